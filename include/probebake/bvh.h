@@ -1,0 +1,84 @@
+/*
+ * probebake BVH: binned SAH build, flattened for the GPU, CPU reference traversal.
+ *
+ * Layout (docs/bvh.md): a binary BVH stored as "child pairs". Each node
+ * (64 bytes) holds the bounds of both of its children and how to reach
+ * them, so one fetch tests two boxes:
+ *
+ *   float lo_hi_x[4] = { c0.lo.x, c0.hi.x, c1.lo.x, c1.hi.x }
+ *   float lo_hi_y[4], lo_hi_z[4]      (likewise)
+ *   int32 child[2]    node index (count == 0) or first leaf-ordered triangle
+ *   uint32 count[2]   triangles in the leaf, 0 for an inner node
+ *
+ * Node 0 is the root; children are stored depth first. Triangles are
+ * reordered so each leaf's triangles are contiguous ("leaf order");
+ * tri_order[k] is the scene index of leaf-ordered triangle k. An empty child
+ * slot (a scene with one leaf) has count 0, child -1 and an inverted box.
+ */
+#ifndef PROBEBAKE_BVH_H
+#define PROBEBAKE_BVH_H
+
+#include "probebake/probebake.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct pb_scene pb_scene;
+
+typedef struct pb_bvh_node {
+    float lo_hi_x[4];
+    float lo_hi_y[4];
+    float lo_hi_z[4];
+    int32_t child[2];
+    uint32_t count[2];
+} pb_bvh_node;
+
+typedef struct pb_bvh_stats {
+    uint32_t nodes;           /* inner nodes (each holds two child boxes) */
+    uint32_t leaves;
+    uint32_t depth;           /* edges from the root to the deepest leaf */
+    uint32_t max_leaf_size;   /* largest leaf actually built */
+    double sah_cost;          /* expected cost per ray, traversal step = 1 */
+    double build_ms;          /* wall time of the build (binning + flatten) */
+    uint32_t threads;         /* host threads used */
+} pb_bvh_stats;
+
+typedef struct pb_bvh {
+    uint32_t node_count;
+    pb_bvh_node *nodes;
+    uint32_t triangle_count;
+    uint32_t *tri_order;      /* leaf order -> scene triangle index */
+    float *tri_positions;     /* 9 floats per leaf-ordered triangle */
+    pb_bvh_stats stats;
+} pb_bvh;
+
+/* Zero fields mean the defaults listed on each line. */
+typedef struct pb_bvh_desc {
+    uint32_t max_leaf_size;   /* default 4; 1..16 */
+    uint32_t bins;            /* default 16; 4..64 */
+    uint32_t threads;         /* default: all online host cores */
+    float traversal_cost;     /* SAH cost of one node step, default 1.0 */
+    float intersection_cost;  /* SAH cost of one triangle test, default 1.0 */
+} pb_bvh_desc;
+
+/* Deepest stack any traversal of a BVH can need: depth + 1 entries. The
+ * GPU kernel is specialised with this, so overflow cannot happen. */
+#define PB_BVH_MAX_DEPTH 64
+
+/* Builds the BVH of `scene` (which must outlive nothing: the BVH copies the
+ * positions it needs). Deterministic: the result does not depend on the
+ * number of threads. desc may be NULL.
+ *  Returns PB_ERROR_INVALID_ARGUMENT for out-of-range desc fields. */
+pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc, pb_bvh **out, pb_error *err);
+
+/* Frees the BVH. NULL is allowed. */
+void pb_bvh_destroy(pb_bvh *bvh);
+
+/* Bytes the GPU needs for nodes + leaf-ordered triangle data. */
+uint64_t pb_bvh_gpu_bytes(const pb_bvh *bvh);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

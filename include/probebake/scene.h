@@ -1,0 +1,158 @@
+/*
+ * probebake scene: a glTF 2.0 file flattened to world-space triangles.
+ *
+ * The scene is a triangle soup: triangle i has its three vertices at
+ * positions[9*i .. 9*i+8], in the scene's *local* frame, which is the world
+ * frame translated by -origin (origin = centre of the world-space AABB, kept
+ * in double so scenes 1e7 m from the world origin keep float precision).
+ * Transforms are composed in double; only the rebased result is rounded to
+ * float. Degenerate (zero-area), NaN and Inf triangles are dropped and
+ * counted in pb_scene_stats.
+ */
+#ifndef PROBEBAKE_SCENE_H
+#define PROBEBAKE_SCENE_H
+
+#include "probebake/probebake.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum pb_alpha_mode {
+    PB_ALPHA_OPAQUE = 0,
+    PB_ALPHA_MASK = 1,
+    PB_ALPHA_BLEND = 2
+} pb_alpha_mode;
+
+typedef enum pb_wrap {
+    PB_WRAP_REPEAT = 0,
+    PB_WRAP_CLAMP = 1,
+    PB_WRAP_MIRROR = 2
+} pb_wrap;
+
+/* Linear-space factors exactly as glTF states them, emission already
+ * multiplied by KHR_materials_emissive_strength. Texture indices are into
+ * pb_scene.textures, -1 when absent. */
+typedef struct pb_material {
+    float base_color[4];
+    float emissive[3];
+    float metallic;
+    float roughness;
+    float alpha_cutoff;       /* glTF default 0.5 */
+    int32_t base_color_texture;
+    int32_t emissive_texture;
+    uint32_t alpha_mode;      /* pb_alpha_mode */
+    uint32_t double_sided;
+    char name[64];
+} pb_material;
+
+/* Decoded texture: RGBA8 texels at pb_scene.texels[offset ...], row-major,
+ * first row = top of the image (glTF UV (0,0) is the top-left corner). */
+typedef struct pb_texture {
+    uint32_t width, height;
+    uint64_t offset;          /* in texels (uint32 RGBA8 words) */
+    uint32_t wrap_s, wrap_t;  /* pb_wrap */
+    uint32_t srgb;            /* 1 for colour textures (base colour, emissive) */
+} pb_texture;
+
+typedef enum pb_light_type {
+    PB_LIGHT_DIRECTIONAL = 0,
+    PB_LIGHT_POINT = 1,
+    PB_LIGHT_SPOT = 2
+} pb_light_type;
+
+/* KHR_lights_punctual light in the local frame. `direction` is where the
+ * light points (the node's -Z). range 0 = infinite. Angles in radians. */
+typedef struct pb_light {
+    uint32_t type;            /* pb_light_type */
+    float color[3];
+    float intensity;
+    float range;
+    float inner_cone, outer_cone;
+    float position[3];
+    float direction[3];
+    char name[64];
+} pb_light;
+
+/* Perspective or orthographic camera in the local frame; the camera looks
+ * along `forward` (the node's -Z) with `up` its +Y. */
+typedef struct pb_camera {
+    uint32_t perspective;     /* 1 perspective, 0 orthographic */
+    float yfov;               /* radians, perspective only */
+    float aspect;             /* 0 when the file does not give one */
+    float znear, zfar;        /* zfar 0 = infinite */
+    float xmag, ymag;         /* orthographic only */
+    float position[3];
+    float forward[3];
+    float up[3];
+    char name[64];
+} pb_camera;
+
+typedef struct pb_scene_stats {
+    uint64_t triangles_in;        /* triangles assembled from all primitives */
+    uint64_t dropped_degenerate;  /* zero area after transformation */
+    uint64_t dropped_nonfinite;   /* NaN or Inf vertex */
+    uint32_t primitives;          /* mesh primitives instanced by nodes */
+    uint32_t primitives_skipped;  /* points and lines: not surfaces */
+    uint32_t normals_generated;   /* primitives without NORMAL (flat normals made) */
+    uint32_t nodes;               /* nodes visited in the default scene */
+} pb_scene_stats;
+
+typedef struct pb_scene {
+    uint32_t triangle_count;
+    float *positions;         /* 9 floats per triangle, local frame */
+    float *normals;           /* 9 floats per triangle, unit vertex normals */
+    float *texcoords;         /* 6 floats per triangle (TEXCOORD_0, 0 if absent) */
+    uint32_t *material;       /* material index per triangle */
+
+    uint32_t material_count;
+    pb_material *materials;   /* at least one: a default grey material is appended if needed */
+    uint32_t texture_count;
+    pb_texture *textures;
+    uint64_t texel_count;
+    uint32_t *texels;         /* RGBA8, R in the low byte */
+    uint32_t light_count;
+    pb_light *lights;
+    uint32_t camera_count;
+    pb_camera *cameras;
+
+    double origin[3];         /* world = local + origin */
+    float bounds_min[3];      /* local frame; zero for an empty scene */
+    float bounds_max[3];
+    pb_scene_stats stats;
+    char path[1024];          /* file it was loaded from, "" if built in memory */
+} pb_scene;
+
+/* Zero fields mean the defaults listed on each line. */
+typedef struct pb_scene_desc {
+    pb_log log;
+    uint32_t skip_textures;   /* 1: do not decode images (info, bench); default 0 */
+} pb_scene_desc;
+
+/* Loads a .gltf or .glb file with the whole node hierarchy of its default
+ * scene (scene 0 when none is marked default).
+ *  desc: may be NULL (defaults).
+ *  out:  receives a scene owned by the caller (pb_scene_destroy); NULL on error.
+ *  Returns PB_ERROR_IO (missing file or buffer), PB_ERROR_PARSE (malformed
+ *  JSON, truncated buffer, out-of-range accessor or index),
+ *  PB_ERROR_UNSUPPORTED (a required extension we do not implement). */
+pb_result pb_scene_load(const char *path, const pb_scene_desc *desc, pb_scene **out, pb_error *err);
+
+/* Builds a scene from a triangle soup given in *world* coordinates (double,
+ * 9 per triangle); one default material. Used by tests and benches.
+ *  material_ids: NULL, or one per triangle into `materials`.
+ *  materials: NULL (one default grey material) or material_count entries. */
+pb_result pb_scene_from_triangles(const double *world_positions, uint32_t triangle_count,
+                                  const uint32_t *material_ids, const pb_material *materials,
+                                  uint32_t material_count, pb_scene **out, pb_error *err);
+
+/* Frees everything the scene owns. NULL is allowed. */
+void pb_scene_destroy(pb_scene *scene);
+
+/* Default-initialised material (glTF defaults: white, opaque, cutoff 0.5). */
+pb_material pb_material_default(void);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,58 @@
+#version 460
+// trace: one invocation per ray, closest hit or (ANY_HIT) any hit.
+// Input pb_ray[], output pb_hit[] with the triangle in leaf order (the host
+// maps it back to scene order). CPU reference: pb_trace_cpu.
+#extension GL_GOOGLE_include_directive : require
+
+#include "traverse.glsl"
+
+layout(local_size_x = 64) in;
+layout(constant_id = 1) const uint ANY_HIT = 0u;
+
+struct Ray {
+    vec4 org_tmin;
+    vec4 dir_tmax;
+};
+
+struct Hit {
+    float t;
+    uint tri;
+    float u;
+    float v;
+    uint backface;
+};
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer RayBuf { Ray r[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer HitBuf { Hit h[]; };
+
+layout(push_constant) uniform Push {
+    SceneRefs scene;
+    uint64_t rays;
+    uint64_t hits;
+    uint count;
+} pc;
+
+void main()
+{
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count)
+        return;
+    Ray ray = RayBuf(pc.rays).r[i];
+    vec3 dir = ray.dir_tmax.xyz;
+    TraceResult tr = trace_ray(pc.scene, ray.org_tmin.xyz, dir, ray.org_tmin.w, ray.dir_tmax.w, ANY_HIT != 0u);
+    Hit h;
+    h.t = tr.t;
+    h.tri = tr.tri;
+    h.u = tr.u;
+    h.v = tr.v;
+    h.backface = 0u;
+    if (tr.tri != PB_NO_HIT) {
+        FloatBuf pos = FloatBuf(pc.scene.tri_pos);
+        uint b = 9u * tr.tri;
+        vec3 v0 = vec3(pos.v[b + 0u], pos.v[b + 1u], pos.v[b + 2u]);
+        vec3 v1 = vec3(pos.v[b + 3u], pos.v[b + 4u], pos.v[b + 5u]);
+        vec3 v2 = vec3(pos.v[b + 6u], pos.v[b + 7u], pos.v[b + 8u]);
+        h.backface = is_backface(v0, v1, v2, dir) ? 1u : 0u;
+    }
+    HitBuf(pc.hits).h[i] = h;
+}

@@ -1,0 +1,50 @@
+// Alpha-mask test at a hit: src/bvh/alpha.h. Nearest texel, so CPU and GPU
+// make the same keep/cut decision.
+#ifndef PB_ALPHA_GLSL
+#define PB_ALPHA_GLSL
+
+#include "scene.glsl"
+
+float wrap_coord(float x, uint mode)
+{
+    if (isnan(x) || isinf(x))
+        return 0.0;
+    if (mode == 1u)
+        return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x);
+    if (mode == 2u) {
+        precise float f = x - 2.0 * floor(x * 0.5);
+        return f > 1.0 ? 2.0 - f : f;
+    }
+    precise float fr = x - floor(x);
+    return fr;
+}
+
+uint texel_index(float s, float t, uint w, uint h, uint wrap_s, uint wrap_t)
+{
+    precise float x = wrap_coord(s, wrap_s) * float(w);
+    precise float y = wrap_coord(t, wrap_t) * float(h);
+    int ix = int(floor(x)), iy = int(floor(y));
+    ix = ix < 0 ? 0 : (ix >= int(w) ? int(w) - 1 : ix);
+    iy = iy < 0 ? 0 : (iy >= int(h) ? int(h) - 1 : iy);
+    return uint(iy) * w + uint(ix);
+}
+
+// True when leaf-ordered triangle `tri` (flags f) is opaque at (u, v).
+bool alpha_opaque(SceneRefs s, uint tri, uint f, float u, float v)
+{
+    Material m = MaterialBuf(s.materials).m[f & ~PB_FLAG_ALPHA_MASK];
+    float a = m.base_alpha;
+    if (m.texture >= 0) {
+        Texture tx = TextureBuf(s.textures).t[m.texture];
+        FloatBuf uv = FloatBuf(s.tri_uv);
+        uint b = 6u * tri;
+        precise float w0 = 1.0 - u - v;
+        precise float ts = w0 * uv.v[b + 0u] + u * uv.v[b + 2u] + v * uv.v[b + 4u];
+        precise float tt = w0 * uv.v[b + 1u] + u * uv.v[b + 3u] + v * uv.v[b + 5u];
+        uint texel = UintBuf(s.texels).v[tx.offset + texel_index(ts, tt, tx.width, tx.height, tx.wrap & 0xffu, tx.wrap >> 8)];
+        a *= float(texel >> 24) * (1.0 / 255.0);
+    }
+    return a >= m.cutoff;
+}
+
+#endif

@@ -1,0 +1,113 @@
+// Ray/box and watertight ray/triangle tests: src/bvh/intersect.h operation
+// for operation. `precise` forbids FMA contraction and reassociation, which
+// would break the exact antisymmetry of shared-edge functions that makes the
+// triangle test watertight (Woop, Benthin & Wald 2013).
+#ifndef PB_INTERSECT_GLSL
+#define PB_INTERSECT_GLSL
+
+#define PB_BOX_FAR_SCALE 1.00000036 // 1 + 2*gamma(3): Ize 2013, conservative slabs
+
+struct RayPre {
+    vec3 org;
+    vec3 idir;
+    int kx, ky, kz;
+    float sx, sy, sz;
+};
+
+RayPre ray_prepare(vec3 org, vec3 dir)
+{
+    RayPre r;
+    vec3 ad = abs(dir);
+    int kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (dir[kz] < 0.0) {
+        int t = kx;
+        kx = ky;
+        ky = t;
+    }
+    r.kx = kx;
+    r.ky = ky;
+    r.kz = kz;
+    r.sx = dir[kx] / dir[kz];
+    r.sy = dir[ky] / dir[kz];
+    r.sz = 1.0 / dir[kz];
+    for (int k = 0; k < 3; ++k) {
+        float d = dir[k];
+        if (abs(d) < 1e-30)
+            d = d < 0.0 ? -1e-30 : 1e-30;
+        r.idir[k] = 1.0 / d;
+    }
+    r.org = org;
+    return r;
+}
+
+float ray_box(RayPre r, vec3 lo, vec3 hi, float tmin, float tmax)
+{
+    float t0 = tmin, t1 = tmax;
+    for (int k = 0; k < 3; ++k) {
+        precise float a = (lo[k] - r.org[k]) * r.idir[k];
+        precise float b = (hi[k] - r.org[k]) * r.idir[k];
+        float n = a < b ? a : b;
+        precise float f = (a < b ? b : a) * PB_BOX_FAR_SCALE;
+        t0 = n > t0 ? n : t0;
+        t1 = f < t1 ? f : t1;
+    }
+    return t0 <= t1 ? t0 : PB_INF;
+}
+
+// On a hit with tmin < t < tmax: true, t, and barycentrics of v1 (u), v2 (v).
+bool ray_triangle(RayPre r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tmax, out float t, out float u, out float v)
+{
+    precise vec3 A = v0 - r.org;
+    precise vec3 B = v1 - r.org;
+    precise vec3 C = v2 - r.org;
+    precise float Ax = A[r.kx] - r.sx * A[r.kz];
+    precise float Ay = A[r.ky] - r.sy * A[r.kz];
+    precise float Bx = B[r.kx] - r.sx * B[r.kz];
+    precise float By = B[r.ky] - r.sy * B[r.kz];
+    precise float Cx = C[r.kx] - r.sx * C[r.kz];
+    precise float Cy = C[r.ky] - r.sy * C[r.kz];
+    precise float U = Cx * By - Cy * Bx;
+    precise float V = Ax * Cy - Ay * Cx;
+    precise float W = Bx * Ay - By * Ax;
+    t = 0.0;
+    u = 0.0;
+    v = 0.0;
+    if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0))
+        return false;
+    precise float det = U + V + W;
+    if (det == 0.0)
+        return false;
+    precise float Az = r.sz * A[r.kz];
+    precise float Bz = r.sz * B[r.kz];
+    precise float Cz = r.sz * C[r.kz];
+    precise float T = U * Az + V * Bz + W * Cz;
+    if (det < 0.0) {
+        T = -T;
+        det = -det;
+        U = -U;
+        V = -V;
+        W = -W;
+    }
+    precise float lo = tmin * det;
+    precise float hi = tmax * det;
+    if (!(T > lo) || !(T < hi))
+        return false;
+    float inv = 1.0 / det;
+    t = T * inv;
+    u = V * inv;
+    v = W * inv;
+    return true;
+}
+
+bool is_backface(vec3 v0, vec3 v1, vec3 v2, vec3 dir)
+{
+    precise vec3 e1 = v1 - v0;
+    precise vec3 e2 = v2 - v0;
+    precise vec3 n = vec3(e1.y * e2.z - e1.z * e2.y, e1.z * e2.x - e1.x * e2.z, e1.x * e2.y - e1.y * e2.x);
+    precise float d = n.x * dir.x + n.y * dir.y + n.z * dir.z;
+    return d > 0.0;
+}
+
+#endif

@@ -1,0 +1,142 @@
+/* Upload of the scene and its BVH, in leaf order, and the trace pipelines.
+ * Sizes are checked against the device before anything is allocated. */
+#include "bake/gpu_scene.h"
+#include "common/common.h"
+#include "probebake/scene.h"
+
+#include "trace.spv.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static pb_result upload_array(pb_context *ctx, pb_buffer *b, const void *data, uint64_t bytes, const char *what,
+                              pb_error *err)
+{
+    pb_result r = pb_buffer_create(ctx, bytes, PB_MEMORY_DEVICE, what, b, err);
+    if (r == PB_OK && bytes)
+        r = pb_buffer_upload(ctx, b, 0, data, bytes, err);
+    return r;
+}
+
+pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_bvh *bvh, pb_gpu_scene **out,
+                              pb_error *err)
+{
+    pb_error_clear(err);
+    *out = NULL;
+    if (bvh->triangle_count != scene->triangle_count)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH (%u triangles) does not belong to scene %s (%u)",
+                       bvh->triangle_count, scene->path, scene->triangle_count);
+    if (bvh->stats.depth + 1 > PB_BVH_MAX_DEPTH + 1)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH depth %u exceeds %d", bvh->stats.depth, PB_BVH_MAX_DEPTH);
+    uint32_t n = scene->triangle_count;
+    uint64_t sizes[7] = {
+        (uint64_t)bvh->node_count * sizeof(pb_bvh_node),
+        (uint64_t)n * 36u,
+        (uint64_t)n * 4u,
+        (uint64_t)n * 24u,
+        (uint64_t)scene->material_count * sizeof(gpu_material),
+        (uint64_t)scene->texture_count * sizeof(gpu_texture),
+        scene->texel_count * 4u,
+    };
+    static const char *const names[7] = {"BVH nodes", "triangle positions", "triangle flags", "texture coordinates",
+                                         "materials", "textures", "texels"};
+    uint64_t total = 0;
+    for (int i = 0; i < 7; ++i) {
+        total += sizes[i];
+        if (ctx->max_allocation && sizes[i] > ctx->max_allocation)
+            return pb_fail(err, PB_ERROR_TOO_LARGE,
+                           "%s: %s needs %.1f MiB in one allocation; device %s allows %.1f MiB "
+                           "(maxMemoryAllocationSize)", scene->path, names[i], sizes[i] / 1048576.0,
+                           ctx->info.name, ctx->max_allocation / 1048576.0);
+    }
+    if (ctx->info.device_local_bytes && total > ctx->info.device_local_bytes / 10 * 9)
+        return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: scene needs %.1f MiB of device memory; device %s has %.1f MiB",
+                       scene->path, total / 1048576.0, ctx->info.name, ctx->info.device_local_bytes / 1048576.0);
+    if (scene->texel_count > UINT32_MAX)
+        return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: more than 2^32 texels", scene->path);
+
+    pb_gpu_scene *gs = calloc(1, sizeof *gs);
+    uint32_t *flags = malloc((size_t)(n ? n : 1) * 4);
+    float *uvs = malloc((size_t)(n ? n : 1) * 24);
+    gpu_material *mats = malloc((size_t)(scene->material_count ? scene->material_count : 1) * sizeof *mats);
+    gpu_texture *texs = malloc((size_t)(scene->texture_count ? scene->texture_count : 1) * sizeof *texs);
+    if (gs)
+        gs->tri_order = malloc((size_t)(n ? n : 1) * 4);
+    if (!gs || !flags || !uvs || !mats || !texs || !gs->tri_order) {
+        free(flags), free(uvs), free(mats), free(texs);
+        if (gs)
+            free(gs->tri_order);
+        free(gs);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory preparing the scene upload");
+    }
+    for (uint32_t m = 0; m < scene->material_count; ++m) {
+        const pb_material *pm = &scene->materials[m];
+        mats[m] = (gpu_material){pm->base_color[3], pm->alpha_cutoff, pm->base_color_texture, pm->alpha_mode};
+    }
+    for (uint32_t t = 0; t < scene->texture_count; ++t) {
+        const pb_texture *pt = &scene->textures[t];
+        texs[t] = (gpu_texture){(uint32_t)pt->offset, pt->width, pt->height, pt->wrap_s | (pt->wrap_t << 8)};
+    }
+    for (uint32_t k = 0; k < n; ++k) {
+        uint32_t tri = bvh->tri_order[k];
+        uint32_t m = scene->material[tri];
+        flags[k] = m | (scene->materials[m].alpha_mode == PB_ALPHA_MASK ? PB_FLAG_ALPHA_MASK : 0u);
+        memcpy(uvs + 6 * (size_t)k, scene->texcoords + 6 * (size_t)tri, 24);
+    }
+    memcpy(gs->tri_order, bvh->tri_order, (size_t)n * 4);
+    gs->triangle_count = n;
+    gs->bvh_depth = bvh->stats.depth;
+
+    pb_result r = upload_array(ctx, &gs->nodes, bvh->nodes, sizes[0], names[0], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->tri_pos, bvh->tri_positions, sizes[1], names[1], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->tri_flags, flags, sizes[2], names[2], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->tri_uv, uvs, sizes[3], names[3], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->materials, mats, sizes[4], names[4], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->textures, texs, sizes[5], names[5], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->texels, scene->texels, sizes[6], names[6], err);
+    free(flags), free(uvs), free(mats), free(texs);
+    if (r == PB_OK) {
+        uint32_t spec_closest[2] = {gs->bvh_depth + 1, 0}, spec_any[2] = {gs->bvh_depth + 1, 1};
+        r = pb_pipeline_create(ctx, pb_spv_trace, sizeof pb_spv_trace, sizeof(trace_push), spec_closest, 2, 64,
+                               "trace (closest)", &gs->trace_closest, err);
+        if (r == PB_OK)
+            r = pb_pipeline_create(ctx, pb_spv_trace, sizeof pb_spv_trace, sizeof(trace_push), spec_any, 2, 64,
+                                   "trace (any)", &gs->trace_any, err);
+    }
+    if (r != PB_OK) {
+        pb_gpu_scene_destroy_ctx(ctx, gs);
+        return r;
+    }
+    gs->refs = (gpu_scene_refs){gs->nodes.address, gs->tri_pos.address, gs->tri_flags.address, gs->tri_uv.address,
+                                gs->materials.address, gs->textures.address, gs->texels.address, n, 0};
+    gs->ctx = ctx;
+    gs->bytes = total;
+    gs->traversal_bytes = sizes[0] + sizes[1] + sizes[2];
+    *out = gs;
+    return PB_OK;
+}
+
+void pb_gpu_scene_destroy_ctx(pb_context *ctx, pb_gpu_scene *gs)
+{
+    pb_pipeline_destroy(ctx, &gs->trace_closest);
+    pb_pipeline_destroy(ctx, &gs->trace_any);
+    pb_buffer *bufs[9] = {&gs->nodes, &gs->tri_pos, &gs->tri_flags, &gs->tri_uv, &gs->materials,
+                          &gs->textures, &gs->texels, &gs->rays, &gs->hits};
+    for (int i = 0; i < 9; ++i)
+        pb_buffer_destroy(ctx, bufs[i]);
+    free(gs->tri_order);
+    free(gs);
+}
+
+void pb_gpu_scene_destroy(pb_gpu_scene *gs)
+{
+    if (gs)
+        pb_gpu_scene_destroy_ctx(gs->ctx, gs);
+}
+
+uint64_t pb_gpu_scene_bytes(const pb_gpu_scene *gs, uint64_t *traversal_bytes)
+{
+    if (traversal_bytes)
+        *traversal_bytes = gs->traversal_bytes;
+    return gs->bytes;
+}

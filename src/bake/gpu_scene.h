@@ -1,0 +1,25 @@
+/* The uploaded scene (leaf order) and the kernels that read it. */
+#ifndef PB_GPU_SCENE_H
+#define PB_GPU_SCENE_H
+
+#include "bake/gpu_types.h"
+#include "gpu/gpu.h"
+
+struct pb_gpu_scene {
+    pb_context *ctx;          /* the context it lives on (not owned) */
+    pb_buffer nodes, tri_pos, tri_flags, tri_uv, materials, textures, texels;
+    uint32_t *tri_order;      /* leaf -> scene triangle, host copy */
+    uint32_t triangle_count;
+    uint32_t bvh_depth;
+    gpu_scene_refs refs;
+    pb_pipeline trace_closest, trace_any;
+    uint64_t bytes, traversal_bytes;
+    /* ray/hit buffers, grown on demand and reused */
+    pb_buffer rays, hits;
+    uint32_t ray_capacity;
+};
+
+/* Frees the scene's device objects on `ctx`. */
+void pb_gpu_scene_destroy_ctx(pb_context *ctx, pb_gpu_scene *gs);
+
+#endif

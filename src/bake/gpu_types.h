@@ -1,0 +1,51 @@
+/* C mirrors of the GLSL structs in shaders/include/scene.glsl and the push
+ * constant blocks of the kernels in shaders/comp, field for field. The asserts catch
+ * any drift in size or offset at compile time. */
+#ifndef PB_GPU_TYPES_H
+#define PB_GPU_TYPES_H
+
+#include "probebake/bvh.h"
+#include "probebake/trace.h"
+
+#include <assert.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define PB_FLAG_ALPHA_MASK 0x80000000u
+
+typedef struct gpu_material {
+    float base_alpha;
+    float cutoff;
+    int32_t texture;
+    uint32_t mode;
+} gpu_material;
+_Static_assert(sizeof(gpu_material) == 16, "gpu_material layout");
+
+typedef struct gpu_texture {
+    uint32_t offset;
+    uint32_t width, height;
+    uint32_t wrap; /* wrap_s | wrap_t << 8 */
+} gpu_texture;
+_Static_assert(sizeof(gpu_texture) == 16, "gpu_texture layout");
+
+_Static_assert(sizeof(pb_bvh_node) == 64, "Node layout");
+_Static_assert(offsetof(pb_bvh_node, child) == 48 && offsetof(pb_bvh_node, count) == 56, "Node layout");
+
+typedef struct gpu_scene_refs {
+    uint64_t nodes, tri_pos, tri_flags, tri_uv, materials, textures, texels;
+    uint32_t triangle_count, pad;
+} gpu_scene_refs;
+_Static_assert(sizeof(gpu_scene_refs) == 64, "SceneRefs layout");
+
+/* Ray and Hit of trace.comp are pb_ray and pb_hit. */
+_Static_assert(sizeof(pb_ray) == 32 && offsetof(pb_ray, direction) == 16, "Ray layout");
+_Static_assert(sizeof(pb_hit) == 20 && offsetof(pb_hit, backface) == 16, "Hit layout");
+
+typedef struct trace_push {
+    gpu_scene_refs scene;
+    uint64_t rays, hits;
+    uint32_t count, pad;
+} trace_push;
+_Static_assert(sizeof(trace_push) == 88, "trace.comp push constants");
+
+#endif

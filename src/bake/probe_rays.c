@@ -1,0 +1,82 @@
+/* Probe grids and their ray sets: spherical Fibonacci directions (Keinert et
+ * al. 2015) rotated per probe by a uniformly random rotation (Shoemake's
+ * quaternion from three uniforms). Randomness keys only on (seed, probe,
+ * stream), so a probe's rays never depend on which other probes are traced. */
+#include "probebake/trace.h"
+
+#include <math.h>
+
+uint32_t pb_hash32(uint32_t x)
+{
+    uint32_t state = x * 747796405u + 2891336453u;
+    uint32_t word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+float pb_random01(uint32_t seed, uint32_t a, uint32_t b, uint32_t c)
+{
+    uint32_t h = pb_hash32(seed ^ pb_hash32(a ^ pb_hash32(b ^ pb_hash32(c))));
+    return (float)(h >> 8) * (1.0f / 16777216.0f);
+}
+
+void pb_probe_grid_fit(const float lo[3], const float hi[3], uint32_t target_probes, pb_probe_grid *g)
+{
+    double ext[3], vol = 1.0;
+    int dims = 0;
+    for (int k = 0; k < 3; ++k) {
+        ext[k] = hi[k] > lo[k] ? (double)hi[k] - lo[k] : 0.0;
+        if (ext[k] > 0) {
+            vol *= ext[k];
+            ++dims;
+        }
+    }
+    if (target_probes < 1)
+        target_probes = 1;
+    double s = dims ? pow(vol / target_probes, 1.0 / dims) : 1.0;
+    for (int k = 0; k < 3; ++k) {
+        uint32_t n = ext[k] > 0 ? (uint32_t)fmax(1.0, floor(ext[k] / s + 0.5)) : 1u;
+        g->counts[k] = n;
+        g->spacing[k] = ext[k] > 0 ? (float)(ext[k] / n) : 0.f;
+        g->origin[k] = (float)(lo[k] + 0.5 * g->spacing[k]);
+        if (!(ext[k] > 0))
+            g->origin[k] = 0.5f * (lo[k] + hi[k]);
+    }
+}
+
+uint32_t pb_probe_grid_count(const pb_probe_grid *g)
+{
+    return g->counts[0] * g->counts[1] * g->counts[2];
+}
+
+void pb_probe_rays(const pb_probe_grid *g, uint32_t first, uint32_t count, uint32_t per_probe, uint32_t seed,
+                   pb_ray *out)
+{
+    const float golden = 1.61803398874989485f;
+    const float two_pi = 6.28318530717958648f;
+    for (uint32_t p = first; p < first + count; ++p) {
+        uint32_t i = p % g->counts[0], j = (p / g->counts[0]) % g->counts[1], k = p / (g->counts[0] * g->counts[1]);
+        float pos[3] = {g->origin[0] + (float)i * g->spacing[0], g->origin[1] + (float)j * g->spacing[1],
+                        g->origin[2] + (float)k * g->spacing[2]};
+        /* uniform random rotation (unit quaternion) */
+        float u1 = pb_random01(seed, p, 0, 0), u2 = pb_random01(seed, p, 0, 1), u3 = pb_random01(seed, p, 0, 2);
+        float a = sqrtf(1.f - u1), b = sqrtf(u1);
+        float qx = a * sinf(two_pi * u2), qy = a * cosf(two_pi * u2), qz = b * sinf(two_pi * u3),
+              qw = b * cosf(two_pi * u3);
+        float m[9] = {1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw),     2 * (qx * qz + qy * qw),
+                      2 * (qx * qy + qz * qw),     1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw),
+                      2 * (qx * qz - qy * qw),     2 * (qy * qz + qx * qw),     1 - 2 * (qx * qx + qy * qy)};
+        for (uint32_t r = 0; r < per_probe; ++r) {
+            float z = 1.f - (2.f * (float)r + 1.f) / (float)per_probe;
+            float rad = sqrtf(fmaxf(0.f, 1.f - z * z));
+            float phi = two_pi * ((float)r / golden - floorf((float)r / golden));
+            float d[3] = {rad * cosf(phi), rad * sinf(phi), z};
+            pb_ray *ray = &out[(size_t)(p - first) * per_probe + r];
+            for (int c = 0; c < 3; ++c) {
+                ray->origin[c] = pos[c];
+                ray->direction[c] = m[3 * c] * d[0] + m[3 * c + 1] * d[1] + m[3 * c + 2] * d[2];
+            }
+            ray->tmin = 0.f;
+            ray->tmax = INFINITY;
+        }
+    }
+}

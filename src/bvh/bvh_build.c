@@ -1,0 +1,581 @@
+/* Binned SAH BVH build on all host cores, then a depth-first flatten into
+ * child-pair nodes (see include/probebake/bvh.h and docs/bvh.md).
+ *
+ * Parallelism: tasks (a node and its primitive range) go through a shared
+ * stack. A worker splits its range, pushes one child and keeps the other, so
+ * every core is busy once the top levels are split. Nodes that see more than
+ * PAR_BIN_MIN primitives bin them in parallel, so the root of a 1M-triangle
+ * scene does not serialise the build.
+ *
+ * Determinism: a node's split depends only on its primitive range, and the
+ * flatten walks the tree in a fixed order, so the output is byte-identical
+ * whatever the thread count or scheduling. */
+#define _POSIX_C_SOURCE 200809L
+#include "common/common.h"
+#include "probebake/bvh.h"
+#include "probebake/scene.h"
+
+#include <assert.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_BINS 64
+#define PAR_BIN_MIN (1u << 16)
+
+typedef struct aabb {
+    float lo[3], hi[3];
+} aabb;
+
+typedef struct build_node {
+    aabb box;
+    uint32_t left, right; /* build-node indices, valid when count == 0 */
+    uint32_t begin, count;
+} build_node;
+
+typedef struct task {
+    uint32_t node, begin, end, depth;
+} task;
+
+typedef struct builder {
+    const float *centroid; /* 3 per triangle */
+    const aabb *tri_box;
+    uint32_t *index;       /* permuted into leaf order */
+    build_node *nodes;
+    atomic_uint node_count;
+    uint32_t bins, max_leaf;
+    float tc, ic;
+    /* task stack */
+    pthread_mutex_t lock;
+    pthread_cond_t cond;
+    task *stack;
+    uint32_t stack_size, stack_cap;
+    uint32_t busy;         /* tasks being worked on */
+    uint32_t threads;
+} builder;
+
+static void box_empty(aabb *b)
+{
+    for (int k = 0; k < 3; ++k) {
+        b->lo[k] = INFINITY;
+        b->hi[k] = -INFINITY;
+    }
+}
+
+static void box_grow(aabb *b, const aabb *o)
+{
+    for (int k = 0; k < 3; ++k) {
+        b->lo[k] = o->lo[k] < b->lo[k] ? o->lo[k] : b->lo[k];
+        b->hi[k] = o->hi[k] > b->hi[k] ? o->hi[k] : b->hi[k];
+    }
+}
+
+static float box_area(const aabb *b)
+{
+    float d[3];
+    for (int k = 0; k < 3; ++k) {
+        d[k] = b->hi[k] - b->lo[k];
+        if (!(d[k] > 0.f))
+            d[k] = 0.f;
+    }
+    return 2.f * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
+}
+
+/* Per-range statistics gathered in one pass: bounds, centroid bounds. */
+typedef struct range_info {
+    aabb box, cbox;
+} range_info;
+
+typedef struct bin_set {
+    aabb box[3][MAX_BINS];
+    uint32_t count[3][MAX_BINS];
+} bin_set;
+
+static void bin_set_clear(bin_set *s, uint32_t bins)
+{
+    for (int a = 0; a < 3; ++a)
+        for (uint32_t i = 0; i < bins; ++i) {
+            box_empty(&s->box[a][i]);
+            s->count[a][i] = 0;
+        }
+}
+
+static inline uint32_t bin_of(float c, float lo, float scale, uint32_t bins)
+{
+    float f = (c - lo) * scale;
+    int b = (int)f;
+    if (b < 0 || f != f)
+        b = 0;
+    if (b >= (int)bins)
+        b = (int)bins - 1;
+    return (uint32_t)b;
+}
+
+static void bin_range(const builder *bd, uint32_t begin, uint32_t end, const aabb *cbox, bin_set *s)
+{
+    float scale[3];
+    for (int a = 0; a < 3; ++a) {
+        float ext = cbox->hi[a] - cbox->lo[a];
+        scale[a] = ext > 0.f ? (float)bd->bins / ext : 0.f;
+    }
+    for (uint32_t i = begin; i < end; ++i) {
+        uint32_t t = bd->index[i];
+        const float *c = bd->centroid + 3 * (size_t)t;
+        for (int a = 0; a < 3; ++a) {
+            uint32_t b = bin_of(c[a], cbox->lo[a], scale[a], bd->bins);
+            s->count[a][b]++;
+            box_grow(&s->box[a][b], &bd->tri_box[t]);
+        }
+    }
+}
+
+typedef struct par_bin {
+    const builder *bd;
+    const aabb *cbox;
+    uint32_t base;
+    bin_set parts[16];
+    range_info infos[16];
+    uint32_t chunk, nparts;
+    int mode; /* 0: gather range info, 1: bin */
+} par_bin;
+
+static void info_range(const builder *bd, uint32_t begin, uint32_t end, range_info *ri)
+{
+    box_empty(&ri->box);
+    box_empty(&ri->cbox);
+    for (uint32_t i = begin; i < end; ++i) {
+        uint32_t t = bd->index[i];
+        box_grow(&ri->box, &bd->tri_box[t]);
+        const float *c = bd->centroid + 3 * (size_t)t;
+        for (int k = 0; k < 3; ++k) {
+            ri->cbox.lo[k] = c[k] < ri->cbox.lo[k] ? c[k] : ri->cbox.lo[k];
+            ri->cbox.hi[k] = c[k] > ri->cbox.hi[k] ? c[k] : ri->cbox.hi[k];
+        }
+    }
+}
+
+static void par_bin_fn(void *user, uint64_t b, uint64_t e)
+{
+    par_bin *pb = user;
+    for (uint64_t part = b; part < e; ++part) {
+        uint32_t begin = pb->base + (uint32_t)part * pb->chunk;
+        uint32_t end = begin + pb->chunk; /* the remainder past nparts*chunk is done by the caller */
+        if (pb->mode == 0) {
+            info_range(pb->bd, begin, end, &pb->infos[part]);
+        } else {
+            bin_set_clear(&pb->parts[part], pb->bd->bins);
+            bin_range(pb->bd, begin, end, pb->cbox, &pb->parts[part]);
+        }
+    }
+}
+
+/* Gathers info and bins of [begin,end), in parallel for large ranges. The
+ * merge order is fixed, so the result does not depend on threads. */
+static void analyse(const builder *bd, uint32_t begin, uint32_t end, range_info *ri, bin_set *s, par_bin *scratch)
+{
+    uint32_t n = end - begin;
+    bin_set_clear(s, bd->bins);
+    if (n < PAR_BIN_MIN || bd->threads <= 1) {
+        info_range(bd, begin, end, ri);
+        bin_range(bd, begin, end, &ri->cbox, s);
+        return;
+    }
+    par_bin *pb = scratch;
+    pb->bd = bd;
+    pb->base = begin;
+    pb->nparts = 16;
+    pb->chunk = n / 16;
+    pb->mode = 0;
+    pb_parallel_for(16, 1, bd->threads, par_bin_fn, pb);
+    uint32_t covered = begin + 16 * pb->chunk;
+    range_info tail;
+    info_range(bd, covered, end, &tail);
+    box_empty(&ri->box);
+    box_empty(&ri->cbox);
+    for (int p = 0; p < 16; ++p) {
+        box_grow(&ri->box, &pb->infos[p].box);
+        box_grow(&ri->cbox, &pb->infos[p].cbox);
+    }
+    box_grow(&ri->box, &tail.box);
+    box_grow(&ri->cbox, &tail.cbox);
+    pb->cbox = &ri->cbox;
+    pb->mode = 1;
+    pb_parallel_for(16, 1, bd->threads, par_bin_fn, pb);
+    for (int p = 0; p < 16; ++p)
+        for (int a = 0; a < 3; ++a)
+            for (uint32_t i = 0; i < bd->bins; ++i) {
+                s->count[a][i] += pb->parts[p].count[a][i];
+                box_grow(&s->box[a][i], &pb->parts[p].box[a][i]);
+            }
+    bin_range(bd, covered, end, &ri->cbox, s);
+}
+
+typedef struct sort_key {
+    float key;
+    uint32_t index;
+} sort_key;
+
+static int compare_keys(const void *pa, const void *pb)
+{
+    const sort_key *a = pa, *b = pb;
+    if (a->key != b->key)
+        return a->key < b->key ? -1 : 1;
+    return a->index < b->index ? -1 : a->index > b->index;
+}
+
+static uint32_t ceil_log2(uint32_t x)
+{
+    uint32_t l = 0;
+    while ((1ull << l) < x)
+        ++l;
+    return l;
+}
+
+/* Splits the range or makes a leaf. Returns the split position (begin < mid
+ * < end) or 0 for a leaf. */
+static uint32_t split_node(builder *bd, build_node *node, uint32_t begin, uint32_t end, uint32_t depth,
+                           par_bin *scratch, bin_set *bins)
+{
+    uint32_t n = end - begin;
+    range_info ri;
+    analyse(bd, begin, end, &ri, bins, scratch);
+    node->box = ri.box;
+    if (n <= 1)
+        return 0;
+
+    /* depth guard: if the remaining levels could exceed the bound, halve */
+    uint32_t leaves_needed = (n + bd->max_leaf - 1) / bd->max_leaf;
+    int force_median = depth + ceil_log2(leaves_needed) + 2 >= PB_BVH_MAX_DEPTH;
+
+    float best_cost = INFINITY;
+    int best_axis = -1;
+    uint32_t best_bin = 0;
+    if (!force_median) {
+        for (int a = 0; a < 3; ++a) {
+            if (!(ri.cbox.hi[a] > ri.cbox.lo[a]))
+                continue;
+            /* sweep from the right, then from the left */
+            float right_cost[MAX_BINS];
+            aabb acc;
+            box_empty(&acc);
+            uint32_t cnt = 0;
+            for (uint32_t i = bd->bins - 1; i > 0; --i) {
+                box_grow(&acc, &bins->box[a][i]);
+                cnt += bins->count[a][i];
+                right_cost[i] = cnt ? box_area(&acc) * (float)cnt : 0.f;
+            }
+            box_empty(&acc);
+            cnt = 0;
+            for (uint32_t i = 0; i + 1 < bd->bins; ++i) {
+                box_grow(&acc, &bins->box[a][i]);
+                cnt += bins->count[a][i];
+                if (cnt == 0 || cnt == n)
+                    continue;
+                float c = box_area(&acc) * (float)cnt + right_cost[i + 1];
+                if (c < best_cost) {
+                    best_cost = c;
+                    best_axis = a;
+                    best_bin = i + 1;
+                }
+            }
+        }
+    }
+    float area = box_area(&ri.box);
+    float leaf_cost = bd->ic * (float)n;
+    float split_cost = area > 0.f ? bd->tc + bd->ic * best_cost / area : bd->tc + bd->ic * (float)n;
+    if (n <= bd->max_leaf && (best_axis < 0 || leaf_cost <= split_cost))
+        return 0;
+
+    uint32_t mid;
+    if (best_axis >= 0) {
+        float ext = ri.cbox.hi[best_axis] - ri.cbox.lo[best_axis];
+        float scale = (float)bd->bins / ext;
+        uint32_t i = begin, j = end;
+        while (i < j) {
+            uint32_t t = bd->index[i];
+            if (bin_of(bd->centroid[3 * (size_t)t + best_axis], ri.cbox.lo[best_axis], scale, bd->bins) < best_bin) {
+                ++i;
+            } else {
+                --j;
+                bd->index[i] = bd->index[j];
+                bd->index[j] = t;
+            }
+        }
+        mid = i;
+    } else {
+        /* no usable split (identical centroids) or depth guard: halve the range
+         * after ordering along the longest centroid axis */
+        int a = 0;
+        for (int k = 1; k < 3; ++k)
+            if (ri.cbox.hi[k] - ri.cbox.lo[k] > ri.cbox.hi[a] - ri.cbox.lo[a])
+                a = k;
+        mid = begin + n / 2;
+        sort_key *keys = malloc((size_t)n * sizeof *keys);
+        if (keys) { /* rare path: a full sort is fine; ties broken by index (deterministic) */
+            for (uint32_t i = 0; i < n; ++i) {
+                keys[i].index = bd->index[begin + i];
+                keys[i].key = bd->centroid[3 * (size_t)keys[i].index + a];
+            }
+            qsort(keys, n, sizeof *keys, compare_keys);
+            for (uint32_t i = 0; i < n; ++i)
+                bd->index[begin + i] = keys[i].index;
+            free(keys);
+        }
+    }
+    if (mid == begin || mid == end)
+        mid = begin + n / 2;
+    return mid;
+}
+
+static void push_task(builder *bd, task t)
+{
+    pthread_mutex_lock(&bd->lock);
+    assert(bd->stack_size < bd->stack_cap);
+    bd->stack[bd->stack_size++] = t;
+    pthread_cond_signal(&bd->cond);
+    pthread_mutex_unlock(&bd->lock);
+}
+
+typedef struct worker_arg {
+    builder *bd;
+    par_bin scratch;
+    bin_set bins;
+} worker_arg;
+
+static void *worker(void *arg)
+{
+    builder *bd = ((worker_arg *)arg)->bd;
+    par_bin *scratch = &((worker_arg *)arg)->scratch;
+    bin_set *bins = &((worker_arg *)arg)->bins;
+    for (;;) {
+        pthread_mutex_lock(&bd->lock);
+        while (bd->stack_size == 0 && bd->busy > 0)
+            pthread_cond_wait(&bd->cond, &bd->lock);
+        if (bd->stack_size == 0) { /* nothing queued, nobody working: done */
+            pthread_cond_broadcast(&bd->cond);
+            pthread_mutex_unlock(&bd->lock);
+            break;
+        }
+        task t = bd->stack[--bd->stack_size];
+        bd->busy++;
+        pthread_mutex_unlock(&bd->lock);
+
+        for (;;) { /* keep one child, share the other */
+            build_node *node = &bd->nodes[t.node];
+            uint32_t mid = split_node(bd, node, t.begin, t.end, t.depth, scratch, bins);
+            if (!mid) {
+                node->begin = t.begin;
+                node->count = t.end - t.begin;
+                break;
+            }
+            uint32_t l = atomic_fetch_add(&bd->node_count, 2);
+            node->left = l;
+            node->right = l + 1;
+            node->count = 0;
+            task right = {l + 1, mid, t.end, t.depth + 1};
+            push_task(bd, right);
+            t = (task){l, t.begin, mid, t.depth + 1};
+        }
+
+        pthread_mutex_lock(&bd->lock);
+        bd->busy--;
+        if (bd->busy == 0 && bd->stack_size == 0)
+            pthread_cond_broadcast(&bd->cond);
+        pthread_mutex_unlock(&bd->lock);
+    }
+    return NULL;
+}
+
+typedef struct flatten_state {
+    const builder *bd;
+    pb_bvh *bvh;
+    uint32_t next;
+    uint32_t depth;
+    uint32_t leaves, max_leaf;
+    double sah, root_area;
+} flatten_state;
+
+static void set_child(flatten_state *fs, pb_bvh_node *out, int slot, uint32_t bnode, uint32_t depth);
+
+/* Emits build node `bnode` (an inner node) as flattened node `slot_index`. */
+static void emit_inner(flatten_state *fs, uint32_t out_index, uint32_t bnode, uint32_t depth)
+{
+    const build_node *b = &fs->bd->nodes[bnode];
+    pb_bvh_node *out = &fs->bvh->nodes[out_index];
+    if (fs->root_area > 0)
+        fs->sah += box_area(&b->box) / fs->root_area; /* traversal cost 1 per visited pair */
+    set_child(fs, out, 0, b->left, depth);
+    out = &fs->bvh->nodes[out_index];
+    set_child(fs, out, 1, b->right, depth);
+}
+
+static void set_child(flatten_state *fs, pb_bvh_node *out, int slot, uint32_t bnode, uint32_t depth)
+{
+    const build_node *c = &fs->bd->nodes[bnode];
+    out->lo_hi_x[2 * slot] = c->box.lo[0];
+    out->lo_hi_x[2 * slot + 1] = c->box.hi[0];
+    out->lo_hi_y[2 * slot] = c->box.lo[1];
+    out->lo_hi_y[2 * slot + 1] = c->box.hi[1];
+    out->lo_hi_z[2 * slot] = c->box.lo[2];
+    out->lo_hi_z[2 * slot + 1] = c->box.hi[2];
+    if (depth + 1 > fs->depth)
+        fs->depth = depth + 1;
+    if (c->count) {
+        out->child[slot] = (int32_t)c->begin;
+        out->count[slot] = c->count;
+        fs->leaves++;
+        fs->max_leaf = c->count > fs->max_leaf ? c->count : fs->max_leaf;
+        if (fs->root_area > 0)
+            fs->sah += box_area(&c->box) / fs->root_area * c->count * fs->bd->ic;
+    } else {
+        uint32_t idx = fs->next++;
+        out->child[slot] = (int32_t)idx;
+        out->count[slot] = 0;
+        emit_inner(fs, idx, bnode, depth + 1);
+    }
+}
+
+pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh **out, pb_error *err)
+{
+    pb_error_clear(err);
+    *out = NULL;
+    pb_bvh_desc d;
+    memset(&d, 0, sizeof d);
+    if (desc_in)
+        d = *desc_in;
+    if (!d.max_leaf_size) d.max_leaf_size = 4;
+    if (!d.bins) d.bins = 16;
+    if (!d.threads) d.threads = pb_host_threads();
+    if (d.traversal_cost == 0.f) d.traversal_cost = 1.f;
+    if (d.intersection_cost == 0.f) d.intersection_cost = 1.f;
+    if (d.max_leaf_size > 16)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH max leaf size %u is out of range 1..16", d.max_leaf_size);
+    if (d.bins < 4 || d.bins > MAX_BINS)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH bin count %u is out of range 4..%d", d.bins, MAX_BINS);
+    if (!(d.traversal_cost > 0.f) || !(d.intersection_cost > 0.f))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH SAH costs must be positive");
+    if (d.threads > 64)
+        d.threads = 64;
+
+    double t0 = pb_now_ms();
+    uint32_t n = scene->triangle_count;
+    pb_bvh *bvh = calloc(1, sizeof *bvh);
+    builder bd;
+    memset(&bd, 0, sizeof bd);
+    uint32_t max_nodes = n ? 2 * n : 1;
+    float *centroid = malloc((size_t)(n ? n : 1) * 3 * sizeof(float));
+    aabb *tri_box = malloc((size_t)(n ? n : 1) * sizeof(aabb));
+    bd.index = malloc((size_t)(n ? n : 1) * sizeof(uint32_t));
+    bd.nodes = calloc(max_nodes, sizeof(build_node));
+    bd.stack = malloc((size_t)max_nodes * sizeof(task));
+    uint32_t inner_cap = n > 1 ? n : 1;
+    if (bvh) {
+        bvh->nodes = calloc(inner_cap, sizeof(pb_bvh_node));
+        bvh->tri_positions = malloc((size_t)(n ? n : 1) * 9 * sizeof(float));
+    }
+    if (!bvh || !centroid || !tri_box || !bd.index || !bd.nodes || !bd.stack || !bvh->nodes || !bvh->tri_positions) {
+        free(centroid), free(tri_box), free(bd.index), free(bd.nodes), free(bd.stack);
+        pb_bvh_destroy(bvh);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory building the BVH of %u triangles", n);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        const float *p = scene->positions + 9 * (size_t)i;
+        aabb *b = &tri_box[i];
+        for (int k = 0; k < 3; ++k) {
+            float a = p[k], bb = p[3 + k], c = p[6 + k];
+            b->lo[k] = fminf(a, fminf(bb, c));
+            b->hi[k] = fmaxf(a, fmaxf(bb, c));
+            centroid[3 * (size_t)i + k] = 0.5f * (b->lo[k] + b->hi[k]);
+        }
+        bd.index[i] = i;
+    }
+    bd.centroid = centroid;
+    bd.tri_box = tri_box;
+    bd.bins = d.bins;
+    bd.max_leaf = d.max_leaf_size;
+    bd.tc = d.traversal_cost;
+    bd.ic = d.intersection_cost;
+    bd.threads = d.threads;
+    bd.stack_cap = max_nodes;
+    atomic_init(&bd.node_count, 1);
+    pthread_mutex_init(&bd.lock, NULL);
+    pthread_cond_init(&bd.cond, NULL);
+
+    uint32_t want = n >= 4096 ? d.threads : 1;
+    worker_arg *args = n ? malloc(want * sizeof *args) : NULL;
+    if (n > 0 && !args) {
+        free(centroid), free(tri_box), free(bd.nodes), free(bd.stack);
+        bvh->tri_order = bd.index;
+        pb_bvh_destroy(bvh);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory building the BVH of %u triangles", n);
+    }
+    if (n > 0) {
+        bd.stack[bd.stack_size++] = (task){0, 0, n, 0};
+        pthread_t tids[64];
+        uint32_t started = 0;
+        for (uint32_t i = 0; i < want; ++i)
+            args[i].bd = &bd;
+        for (uint32_t i = 1; i < want; ++i)
+            if (pthread_create(&tids[started], NULL, worker, &args[started + 1]) == 0)
+                ++started;
+        worker(&args[0]);
+        for (uint32_t i = 0; i < started; ++i)
+            pthread_join(tids[i], NULL);
+        want = started + 1;
+    }
+    free(args);
+
+    /* flatten: node 0 is the root's child pair. A root that is a leaf (or an
+     * empty scene) becomes one pair with an empty second slot. */
+    flatten_state fs = {.bd = &bd, .bvh = bvh, .next = 1};
+    const build_node *root = &bd.nodes[0];
+    fs.root_area = n ? box_area(&root->box) : 0;
+    pb_bvh_node *r0 = &bvh->nodes[0];
+    memset(r0, 0, sizeof *r0);
+    r0->child[0] = r0->child[1] = -1;
+    if (n > 0 && root->count == 0) {
+        emit_inner(&fs, 0, 0, 0); /* counts the root pair's fetch (area ratio 1) */
+    } else if (n > 0) {
+        set_child(&fs, r0, 0, 0, 0);
+        fs.sah += 1.0;
+    }
+    bvh->node_count = fs.next;
+    bvh->triangle_count = n;
+    bvh->tri_order = bd.index;
+    for (uint32_t k = 0; k < n; ++k)
+        memcpy(bvh->tri_positions + 9 * (size_t)k, scene->positions + 9 * (size_t)bd.index[k], 9 * sizeof(float));
+    bvh->stats.nodes = fs.next;
+    bvh->stats.leaves = fs.leaves;
+    bvh->stats.depth = fs.depth;
+    bvh->stats.max_leaf_size = fs.max_leaf;
+    bvh->stats.sah_cost = fs.sah;
+    bvh->stats.threads = n ? want : 1;
+
+    pthread_mutex_destroy(&bd.lock);
+    pthread_cond_destroy(&bd.cond);
+    free(centroid);
+    free(tri_box);
+    free(bd.nodes);
+    free(bd.stack);
+    bvh->stats.build_ms = pb_now_ms() - t0;
+    *out = bvh;
+    return PB_OK;
+}
+
+void pb_bvh_destroy(pb_bvh *bvh)
+{
+    if (!bvh)
+        return;
+    free(bvh->nodes);
+    free(bvh->tri_order);
+    free(bvh->tri_positions);
+    free(bvh);
+}
+
+uint64_t pb_bvh_gpu_bytes(const pb_bvh *bvh)
+{
+    /* nodes + 36 bytes of positions + 4 bytes of flags per triangle */
+    return (uint64_t)bvh->node_count * sizeof(pb_bvh_node) + (uint64_t)bvh->triangle_count * 40u;
+}

@@ -1,0 +1,119 @@
+/* Ray/box and ray/triangle tests shared by the CPU traversal and brute force.
+ * shaders/include/intersect.glsl is the same arithmetic, operation for
+ * operation (the GLSL marks it `precise` so no FMA contraction changes it;
+ * the C side is built with -ffp-contract=off).
+ *
+ * Triangle test: watertight (Woop, Benthin & Wald, JCGT 2013). The ray is
+ * sheared so it runs along +Z; the 2D edge functions of a shared edge are then
+ * computed from the same two sheared vertices by both triangles and are exact
+ * negations of each other, so no ray slips between neighbours. An edge
+ * function of exactly 0 counts as inside for both (a hit on the edge, never a
+ * gap). Box test: slabs with the far distance scaled by 1 + 2*gamma(3) (Ize,
+ * "Robust BVH Ray Traversal", JCGT 2013) so rounding never culls a box the
+ * ray touches. */
+#ifndef PB_INTERSECT_H
+#define PB_INTERSECT_H
+
+#include <math.h>
+#include <stdint.h>
+
+typedef struct pb_ray_pre {
+    float org[3];
+    float idir[3];     /* 1/dir with zeros replaced by a signed tiny value */
+    int kx, ky, kz;    /* axis permutation: kz = largest |dir| component */
+    float sx, sy, sz;  /* shear constants */
+} pb_ray_pre;
+
+#define PB_BOX_FAR_SCALE 1.00000036f /* 1 + 2*gamma(3), gamma(n) = n*u/(1-n*u), u = 2^-24 */
+
+static inline void pb_ray_prepare(const float org[3], const float dir[3], pb_ray_pre *r)
+{
+    float ax = fabsf(dir[0]), ay = fabsf(dir[1]), az = fabsf(dir[2]);
+    int kz = ax > ay ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    if (dir[kz] < 0.f) {
+        int t = kx;
+        kx = ky;
+        ky = t;
+    }
+    r->kx = kx, r->ky = ky, r->kz = kz;
+    r->sx = dir[kx] / dir[kz];
+    r->sy = dir[ky] / dir[kz];
+    r->sz = 1.0f / dir[kz];
+    for (int k = 0; k < 3; ++k) {
+        float d = dir[k];
+        if (fabsf(d) < 1e-30f)
+            d = d < 0.f ? -1e-30f : 1e-30f; /* as the GLSL: -0 becomes +1e-30 */
+        r->idir[k] = 1.0f / d;
+        r->org[k] = org[k];
+    }
+}
+
+/* Entry distance into the box [lo, hi] clipped to [tmin, tmax], or +inf. */
+static inline float pb_ray_box(const pb_ray_pre *r, const float lo[3], const float hi[3], float tmin, float tmax)
+{
+    float t0 = tmin, t1 = tmax;
+    for (int k = 0; k < 3; ++k) {
+        float a = (lo[k] - r->org[k]) * r->idir[k];
+        float b = (hi[k] - r->org[k]) * r->idir[k];
+        float n = a < b ? a : b, f = a < b ? b : a;
+        f *= PB_BOX_FAR_SCALE;
+        t0 = n > t0 ? n : t0;
+        t1 = f < t1 ? f : t1;
+    }
+    return t0 <= t1 ? t0 : INFINITY;
+}
+
+/* Watertight test of triangle (v0, v1, v2). On a hit with tmin < t < tmax
+ * returns 1 and writes t and the barycentrics of v1 (u) and v2 (v). */
+static inline int pb_ray_triangle(const pb_ray_pre *r, const float *v0, const float *v1, const float *v2, float tmin,
+                                  float tmax, float *t_out, float *u_out, float *v_out)
+{
+    const int kx = r->kx, ky = r->ky, kz = r->kz;
+    float A[3], B[3], C[3];
+    for (int k = 0; k < 3; ++k) {
+        A[k] = v0[k] - r->org[k];
+        B[k] = v1[k] - r->org[k];
+        C[k] = v2[k] - r->org[k];
+    }
+    float Ax = A[kx] - r->sx * A[kz], Ay = A[ky] - r->sy * A[kz];
+    float Bx = B[kx] - r->sx * B[kz], By = B[ky] - r->sy * B[kz];
+    float Cx = C[kx] - r->sx * C[kz], Cy = C[ky] - r->sy * C[kz];
+    float U = Cx * By - Cy * Bx;
+    float V = Ax * Cy - Ay * Cx;
+    float W = Bx * Ay - By * Ax;
+    if ((U < 0.f || V < 0.f || W < 0.f) && (U > 0.f || V > 0.f || W > 0.f))
+        return 0;
+    float det = U + V + W;
+    if (det == 0.f)
+        return 0;
+    float Az = r->sz * A[kz], Bz = r->sz * B[kz], Cz = r->sz * C[kz];
+    float T = U * Az + V * Bz + W * Cz;
+    /* compare t = T/det against the interval without dividing: flip signs so det > 0 */
+    if (det < 0.f) {
+        T = -T;
+        det = -det;
+        U = -U;
+        V = -V;
+        W = -W;
+    }
+    if (!(T > tmin * det) || !(T < tmax * det))
+        return 0;
+    float inv = 1.0f / det;
+    *t_out = T * inv;
+    *u_out = V * inv;
+    *v_out = W * inv;
+    return 1;
+}
+
+/* 1 when the ray direction leaves the triangle's front (CCW) side. */
+static inline uint32_t pb_is_backface(const float *v0, const float *v1, const float *v2, const float dir[3])
+{
+    float e1[3] = {v1[0] - v0[0], v1[1] - v0[1], v1[2] - v0[2]};
+    float e2[3] = {v2[0] - v0[0], v2[1] - v0[1], v2[2] - v0[2]};
+    float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    return n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2] > 0.f;
+}
+
+#endif

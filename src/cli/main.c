@@ -1,0 +1,389 @@
+/* probebake command line: devices, info, trace. Every failure prints one
+ * line "probebake: error: FILE: problem" to stderr and exits non-zero. */
+#include "probebake/probebake.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+typedef struct cli_log {
+    int verbose;
+    int quiet;
+} cli_log;
+
+static void log_to_stderr(pb_log_level level, const char *msg, void *user)
+{
+    const cli_log *l = user;
+    if (level == PB_LOG_DEBUG && !l->verbose)
+        return;
+    if (level <= PB_LOG_INFO && l->quiet)
+        return;
+    static const char *const names[] = {"debug", "info", "warning", "error"};
+    fprintf(stderr, "probebake: %s: %s\n", names[level], msg);
+}
+
+static int fail(const pb_error *err)
+{
+    fprintf(stderr, "probebake: error: %s\n", err->message[0] ? err->message : pb_result_name(err->code));
+    return 1;
+}
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "probebake: error: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, " (see probebake --help)\n");
+    return 2;
+}
+
+static void print_help(void)
+{
+    printf("probebake %s - light probe volume baker (glTF 2.0 -> SH L2 + depth octmaps, Vulkan compute)\n\n"
+           "usage:\n"
+           "  probebake devices [--json]              list Vulkan devices\n"
+           "  probebake info SCENE [--json]           scene summary: triangles kept/dropped, materials,\n"
+           "                                          textures, lights, cameras, bounds\n"
+           "  probebake trace SCENE [options]         trace probe-style rays on the device and report\n"
+           "                                          throughput; --verify compares with the CPU reference\n"
+           "  probebake --help | --version\n\n"
+           "options:\n"
+           "  --device INDEX|NAME     pick a device (default: discrete > integrated > virtual > CPU)\n"
+           "  --validation            enable the Vulkan validation layer (fail on any message)\n"
+           "  --probes N              probes in the grid over the scene bounds (trace; default 4096)\n"
+           "  --rays N                rays per probe (trace; default 256)\n"
+           "  --seed S                random seed (default 1)\n"
+           "  --verify                trace on the CPU too and compare hit by hit\n"
+           "  --json                  machine-readable output (devices, info)\n"
+           "  --verbose, --quiet      more or fewer messages on stderr\n\n"
+           "The bake itself (probebake bake) is not implemented yet; see README.md.\n",
+           PB_VERSION_STRING);
+}
+
+typedef struct options {
+    const char *command;
+    const char *scene;
+    const char *device;
+    int json, validation, verify;
+    uint32_t probes, rays, seed;
+    cli_log log;
+} options;
+
+static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
+{
+    char *end = NULL;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (!s[0] || *end || s[0] == '-' || v < lo || v > hi)
+        return 0;
+    *out = (uint32_t)v;
+    return 1;
+}
+
+static int parse(int argc, char **argv, options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->probes = 4096;
+    o->rays = 256;
+    o->seed = 1;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const char *next = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            print_help();
+            exit(0);
+        } else if (!strcmp(a, "--version")) {
+            printf("probebake %s\n", PB_VERSION_STRING);
+            exit(0);
+        } else if (!strcmp(a, "--json")) {
+            o->json = 1;
+        } else if (!strcmp(a, "--validation")) {
+            o->validation = 1;
+        } else if (!strcmp(a, "--verify")) {
+            o->verify = 1;
+        } else if (!strcmp(a, "--verbose")) {
+            o->log.verbose = 1;
+        } else if (!strcmp(a, "--quiet")) {
+            o->log.quiet = 1;
+        } else if (!strcmp(a, "--device")) {
+            if (!next)
+                return usage_error("%s needs a value", a);
+            o->device = argv[++i];
+        } else if (!strcmp(a, "--probes") || !strcmp(a, "--rays") || !strcmp(a, "--seed")) {
+            if (!next)
+                return usage_error("%s needs a value", a);
+            uint32_t *dst = !strcmp(a, "--probes") ? &o->probes : !strcmp(a, "--rays") ? &o->rays : &o->seed;
+            uint32_t lo = dst == &o->seed ? 0 : 1, hi = dst == &o->rays ? 65536 : (dst == &o->probes ? 1u << 24 : UINT32_MAX);
+            if (!parse_u32(next, lo, hi, dst)) {
+                fprintf(stderr, "probebake: error: %s '%s' is not an integer in [%u, %u]\n", a, next, lo, hi);
+                return 2;
+            }
+            ++i;
+        } else if (a[0] == '-') {
+            return usage_error("unknown option '%s'", a);
+        } else if (!o->command) {
+            o->command = a;
+        } else if (!o->scene) {
+            o->scene = a;
+        } else {
+            return usage_error("unexpected argument '%s'", a);
+        }
+    }
+    if (!o->command) {
+        print_help();
+        return 2;
+    }
+    return 0;
+}
+
+static void json_string(const char *s)
+{
+    putchar('"');
+    for (; *s; ++s) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\')
+            printf("\\%c", c);
+        else if (c < 0x20)
+            printf("\\u%04x", c);
+        else
+            putchar(c);
+    }
+    putchar('"');
+}
+
+static int cmd_devices(const options *o)
+{
+    pb_device_info infos[16];
+    uint32_t n = 0;
+    pb_error err;
+    if (pb_enumerate_devices(infos, 16, &n, &err) != PB_OK)
+        return fail(&err);
+    if (n > 16)
+        n = 16;
+    if (o->json) {
+        printf("[");
+        for (uint32_t i = 0; i < n; ++i) {
+            const pb_device_info *d = &infos[i];
+            printf("%s\n  {\"index\": %u, \"name\": ", i ? "," : "", d->index);
+            json_string(d->name);
+            printf(", \"type\": \"%s\", \"driver\": ", pb_device_type_name(d->type));
+            json_string(d->driver);
+            printf(", \"vulkan\": \"%u.%u\", \"device_local_bytes\": %llu, \"subgroup_size\": %u, "
+                   "\"max_storage_buffer_range\": %llu, \"max_memory_allocation\": %llu, \"usable\": %s}",
+                   (d->api_version >> 22) & 0x7f, (d->api_version >> 12) & 0x3ff,
+                   (unsigned long long)d->device_local_bytes, d->subgroup_size,
+                   (unsigned long long)d->max_storage_buffer_range, (unsigned long long)d->max_memory_allocation,
+                   d->usable ? "true" : "false");
+        }
+        printf("\n]\n");
+        return 0;
+    }
+    if (n == 0) {
+        fprintf(stderr, "probebake: error: no Vulkan device found\n");
+        return 1;
+    }
+    printf("%-5s %-40s %-15s %-32s %10s %8s\n", "index", "name", "type", "driver", "memory", "subgroup");
+    for (uint32_t i = 0; i < n; ++i) {
+        const pb_device_info *d = &infos[i];
+        printf("%-5u %-40.40s %-15s %-32.32s %7.1f GiB %8u%s%s\n", d->index, d->name, pb_device_type_name(d->type),
+               d->driver, d->device_local_bytes / 1073741824.0, d->subgroup_size, d->usable ? "" : "  unusable: ",
+               d->usable ? "" : d->unusable_reason);
+    }
+    return 0;
+}
+
+static const char *light_type(uint32_t t)
+{
+    return t == PB_LIGHT_DIRECTIONAL ? "directional" : t == PB_LIGHT_SPOT ? "spot" : "point";
+}
+
+static int cmd_info(const options *o)
+{
+    if (!o->scene)
+        return usage_error("%s needs a SCENE file", "info");
+    pb_scene_desc sd = {{log_to_stderr, (void *)&o->log}, 0};
+    pb_scene *s;
+    pb_error err;
+    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
+        return fail(&err);
+    const pb_scene_stats *st = &s->stats;
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = s->bounds_min[k] + s->origin[k];
+        hi[k] = s->bounds_max[k] + s->origin[k];
+    }
+    uint32_t emissive = 0, masked = 0, blended = 0;
+    for (uint32_t m = 0; m < s->material_count; ++m) {
+        const pb_material *mt = &s->materials[m];
+        emissive += mt->emissive[0] > 0 || mt->emissive[1] > 0 || mt->emissive[2] > 0;
+        masked += mt->alpha_mode == PB_ALPHA_MASK;
+        blended += mt->alpha_mode == PB_ALPHA_BLEND;
+    }
+    if (o->json) {
+        printf("{\n  \"file\": ");
+        json_string(o->scene);
+        printf(",\n  \"triangles\": %u,\n  \"triangles_in\": %llu,\n  \"dropped_degenerate\": %llu,\n"
+               "  \"dropped_nonfinite\": %llu,\n  \"primitives\": %u,\n  \"primitives_skipped\": %u,\n"
+               "  \"normals_generated\": %u,\n  \"nodes\": %u,\n",
+               s->triangle_count, (unsigned long long)st->triangles_in, (unsigned long long)st->dropped_degenerate,
+               (unsigned long long)st->dropped_nonfinite, st->primitives, st->primitives_skipped,
+               st->normals_generated, st->nodes);
+        printf("  \"materials\": %u,\n  \"emissive_materials\": %u,\n  \"masked_materials\": %u,\n"
+               "  \"blended_materials\": %u,\n  \"textures\": %u,\n",
+               s->material_count, emissive, masked, blended, s->texture_count);
+        printf("  \"lights\": [");
+        for (uint32_t i = 0; i < s->light_count; ++i) {
+            const pb_light *l = &s->lights[i];
+            printf("%s{\"type\": \"%s\", \"name\": ", i ? ", " : "", light_type(l->type));
+            json_string(l->name);
+            printf(", \"color\": [%g, %g, %g], \"intensity\": %g, \"range\": %g, \"position\": [%.9g, %.9g, %.9g]}",
+                   l->color[0], l->color[1], l->color[2], l->intensity, l->range, l->position[0] + s->origin[0],
+                   l->position[1] + s->origin[1], l->position[2] + s->origin[2]);
+        }
+        printf("],\n  \"cameras\": [");
+        for (uint32_t i = 0; i < s->camera_count; ++i) {
+            const pb_camera *c = &s->cameras[i];
+            printf("%s{\"name\": ", i ? ", " : "");
+            json_string(c->name);
+            printf(", \"perspective\": %s, \"yfov\": %g, \"position\": [%.9g, %.9g, %.9g]}",
+                   c->perspective ? "true" : "false", c->yfov, c->position[0] + s->origin[0],
+                   c->position[1] + s->origin[1], c->position[2] + s->origin[2]);
+        }
+        printf("],\n  \"bounds_min\": [%.9g, %.9g, %.9g],\n  \"bounds_max\": [%.9g, %.9g, %.9g],\n"
+               "  \"origin\": [%.17g, %.17g, %.17g]\n}\n",
+               lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], s->origin[0], s->origin[1], s->origin[2]);
+    } else {
+        printf("scene       %s\n", o->scene);
+        printf("triangles   %u kept of %llu (%llu degenerate, %llu NaN/Inf dropped)\n", s->triangle_count,
+               (unsigned long long)st->triangles_in, (unsigned long long)st->dropped_degenerate,
+               (unsigned long long)st->dropped_nonfinite);
+        printf("primitives  %u (%u points/lines skipped, %u without normals: flat normals generated), %u nodes\n",
+               st->primitives, st->primitives_skipped, st->normals_generated, st->nodes);
+        printf("materials   %u (%u emissive, %u alpha-masked, %u blended)\n", s->material_count, emissive, masked,
+               blended);
+        printf("textures    %u\n", s->texture_count);
+        printf("lights      %u", s->light_count);
+        for (uint32_t i = 0; i < s->light_count; ++i)
+            printf("%s%s '%s' %g", i ? ", " : ": ", light_type(s->lights[i].type), s->lights[i].name,
+                   s->lights[i].intensity);
+        printf("\ncameras     %u\n", s->camera_count);
+        printf("bounds      (%.6g, %.6g, %.6g) .. (%.6g, %.6g, %.6g) m\n", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    }
+    pb_scene_destroy(s);
+    return 0;
+}
+
+static int cmd_trace(const options *o)
+{
+    if (!o->scene)
+        return usage_error("%s needs a SCENE file", "trace");
+    pb_log log = {log_to_stderr, (void *)&o->log};
+    pb_scene_desc sd = {log, 0};
+    pb_scene *s = NULL;
+    pb_bvh *bvh = NULL;
+    pb_context *ctx = NULL;
+    pb_gpu_scene *gs = NULL;
+    pb_ray *rays = NULL;
+    pb_hit *hits = NULL, *ref = NULL;
+    pb_error err;
+    int rc = 1;
+    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
+        goto out;
+    pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, log};
+    if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+        goto out;
+    pb_probe_grid grid;
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, o->probes, &grid);
+    uint32_t probes = pb_probe_grid_count(&grid);
+    uint64_t n64 = (uint64_t)probes * o->rays;
+    if (n64 > (1u << 28)) {
+        pb_error e2 = {PB_ERROR_INVALID_ARGUMENT, ""};
+        snprintf(e2.message, sizeof e2.message, "%s: %llu rays requested; at most 2^28 per trace", o->scene,
+                 (unsigned long long)n64);
+        err = e2;
+        goto out;
+    }
+    uint32_t n = (uint32_t)n64;
+    rays = malloc((size_t)n * sizeof *rays);
+    hits = malloc((size_t)n * sizeof *hits);
+    if (!rays || !hits) {
+        snprintf(err.message, sizeof err.message, "out of host memory for %u rays", n);
+        goto out;
+    }
+    pb_probe_rays(&grid, 0, probes, o->rays, o->seed, rays);
+    pb_trace_stats ts;
+    if (pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &ts, &err) != PB_OK)
+        goto out;
+    uint64_t traversal = 0, total = pb_gpu_scene_bytes(gs, &traversal);
+    uint32_t missed = 0, back = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        missed += hits[i].triangle == PB_NO_HIT;
+        back += hits[i].triangle != PB_NO_HIT && hits[i].backface;
+    }
+    printf("scene      %s: %u triangles\n", o->scene, s->triangle_count);
+    printf("bvh        %u nodes, %u leaves, depth %u, SAH %.2f, %.1f ms on %u threads\n", bvh->stats.nodes,
+           bvh->stats.leaves, bvh->stats.depth, bvh->stats.sah_cost, bvh->stats.build_ms, bvh->stats.threads);
+    printf("device     %s: %.1f MiB uploaded, %.1f bytes/triangle for traversal\n", pb_context_device(ctx)->name,
+           total / 1048576.0, s->triangle_count ? (double)traversal / s->triangle_count : 0.0);
+    printf("trace      %u probes x %u rays = %u rays in %u submits: kernel %.1f ms (%.2f Mrays/s), wall %.1f ms "
+           "(%.2f Mrays/s)\n", probes, o->rays, n, ts.submits, ts.kernel_ms,
+           ts.kernel_ms > 0 ? n / (ts.kernel_ms * 1e3) : 0.0, ts.wall_ms, n / (ts.wall_ms * 1e3));
+    printf("hits       %.1f%% hit, %.1f%% of hits on back faces\n", 100.0 * (n - missed) / n,
+           n - missed ? 100.0 * back / (n - missed) : 0.0);
+    if (o->verify) {
+        ref = malloc((size_t)n * sizeof *ref);
+        if (!ref) {
+            snprintf(err.message, sizeof err.message, "out of host memory for the CPU reference");
+            goto out;
+        }
+        pb_trace_cpu(s, bvh, rays, n, PB_TRACE_CLOSEST, ref, 0);
+        uint32_t mismatches = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            int same = hits[i].triangle == ref[i].triangle;
+            float tol = 1e-5f * fmaxf(1.f, fabsf(ref[i].t));
+            if (!same && hits[i].triangle != PB_NO_HIT && ref[i].triangle != PB_NO_HIT)
+                same = fabsf(hits[i].t - ref[i].t) <= tol; /* a tie between two triangles */
+            else if (same && hits[i].triangle != PB_NO_HIT)
+                same = fabsf(hits[i].t - ref[i].t) <= tol;
+            mismatches += !same;
+        }
+        printf("verify     GPU vs CPU reference: %u mismatches of %u rays\n", mismatches, n);
+        if (mismatches) {
+            snprintf(err.message, sizeof err.message, "%s: GPU and CPU traces differ on %u rays", o->scene,
+                     mismatches);
+            goto out;
+        }
+    }
+    if (o->validation && pb_context_validation_messages(ctx)) {
+        snprintf(err.message, sizeof err.message, "%u Vulkan validation messages", pb_context_validation_messages(ctx));
+        goto out;
+    }
+    rc = 0;
+out:
+    free(rays), free(hits), free(ref);
+    pb_gpu_scene_destroy(gs);
+    pb_context_destroy(ctx);
+    pb_bvh_destroy(bvh);
+    pb_scene_destroy(s);
+    return rc ? fail(&err) : 0;
+}
+
+int main(int argc, char **argv)
+{
+    options o;
+    int r = parse(argc, argv, &o);
+    if (r)
+        return r;
+    if (!strcmp(o.command, "devices"))
+        return cmd_devices(&o);
+    if (!strcmp(o.command, "info"))
+        return cmd_info(&o);
+    if (!strcmp(o.command, "trace"))
+        return cmd_trace(&o);
+    if (!strcmp(o.command, "bake")) {
+        fprintf(stderr, "probebake: error: 'bake' is not implemented yet (issue 3); 'trace' exercises the "
+                        "foundation\n");
+        return 2;
+    }
+    return usage_error("unknown command '%s'", o.command);
+}

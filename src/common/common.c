@@ -1,0 +1,141 @@
+#define _POSIX_C_SOURCE 200809L
+#include "common/common.h"
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+static const char *const result_names[PB_RESULT_COUNT] = {
+    "PB_OK",
+    "PB_ERROR_INVALID_ARGUMENT",
+    "PB_ERROR_IO",
+    "PB_ERROR_PARSE",
+    "PB_ERROR_UNSUPPORTED",
+    "PB_ERROR_OUT_OF_HOST_MEMORY",
+    "PB_ERROR_NO_DEVICE",
+    "PB_ERROR_DEVICE_LOST",
+    "PB_ERROR_OUT_OF_DEVICE_MEMORY",
+    "PB_ERROR_TOO_LARGE",
+    "PB_ERROR_VULKAN",
+    "PB_ERROR_CANCELLED",
+};
+
+const char *pb_result_name(pb_result r)
+{
+    if ((unsigned)r >= PB_RESULT_COUNT)
+        return "PB_ERROR_UNKNOWN";
+    return result_names[r];
+}
+
+pb_result pb_fail(pb_error *err, pb_result code, const char *fmt, ...)
+{
+    if (err) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err->message, sizeof err->message, fmt, ap);
+        va_end(ap);
+        /* one line: a message is printed after "error: " by the CLI */
+        for (char *c = err->message; *c; ++c)
+            if (*c == '\n' || *c == '\r')
+                *c = ' ';
+        err->code = code;
+    }
+    return code;
+}
+
+void pb_error_clear(pb_error *err)
+{
+    if (err) {
+        err->code = PB_OK;
+        err->message[0] = '\0';
+    }
+}
+
+void pb_logf(const pb_log *log, pb_log_level level, const char *fmt, ...)
+{
+    if (!log || !log->fn)
+        return;
+    char line[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    log->fn(level, line, log->user_data);
+}
+
+double pb_now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+uint32_t pb_host_threads(void)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n < 1 ? 1u : (uint32_t)n;
+}
+
+typedef struct parallel_job {
+    uint64_t count, grain;
+    atomic_uint_fast64_t next;
+    pb_range_fn fn;
+    void *user;
+} parallel_job;
+
+static void *parallel_worker(void *arg)
+{
+    parallel_job *job = arg;
+    for (;;) {
+        uint64_t begin = atomic_fetch_add(&job->next, job->grain);
+        if (begin >= job->count)
+            break;
+        uint64_t end = begin + job->grain < job->count ? begin + job->grain : job->count;
+        job->fn(job->user, begin, end);
+    }
+    return NULL;
+}
+
+void pb_parallel_for(uint64_t count, uint64_t grain, uint32_t threads, pb_range_fn fn, void *user)
+{
+    if (count == 0)
+        return;
+    if (grain == 0)
+        grain = 1;
+    if (threads == 0)
+        threads = pb_host_threads();
+    uint64_t blocks = (count + grain - 1) / grain;
+    if (threads > blocks)
+        threads = (uint32_t)blocks;
+    if (threads <= 1) {
+        fn(user, 0, count);
+        return;
+    }
+    parallel_job job = {.count = count, .grain = grain, .fn = fn, .user = user};
+    atomic_init(&job.next, 0);
+    pthread_t tids[64];
+    if (threads > 64)
+        threads = 64;
+    uint32_t started = 0;
+    for (uint32_t i = 1; i < threads; ++i)
+        if (pthread_create(&tids[started], NULL, parallel_worker, &job) == 0)
+            ++started;
+    parallel_worker(&job); /* the calling thread works too; if no thread started, it does it all */
+    for (uint32_t i = 0; i < started; ++i)
+        pthread_join(tids[i], NULL);
+}
+
+uint64_t pb_hash64(const void *data, size_t size, uint64_t seed)
+{
+    const unsigned char *p = data;
+    uint64_t h = 1469598103934665603ull ^ seed;
+    for (size_t i = 0; i < size; ++i) {
+        h ^= p[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}

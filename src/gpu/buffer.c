@@ -1,0 +1,164 @@
+/* Buffers: every one has a device address (arrays are reached through
+ * GL_EXT_buffer_reference, so no binding range limits scene size) and stays
+ * mapped when its memory is host-visible. On UMA devices (lavapipe,
+ * integrated GPUs) device-local memory is host-visible and uploads are a
+ * memcpy; elsewhere they go through a staging buffer. */
+#include "common/common.h"
+#include "gpu/gpu.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#define STAGING_CHUNK (16u << 20)
+
+static int find_memory(const pb_context *ctx, uint32_t type_bits, VkMemoryPropertyFlags need,
+                       VkMemoryPropertyFlags want)
+{
+    int fallback = -1;
+    for (uint32_t i = 0; i < ctx->memory.memoryTypeCount; ++i) {
+        VkMemoryPropertyFlags f = ctx->memory.memoryTypes[i].propertyFlags;
+        if (!(type_bits & (1u << i)) || (f & need) != need)
+            continue;
+        if ((f & want) == want)
+            return (int)i;
+        if (fallback < 0)
+            fallback = (int)i;
+    }
+    return fallback;
+}
+
+pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind kind, const char *what, pb_buffer *out,
+                           pb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (size == 0)
+        size = 16; /* empty arrays still get a valid address */
+    if (ctx->max_allocation && size > ctx->max_allocation)
+        return pb_fail(err, PB_ERROR_TOO_LARGE,
+                       "%s: %s needs %.1f MiB in one allocation, over the device's maxMemoryAllocationSize of "
+                       "%.1f MiB", ctx->info.name, what, size / 1048576.0, ctx->max_allocation / 1048576.0);
+    VkBufferCreateInfo bci = {VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    bci.size = size;
+    bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
+    bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    VkResult vr = ctx->vk.vkCreateBuffer(ctx->device, &bci, NULL, &out->buffer);
+    if (vr != VK_SUCCESS)
+        return pb_vk_fail(ctx, err, vr, what);
+    VkMemoryRequirements req;
+    ctx->vk.vkGetBufferMemoryRequirements(ctx->device, out->buffer, &req);
+    const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    int type = -1;
+    if (kind == PB_MEMORY_DEVICE)
+        type = find_memory(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT,
+                           VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | host);
+    else if (kind == PB_MEMORY_UPLOAD)
+        type = find_memory(ctx, req.memoryTypeBits, host, host);
+    else
+        type = find_memory(ctx, req.memoryTypeBits, host, host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
+    if (type < 0)
+        type = find_memory(ctx, req.memoryTypeBits, kind == PB_MEMORY_DEVICE ? 0 : host, 0);
+    if (type < 0) {
+        pb_buffer_destroy(ctx, out);
+        return pb_fail(err, PB_ERROR_VULKAN, "%s: no memory type for %s", ctx->info.name, what);
+    }
+    VkMemoryAllocateFlagsInfo flags = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO};
+    flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+    VkMemoryAllocateInfo mai = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, &flags};
+    mai.allocationSize = req.size;
+    mai.memoryTypeIndex = (uint32_t)type;
+    vr = ctx->vk.vkAllocateMemory(ctx->device, &mai, NULL, &out->memory);
+    if (vr != VK_SUCCESS) {
+        pb_buffer_destroy(ctx, out);
+        char w[160];
+        snprintf(w, sizeof w, "allocation of %.1f MiB for %s", req.size / 1048576.0, what);
+        return pb_vk_fail(ctx, err, vr, w);
+    }
+    if ((vr = ctx->vk.vkBindBufferMemory(ctx->device, out->buffer, out->memory, 0)) != VK_SUCCESS) {
+        pb_buffer_destroy(ctx, out);
+        return pb_vk_fail(ctx, err, vr, what);
+    }
+    VkMemoryPropertyFlags f = ctx->memory.memoryTypes[type].propertyFlags;
+    if ((f & host) == host) {
+        if ((vr = ctx->vk.vkMapMemory(ctx->device, out->memory, 0, VK_WHOLE_SIZE, 0, &out->mapped)) != VK_SUCCESS) {
+            pb_buffer_destroy(ctx, out);
+            return pb_vk_fail(ctx, err, vr, what);
+        }
+    }
+    out->device_local = (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) != 0;
+    VkBufferDeviceAddressInfo ai = {VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
+    ai.buffer = out->buffer;
+    out->address = ctx->vk.vkGetBufferDeviceAddress(ctx->device, &ai);
+    out->size = size;
+    if (kind == PB_MEMORY_DEVICE)
+        ctx->allocated += req.size;
+    return PB_OK;
+}
+
+void pb_buffer_destroy(pb_context *ctx, pb_buffer *b)
+{
+    if (b->buffer)
+        ctx->vk.vkDestroyBuffer(ctx->device, b->buffer, NULL);
+    if (b->memory)
+        ctx->vk.vkFreeMemory(ctx->device, b->memory, NULL); /* unmaps implicitly */
+    memset(b, 0, sizeof *b);
+}
+
+pb_result pb_buffer_upload(pb_context *ctx, pb_buffer *dst, VkDeviceSize offset, const void *data, VkDeviceSize size,
+                           pb_error *err)
+{
+    if (size == 0)
+        return PB_OK;
+    if (offset + size > dst->size)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "upload past the end of a buffer");
+    if (dst->mapped) {
+        memcpy((char *)dst->mapped + offset, data, (size_t)size);
+        return PB_OK;
+    }
+    pb_buffer staging;
+    VkDeviceSize chunk = size < STAGING_CHUNK ? size : STAGING_CHUNK;
+    pb_result r = pb_buffer_create(ctx, chunk, PB_MEMORY_UPLOAD, "staging buffer", &staging, err);
+    if (r != PB_OK)
+        return r;
+    for (VkDeviceSize done = 0; done < size && r == PB_OK; done += chunk) {
+        VkDeviceSize n = size - done < chunk ? size - done : chunk;
+        memcpy(staging.mapped, (const char *)data + done, (size_t)n);
+        r = pb_cmd_begin(ctx, err);
+        if (r != PB_OK)
+            break;
+        pb_cmd_copy(ctx, &staging, 0, dst, offset + done, n);
+        r = pb_cmd_submit_wait(ctx, NULL, err);
+    }
+    pb_buffer_destroy(ctx, &staging);
+    return r;
+}
+
+pb_result pb_buffer_download(pb_context *ctx, const pb_buffer *src, VkDeviceSize offset, void *data, VkDeviceSize size,
+                             pb_error *err)
+{
+    if (size == 0)
+        return PB_OK;
+    if (offset + size > src->size)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "download past the end of a buffer");
+    if (src->mapped) {
+        memcpy(data, (const char *)src->mapped + offset, (size_t)size);
+        return PB_OK;
+    }
+    pb_buffer staging;
+    VkDeviceSize chunk = size < STAGING_CHUNK ? size : STAGING_CHUNK;
+    pb_result r = pb_buffer_create(ctx, chunk, PB_MEMORY_DOWNLOAD, "staging buffer", &staging, err);
+    if (r != PB_OK)
+        return r;
+    for (VkDeviceSize done = 0; done < size && r == PB_OK; done += chunk) {
+        VkDeviceSize n = size - done < chunk ? size - done : chunk;
+        r = pb_cmd_begin(ctx, err);
+        if (r != PB_OK)
+            break;
+        pb_cmd_copy(ctx, src, offset + done, &staging, 0, n);
+        r = pb_cmd_submit_wait(ctx, NULL, err);
+        if (r == PB_OK)
+            memcpy((char *)data + done, staging.mapped, (size_t)n);
+    }
+    pb_buffer_destroy(ctx, &staging);
+    return r;
+}

@@ -1,0 +1,108 @@
+/* The Vulkan compute layer: plain structs with create/destroy pairs.
+ *
+ * device.c   instance, validation messenger, device listing and choice
+ * buffer.c   buffers (device address, mapped when host-visible), staging copies
+ * pipeline.c compute pipelines from embedded SPIR-V (push constants only:
+ *            every array is reached through a buffer device address)
+ * submit.c   one command buffer, bounded submissions, timestamp queries
+ *
+ * Device-level calls go through the context's own volk table (no global
+ * device dispatch), so several contexts can live side by side. */
+#ifndef PB_GPU_H
+#define PB_GPU_H
+
+#ifndef VK_NO_PROTOTYPES
+#define VK_NO_PROTOTYPES
+#endif
+#include <volk.h>
+
+#include "probebake/device.h"
+
+typedef struct pb_context {
+    pb_context_desc desc;
+    pb_device_info info;
+    VkInstance instance;
+    VkDebugUtilsMessengerEXT messenger;
+    VkPhysicalDevice physical;
+    VkDevice device;
+    struct VolkDeviceTable vk;
+    VkQueue queue;
+    uint32_t queue_family;
+    VkCommandPool pool;
+    VkCommandBuffer cmd;
+    VkFence fence;
+    VkQueryPool timestamps;
+    uint32_t timestamp_capacity;
+    uint32_t timestamp_count;    /* written in the current command buffer */
+    double timestamp_period_ns;  /* 0: timestamps unsupported on this queue */
+    uint64_t timestamp_mask;
+    VkPhysicalDeviceMemoryProperties memory;
+    VkPhysicalDeviceLimits limits;
+    uint64_t max_allocation;
+    uint64_t allocated;          /* device-local bytes allocated through pb_buffer_create */
+    uint32_t validation_messages;
+    int recording;
+} pb_context;
+
+/* Maps a Vulkan error to a pb_result and a message naming `what`. */
+pb_result pb_vk_fail(pb_context *ctx, pb_error *err, VkResult vr, const char *what);
+const char *pb_vk_result_name(VkResult vr);
+
+typedef enum pb_memory_kind {
+    PB_MEMORY_DEVICE = 0,    /* device-local; mapped too when the device is UMA */
+    PB_MEMORY_UPLOAD = 1,    /* host-visible, coherent: staging towards the device */
+    PB_MEMORY_DOWNLOAD = 2   /* host-visible, cached if possible: staging back */
+} pb_memory_kind;
+
+typedef struct pb_buffer {
+    VkBuffer buffer;
+    VkDeviceMemory memory;
+    VkDeviceSize size;
+    VkDeviceAddress address;
+    void *mapped;            /* NULL when not host-visible */
+    int device_local;
+} pb_buffer;
+
+/* Creates a buffer of `size` bytes (> 0) usable as storage buffer, transfer
+ * source/destination and by device address. `what` names it in errors.
+ * Refuses (PB_ERROR_TOO_LARGE) sizes over maxMemoryAllocationSize before
+ * allocating. */
+pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind kind, const char *what, pb_buffer *out,
+                           pb_error *err);
+void pb_buffer_destroy(pb_context *ctx, pb_buffer *b);
+
+/* Copies host data into a buffer: memcpy when mapped, else through a staging
+ * buffer and a submission of its own (so: not while recording). */
+pb_result pb_buffer_upload(pb_context *ctx, pb_buffer *dst, VkDeviceSize offset, const void *data, VkDeviceSize size,
+                           pb_error *err);
+pb_result pb_buffer_download(pb_context *ctx, const pb_buffer *src, VkDeviceSize offset, void *data,
+                             VkDeviceSize size, pb_error *err);
+
+typedef struct pb_pipeline {
+    VkPipelineLayout layout;
+    VkPipeline pipeline;
+    uint32_t push_size;
+    uint32_t local_size;
+} pb_pipeline;
+
+/* Compute pipeline from SPIR-V words; `spec` holds `spec_count` uint32
+ * specialisation constants with ids 0..spec_count-1. */
+pb_result pb_pipeline_create(pb_context *ctx, const uint32_t *spirv, size_t spirv_bytes, uint32_t push_size,
+                             const uint32_t *spec, uint32_t spec_count, uint32_t local_size, const char *what,
+                             pb_pipeline *out, pb_error *err);
+void pb_pipeline_destroy(pb_context *ctx, pb_pipeline *p);
+
+/* Recording: begin, add work, then submit and wait (bounded submissions are
+ * the caller's loop). Timestamps written in between are read after the wait. */
+pb_result pb_cmd_begin(pb_context *ctx, pb_error *err);
+void pb_cmd_dispatch(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups);
+void pb_cmd_barrier(pb_context *ctx); /* all compute/transfer writes -> reads */
+void pb_cmd_barrier_to_host(pb_context *ctx); /* device writes -> host reads after the wait */
+void pb_cmd_copy(pb_context *ctx, const pb_buffer *src, VkDeviceSize src_offset, const pb_buffer *dst,
+                 VkDeviceSize dst_offset, VkDeviceSize size);
+void pb_cmd_timestamp(pb_context *ctx); /* no-op without timestamp support */
+/* Submits, waits, and returns the summed intervals between timestamp pairs
+ * (0,1), (2,3), ... in milliseconds through gpu_ms (may be NULL). */
+pb_result pb_cmd_submit_wait(pb_context *ctx, double *gpu_ms, pb_error *err);
+
+#endif

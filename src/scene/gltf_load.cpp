@@ -1,0 +1,573 @@
+// The one C++ file: wraps tinygltf. Parses the file, checks every index and
+// byte range before touching data, walks the default scene's node hierarchy
+// composing transforms in double, assembles triangles from triangles / strips
+// / fans with or without indices, and hands world-space data to the C scene
+// builder. Nothing here outlives the call.
+#include "scene/scene_builder.h"
+
+extern "C" {
+#include "common/common.h"
+}
+
+#include <stb_image.h>
+#include <tiny_gltf.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace {
+
+typedef double mat4[16]; // column-major, as glTF
+
+struct reader {
+    const tinygltf::Model &m;
+    const char *path;
+    pb_scene_builder *b;
+    pb_error *err;
+    std::vector<int32_t> texture_map; // glTF texture -> pb texture (-1: none / failed)
+    uint32_t default_material = 0;
+};
+
+// Custom image loader: stb_image to RGBA8. A texture that fails to decode is a
+// warning (the material falls back to its factor), never a failed load.
+struct image_ctx {
+    const char *path;
+    pb_log log;
+    int skip;
+};
+
+bool load_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
+                const unsigned char *bytes, int size, void *user)
+{
+    const image_ctx *ctx = static_cast<const image_ctx *>(user);
+    image->width = image->height = 0;
+    image->component = 4;
+    image->bits = 8;
+    image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+    image->image.clear();
+    if (ctx->skip)
+        return true;
+    int w = 0, h = 0, c = 0;
+    unsigned char *px = stbi_load_from_memory(bytes, size, &w, &h, &c, 4);
+    if (!px || w <= 0 || h <= 0) {
+        pb_logf(&ctx->log, PB_LOG_WARN, "%s: image %d could not be decoded (%s); its factor is used", ctx->path,
+                index, stbi_failure_reason() ? stbi_failure_reason() : "unknown");
+        if (px)
+            stbi_image_free(px);
+        return true;
+    }
+    image->width = w;
+    image->height = h;
+    image->image.assign(px, px + (size_t)w * h * 4);
+    stbi_image_free(px);
+    return true;
+}
+
+void mat_identity(mat4 o)
+{
+    for (int i = 0; i < 16; ++i)
+        o[i] = (i % 5) == 0 ? 1.0 : 0.0;
+}
+
+void mat_mul(const mat4 a, const mat4 b, mat4 o)
+{
+    mat4 r;
+    for (int c = 0; c < 4; ++c)
+        for (int rr = 0; rr < 4; ++rr) {
+            double s = 0;
+            for (int k = 0; k < 4; ++k)
+                s += a[k * 4 + rr] * b[c * 4 + k];
+            r[c * 4 + rr] = s;
+        }
+    memcpy(o, r, sizeof r);
+}
+
+void node_local(const tinygltf::Node &n, mat4 o)
+{
+    if (n.matrix.size() == 16) {
+        for (int i = 0; i < 16; ++i)
+            o[i] = n.matrix[i];
+        return;
+    }
+    double t[3] = {0, 0, 0}, s[3] = {1, 1, 1}, q[4] = {0, 0, 0, 1};
+    if (n.translation.size() == 3)
+        for (int i = 0; i < 3; ++i)
+            t[i] = n.translation[i];
+    if (n.scale.size() == 3)
+        for (int i = 0; i < 3; ++i)
+            s[i] = n.scale[i];
+    if (n.rotation.size() == 4)
+        for (int i = 0; i < 4; ++i)
+            q[i] = n.rotation[i];
+    double ql = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (ql > 0)
+        for (double &c : q)
+            c /= ql;
+    double x = q[0], y = q[1], z = q[2], w = q[3];
+    double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
+                   2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
+                   2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)}; // columns
+    mat_identity(o);
+    for (int c = 0; c < 3; ++c)
+        for (int rr = 0; rr < 3; ++rr)
+            o[c * 4 + rr] = r[c * 3 + rr] * s[c];
+    o[12] = t[0], o[13] = t[1], o[14] = t[2];
+}
+
+void xform_point(const mat4 m, const double p[3], double o[3])
+{
+    for (int r = 0; r < 3; ++r)
+        o[r] = m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r];
+}
+
+void xform_dir(const mat4 m, const double d[3], double o[3])
+{
+    for (int r = 0; r < 3; ++r)
+        o[r] = m[r] * d[0] + m[4 + r] * d[1] + m[8 + r] * d[2];
+}
+
+// Inverse-transpose of the upper 3x3 (cofactor matrix; the scale does not
+// matter because normals are renormalised). Returns the determinant.
+double normal_matrix(const mat4 m, double n[9])
+{
+    double a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
+    // cofactors, stored column-major for xform: n maps object normal -> world
+    double c00 = e * i - f * h, c01 = -(d * i - f * g), c02 = d * h - e * g;
+    double c10 = -(b * i - c * h), c11 = a * i - c * g, c12 = -(a * h - b * g);
+    double c20 = b * f - c * e, c21 = -(a * f - c * d), c22 = a * e - b * d;
+    // world normal row r = sum_k cof[r][k] * n_k
+    n[0] = c00, n[3] = c01, n[6] = c02;
+    n[1] = c10, n[4] = c11, n[7] = c12;
+    n[2] = c20, n[5] = c21, n[8] = c22;
+    return a * c00 + b * c01 + c * c02;
+}
+
+pb_result fail(reader &r, pb_result code, const std::string &what)
+{
+    return pb_fail(r.err, code, "%s: %s", r.path, what.c_str());
+}
+
+// Reads `count` elements of accessor `index` as `ncomp` doubles each, after
+// checking every byte it touches lies inside its buffer view and buffer.
+pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &out, const char *what)
+{
+    const tinygltf::Model &m = r.m;
+    if (index < 0 || index >= (int)m.accessors.size())
+        return fail(r, PB_ERROR_PARSE, std::string(what) + " accessor " + std::to_string(index) + " does not exist");
+    const tinygltf::Accessor &a = m.accessors[index];
+    std::string name = std::string(what) + " accessor " + std::to_string(index);
+    if (a.sparse.isSparse)
+        return fail(r, PB_ERROR_UNSUPPORTED, name + " is sparse (sparse accessors are not supported)");
+    int comps = tinygltf::GetNumComponentsInType((uint32_t)a.type);
+    int csize = tinygltf::GetComponentSizeInBytes((uint32_t)a.componentType);
+    if (comps <= 0 || csize <= 0)
+        return fail(r, PB_ERROR_PARSE, name + " has an invalid type or component type");
+    if (comps < ncomp)
+        return fail(r, PB_ERROR_PARSE, name + " has " + std::to_string(comps) + " components, needs " +
+                                           std::to_string(ncomp));
+    out.assign((size_t)a.count * ncomp, 0.0);
+    if (a.count == 0)
+        return PB_OK;
+    if (a.bufferView < 0)
+        return PB_OK; // glTF: all zeros
+    if (a.bufferView >= (int)m.bufferViews.size())
+        return fail(r, PB_ERROR_PARSE, name + " refers to missing bufferView " + std::to_string(a.bufferView));
+    const tinygltf::BufferView &v = m.bufferViews[a.bufferView];
+    if (v.buffer < 0 || v.buffer >= (int)m.buffers.size())
+        return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(a.bufferView) + " refers to missing buffer " +
+                                           std::to_string(v.buffer));
+    const std::vector<unsigned char> &buf = m.buffers[v.buffer].data;
+    size_t elem = (size_t)comps * csize;
+    size_t stride = v.byteStride ? v.byteStride : elem;
+    if (stride < elem)
+        return fail(r, PB_ERROR_PARSE, name + ": byteStride smaller than an element");
+    // the view must sit in the buffer, and the accessor in the view
+    if (v.byteOffset > buf.size() || v.byteLength > buf.size() - v.byteOffset)
+        return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(a.bufferView) + " (offset " +
+                                           std::to_string(v.byteOffset) + ", length " + std::to_string(v.byteLength) +
+                                           ") exceeds buffer " + std::to_string(v.buffer) + " of " +
+                                           std::to_string(buf.size()) + " bytes (truncated or missing buffer?)");
+    size_t need = a.byteOffset + stride * (a.count - 1) + elem;
+    if (a.count > SIZE_MAX / stride || need < a.byteOffset || need > v.byteLength)
+        return fail(r, PB_ERROR_PARSE, name + " (" + std::to_string(a.count) + " elements) reads past the end of bufferView " +
+                                           std::to_string(a.bufferView));
+    const unsigned char *base = buf.data() + v.byteOffset + a.byteOffset;
+    for (size_t i = 0; i < a.count; ++i) {
+        const unsigned char *e = base + i * stride;
+        for (int c = 0; c < ncomp; ++c) {
+            const unsigned char *p = e + (size_t)c * csize;
+            double x = 0;
+            switch (a.componentType) {
+            case TINYGLTF_COMPONENT_TYPE_FLOAT: { float f; memcpy(&f, p, 4); x = f; break; }
+            case TINYGLTF_COMPONENT_TYPE_DOUBLE: { double f; memcpy(&f, p, 8); x = f; break; }
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: x = a.normalized ? p[0] / 255.0 : p[0]; break;
+            case TINYGLTF_COMPONENT_TYPE_BYTE: {
+                int8_t s; memcpy(&s, p, 1);
+                x = a.normalized ? std::fmax(s / 127.0, -1.0) : s; break; }
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+                uint16_t s; memcpy(&s, p, 2); x = a.normalized ? s / 65535.0 : s; break; }
+            case TINYGLTF_COMPONENT_TYPE_SHORT: {
+                int16_t s; memcpy(&s, p, 2); x = a.normalized ? std::fmax(s / 32767.0, -1.0) : s; break; }
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+                uint32_t s; memcpy(&s, p, 4); x = a.normalized ? s / 4294967295.0 : s; break; }
+            case TINYGLTF_COMPONENT_TYPE_INT: { int32_t s; memcpy(&s, p, 4); x = s; break; }
+            default: return fail(r, PB_ERROR_PARSE, name + " has an invalid component type");
+            }
+            out[i * ncomp + c] = x;
+        }
+    }
+    return PB_OK;
+}
+
+int32_t texture_of(reader &r, int gltf_texture, const char *material)
+{
+    if (gltf_texture < 0)
+        return -1;
+    if (gltf_texture >= (int)r.texture_map.size()) {
+        pb_logf(&r.b->log, PB_LOG_WARN, "%s: material '%s' refers to missing texture %d; ignored", r.path, material,
+                gltf_texture);
+        return -1;
+    }
+    return r.texture_map[gltf_texture];
+}
+
+pb_result read_textures(reader &r, int skip)
+{
+    const tinygltf::Model &m = r.m;
+    r.texture_map.assign(m.textures.size(), -1);
+    if (skip)
+        return PB_OK;
+    // colour textures are sRGB: note which ones the materials use that way
+    std::vector<int> srgb(m.textures.size(), 0);
+    for (const tinygltf::Material &mt : m.materials) {
+        int t0 = mt.pbrMetallicRoughness.baseColorTexture.index, t1 = mt.emissiveTexture.index;
+        if (t0 >= 0 && t0 < (int)srgb.size()) srgb[t0] = 1;
+        if (t1 >= 0 && t1 < (int)srgb.size()) srgb[t1] = 1;
+    }
+    for (size_t i = 0; i < m.textures.size(); ++i) {
+        const tinygltf::Texture &t = m.textures[i];
+        if (t.source < 0 || t.source >= (int)m.images.size()) {
+            pb_logf(&r.b->log, PB_LOG_WARN, "%s: texture %zu refers to missing image %d; ignored", r.path, i, t.source);
+            continue;
+        }
+        const tinygltf::Image &img = m.images[t.source];
+        if (img.width <= 0 || img.height <= 0 || img.component != 4 || img.bits != 8 ||
+            img.image.size() != (size_t)img.width * img.height * 4)
+            continue; // warned by load_image
+        uint32_t wrap[2] = {PB_WRAP_REPEAT, PB_WRAP_REPEAT};
+        if (t.sampler >= 0 && t.sampler < (int)m.samplers.size()) {
+            int w[2] = {m.samplers[t.sampler].wrapS, m.samplers[t.sampler].wrapT};
+            for (int k = 0; k < 2; ++k)
+                wrap[k] = w[k] == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE     ? PB_WRAP_CLAMP
+                          : w[k] == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? PB_WRAP_MIRROR
+                                                                          : PB_WRAP_REPEAT;
+        }
+        std::vector<uint32_t> texels((size_t)img.width * img.height);
+        memcpy(texels.data(), img.image.data(), texels.size() * 4);
+        r.texture_map[i] = pb_sb_add_texture(r.b, texels.data(), (uint32_t)img.width, (uint32_t)img.height, wrap[0],
+                                             wrap[1], (uint32_t)srgb[i]);
+    }
+    return PB_OK;
+}
+
+void read_materials(reader &r)
+{
+    for (const tinygltf::Material &mt : r.m.materials) {
+        pb_material pm = pb_material_default();
+        snprintf(pm.name, sizeof pm.name, "%s", mt.name.c_str());
+        const tinygltf::PbrMetallicRoughness &pbr = mt.pbrMetallicRoughness;
+        for (int k = 0; k < 4 && k < (int)pbr.baseColorFactor.size(); ++k)
+            pm.base_color[k] = (float)pbr.baseColorFactor[k];
+        pm.metallic = (float)pbr.metallicFactor;
+        pm.roughness = (float)pbr.roughnessFactor;
+        double strength = 1.0;
+        auto ext = mt.extensions.find("KHR_materials_emissive_strength");
+        if (ext != mt.extensions.end() && ext->second.Has("emissiveStrength"))
+            strength = ext->second.Get("emissiveStrength").GetNumberAsDouble();
+        for (int k = 0; k < 3 && k < (int)mt.emissiveFactor.size(); ++k)
+            pm.emissive[k] = (float)(mt.emissiveFactor[k] * strength);
+        pm.alpha_mode = mt.alphaMode == "MASK" ? PB_ALPHA_MASK : mt.alphaMode == "BLEND" ? PB_ALPHA_BLEND : PB_ALPHA_OPAQUE;
+        pm.alpha_cutoff = (float)mt.alphaCutoff;
+        pm.double_sided = mt.doubleSided ? 1u : 0u;
+        pm.base_color_texture = texture_of(r, pbr.baseColorTexture.index, pm.name);
+        pm.emissive_texture = texture_of(r, mt.emissiveTexture.index, pm.name);
+        pb_sb_add_material(r.b, &pm);
+    }
+    pb_material def = pb_material_default();
+    snprintf(def.name, sizeof def.name, "default");
+    r.default_material = (uint32_t)pb_sb_add_material(r.b, &def);
+}
+
+pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 world, const char *mesh_name)
+{
+    r.b->stats.primitives++;
+    if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+        prim.mode != TINYGLTF_MODE_TRIANGLE_FAN && prim.mode != -1) {
+        r.b->stats.primitives_skipped++;
+        return PB_OK;
+    }
+    auto pos_it = prim.attributes.find("POSITION");
+    if (pos_it == prim.attributes.end()) {
+        pb_logf(&r.b->log, PB_LOG_WARN, "%s: a primitive of mesh '%s' has no POSITION; skipped", r.path, mesh_name);
+        r.b->stats.primitives_skipped++;
+        return PB_OK;
+    }
+    std::vector<double> pos, nrm, uv, idx;
+    pb_result res = read_accessor(r, pos_it->second, 3, pos, "POSITION");
+    if (res != PB_OK)
+        return res;
+    size_t nv = pos.size() / 3;
+    auto nit = prim.attributes.find("NORMAL");
+    bool have_n = nit != prim.attributes.end();
+    if (have_n && (res = read_accessor(r, nit->second, 3, nrm, "NORMAL")) != PB_OK)
+        return res;
+    if (have_n && nrm.size() != pos.size())
+        return fail(r, PB_ERROR_PARSE, "NORMAL and POSITION accessors of mesh '" + std::string(mesh_name) + "' differ in count");
+    if (!have_n)
+        r.b->stats.normals_generated++;
+    auto tit = prim.attributes.find("TEXCOORD_0");
+    bool have_uv = tit != prim.attributes.end();
+    if (have_uv && (res = read_accessor(r, tit->second, 2, uv, "TEXCOORD_0")) != PB_OK)
+        return res;
+    if (have_uv && uv.size() / 2 != nv)
+        return fail(r, PB_ERROR_PARSE, "TEXCOORD_0 and POSITION accessors of mesh '" + std::string(mesh_name) + "' differ in count");
+    std::vector<uint32_t> order; // vertex indices, before triangle assembly
+    if (prim.indices >= 0) {
+        const tinygltf::Accessor *ia = prim.indices < (int)r.m.accessors.size() ? &r.m.accessors[prim.indices] : nullptr;
+        if (ia && ia->componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+            ia->componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            ia->componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+            return fail(r, PB_ERROR_PARSE, "index accessor " + std::to_string(prim.indices) + " is not unsigned integer");
+        if ((res = read_accessor(r, prim.indices, 1, idx, "index")) != PB_OK)
+            return res;
+        order.resize(idx.size());
+        for (size_t i = 0; i < idx.size(); ++i) {
+            if (idx[i] >= (double)nv)
+                return fail(r, PB_ERROR_PARSE, "index " + std::to_string((uint64_t)idx[i]) + " in accessor " +
+                                                   std::to_string(prim.indices) + " is out of range (" +
+                                                   std::to_string(nv) + " vertices)");
+            order[i] = (uint32_t)idx[i];
+        }
+    } else {
+        order.resize(nv);
+        for (size_t i = 0; i < nv; ++i)
+            order[i] = (uint32_t)i;
+    }
+    // assemble triangles as vertex-index triples
+    std::vector<uint32_t> tris;
+    int mode = prim.mode == -1 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+    if (mode == TINYGLTF_MODE_TRIANGLES) {
+        tris.assign(order.begin(), order.begin() + (order.size() / 3) * 3);
+    } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        for (size_t i = 0; i + 2 < order.size(); ++i) { // odd triangles swap to keep the winding
+            bool odd = i & 1;
+            tris.insert(tris.end(), {order[i], order[odd ? i + 2 : i + 1], order[odd ? i + 1 : i + 2]});
+        }
+    } else {
+        for (size_t i = 1; i + 1 < order.size(); ++i)
+            tris.insert(tris.end(), {order[i], order[i + 1], order[0]});
+    }
+    uint32_t material = r.default_material;
+    if (prim.material >= 0) {
+        if (prim.material >= (int)r.m.materials.size())
+            return fail(r, PB_ERROR_PARSE, "mesh '" + std::string(mesh_name) + "' refers to missing material " +
+                                               std::to_string(prim.material));
+        material = (uint32_t)prim.material;
+    }
+    double nm[9];
+    double det = normal_matrix(world, nm);
+    bool flip = det < 0; // mirrored transform: glTF says reverse the winding
+    for (size_t t = 0; t + 2 < tris.size(); t += 3) {
+        double p[9];
+        float n[9], tc[6];
+        for (int k = 0; k < 3; ++k) {
+            uint32_t v = tris[t + (flip && k ? 3 - k : k)];
+            xform_point(world, &pos[3 * v], &p[3 * k]);
+            if (have_n) {
+                double wn[3]; // nm is the 3x3 cofactor matrix, column-major
+                wn[0] = nm[0] * nrm[3 * v] + nm[3] * nrm[3 * v + 1] + nm[6] * nrm[3 * v + 2];
+                wn[1] = nm[1] * nrm[3 * v] + nm[4] * nrm[3 * v + 1] + nm[7] * nrm[3 * v + 2];
+                wn[2] = nm[2] * nrm[3 * v] + nm[5] * nrm[3 * v + 1] + nm[8] * nrm[3 * v + 2];
+                if (det < 0)
+                    wn[0] = -wn[0], wn[1] = -wn[1], wn[2] = -wn[2]; // cofactors of a mirror point inward
+                for (int c = 0; c < 3; ++c)
+                    n[3 * k + c] = (float)wn[c];
+            }
+            tc[2 * k] = have_uv ? (float)uv[2 * v] : 0.f;
+            tc[2 * k + 1] = have_uv ? (float)uv[2 * v + 1] : 0.f;
+        }
+        if (!pb_sb_add_triangle(r.b, p, have_n ? n : nullptr, tc, material))
+            return fail(r, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
+    }
+    return PB_OK;
+}
+
+pb_result visit(reader &r, int node_index, const mat4 parent, int depth)
+{
+    const tinygltf::Model &m = r.m;
+    if (node_index < 0 || node_index >= (int)m.nodes.size())
+        return fail(r, PB_ERROR_PARSE, "node " + std::to_string(node_index) + " does not exist");
+    if (depth > 1024 || r.b->stats.nodes > 16u * (uint32_t)m.nodes.size() + 16u)
+        return fail(r, PB_ERROR_PARSE, "node hierarchy is cyclic or deeper than 1024 levels (at node " +
+                                           std::to_string(node_index) + ")");
+    r.b->stats.nodes++;
+    const tinygltf::Node &n = m.nodes[node_index];
+    mat4 local, world;
+    node_local(n, local);
+    mat_mul(parent, local, world);
+    if (n.mesh >= 0) {
+        if (n.mesh >= (int)m.meshes.size())
+            return fail(r, PB_ERROR_PARSE, "node " + std::to_string(node_index) + " refers to missing mesh " +
+                                               std::to_string(n.mesh));
+        const tinygltf::Mesh &mesh = m.meshes[n.mesh];
+        for (const tinygltf::Primitive &p : mesh.primitives) {
+            pb_result res = read_primitive(r, p, world, mesh.name.c_str());
+            if (res != PB_OK)
+                return res;
+        }
+    }
+    const double origin[3] = {0, 0, 0}, neg_z[3] = {0, 0, -1}, pos_y[3] = {0, 1, 0};
+    double wp[3], wf[3], wu[3];
+    xform_point(world, origin, wp);
+    xform_dir(world, neg_z, wf);
+    xform_dir(world, pos_y, wu);
+    if (n.camera >= 0 && n.camera < (int)m.cameras.size()) {
+        const tinygltf::Camera &c = m.cameras[n.camera];
+        pb_camera pc;
+        memset(&pc, 0, sizeof pc);
+        snprintf(pc.name, sizeof pc.name, "%s", c.name.c_str());
+        pc.perspective = c.type != "orthographic";
+        if (pc.perspective) {
+            pc.yfov = (float)c.perspective.yfov;
+            pc.aspect = (float)c.perspective.aspectRatio;
+            pc.znear = (float)c.perspective.znear;
+            pc.zfar = (float)c.perspective.zfar;
+        } else {
+            pc.xmag = (float)c.orthographic.xmag;
+            pc.ymag = (float)c.orthographic.ymag;
+            pc.znear = (float)c.orthographic.znear;
+            pc.zfar = (float)c.orthographic.zfar;
+        }
+        pb_sb_add_camera(r.b, &pc, wp, wf, wu);
+    }
+    auto le = n.extensions.find("KHR_lights_punctual");
+    if (le != n.extensions.end() && le->second.Has("light")) {
+        int li = le->second.Get("light").GetNumberAsInt();
+        if (li < 0 || li >= (int)m.lights.size())
+            return fail(r, PB_ERROR_PARSE, "node " + std::to_string(node_index) + " refers to missing light " +
+                                               std::to_string(li));
+        const tinygltf::Light &l = m.lights[li];
+        pb_light pl;
+        memset(&pl, 0, sizeof pl);
+        snprintf(pl.name, sizeof pl.name, "%s", l.name.c_str());
+        pl.type = l.type == "directional" ? PB_LIGHT_DIRECTIONAL : l.type == "spot" ? PB_LIGHT_SPOT : PB_LIGHT_POINT;
+        if (l.type != "directional" && l.type != "spot" && l.type != "point")
+            return fail(r, PB_ERROR_PARSE, "light " + std::to_string(li) + " has unknown type '" + l.type + "'");
+        for (int k = 0; k < 3; ++k)
+            pl.color[k] = k < (int)l.color.size() ? (float)l.color[k] : 1.f;
+        pl.intensity = (float)l.intensity;
+        pl.range = (float)l.range;
+        pl.inner_cone = (float)l.spot.innerConeAngle;
+        pl.outer_cone = (float)l.spot.outerConeAngle;
+        pb_sb_add_light(r.b, &pl, wp, wf);
+    }
+    for (int c : n.children) {
+        pb_result res = visit(r, c, world, depth + 1);
+        if (res != PB_OK)
+            return res;
+    }
+    return PB_OK;
+}
+
+bool has_glb_magic(FILE *f)
+{
+    char magic[4] = {0, 0, 0, 0};
+    size_t got = fread(magic, 1, 4, f);
+    return got == 4 && memcmp(magic, "glTF", 4) == 0;
+}
+
+std::string first_line(const std::string &s)
+{
+    std::string t = s.substr(0, s.find('\n'));
+    while (!t.empty() && (t.back() == ' ' || t.back() == '\r'))
+        t.pop_back();
+    return t;
+}
+
+} // namespace
+
+extern "C" pb_result pb_gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builder *b, pb_error *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return pb_fail(err, PB_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
+    bool glb = has_glb_magic(f);
+    fclose(f);
+
+    tinygltf::TinyGLTF loader;
+    image_ctx ictx = {path, b->log, desc->skip_textures ? 1 : 0};
+    loader.SetImageLoader(load_image, &ictx);
+    tinygltf::Model model;
+    std::string gerr, gwarn;
+    bool ok;
+    try {
+        ok = glb ? loader.LoadBinaryFromFile(&model, &gerr, &gwarn, path)
+                 : loader.LoadASCIIFromFile(&model, &gerr, &gwarn, path);
+    } catch (const std::exception &e) { // nlohmann throws on some malformed input
+        return pb_fail(err, PB_ERROR_PARSE, "%s: malformed glTF: %s", path, e.what());
+    }
+    if (!ok) {
+        std::string msg = first_line(gerr.empty() ? gwarn : gerr);
+        pb_result code = PB_ERROR_PARSE;
+        if (msg.find("File not found") != std::string::npos || msg.find("Failed to load external") != std::string::npos)
+            code = PB_ERROR_IO;
+        return pb_fail(err, code, "%s: %s", path, msg.empty() ? "not a valid glTF file" : msg.c_str());
+    }
+    if (!gwarn.empty())
+        pb_logf(&b->log, PB_LOG_DEBUG, "%s: tinygltf: %s", path, first_line(gwarn).c_str());
+
+    static const char *const supported[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength"};
+    for (const std::string &ext : model.extensionsRequired) {
+        bool known = false;
+        for (const char *s : supported)
+            known |= ext == s;
+        if (!known)
+            return pb_fail(err, PB_ERROR_UNSUPPORTED, "%s: requires extension %s, which probebake does not support",
+                           path, ext.c_str());
+    }
+    for (const std::string &ext : model.extensionsUsed) {
+        bool known = false;
+        for (const char *s : supported)
+            known |= ext == s;
+        if (!known)
+            pb_logf(&b->log, PB_LOG_INFO, "%s: extension %s is used but not supported; ignored", path, ext.c_str());
+    }
+
+    reader r{model, path, b, err, {}, 0};
+    pb_result res = read_textures(r, desc->skip_textures);
+    if (res != PB_OK)
+        return res;
+    read_materials(r);
+    if (model.scenes.empty()) {
+        if (!model.nodes.empty())
+            pb_logf(&b->log, PB_LOG_WARN, "%s: no scene defined; nothing to load", path);
+        return b->out_of_memory ? pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path) : PB_OK;
+    }
+    int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
+    if (scene >= (int)model.scenes.size())
+        return pb_fail(err, PB_ERROR_PARSE, "%s: default scene %d does not exist", path, scene);
+    mat4 id;
+    mat_identity(id);
+    for (int n : model.scenes[scene].nodes) {
+        res = visit(r, n, id, 0);
+        if (res != PB_OK)
+            return res;
+    }
+    if (b->out_of_memory)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
+    return PB_OK;
+}

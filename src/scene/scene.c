@@ -1,0 +1,84 @@
+/* Scene entry points: load from glTF, build from a soup, destroy. */
+#include "common/common.h"
+#include "scene/scene_builder.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+pb_material pb_material_default(void)
+{
+    pb_material m;
+    memset(&m, 0, sizeof m);
+    for (int k = 0; k < 4; ++k)
+        m.base_color[k] = 1.f;
+    m.metallic = 1.f; /* glTF defaults; a material without pbrMetallicRoughness gets these too */
+    m.roughness = 1.f;
+    m.alpha_cutoff = 0.5f;
+    m.base_color_texture = -1;
+    m.emissive_texture = -1;
+    m.alpha_mode = PB_ALPHA_OPAQUE;
+    return m;
+}
+
+pb_result pb_scene_load(const char *path, const pb_scene_desc *desc, pb_scene **out, pb_error *err)
+{
+    pb_error_clear(err);
+    if (!out)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "pb_scene_load: out is NULL");
+    *out = NULL;
+    if (!path || !path[0])
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "no scene file given");
+    pb_scene_desc d;
+    memset(&d, 0, sizeof d);
+    if (desc)
+        d = *desc;
+    pb_scene_builder b;
+    pb_sb_init(&b, d.log);
+    pb_result r = pb_gltf_read(path, &d, &b, err);
+    if (r == PB_OK)
+        r = pb_sb_finish(&b, path, out, err);
+    pb_sb_free(&b);
+    return r;
+}
+
+pb_result pb_scene_from_triangles(const double *world_positions, uint32_t triangle_count,
+                                  const uint32_t *material_ids, const pb_material *materials,
+                                  uint32_t material_count, pb_scene **out, pb_error *err)
+{
+    pb_error_clear(err);
+    *out = NULL;
+    if (triangle_count && !world_positions)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "pb_scene_from_triangles: positions are NULL");
+    pb_scene_builder b;
+    pb_log nolog = {0};
+    pb_sb_init(&b, nolog);
+    for (uint32_t i = 0; i < material_count && materials; ++i)
+        pb_sb_add_material(&b, &materials[i]);
+    for (uint32_t i = 0; i < triangle_count; ++i) {
+        uint32_t m = material_ids ? material_ids[i] : 0;
+        if (!pb_sb_add_triangle(&b, world_positions + 9 * (uint64_t)i, NULL, NULL, m))
+            break;
+    }
+    pb_result r = pb_sb_finish(&b, "<memory>", out, err);
+    if (*out)
+        (*out)->path[0] = '\0';
+    pb_sb_free(&b);
+    return r;
+}
+
+void pb_scene_destroy(pb_scene *s)
+{
+    if (!s)
+        return;
+    free(s->positions);
+    free(s->normals);
+    free(s->texcoords);
+    free(s->material);
+    free(s->materials);
+    free(s->textures);
+    free(s->texels);
+    free(s->lights);
+    free(s->cameras);
+    free(s);
+}

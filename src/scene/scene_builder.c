@@ -1,0 +1,322 @@
+#include "scene/scene_builder.h"
+#include "common/common.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Grows *ptr (elements of `size` bytes) so that `need` fit. Returns 0 on OOM. */
+static int grow(void **ptr, uint64_t *capacity, uint64_t need, size_t size)
+{
+    if (need <= *capacity)
+        return 1;
+    uint64_t cap = *capacity ? *capacity : 64;
+    while (cap < need)
+        cap *= 2;
+    void *p = realloc(*ptr, (size_t)(cap * size));
+    if (!p)
+        return 0;
+    *ptr = p;
+    *capacity = cap;
+    return 1;
+}
+
+static int grow32(void **ptr, uint32_t *capacity, uint64_t need, size_t size)
+{
+    uint64_t cap = *capacity;
+    if (need > UINT32_MAX)
+        return 0;
+    int ok = grow(ptr, &cap, need, size);
+    *capacity = (uint32_t)cap;
+    return ok;
+}
+
+void pb_sb_init(pb_scene_builder *b, pb_log log)
+{
+    memset(b, 0, sizeof *b);
+    b->log = log;
+}
+
+void pb_sb_free(pb_scene_builder *b)
+{
+    free(b->pos);
+    free(b->nrm);
+    free(b->uv);
+    free(b->mat);
+    free(b->materials);
+    free(b->textures);
+    free(b->texels);
+    free(b->lights);
+    free(b->light_world);
+    free(b->cameras);
+    free(b->camera_world);
+    pb_log log = b->log;
+    memset(b, 0, sizeof *b);
+    b->log = log;
+}
+
+static void normalize3f(float v[3])
+{
+    float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (l > 0.f && isfinite(l)) {
+        v[0] /= l, v[1] /= l, v[2] /= l;
+    } else {
+        v[0] = 0.f, v[1] = 1.f, v[2] = 0.f;
+    }
+}
+
+static void flat_normal(const double p[9], float n[3])
+{
+    double e1[3] = {p[3] - p[0], p[4] - p[1], p[5] - p[2]};
+    double e2[3] = {p[6] - p[0], p[7] - p[1], p[8] - p[2]};
+    double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    double l = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    if (l > 0) {
+        n[0] = (float)(c[0] / l), n[1] = (float)(c[1] / l), n[2] = (float)(c[2] / l);
+    } else {
+        n[0] = 0.f, n[1] = 1.f, n[2] = 0.f;
+    }
+}
+
+int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, uint32_t material)
+{
+    b->stats.triangles_in++;
+    for (int i = 0; i < 9; ++i) {
+        if (!isfinite(p[i])) {
+            b->stats.dropped_nonfinite++;
+            return 1;
+        }
+    }
+    if (!grow((void **)&b->pos, &b->capacity, b->count + 1, 9 * sizeof(double))) {
+        b->out_of_memory = 1;
+        return 0;
+    }
+    /* the other arrays follow the same capacity */
+    uint64_t cap = b->capacity;
+    float *nrm = realloc(b->nrm, (size_t)(cap * 9 * sizeof(float)));
+    if (nrm)
+        b->nrm = nrm;
+    float *uvs = nrm ? realloc(b->uv, (size_t)(cap * 6 * sizeof(float))) : NULL;
+    if (uvs)
+        b->uv = uvs;
+    uint32_t *mat = uvs ? realloc(b->mat, (size_t)(cap * sizeof(uint32_t))) : NULL;
+    if (mat)
+        b->mat = mat;
+    if (!mat) {
+        b->out_of_memory = 1;
+        return 0;
+    }
+    uint64_t i = b->count++;
+    memcpy(b->pos + 9 * i, p, 9 * sizeof(double));
+    float *dn = b->nrm + 9 * i;
+    int nrm_ok = n != NULL;
+    for (int k = 0; nrm_ok && k < 9; ++k)
+        nrm_ok = isfinite(n[k]);
+    if (nrm_ok) {
+        memcpy(dn, n, 9 * sizeof(float));
+        for (int v = 0; v < 3; ++v)
+            normalize3f(dn + 3 * v);
+    } else {
+        flat_normal(p, dn);
+        memcpy(dn + 3, dn, 3 * sizeof(float));
+        memcpy(dn + 6, dn, 3 * sizeof(float));
+    }
+    float *du = b->uv + 6 * i;
+    for (int k = 0; k < 6; ++k)
+        du[k] = (uv && isfinite(uv[k])) ? uv[k] : 0.f;
+    b->mat[i] = material;
+    return 1;
+}
+
+int32_t pb_sb_add_material(pb_scene_builder *b, const pb_material *m)
+{
+    if (!grow32((void **)&b->materials, &b->material_capacity, (uint64_t)b->material_count + 1, sizeof *m)) {
+        b->out_of_memory = 1;
+        return -1;
+    }
+    b->materials[b->material_count] = *m;
+    return (int32_t)b->material_count++;
+}
+
+int32_t pb_sb_add_texture(pb_scene_builder *b, const uint32_t *texels, uint32_t width, uint32_t height,
+                          uint32_t wrap_s, uint32_t wrap_t, uint32_t srgb)
+{
+    uint64_t n = (uint64_t)width * height;
+    if (!grow32((void **)&b->textures, &b->texture_capacity, (uint64_t)b->texture_count + 1, sizeof(pb_texture)) ||
+        !grow((void **)&b->texels, &b->texel_capacity, b->texel_count + n, sizeof(uint32_t))) {
+        b->out_of_memory = 1;
+        return -1;
+    }
+    pb_texture *t = &b->textures[b->texture_count];
+    t->width = width;
+    t->height = height;
+    t->offset = b->texel_count;
+    t->wrap_s = wrap_s;
+    t->wrap_t = wrap_t;
+    t->srgb = srgb;
+    if (n)
+        memcpy(b->texels + b->texel_count, texels, (size_t)n * sizeof(uint32_t));
+    b->texel_count += n;
+    return (int32_t)b->texture_count++;
+}
+
+int32_t pb_sb_add_light(pb_scene_builder *b, const pb_light *l, const double pos[3], const double dir[3])
+{
+    uint32_t cap = b->light_capacity;
+    if (!grow32((void **)&b->lights, &b->light_capacity, (uint64_t)b->light_count + 1, sizeof(pb_light)) ||
+        !grow32((void **)&b->light_world, &cap, (uint64_t)b->light_count + 1, 6 * sizeof(double))) {
+        b->out_of_memory = 1;
+        return -1;
+    }
+    b->lights[b->light_count] = *l;
+    memcpy(b->light_world + 6 * b->light_count, pos, 3 * sizeof(double));
+    memcpy(b->light_world + 6 * b->light_count + 3, dir, 3 * sizeof(double));
+    return (int32_t)b->light_count++;
+}
+
+int32_t pb_sb_add_camera(pb_scene_builder *b, const pb_camera *c, const double pos[3], const double fwd[3],
+                         const double up[3])
+{
+    uint32_t cap = b->camera_capacity;
+    if (!grow32((void **)&b->cameras, &b->camera_capacity, (uint64_t)b->camera_count + 1, sizeof(pb_camera)) ||
+        !grow32((void **)&b->camera_world, &cap, (uint64_t)b->camera_count + 1, 9 * sizeof(double))) {
+        b->out_of_memory = 1;
+        return -1;
+    }
+    b->cameras[b->camera_count] = *c;
+    double *w = b->camera_world + 9 * b->camera_count;
+    memcpy(w, pos, 3 * sizeof(double));
+    memcpy(w + 3, fwd, 3 * sizeof(double));
+    memcpy(w + 6, up, 3 * sizeof(double));
+    return (int32_t)b->camera_count++;
+}
+
+static void unit3(const double in[3], float out[3])
+{
+    double l = sqrt(in[0] * in[0] + in[1] * in[1] + in[2] * in[2]);
+    if (!(l > 0) || !isfinite(l)) {
+        out[0] = 0.f, out[1] = 0.f, out[2] = -1.f;
+        return;
+    }
+    for (int k = 0; k < 3; ++k)
+        out[k] = (float)(in[k] / l);
+}
+
+pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb_error *err)
+{
+    *out = NULL;
+    if (b->out_of_memory)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory while loading", path);
+    if (b->count > UINT32_MAX)
+        return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: %llu triangles, more than 2^32-1", path,
+                       (unsigned long long)b->count);
+    if (b->material_count == 0) {
+        pb_material m = pb_material_default();
+        snprintf(m.name, sizeof m.name, "default");
+        if (pb_sb_add_material(b, &m) < 0)
+            return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
+    }
+
+    /* origin: centre of the world AABB of every finite triangle, in double */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint64_t i = 0; i < 3 * b->count; ++i)
+        for (int k = 0; k < 3; ++k) {
+            double v = b->pos[3 * i + k];
+            lo[k] = v < lo[k] ? v : lo[k];
+            hi[k] = v > hi[k] ? v : hi[k];
+        }
+    double origin[3] = {0, 0, 0};
+    if (b->count)
+        for (int k = 0; k < 3; ++k)
+            origin[k] = 0.5 * (lo[k] + hi[k]);
+
+    pb_scene *s = calloc(1, sizeof *s);
+    if (!s)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
+    uint64_t n = b->count ? b->count : 1;
+    s->positions = malloc((size_t)n * 9 * sizeof(float));
+    s->normals = malloc((size_t)n * 9 * sizeof(float));
+    s->texcoords = malloc((size_t)n * 6 * sizeof(float));
+    s->material = malloc((size_t)n * sizeof(uint32_t));
+    if (!s->positions || !s->normals || !s->texcoords || !s->material) {
+        pb_scene_destroy(s);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
+    }
+
+    /* rebase, round to float, then drop what became (or was) zero area */
+    uint32_t kept = 0;
+    float flo[3] = {INFINITY, INFINITY, INFINITY}, fhi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint64_t i = 0; i < b->count; ++i) {
+        float *p = s->positions + 9 * (uint64_t)kept;
+        for (int k = 0; k < 9; ++k)
+            p[k] = (float)(b->pos[9 * i + k] - origin[k % 3]);
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = (double)p[3 + k] - p[k];
+            e2[k] = (double)p[6 + k] - p[k];
+        }
+        double c0 = e1[1] * e2[2] - e1[2] * e2[1];
+        double c1 = e1[2] * e2[0] - e1[0] * e2[2];
+        double c2 = e1[0] * e2[1] - e1[1] * e2[0];
+        int finite = 1;
+        for (int k = 0; k < 9; ++k)
+            finite &= isfinite(p[k]) != 0;
+        if (!finite) {
+            b->stats.dropped_nonfinite++;
+            continue;
+        }
+        if (c0 == 0 && c1 == 0 && c2 == 0) {
+            b->stats.dropped_degenerate++;
+            continue;
+        }
+        for (int k = 0; k < 9; ++k) {
+            flo[k % 3] = p[k] < flo[k % 3] ? p[k] : flo[k % 3];
+            fhi[k % 3] = p[k] > fhi[k % 3] ? p[k] : fhi[k % 3];
+        }
+        memcpy(s->normals + 9 * (uint64_t)kept, b->nrm + 9 * i, 9 * sizeof(float));
+        memcpy(s->texcoords + 6 * (uint64_t)kept, b->uv + 6 * i, 6 * sizeof(float));
+        uint32_t m = b->mat[i];
+        s->material[kept] = m < b->material_count ? m : b->material_count - 1;
+        ++kept;
+    }
+    s->triangle_count = kept;
+    for (int k = 0; k < 3; ++k) {
+        s->origin[k] = origin[k];
+        s->bounds_min[k] = kept ? flo[k] : 0.f;
+        s->bounds_max[k] = kept ? fhi[k] : 0.f;
+    }
+
+    /* move the rest */
+    s->material_count = b->material_count;
+    s->materials = b->materials;
+    s->texture_count = b->texture_count;
+    s->textures = b->textures;
+    s->texel_count = b->texel_count;
+    s->texels = b->texels;
+    b->materials = NULL, b->textures = NULL, b->texels = NULL;
+    s->light_count = b->light_count;
+    s->lights = b->lights;
+    b->lights = NULL;
+    for (uint32_t i = 0; i < s->light_count; ++i) {
+        const double *w = b->light_world + 6 * i;
+        for (int k = 0; k < 3; ++k)
+            s->lights[i].position[k] = (float)(w[k] - origin[k]);
+        unit3(w + 3, s->lights[i].direction);
+    }
+    s->camera_count = b->camera_count;
+    s->cameras = b->cameras;
+    b->cameras = NULL;
+    for (uint32_t i = 0; i < s->camera_count; ++i) {
+        const double *w = b->camera_world + 9 * i;
+        for (int k = 0; k < 3; ++k)
+            s->cameras[i].position[k] = (float)(w[k] - origin[k]);
+        unit3(w + 3, s->cameras[i].forward);
+        unit3(w + 6, s->cameras[i].up);
+    }
+    s->stats = b->stats;
+    snprintf(s->path, sizeof s->path, "%s", path ? path : "");
+    pb_sb_free(b);
+    *out = s;
+    return PB_OK;
+}

@@ -1,0 +1,67 @@
+/* Scene builder: collects world-space triangles, materials, textures, lights
+ * and cameras from a loader (the glTF wrapper, or an in-memory soup), drops
+ * and counts bad triangles, then rebases everything to the AABB centre.
+ * C interface so the one C++ file (gltf_load.cpp) stays a thin wrapper. */
+#ifndef PB_SCENE_BUILDER_H
+#define PB_SCENE_BUILDER_H
+
+#include "probebake/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct pb_scene_builder {
+    pb_log log;
+    /* triangles, world space */
+    uint64_t count, capacity;
+    double *pos;       /* 9 per triangle */
+    float *nrm;        /* 9 per triangle */
+    float *uv;         /* 6 per triangle */
+    uint32_t *mat;
+    /* everything else */
+    pb_material *materials;
+    uint32_t material_count, material_capacity;
+    pb_texture *textures;
+    uint32_t texture_count, texture_capacity;
+    uint32_t *texels;
+    uint64_t texel_count, texel_capacity;
+    pb_light *lights;          /* position/direction fields unused: see light_world */
+    double *light_world;       /* 6 per light: world position, world direction */
+    uint32_t light_count, light_capacity;
+    pb_camera *cameras;
+    double *camera_world;      /* 9 per camera: position, forward, up */
+    uint32_t camera_count, camera_capacity;
+    pb_scene_stats stats;
+    int out_of_memory;
+} pb_scene_builder;
+
+void pb_sb_init(pb_scene_builder *b, pb_log log);
+void pb_sb_free(pb_scene_builder *b);
+
+/* Adds one triangle. p: 9 doubles (world). n: 9 floats or NULL for the flat
+ * normal. uv: 6 floats or NULL. Degenerate and non-finite triangles are
+ * counted and dropped. Returns 0 only when out of memory. */
+int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv,
+                       uint32_t material);
+
+/* Appends and returns the index, or -1 when out of memory. */
+int32_t pb_sb_add_material(pb_scene_builder *b, const pb_material *m);
+/* Copies width*height RGBA8 texels. */
+int32_t pb_sb_add_texture(pb_scene_builder *b, const uint32_t *texels, uint32_t width, uint32_t height,
+                          uint32_t wrap_s, uint32_t wrap_t, uint32_t srgb);
+/* pos/dir: world space. */
+int32_t pb_sb_add_light(pb_scene_builder *b, const pb_light *l, const double pos[3], const double dir[3]);
+int32_t pb_sb_add_camera(pb_scene_builder *b, const pb_camera *c, const double pos[3], const double fwd[3],
+                         const double up[3]);
+
+/* Rebases and moves everything into a new pb_scene; the builder is emptied. */
+pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb_error *err);
+
+/* The glTF reader (gltf_load.cpp): fills b from the file. */
+pb_result pb_gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builder *b, pb_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
