@@ -523,8 +523,12 @@ extern "C" pb_result pb_gltf_read(const char *path, const pb_scene_desc *desc, p
     if (!ok) {
         std::string msg = first_line(gerr.empty() ? gwarn : gerr);
         pb_result code = PB_ERROR_PARSE;
-        if (msg.find("File not found") != std::string::npos || msg.find("Failed to load external") != std::string::npos)
+        bool data_uri = msg.find("data:") != std::string::npos;
+        if (!data_uri &&
+            (msg.find("File not found") != std::string::npos || msg.find("Failed to load external") != std::string::npos))
             code = PB_ERROR_IO;
+        if (data_uri)
+            msg = "invalid embedded (data URI) buffer or image: " + msg;
         return pb_fail(err, code, "%s: %s", path, msg.empty() ? "not a valid glTF file" : msg.c_str());
     }
     if (!gwarn.empty())

@@ -1,0 +1,160 @@
+/* Procedural test geometry and rays shared by the BVH and trace tests, plus
+ * the hit comparison every kernel-vs-reference test uses. */
+#ifndef PB_TEST_SCENES_GEN_H
+#define PB_TEST_SCENES_GEN_H
+
+#include "test_util.h"
+
+/* n random triangles: centres uniform in [-1,1]^3, edges up to `size`. */
+static inline pb_scene *random_soup(uint32_t n, float size, uint64_t seed, const double offset[3])
+{
+    test_rng r = {seed * 0x9E3779B97F4A7C15ull + 1};
+    double *p = malloc((size_t)n * 9 * sizeof(double));
+    for (uint32_t t = 0; t < n; ++t) {
+        double c[3];
+        for (int k = 0; k < 3; ++k)
+            c[k] = 2.0 * rng_uniform(&r) - 1.0;
+        for (int v = 0; v < 3; ++v)
+            for (int k = 0; k < 3; ++k)
+                p[9 * (size_t)t + 3 * v + k] = c[k] + size * (rng_uniform(&r) - 0.5) + (offset ? offset[k] : 0.0);
+    }
+    pb_scene *s = NULL;
+    pb_error err;
+    if (pb_scene_from_triangles(p, n, NULL, NULL, 0, &s, &err) != PB_OK)
+        fprintf(stderr, "random_soup: %s\n", err.message);
+    free(p);
+    return s;
+}
+
+/* UV sphere of radius 1 around the origin, closed, outward CCW. Each vertex
+ * position is computed once and shared exactly by its triangles. */
+static inline pb_scene *closed_sphere(uint32_t rings, uint32_t segments, float **verts_out, uint32_t *nverts)
+{
+    uint32_t nv = 2 + (rings - 1) * segments;
+    float *vp = malloc((size_t)nv * 3 * sizeof(float));
+    vp[0] = 0, vp[1] = 1, vp[2] = 0;
+    vp[3] = 0, vp[4] = -1, vp[5] = 0;
+    for (uint32_t i = 1; i < rings; ++i)
+        for (uint32_t j = 0; j < segments; ++j) {
+            double th = 3.141592653589793 * i / rings, ph = 6.283185307179586 * j / segments;
+            float *v = vp + 3 * (2 + (i - 1) * segments + j);
+            v[0] = (float)(sin(th) * cos(ph));
+            v[1] = (float)cos(th);
+            v[2] = (float)(sin(th) * sin(ph));
+        }
+#define RV(i, j) (2 + ((i)-1) * segments + ((j) % segments))
+    uint32_t nt = 2 * segments * (rings - 1);
+    double *p = malloc((size_t)nt * 9 * sizeof(double));
+    uint32_t t = 0;
+    for (uint32_t j = 0; j < segments; ++j) {
+        uint32_t tri[2][3] = {{0, RV(1, j + 1), RV(1, j)}, {1, RV(rings - 1, j), RV(rings - 1, j + 1)}};
+        for (int q = 0; q < 2; ++q, ++t)
+            for (int v = 0; v < 3; ++v)
+                for (int k = 0; k < 3; ++k)
+                    p[9 * (size_t)t + 3 * v + k] = vp[3 * tri[q][v] + k];
+    }
+    for (uint32_t i = 1; i + 1 < rings; ++i)
+        for (uint32_t j = 0; j < segments; ++j) {
+            uint32_t a = RV(i, j), b = RV(i, j + 1), c = RV(i + 1, j + 1), d = RV(i + 1, j);
+            uint32_t tri[2][3] = {{a, b, c}, {a, c, d}};
+            for (int q = 0; q < 2; ++q, ++t)
+                for (int v = 0; v < 3; ++v)
+                    for (int k = 0; k < 3; ++k)
+                        p[9 * (size_t)t + 3 * v + k] = vp[3 * tri[q][v] + k];
+        }
+#undef RV
+    pb_scene *s = NULL;
+    pb_error err;
+    /* the soup's AABB is centred on the origin, so rebasing does not move it */
+    if (pb_scene_from_triangles(p, t, NULL, NULL, 0, &s, &err) != PB_OK)
+        fprintf(stderr, "closed_sphere: %s\n", err.message);
+    free(p);
+    *verts_out = vp;
+    *nverts = nv;
+    return s;
+}
+
+/* Rays from inside the unit sphere aimed exactly at its vertices, at points on
+ * its edges (midpoints and random fractions) and at its triangles' corners. */
+static inline pb_ray *sphere_probe_rays(const pb_scene *s, uint32_t count, uint64_t seed)
+{
+    test_rng r = {seed};
+    pb_ray *rays = malloc((size_t)count * sizeof *rays);
+    for (uint32_t i = 0; i < count; ++i) {
+        uint32_t t = (uint32_t)(rng_uniform(&r) * s->triangle_count) % s->triangle_count;
+        const float *p = s->positions + 9 * (size_t)t;
+        float target[3];
+        int kind = i % 3, e = (int)(rng_uniform(&r) * 3) % 3;
+        const float *a = p + 3 * e, *b = p + 3 * ((e + 1) % 3);
+        float f = kind == 0 ? 0.f : (kind == 1 ? 0.5f : (float)rng_uniform(&r));
+        for (int k = 0; k < 3; ++k)
+            target[k] = a[k] + f * (b[k] - a[k]);
+        /* origins: the centre, and random points well inside */
+        float o[3] = {0, 0, 0};
+        if (i & 1) {
+            float d[3];
+            rng_direction(&r, d);
+            float rad = 0.6f * (float)rng_uniform(&r);
+            for (int k = 0; k < 3; ++k)
+                o[k] = d[k] * rad;
+        }
+        for (int k = 0; k < 3; ++k) {
+            rays[i].origin[k] = o[k];
+            rays[i].direction[k] = target[k] - o[k];
+        }
+        rays[i].tmin = 0.f;
+        rays[i].tmax = INFINITY;
+    }
+    return rays;
+}
+
+/* Random rays with origins in the box, some with a finite tmax or tmin > 0. */
+static inline pb_ray *random_rays(const float lo[3], const float hi[3], uint32_t count, uint64_t seed)
+{
+    test_rng r = {seed * 7919 + 3};
+    pb_ray *rays = malloc((size_t)count * sizeof *rays);
+    for (uint32_t i = 0; i < count; ++i) {
+        for (int k = 0; k < 3; ++k)
+            rays[i].origin[k] = lo[k] + (hi[k] - lo[k]) * (float)rng_uniform(&r);
+        rng_direction(&r, rays[i].direction);
+        float ext = hi[0] - lo[0];
+        rays[i].tmin = (i % 7 == 3) ? 0.05f * ext : 0.f;
+        rays[i].tmax = (i % 5 == 1) ? 0.3f * ext : INFINITY;
+    }
+    return rays;
+}
+
+/* Counts disagreements between two hit lists: a hit against a miss, a
+ * distance off by more than 1e-5 relative, or a different triangle at a
+ * different distance (different triangles at the same distance are a tie:
+ * both are the closest). Prints the first few. */
+static inline uint32_t compare_hits(const char *what, const pb_ray *rays, const pb_hit *a, const pb_hit *b,
+                                    uint32_t n, uint32_t *ties)
+{
+    uint32_t bad = 0, tie = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        int ha = a[i].triangle != PB_NO_HIT, hb = b[i].triangle != PB_NO_HIT;
+        int ok = ha == hb;
+        if (ok && ha) {
+            float tol = 1e-5f * fmaxf(1.f, fabsf(b[i].t));
+            ok = fabsf(a[i].t - b[i].t) <= tol;
+            if (ok && a[i].triangle != b[i].triangle)
+                ++tie;
+            if (ok && a[i].triangle == b[i].triangle)
+                ok = a[i].backface == b[i].backface && fabsf(a[i].u - b[i].u) <= 1e-4f &&
+                     fabsf(a[i].v - b[i].v) <= 1e-4f;
+        }
+        if (!ok) {
+            if (bad < 5)
+                fprintf(stderr, "  %s: ray %u (o %g %g %g d %g %g %g): tri %u t %.9g vs tri %u t %.9g\n", what, i,
+                        rays[i].origin[0], rays[i].origin[1], rays[i].origin[2], rays[i].direction[0],
+                        rays[i].direction[1], rays[i].direction[2], a[i].triangle, a[i].t, b[i].triangle, b[i].t);
+            ++bad;
+        }
+    }
+    if (ties)
+        *ties = tie;
+    return bad;
+}
+
+#endif

@@ -1,0 +1,441 @@
+/* Scene loader: hierarchy transforms, primitive modes, file forms, attribute
+ * encodings, dropped triangles, and every malformed-file error. CPU only. */
+#include "test_util.h"
+
+/* ------------------------------------------------------------ helpers */
+
+/* Writes `json` with each "@BUF@" replaced by a data URI of `bin`. */
+static const char *write_gltf(const char *name, const char *json, const void *bin, size_t bin_size)
+{
+    char *b64 = base64(bin, bin_size);
+    size_t need = strlen(json) + 8 * (strlen(b64) + 64);
+    char *out = malloc(need), *o = out;
+    for (const char *p = json; *p;) {
+        if (!strncmp(p, "@BUF@", 5)) {
+            o += sprintf(o, "data:application/octet-stream;base64,%s", b64);
+            p += 5;
+        } else {
+            *o++ = *p++;
+        }
+    }
+    *o = '\0';
+    const char *path = write_file(name, out, strlen(out));
+    free(out);
+    free(b64);
+    return path;
+}
+
+static pb_scene *load_ok(const char *path)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    pb_result r = pb_scene_load(path, NULL, &s, &err);
+    CHECKF(r == PB_OK, "%s: %s", path, err.message);
+    return s;
+}
+
+/* Loads, expects failure with `code`, and a message naming the file. */
+static void load_fails(const char *path, pb_result code, const char *needle)
+{
+    pb_scene *s = (pb_scene *)1;
+    pb_error err;
+    pb_result r = pb_scene_load(path, NULL, &s, &err);
+    CHECKF(r == code, "%s: got %s (%s), want %s", path, pb_result_name(r), err.message, pb_result_name(code));
+    CHECK(s == NULL);
+    CHECKF(strstr(err.message, path) != NULL, "message does not name the file: %s", err.message);
+    if (needle)
+        CHECKF(strstr(err.message, needle) != NULL, "message '%s' lacks '%s'", err.message, needle);
+    CHECK(strchr(err.message, '\n') == NULL);
+}
+
+/* World position of vertex v of triangle t. */
+static void world(const pb_scene *s, uint32_t t, int v, double out[3])
+{
+    for (int k = 0; k < 3; ++k)
+        out[k] = s->positions[9 * (size_t)t + 3 * v + k] + s->origin[k];
+}
+
+static int near3(const double a[3], double x, double y, double z, double tol)
+{
+    return fabs(a[0] - x) <= tol && fabs(a[1] - y) <= tol && fabs(a[2] - z) <= tol;
+}
+
+/* Geometric normal direction (unnormalised) of triangle t. */
+static void geo_normal(const pb_scene *s, uint32_t t, double n[3])
+{
+    const float *p = s->positions + 9 * (size_t)t;
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; ++k) {
+        e1[k] = (double)p[3 + k] - p[k];
+        e2[k] = (double)p[6 + k] - p[k];
+    }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
+/* One triangle (0,0,0) (1,0,0) (0,1,0), normals +Z, as bytes. */
+static const float tri_pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+
+static const char *one_triangle_json =
+    "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],%s"
+    "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+    "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+    "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+    "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
+
+static const char *one_triangle(const char *name, const char *nodes)
+{
+    char json[4096];
+    snprintf(json, sizeof json, one_triangle_json, nodes);
+    return write_gltf(name, json, tri_pos, sizeof tri_pos);
+}
+
+/* ------------------------------------------------------------ tests */
+
+static void demo_scene_loads_everything(void)
+{
+    pb_scene *s = load_ok(source_path("tests/scenes/demo.gltf"));
+    if (!s)
+        return;
+    CHECK(s->triangle_count == 40);
+    CHECK(s->stats.dropped_degenerate == 0 && s->stats.dropped_nonfinite == 0);
+    CHECK(s->light_count == 1 && s->lights[0].type == PB_LIGHT_POINT && s->lights[0].intensity == 15.f);
+    double lp[3] = {s->lights[0].position[0] + s->origin[0], s->lights[0].position[1] + s->origin[1],
+                    s->lights[0].position[2] + s->origin[2]};
+    CHECK(near3(lp, 0.6, 2.4, 1.2, 1e-6));
+    CHECK(s->camera_count == 1 && s->cameras[0].perspective && fabsf(s->cameras[0].yfov - 1.f) < 1e-6f);
+    CHECK(fabsf(s->cameras[0].forward[2] + 1.f) < 1e-6f); /* looks down -Z */
+    CHECK(s->texture_count == 1 && s->textures[0].width == 16 && s->textures[0].height == 16);
+    int light = -1, lattice = -1;
+    for (uint32_t m = 0; m < s->material_count; ++m) {
+        if (!strcmp(s->materials[m].name, "light"))
+            light = (int)m;
+        if (!strcmp(s->materials[m].name, "lattice"))
+            lattice = (int)m;
+    }
+    CHECK(light >= 0 && fabsf(s->materials[light].emissive[0] - 8.f) < 1e-5f); /* emissive strength applied */
+    CHECK(lattice >= 0 && s->materials[lattice].alpha_mode == PB_ALPHA_MASK && s->materials[lattice].double_sided);
+    CHECK(lattice >= 0 && s->materials[lattice].base_color_texture == 0);
+    double lo[3] = {s->bounds_min[0] + s->origin[0], s->bounds_min[1] + s->origin[1], s->bounds_min[2] + s->origin[2]};
+    double hi[3] = {s->bounds_max[0] + s->origin[0], s->bounds_max[1] + s->origin[1], s->bounds_max[2] + s->origin[2]};
+    CHECK(near3(lo, -2, 0, -2.5, 1e-6) && near3(hi, 2, 3, 2.5, 1e-6));
+    CHECK(near3(s->origin, 0, 1.5, 0, 0));
+    /* texels decoded: the lattice has transparent holes and opaque bars */
+    uint32_t opaque = 0;
+    for (uint32_t i = 0; i < 256; ++i)
+        opaque += (s->texels[i] >> 24) == 255;
+    CHECK(opaque > 0 && opaque < 256);
+    pb_scene_destroy(s);
+}
+
+static void hierarchy_composes_matrix_and_trs(void)
+{
+    /* parent: matrix = translate (10,0,0) * scale 2; child: TRS, 90 deg about Y, then +1 in Y */
+    const char *nodes =
+        "\"nodes\":[{\"matrix\":[2,0,0,0, 0,2,0,0, 0,0,2,0, 10,0,0,1],\"children\":[1]},"
+        "{\"mesh\":0,\"rotation\":[0,0.7071067811865476,0,0.7071067811865476],\"translation\":[0,1,0]}],";
+    pb_scene *s = load_ok(one_triangle("hierarchy.gltf", nodes));
+    if (!s)
+        return;
+    CHECK(s->triangle_count == 1);
+    double v[3];
+    world(s, 0, 0, v);
+    CHECKF(near3(v, 10, 2, 0, 1e-6), "v0 = %g %g %g", v[0], v[1], v[2]);
+    world(s, 0, 1, v);
+    CHECKF(near3(v, 10, 2, -2, 1e-6), "v1 = %g %g %g", v[0], v[1], v[2]);
+    world(s, 0, 2, v);
+    CHECKF(near3(v, 10, 4, 0, 1e-6), "v2 = %g %g %g", v[0], v[1], v[2]);
+    /* flat normal generated (no NORMAL): rotated +Z -> +X */
+    CHECK(s->stats.normals_generated == 1);
+    CHECK(fabsf(s->normals[0] - 1.f) < 1e-6f);
+    pb_scene_destroy(s);
+}
+
+static void mirrored_transform_keeps_front_faces(void)
+{
+    pb_scene *s = load_ok(one_triangle("mirror.gltf", "\"nodes\":[{\"mesh\":0,\"scale\":[-1,1,1]}],"));
+    if (!s)
+        return;
+    double n[3];
+    geo_normal(s, 0, n);
+    CHECKF(n[2] > 0, "winding not reversed under a mirror: n.z = %g", n[2]);
+    pb_scene_destroy(s);
+}
+
+static void strips_fans_and_unindexed(void)
+{
+    /* 5 vertices in the z=0 plane, all primitives should face +Z */
+    float pos[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 2, 0};
+    float fan[15] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0.5f, 1.5f, 0, 0, 1, 0};
+    unsigned char bin[15 * 4 * 2 + 8];
+    memcpy(bin, pos, 60);
+    memcpy(bin + 60, fan, 60);
+    uint16_t idx[4] = {0, 1, 2, 3};
+    memcpy(bin + 120, idx, 8);
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":["
+        "{\"attributes\":{\"POSITION\":0},\"mode\":5},"               /* strip, 5 verts: 3 tris */
+        "{\"attributes\":{\"POSITION\":1},\"mode\":6},"               /* fan, 5 verts: 3 tris */
+        "{\"attributes\":{\"POSITION\":0},\"mode\":5,\"indices\":2}," /* indexed strip: 2 tris */
+        "{\"attributes\":{\"POSITION\":0},\"mode\":4},"               /* unindexed triangles: 1 tri (5/3) */
+        "{\"attributes\":{\"POSITION\":0},\"mode\":1}]}],"            /* lines: skipped */
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":5,\"type\":\"VEC3\"},"
+        "{\"bufferView\":0,\"byteOffset\":60,\"componentType\":5126,\"count\":5,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5123,\"count\":4,\"type\":\"SCALAR\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":120},{\"buffer\":0,\"byteOffset\":120,\"byteLength\":8}],"
+        "\"buffers\":[{\"byteLength\":128,\"uri\":\"@BUF@\"}]}";
+    pb_scene *s = load_ok(write_gltf("modes.gltf", json, bin, 128));
+    if (!s)
+        return;
+    CHECKF(s->triangle_count == 9, "%u triangles", s->triangle_count);
+    CHECK(s->stats.primitives_skipped == 1);
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        double n[3];
+        geo_normal(s, t, n);
+        CHECKF(n[2] > 0, "triangle %u faces -Z (winding)", t);
+    }
+    pb_scene_destroy(s);
+}
+
+static void glb_and_external_buffers(void)
+{
+    /* GLB: header, JSON chunk, BIN chunk */
+    const char *json = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                       "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                       "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+                       "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"buffers\":[{\"byteLength\":36}]}";
+    uint32_t jlen = (uint32_t)((strlen(json) + 3) & ~3u);
+    uint32_t total = 12 + 8 + jlen + 8 + 36;
+    unsigned char *glb = calloc(1, total);
+    uint32_t hdr[3] = {0x46546C67u, 2, total};
+    memcpy(glb, hdr, 12);
+    uint32_t jc[2] = {jlen, 0x4E4F534Au};
+    memcpy(glb + 12, jc, 8);
+    memset(glb + 20, ' ', jlen);
+    memcpy(glb + 20, json, strlen(json));
+    uint32_t bc[2] = {36, 0x004E4942u};
+    memcpy(glb + 20 + jlen, bc, 8);
+    memcpy(glb + 28 + jlen, tri_pos, 36);
+    pb_scene *s = load_ok(write_file("tri.glb", glb, total));
+    CHECK(s && s->triangle_count == 1);
+    pb_scene_destroy(s);
+    free(glb);
+
+    /* .gltf with an external .bin beside it */
+    write_file("tri.bin", tri_pos, 36);
+    const char *ext = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                      "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                      "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+                      "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+                      "\"buffers\":[{\"byteLength\":36,\"uri\":\"tri.bin\"}]}";
+    s = load_ok(write_file("external.gltf", ext, strlen(ext)));
+    CHECK(s && s->triangle_count == 1);
+    pb_scene_destroy(s);
+}
+
+static void normalized_integer_texcoords(void)
+{
+    unsigned char bin[36 + 8];
+    memcpy(bin, tri_pos, 36);
+    unsigned char uv[8] = {0, 0, 255, 0, 0, 51, 0, 0}; /* 3 x (u8,u8) padded to 4-byte stride */
+    memcpy(bin + 36, uv, 8);
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1}}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5121,\"normalized\":true,\"count\":3,\"type\":\"VEC2\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":6}],"
+        "\"buffers\":[{\"byteLength\":44,\"uri\":\"@BUF@\"}]}";
+    pb_scene *s = load_ok(write_gltf("uv8.gltf", json, bin, 44));
+    if (!s)
+        return;
+    CHECK(s->texcoords[0] == 0.f && s->texcoords[2] == 1.f && fabsf(s->texcoords[5] - 0.2f) < 1e-6f);
+    pb_scene_destroy(s);
+}
+
+static void bad_triangles_dropped_and_counted(void)
+{
+    float pos[27] = {0, 0, 0, 1, 0, 0, 0, 1, 0,        /* good */
+                     0, 0, 0, 1, 1, 1, 2, 2, 2,        /* collinear: zero area */
+                     0, 0, 0, NAN, 0, 0, 0, 1, 0};     /* NaN */
+    const char *json = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                       "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                       "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":9,\"type\":\"VEC3\"}],"
+                       "\"bufferViews\":[{\"buffer\":0,\"byteLength\":108}],"
+                       "\"buffers\":[{\"byteLength\":108,\"uri\":\"@BUF@\"}]}";
+    pb_scene *s = load_ok(write_gltf("bad.gltf", json, pos, sizeof pos));
+    if (!s)
+        return;
+    CHECK(s->triangle_count == 1);
+    CHECK(s->stats.triangles_in == 3);
+    CHECK(s->stats.dropped_degenerate == 1);
+    CHECK(s->stats.dropped_nonfinite == 1);
+    pb_scene_destroy(s);
+
+    /* Inf in a node transform poisons every triangle below it */
+    s = load_ok(one_triangle("inf.gltf", "\"nodes\":[{\"mesh\":0,\"translation\":[1e308,1e308,0],"
+                                         "\"scale\":[1e308,1,1]}],"));
+    CHECK(s && s->triangle_count == 0 && s->stats.dropped_nonfinite == 1);
+    pb_scene_destroy(s);
+}
+
+static void far_from_origin_is_rebased(void)
+{
+    pb_scene *near = load_ok(one_triangle("near.gltf", "\"nodes\":[{\"mesh\":0}],"));
+    pb_scene *far = load_ok(one_triangle("far.gltf", "\"nodes\":[{\"mesh\":0,\"translation\":[1e7,-3e6,1e6]}],"));
+    if (!near || !far)
+        return;
+    CHECK(far->origin[0] == 1e7 + 0.5 && far->origin[1] == -3e6 + 0.5);
+    /* local coordinates are the same floats: no precision lost to the offset */
+    CHECK(memcmp(near->positions, far->positions, 9 * sizeof(float)) == 0);
+    pb_scene_destroy(near);
+    pb_scene_destroy(far);
+}
+
+static void malformed_files_get_clear_errors(void)
+{
+    load_fails("/nonexistent/scene.gltf", PB_ERROR_IO, "cannot open");
+    const char *garbage = "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [";
+    load_fails(write_file("garbage.gltf", garbage, strlen(garbage)), PB_ERROR_PARSE, NULL);
+    load_fails(write_file("empty.gltf", "", 0), PB_ERROR_PARSE, NULL);
+    load_fails(write_file("notglb.glb", "glTF\x02\0\0\0\x10\0\0\0", 12), PB_ERROR_PARSE, NULL);
+
+    const char *missing_bin = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                              "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                              "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+                              "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+                              "\"buffers\":[{\"byteLength\":36,\"uri\":\"missing.bin\"}]}";
+    load_fails(write_file("missingbin.gltf", missing_bin, strlen(missing_bin)), PB_ERROR_IO, "missing.bin");
+
+    /* the buffer holds 24 bytes, the view and accessor claim 36 */
+    const char *trunc = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+                        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+                        "\"buffers\":[{\"byteLength\":24,\"uri\":\"@BUF@\"}]}";
+    load_fails(write_gltf("truncated.gltf", trunc, tri_pos, 24), PB_ERROR_PARSE, NULL);
+
+    /* accessor reads past its view */
+    const char *past = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                       "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                       "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":30,\"type\":\"VEC3\"}],"
+                       "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+                       "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
+    load_fails(write_gltf("pastview.gltf", past, tri_pos, 36), PB_ERROR_PARSE, "accessor 0");
+
+    /* accessor index that does not exist */
+    const char *noacc = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":7}}]}],"
+                        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+                        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+                        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
+    load_fails(write_gltf("noaccessor.gltf", noacc, tri_pos, 36), PB_ERROR_PARSE, NULL);
+
+    /* vertex index out of range */
+    unsigned char bin[42];
+    memcpy(bin, tri_pos, 36);
+    uint16_t idx[3] = {0, 1, 9};
+    memcpy(bin + 36, idx, 6);
+    const char *badidx = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                         "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"indices\":1}]}],"
+                         "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+                         "{\"bufferView\":1,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"}],"
+                         "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},"
+                         "{\"buffer\":0,\"byteOffset\":36,\"byteLength\":6}],"
+                         "\"buffers\":[{\"byteLength\":42,\"uri\":\"@BUF@\"}]}";
+    load_fails(write_gltf("badindex.gltf", badidx, bin, 42), PB_ERROR_PARSE, "out of range");
+
+    /* a required extension we do not implement */
+    const char *req = "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_draco_mesh_compression\"],"
+                      "\"extensionsRequired\":[\"KHR_draco_mesh_compression\"],\"scenes\":[{\"nodes\":[]}]}";
+    load_fails(write_file("draco.gltf", req, strlen(req)), PB_ERROR_UNSUPPORTED, "KHR_draco_mesh_compression");
+
+    /* a cycle in the node graph */
+    load_fails(one_triangle("cycle.gltf", "\"nodes\":[{\"mesh\":0,\"children\":[1]},{\"children\":[0]}],"),
+               PB_ERROR_PARSE, NULL);
+
+    /* a node naming a mesh that does not exist */
+    load_fails(one_triangle("nomesh.gltf", "\"nodes\":[{\"mesh\":3}],"), PB_ERROR_PARSE, "mesh 3");
+}
+
+static void corrupt_texture_is_a_warning(void)
+{
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}],"
+        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],"
+        "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"data:image/png;base64,AAAAAAAA\"}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
+    pb_scene *s = load_ok(write_gltf("badpng.gltf", json, tri_pos, 36));
+    CHECK(s && s->triangle_count == 1 && s->materials[0].base_color_texture == -1);
+    pb_scene_destroy(s);
+}
+
+static void shared_scenes_load(void)
+{
+    struct {
+        const char *path;
+        uint32_t triangles;
+    } cases[] = {
+        {"samples/Box/Box.gltf", 12},
+        {"samples/Duck/Duck.gltf", 4212},
+        {"samples/DamagedHelmet/DamagedHelmet.gltf", 15452},
+        {"samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf", 61},
+        {"samples/TextureTransformTest/TextureTransformTest.gltf", 24},
+        {"samples/atteneder-glTF-test-models-embedded/Empty/Empty.gltf", 0},
+        {"samples/atteneder-glTF-test-models-embedded/OnlyAccessors/OnlyAccessors.gltf", 0},
+        {"samples/atteneder-glTF-test-models-embedded/FormatVariants/glTF-Embedded/FormatVariants.gltf", 12},
+        {"cornell/cornellBox.gltf", 16272},
+        {"openarena/oacmpdm1.glb", 59082},
+        {"bunny/bunny.gltf", 3674},
+    };
+    int found = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/../shared/scenes/%s", PB_SOURCE_DIR, cases[i].path);
+        if (!file_exists(path))
+            continue;
+        ++found;
+        pb_scene *s = load_ok(path);
+        CHECKF(s && s->triangle_count == cases[i].triangles, "%s: %u triangles, want %u", cases[i].path,
+               s ? s->triangle_count : 0, cases[i].triangles);
+        if (s && !strcmp(cases[i].path, "samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf")) {
+            uint32_t masked = 0;
+            for (uint32_t m = 0; m < s->material_count; ++m)
+                masked += s->materials[m].alpha_mode == PB_ALPHA_MASK;
+            CHECK(masked == 3);
+        }
+        if (s && !strcmp(cases[i].path, "samples/DamagedHelmet/DamagedHelmet.gltf"))
+            CHECK(s->materials[0].emissive_texture >= 0 && s->texture_count == 5);
+        pb_scene_destroy(s);
+    }
+    char bad[1024];
+    snprintf(bad, sizeof bad, "%s/../shared/scenes/samples/atteneder-glTF-test-models-embedded/EmbedBufferInvalid/"
+                              "EmbedBufferInvalid.gltf", PB_SOURCE_DIR);
+    if (file_exists(bad)) {
+        ++found;
+        load_fails(bad, PB_ERROR_PARSE, NULL);
+    }
+    if (!found)
+        skip("../shared/scenes not present");
+}
+
+int main(void)
+{
+    RUN(demo_scene_loads_everything);
+    RUN(hierarchy_composes_matrix_and_trs);
+    RUN(mirrored_transform_keeps_front_faces);
+    RUN(strips_fans_and_unindexed);
+    RUN(glb_and_external_buffers);
+    RUN(normalized_integer_texcoords);
+    RUN(bad_triangles_dropped_and_counted);
+    RUN(far_from_origin_is_rebased);
+    RUN(malformed_files_get_clear_errors);
+    RUN(corrupt_texture_is_a_warning);
+    RUN(shared_scenes_load);
+    return test_summary();
+}

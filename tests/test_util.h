@@ -1,0 +1,175 @@
+/* Minimal test harness: one static function per behaviour, run in order by
+ * main through RUN(). CHECK prints each failure with file and line and
+ * counts it; a test fails when its count is non-zero. SKIP says why. */
+#ifndef PB_TEST_UTIL_H
+#define PB_TEST_UTIL_H
+
+#define _POSIX_C_SOURCE 200809L
+#include "probebake/probebake.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static int t_failures, t_passed, t_failed, t_skipped, t_skip_current;
+
+#define CHECK(cond)                                                                                                  \
+    do {                                                                                                             \
+        if (!(cond)) {                                                                                               \
+            fprintf(stderr, "  FAIL %s:%d: %s\n", __FILE__, __LINE__, #cond);                                         \
+            t_failures++;                                                                                            \
+        }                                                                                                            \
+    } while (0)
+
+#define CHECKF(cond, ...)                                                                                            \
+    do {                                                                                                             \
+        if (!(cond)) {                                                                                               \
+            fprintf(stderr, "  FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);                                         \
+            fprintf(stderr, __VA_ARGS__);                                                                            \
+            fprintf(stderr, "\n");                                                                                   \
+            t_failures++;                                                                                            \
+        }                                                                                                            \
+    } while (0)
+
+static inline void skip(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "  SKIP: ");
+    vfprintf(stderr, fmt, ap);
+    fprintf(stderr, "\n");
+    va_end(ap);
+    t_skip_current = 1;
+}
+
+#define RUN(fn)                                                                                                      \
+    do {                                                                                                             \
+        int before = t_failures;                                                                                     \
+        t_skip_current = 0;                                                                                          \
+        fprintf(stderr, "[ RUN  ] %s\n", #fn);                                                                       \
+        fn();                                                                                                        \
+        if (t_failures != before) {                                                                                  \
+            t_failed++;                                                                                              \
+            fprintf(stderr, "[ FAIL ] %s\n", #fn);                                                                   \
+        } else if (t_skip_current) {                                                                                 \
+            t_skipped++;                                                                                             \
+            fprintf(stderr, "[ SKIP ] %s\n", #fn);                                                                   \
+        } else {                                                                                                     \
+            t_passed++;                                                                                              \
+            fprintf(stderr, "[  OK  ] %s\n", #fn);                                                                   \
+        }                                                                                                            \
+    } while (0)
+
+static inline int test_summary(void)
+{
+    printf("%d passed, %d failed, %d skipped\n", t_passed, t_failed, t_skipped);
+    return t_failed ? 1 : 0;
+}
+
+/* Paths: PB_SOURCE_DIR is set by tests/CMakeLists.txt. */
+static inline const char *source_path(const char *rel)
+{
+    static char buf[8][1024];
+    static int slot;
+    char *b = buf[slot++ & 7];
+    snprintf(b, 1024, "%s/%s", PB_SOURCE_DIR, rel);
+    return b;
+}
+
+static inline int file_exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+/* A fresh temporary directory for files a test writes. */
+static inline const char *temp_dir(void)
+{
+    static char dir[256];
+    if (!dir[0]) {
+        snprintf(dir, sizeof dir, "/tmp/probebake-test-XXXXXX");
+        if (!mkdtemp(dir)) {
+            perror("mkdtemp");
+            exit(2);
+        }
+    }
+    return dir;
+}
+
+static inline const char *write_file(const char *name, const void *data, size_t size)
+{
+    static char paths[8][512];
+    static int slot;
+    char *p = paths[slot++ & 7];
+    snprintf(p, 512, "%s/%s", temp_dir(), name);
+    FILE *f = fopen(p, "wb");
+    if (!f || fwrite(data, 1, size, f) != size) {
+        perror(p);
+        exit(2);
+    }
+    fclose(f);
+    return p;
+}
+
+static inline char *read_text(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *s = malloc((size_t)n + 1);
+    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) {
+        free(s);
+        s = NULL;
+    }
+    if (s)
+        s[n] = '\0';
+    fclose(f);
+    return s;
+}
+
+static inline char *base64(const void *data, size_t n)
+{
+    static const char tbl[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const unsigned char *p = data;
+    char *out = malloc(4 * ((n + 2) / 3) + 1), *o = out;
+    for (size_t i = 0; i < n; i += 3) {
+        uint32_t v = (uint32_t)p[i] << 16 | (i + 1 < n ? (uint32_t)p[i + 1] << 8 : 0) | (i + 2 < n ? p[i + 2] : 0);
+        *o++ = tbl[v >> 18 & 63];
+        *o++ = tbl[v >> 12 & 63];
+        *o++ = i + 1 < n ? tbl[v >> 6 & 63] : '=';
+        *o++ = i + 2 < n ? tbl[v & 63] : '=';
+    }
+    *o = '\0';
+    return out;
+}
+
+/* Deterministic random numbers for tests (xorshift64*). */
+typedef struct test_rng {
+    uint64_t s;
+} test_rng;
+
+static inline double rng_uniform(test_rng *r)
+{
+    r->s ^= r->s >> 12;
+    r->s ^= r->s << 25;
+    r->s ^= r->s >> 27;
+    return (double)((r->s * 2685821657736338717ull) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static inline void rng_direction(test_rng *r, float d[3])
+{
+    double z = 2.0 * rng_uniform(r) - 1.0, phi = 6.283185307179586 * rng_uniform(r);
+    double s = sqrt(fmax(0.0, 1.0 - z * z));
+    d[0] = (float)(s * cos(phi));
+    d[1] = (float)(s * sin(phi));
+    d[2] = (float)z;
+}
+
+#endif
