@@ -348,6 +348,38 @@ static void robust_offset_avoids_self_intersection(void)
     pb_scene_destroy(s);
 }
 
+/* Regression (The Crypt, triangle 48801): a sliver whose float edge
+ * functions round to U = W = 0 looked "hit" by a ray passing 35 m away. The
+ * exact-sign edge functions reject it; a ray through its middle still hits. */
+static void sliver_has_no_phantom_hit(void)
+{
+    double tri[9] = {30.8864021, 5.74039984, -5.68959999, 31.6039467, 6.45795012, -5.68959999,
+                     31.1340523, 5.98804998, -5.68959999};
+    /* two copies mirrored through the origin keep the AABB centre at 0, so the
+     * local frame equals these coordinates */
+    double both[18];
+    for (int k = 0; k < 9; ++k) {
+        both[k] = tri[k];
+        both[9 + k] = -tri[k];
+    }
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECK(pb_scene_from_triangles(both, 2, NULL, NULL, 0, &s, &err) == PB_OK);
+    if (!s)
+        return;
+    CHECK(s->positions[0] == (float)tri[0] && s->positions[5] == (float)tri[5]);
+    pb_ray far = {{0x1.4f6f4p+0f, -0x1.d642ep+1f, -0x1.3b34b4p+5f}, 0.f,
+                  {-0x1.27c3a8p-3f, -0x1.3875dap-1f, 0x1.8ece04p-1f}, INFINITY};
+    pb_hit h;
+    pb_trace_brute(s, &far, 1, PB_TRACE_CLOSEST, &h, 1);
+    CHECKF(h.triangle == PB_NO_HIT, "phantom hit on triangle %u at t = %g", h.triangle, h.t);
+    float c[3] = {(float)((tri[0] + tri[3] + tri[6]) / 3), (float)((tri[1] + tri[4] + tri[7]) / 3), 0.f};
+    pb_ray through = {{c[0], c[1], 0.f}, 0.f, {0, 0, -1}, INFINITY};
+    pb_trace_brute(s, &through, 1, PB_TRACE_CLOSEST, &h, 1);
+    CHECK(h.triangle == 0 && fabsf(h.t - 5.6896f) < 1e-5f);
+    pb_scene_destroy(s);
+}
+
 static void offset_is_tiny_and_on_the_right_side(void)
 {
     test_rng r = {5};
@@ -380,6 +412,7 @@ int main(void)
     RUN(bad_desc_is_refused);
     RUN(traversal_matches_brute_force);
     RUN(watertight_sphere_cpu);
+    RUN(sliver_has_no_phantom_hit);
     RUN(robust_offset_avoids_self_intersection);
     RUN(offset_is_tiny_and_on_the_right_side);
     return test_summary();

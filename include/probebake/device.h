@@ -37,7 +37,7 @@ typedef struct pb_device_info {
     uint32_t subgroup_size;
     uint64_t max_storage_buffer_range;
     uint64_t max_memory_allocation;
-    uint32_t usable;              /* 1 if it has what probebake needs (Vulkan 1.2, BDA, int64) */
+    uint32_t usable;              /* 1 if it has what probebake needs (Vulkan 1.2, BDA, int64, float64) */
     char unusable_reason[128];
 } pb_device_info;
 

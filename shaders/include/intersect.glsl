@@ -1,7 +1,8 @@
 // Ray/box and watertight ray/triangle tests: src/bvh/intersect.h operation
-// for operation. `precise` forbids FMA contraction and reassociation, which
-// would break the exact antisymmetry of shared-edge functions that makes the
-// triangle test watertight (Woop, Benthin & Wald 2013).
+// for operation (see there for why). `precise` forbids FMA contraction and
+// reassociation, so every device rounds exactly as the C reference. Edge
+// functions are adaptive: float when provably right in sign, else double
+// (needs shaderFloat64; a product of two floats is exact in double).
 #ifndef PB_INTERSECT_GLSL
 #define PB_INTERSECT_GLSL
 
@@ -57,6 +58,23 @@ float ray_box(RayPre r, vec3 lo, vec3 hi, float tmin, float tmax)
 }
 
 // On a hit with tmin < t < tmax: true, t, and barycentrics of v1 (u), v2 (v).
+#define PB_EDGE_ERROR_BOUND 2.5e-7 // float rounding bound of a*b - c*d, see intersect.h
+
+float edge_function(float a, float b, float c, float d)
+{
+    precise float p = a * b;
+    precise float q = c * d;
+    precise float r = p - q;
+    precise float bound = PB_EDGE_ERROR_BOUND * (abs(p) + abs(q));
+    if (abs(r) > bound)
+        return r;
+    precise double e = double(a) * double(b) - double(c) * double(d);
+    float f = float(e);
+    if (f == 0.0 && e != 0.0LF)
+        f = e > 0.0LF ? 1e-37 : -1e-37;
+    return f;
+}
+
 bool ray_triangle(RayPre r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tmax, out float t, out float u, out float v)
 {
     precise vec3 A = v0 - r.org;
@@ -68,9 +86,9 @@ bool ray_triangle(RayPre r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tmax, o
     precise float By = B[r.ky] - r.sy * B[r.kz];
     precise float Cx = C[r.kx] - r.sx * C[r.kz];
     precise float Cy = C[r.ky] - r.sy * C[r.kz];
-    precise float U = Cx * By - Cy * Bx;
-    precise float V = Ax * Cy - Ay * Cx;
-    precise float W = Bx * Ay - By * Ax;
+    precise float U = edge_function(Cx, By, Cy, Bx);
+    precise float V = edge_function(Ax, Cy, Ay, Cx);
+    precise float W = edge_function(Bx, Ay, By, Ax);
     t = 0.0;
     u = 0.0;
     v = 0.0;

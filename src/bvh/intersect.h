@@ -4,11 +4,21 @@
  * the C side is built with -ffp-contract=off).
  *
  * Triangle test: watertight (Woop, Benthin & Wald, JCGT 2013). The ray is
- * sheared so it runs along +Z; the 2D edge functions of a shared edge are then
- * computed from the same two sheared vertices by both triangles and are exact
- * negations of each other, so no ray slips between neighbours. An edge
- * function of exactly 0 counts as inside for both (a hit on the edge, never a
- * gap). Box test: slabs with the far distance scaled by 1 + 2*gamma(3) (Ize,
+ * sheared so it runs along +Z; the 2D edge function of a shared edge depends
+ * only on its two sheared vertices, so both triangles see it with opposite
+ * signs and no ray slips between neighbours. An edge function of exactly 0
+ * counts as inside for both (a hit on the edge, never a gap).
+ *
+ * Edge functions must have the exact sign: plain float products round a
+ * sliver's edge functions to 0 or to the wrong sign and report phantom hits
+ * far from the ray (seen on The Crypt). So each a*b - c*d is an adaptive
+ * predicate: the float result when its magnitude exceeds its rounding-error
+ * bound (then its sign is certain), else the double result, exact in sign
+ * because a product of two floats is exact in double. Both paths give the
+ * exact sign, so shared edges stay consistent. (Kahan's FMA algorithm would
+ * avoid doubles, but lavapipe lowers GLSL fma() to mul + add.)
+ *
+ * Box test: slabs with the far distance scaled by 1 + 2*gamma(3) (Ize,
  * "Robust BVH Ray Traversal", JCGT 2013) so rounding never culls a box the
  * ray touches. */
 #ifndef PB_INTERSECT_H
@@ -50,6 +60,23 @@ static inline void pb_ray_prepare(const float org[3], const float dir[3], pb_ray
     }
 }
 
+/* a*b - c*d with the exact sign. |float - exact| <= (2u + u^2)(|ab| + |cd|),
+ * u = 2^-24; 2.5e-7 (about 4.2u) also covers rounding of the bound itself. */
+#define PB_EDGE_ERROR_BOUND 2.5e-7f
+
+static inline float pb_edge_function(float a, float b, float c, float d)
+{
+    float p = a * b, q = c * d;
+    float r = p - q;
+    if (fabsf(r) > PB_EDGE_ERROR_BOUND * (fabsf(p) + fabsf(q)))
+        return r;
+    double e = (double)a * (double)b - (double)c * (double)d;
+    float f = (float)e;
+    if (f == 0.f && e != 0.0) /* keep the sign of values below float range */
+        f = e > 0.0 ? 1e-37f : -1e-37f;
+    return f;
+}
+
 /* Entry distance into the box [lo, hi] clipped to [tmin, tmax], or +inf. */
 static inline float pb_ray_box(const pb_ray_pre *r, const float lo[3], const float hi[3], float tmin, float tmax)
 {
@@ -80,9 +107,9 @@ static inline int pb_ray_triangle(const pb_ray_pre *r, const float *v0, const fl
     float Ax = A[kx] - r->sx * A[kz], Ay = A[ky] - r->sy * A[kz];
     float Bx = B[kx] - r->sx * B[kz], By = B[ky] - r->sy * B[kz];
     float Cx = C[kx] - r->sx * C[kz], Cy = C[ky] - r->sy * C[kz];
-    float U = Cx * By - Cy * Bx;
-    float V = Ax * Cy - Ay * Cx;
-    float W = Bx * Ay - By * Ax;
+    float U = pb_edge_function(Cx, By, Cy, Bx);
+    float V = pb_edge_function(Ax, Cy, Ay, Cx);
+    float W = pb_edge_function(Bx, Ay, By, Ax);
     if ((U < 0.f || V < 0.f || W < 0.f) && (U > 0.f || V > 0.f || W > 0.f))
         return 0;
     float det = U + V + W;

@@ -175,6 +175,9 @@ static void describe(VkPhysicalDevice pd, uint32_t index, pb_device_info *info)
     } else if (!f2.features.shaderInt64) {
         info->usable = 0;
         snprintf(info->unusable_reason, sizeof info->unusable_reason, "no shaderInt64");
+    } else if (!f2.features.shaderFloat64) {
+        info->usable = 0; /* exact-sign fallback of the watertight triangle test */
+        snprintf(info->unusable_reason, sizeof info->unusable_reason, "no shaderFloat64");
     }
     uint32_t qn = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, NULL);
@@ -281,7 +284,7 @@ static pb_result pick_device(pb_context *ctx, pb_error *err)
         pb_result r = want && *want ? pb_fail(err, PB_ERROR_NO_DEVICE, "no Vulkan device matches --device '%s' "
                                                                         "(see `probebake devices`)", want)
                                     : pb_fail(err, PB_ERROR_NO_DEVICE, "no usable Vulkan device (need Vulkan 1.2 with "
-                                                                        "bufferDeviceAddress and shaderInt64)");
+                                                                        "bufferDeviceAddress, shaderInt64, shaderFloat64)");
         free(pds), free(infos);
         return r;
     }
@@ -319,6 +322,7 @@ static pb_result create_device(pb_context *ctx, pb_error *err)
     f12.bufferDeviceAddress = VK_TRUE;
     VkPhysicalDeviceFeatures2 f2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
     f2.features.shaderInt64 = VK_TRUE;
+    f2.features.shaderFloat64 = VK_TRUE;
     VkDeviceCreateInfo dci = {VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
     dci.queueCreateInfoCount = 1;
     dci.pQueueCreateInfos = &qci;

@@ -1,0 +1,421 @@
+/* The trace kernel against its CPU references, on a Vulkan device with the
+ * validation layer on: random soups, the demo scene and the shared real
+ * scenes; watertightness; far offsets; alpha masks; any-hit; bounded
+ * submissions; refusals. The last test fails on any validation message. */
+#include "scenes_gen.h"
+#include "gpu/gpu.h"
+
+#include <stb_image_write.h>
+
+static pb_context *ctx;
+
+static void log_line(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    if (level >= PB_LOG_WARN)
+        fprintf(stderr, "  [%s] %s\n", level == PB_LOG_WARN ? "warn" : "error", msg);
+}
+
+static const pb_log test_log = {log_line, NULL};
+
+typedef struct traced {
+    pb_bvh *bvh;
+    pb_gpu_scene *gs;
+} traced;
+
+static int prepare(const pb_scene *s, traced *t)
+{
+    pb_error err;
+    t->bvh = NULL;
+    t->gs = NULL;
+    if (pb_bvh_build(s, NULL, &t->bvh, &err) != PB_OK || pb_gpu_scene_create(ctx, s, t->bvh, &t->gs, &err) != PB_OK) {
+        fprintf(stderr, "  prepare: %s\n", err.message);
+        t_failures++;
+        return 0;
+    }
+    return 1;
+}
+
+static void release(traced *t)
+{
+    pb_gpu_scene_destroy(t->gs);
+    pb_bvh_destroy(t->bvh);
+}
+
+/* GPU == CPU BVH (== brute force when `brute`) for `rays`, closest and any. */
+static void check_three_ways(const char *what, const pb_scene *s, const pb_ray *rays, uint32_t n, int brute)
+{
+    traced t;
+    if (!prepare(s, &t))
+        return;
+    pb_hit *g = malloc(n * sizeof *g), *c = malloc(n * sizeof *c), *b = malloc(n * sizeof *b);
+    pb_error err;
+    pb_trace_stats st;
+    pb_result r = pb_trace(ctx, t.gs, rays, n, PB_TRACE_CLOSEST, g, &st, &err);
+    CHECKF(r == PB_OK, "%s", err.message);
+    pb_trace_cpu(s, t.bvh, rays, n, PB_TRACE_CLOSEST, c, 0);
+    uint32_t ties = 0, bad = compare_hits(what, rays, g, c, n, &ties);
+    uint32_t bad_brute = 0, hits = 0;
+    if (brute) {
+        pb_trace_brute(s, rays, n, PB_TRACE_CLOSEST, b, 0);
+        bad_brute = compare_hits(what, rays, c, b, n, NULL);
+    }
+    for (uint32_t i = 0; i < n; ++i)
+        hits += g[i].triangle != PB_NO_HIT;
+    fprintf(stderr, "  %s: %u triangles, %u rays, %u hits, %u ties; GPU vs CPU %u mismatches%s", what,
+            s->triangle_count, n, hits, ties, bad, brute ? "" : "\n");
+    if (brute)
+        fprintf(stderr, ", CPU vs brute force %u\n", bad_brute);
+    CHECK(bad == 0);
+    CHECK(bad_brute == 0);
+    CHECK(hits > 0);
+    /* any-hit on the GPU: occluded exactly when the closest hit exists */
+    r = pb_trace(ctx, t.gs, rays, n, PB_TRACE_ANY, b, NULL, &err);
+    CHECKF(r == PB_OK, "%s", err.message);
+    uint32_t occ_bad = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        int occ = b[i].triangle != PB_NO_HIT;
+        occ_bad += occ != (c[i].triangle != PB_NO_HIT);
+        if (occ)
+            occ_bad += !(b[i].t > rays[i].tmin && b[i].t < rays[i].tmax);
+    }
+    CHECKF(occ_bad == 0, "%s: any-hit disagrees on %u rays", what, occ_bad);
+    free(g), free(c), free(b);
+    release(&t);
+}
+
+static void random_soups_gpu_cpu_brute(void)
+{
+    struct {
+        uint32_t tris;
+        float size;
+    } cases[] = {{2000, 0.3f}, {30000, 0.05f}};
+    for (int i = 0; i < 2; ++i) {
+        pb_scene *s = random_soup(cases[i].tris, cases[i].size, 100 + i, NULL);
+        pb_ray *rays = random_rays(s->bounds_min, s->bounds_max, 100000, 200 + i);
+        char what[64];
+        snprintf(what, sizeof what, "soup %u", cases[i].tris);
+        check_three_ways(what, s, rays, 100000, 1);
+        free(rays);
+        pb_scene_destroy(s);
+    }
+}
+
+/* Probe-style rays over a scene's bounds plus random rays inside them. */
+static pb_ray *scene_rays(const pb_scene *s, uint32_t n, uint32_t seed)
+{
+    pb_probe_grid grid;
+    uint32_t per_probe = 256, probes = n / 2 / per_probe;
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, probes, &grid);
+    probes = pb_probe_grid_count(&grid);
+    if ((uint64_t)probes * per_probe > n / 2)
+        probes = n / 2 / per_probe;
+    pb_ray *rays = random_rays(s->bounds_min, s->bounds_max, n, seed);
+    pb_probe_rays(&grid, 0, probes, per_probe, seed, rays);
+    return rays;
+}
+
+static void demo_scene_gpu_cpu_brute(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    if (!s)
+        return;
+    pb_ray *rays = scene_rays(s, 100000, 3);
+    check_three_ways("demo", s, rays, 100000, 1);
+    free(rays);
+    pb_scene_destroy(s);
+}
+
+static void shared_scenes_gpu_cpu_brute(void)
+{
+    const char *scenes[] = {"cornell/cornellBox.gltf", "openarena/oacmpdm1.glb"};
+    int found = 0;
+    for (int i = 0; i < 2; ++i) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/../shared/scenes/%s", PB_SOURCE_DIR, scenes[i]);
+        if (!file_exists(path)) {
+            fprintf(stderr, "  %s not present: skipped\n", scenes[i]);
+            continue;
+        }
+        ++found;
+        pb_scene *s = NULL;
+        pb_error err;
+        pb_scene_desc d = {{0}, 1}; /* geometry only */
+        CHECKF(pb_scene_load(path, &d, &s, &err) == PB_OK, "%s", err.message);
+        if (!s)
+            continue;
+        pb_ray *rays = scene_rays(s, 100000, 7 + i);
+        check_three_ways(scenes[i], s, rays, 100000, 1);
+        free(rays);
+        pb_scene_destroy(s);
+    }
+    if (!found)
+        skip("../shared/scenes not present (Cornell box, The Crypt)");
+}
+
+static void watertight_sphere_gpu(void)
+{
+    float *verts;
+    uint32_t nv;
+    pb_scene *s = closed_sphere(48, 96, &verts, &nv);
+    traced t;
+    if (!prepare(s, &t))
+        return;
+    uint32_t n = 1000000;
+    pb_ray *rays = sphere_probe_rays(s, n, 9);
+    pb_hit *h = malloc(n * sizeof *h);
+    pb_error err;
+    CHECKF(pb_trace(ctx, t.gs, rays, n, PB_TRACE_CLOSEST, h, NULL, &err) == PB_OK, "%s", err.message);
+    uint32_t escaped = 0;
+    for (uint32_t i = 0; i < n; ++i)
+        escaped += h[i].triangle == PB_NO_HIT;
+    fprintf(stderr, "  GPU: %u rays at vertices and edges of a closed sphere: %u escaped\n", n, escaped);
+    CHECK(escaped == 0);
+    free(rays), free(h), free(verts);
+    release(&t);
+    pb_scene_destroy(s);
+}
+
+/* The demo scene moved 1e6 m away (a translation on its root node) gives the
+ * same hits, in local terms, as at the origin. */
+static void far_from_origin_same_hits(void)
+{
+    char *text = read_text(source_path("tests/scenes/demo.gltf"));
+    CHECK(text != NULL);
+    if (!text)
+        return;
+    const char *key = "\"name\": \"room\",";
+    char *at = strstr(text, key);
+    CHECK(at != NULL);
+    if (!at) {
+        free(text);
+        return;
+    }
+    size_t pre = (size_t)(at - text) + strlen(key);
+    const char *ins = " \"translation\": [1000000.0, -250000.0, 1000000.0],";
+    char *moved = malloc(strlen(text) + strlen(ins) + 1);
+    memcpy(moved, text, pre);
+    strcpy(moved + pre, ins);
+    strcat(moved, text + pre);
+    const char *far_path = write_file("demo_far.gltf", moved, strlen(moved));
+    pb_scene *a = NULL, *b = NULL;
+    pb_error err;
+    CHECK(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &a, &err) == PB_OK);
+    CHECKF(pb_scene_load(far_path, NULL, &b, &err) == PB_OK, "%s", err.message);
+    if (a && b) {
+        CHECK(b->origin[0] == 1e6 && b->origin[1] == 1.5 - 250000.0 && b->origin[2] == 1e6);
+        CHECK(a->triangle_count == b->triangle_count);
+        traced ta, tb;
+        if (prepare(a, &ta) && prepare(b, &tb)) {
+            uint32_t n = 100000;
+            pb_ray *rays = scene_rays(a, n, 17);
+            pb_hit *ha = malloc(n * sizeof *ha), *hb = malloc(n * sizeof *hb);
+            CHECK(pb_trace(ctx, ta.gs, rays, n, PB_TRACE_CLOSEST, ha, NULL, &err) == PB_OK);
+            CHECK(pb_trace(ctx, tb.gs, rays, n, PB_TRACE_CLOSEST, hb, NULL, &err) == PB_OK);
+            uint32_t bad = compare_hits("far", rays, hb, ha, n, NULL);
+            fprintf(stderr, "  demo at 1e6 m: %u of %u rays differ from the demo at the origin\n", bad, n);
+            CHECK(bad == 0);
+            free(rays), free(ha), free(hb);
+            release(&ta);
+            release(&tb);
+        }
+    }
+    pb_scene_destroy(a);
+    pb_scene_destroy(b);
+    free(text);
+    free(moved);
+}
+
+typedef struct png_buf {
+    unsigned char data[4096];
+    int size;
+} png_buf;
+
+static void png_sink(void *user, void *data, int size)
+{
+    png_buf *b = user;
+    if (b->size + size <= (int)sizeof b->data) {
+        memcpy(b->data + b->size, data, (size_t)size);
+        b->size += size;
+    }
+}
+
+/* A masked 4x4 checker quad at z=0 over an opaque quad at z=-1: a ray down
+ * through a texel centre stops at z=0 exactly when that texel is opaque. */
+static void alpha_mask_cuts_out(void)
+{
+    unsigned char px[4 * 4 * 4];
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) {
+            unsigned char *p = px + 4 * (4 * y + x);
+            p[0] = p[1] = p[2] = 200;
+            p[3] = ((x + y) & 1) ? 0 : 255;
+        }
+    png_buf png = {{0}, 0};
+    CHECK(stbi_write_png_to_func(png_sink, &png, 4, 4, 4, px, 16) != 0);
+    char *png64 = base64(png.data, (size_t)png.size);
+    /* front quad (-1..1)^2 at z=0 with uv (0,0) at the top-left, back quad at z=-1 */
+    float pos[24] = {-1, 1, 0, 1, 1, 0, 1, -1, 0, -1, -1, 0, -1, 1, -1, 1, 1, -1, 1, -1, -1, -1, -1, -1};
+    float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    uint16_t idx[6] = {0, 3, 2, 0, 2, 1};
+    unsigned char bin[96 + 32 + 12];
+    memcpy(bin, pos, 96);
+    memcpy(bin + 96, uv, 32);
+    memcpy(bin + 128, idx, 12);
+    char *bin64 = base64(bin, sizeof bin);
+    char *json = malloc(16384);
+    snprintf(json, 16384,
+             "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1]}],"
+             "\"nodes\":[{\"mesh\":0},{\"mesh\":1}],"
+             "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":2},\"indices\":3,"
+             "\"material\":0}]},{\"primitives\":[{\"attributes\":{\"POSITION\":1,\"TEXCOORD_0\":2},\"indices\":3,"
+             "\"material\":1}]}],"
+             "\"materials\":[{\"alphaMode\":\"MASK\",\"alphaCutoff\":0.5,\"doubleSided\":true,"
+             "\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}},{}],"
+             "\"textures\":[{\"source\":0,\"sampler\":0}],\"samplers\":[{\"wrapS\":33071,\"wrapT\":33071}],"
+             "\"images\":[{\"uri\":\"data:image/png;base64,%s\"}],"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+             "{\"bufferView\":0,\"byteOffset\":48,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+             "{\"bufferView\":1,\"componentType\":5126,\"count\":4,\"type\":\"VEC2\"},"
+             "{\"bufferView\":2,\"componentType\":5123,\"count\":6,\"type\":\"SCALAR\"}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":96},{\"buffer\":0,\"byteOffset\":96,\"byteLength\":32},"
+             "{\"buffer\":0,\"byteOffset\":128,\"byteLength\":12}],"
+             "\"buffers\":[{\"byteLength\":140,\"uri\":\"data:application/octet-stream;base64,%s\"}]}",
+             png64, bin64);
+    const char *path = write_file("alpha.gltf", json, strlen(json));
+    free(json), free(png64), free(bin64);
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(path, NULL, &s, &err) == PB_OK, "%s", err.message);
+    if (!s)
+        return;
+    CHECK(s->texture_count == 1 && s->materials[0].alpha_mode == PB_ALPHA_MASK);
+    traced t;
+    if (!prepare(s, &t)) {
+        pb_scene_destroy(s);
+        return;
+    }
+    /* rays through a 64x64 grid; local frame: the scene is rebased to z centre -0.5 */
+    uint32_t n = 64 * 64;
+    pb_ray *rays = malloc(n * sizeof *rays);
+    pb_hit *g = malloc(n * sizeof *g), *c = malloc(n * sizeof *c), *a = malloc(n * sizeof *a);
+    int *expect_front = malloc(n * sizeof *expect_front);
+    for (uint32_t i = 0; i < n; ++i) {
+        float x = -1.f + (2.f * (float)(i % 64) + 1.f) / 64.f, y = 1.f - (2.f * (float)(i / 64) + 1.f) / 64.f;
+        pb_ray r = {{x, y, 1.5f}, 0.f, {0, 0, -1}, 1.8f}; /* stops short of the back quad for any-hit */
+        rays[i] = r;
+        int tx = (int)((x + 1.f) * 2.f), ty = (int)((1.f - y) * 2.f); /* texel under the ray */
+        expect_front[i] = ((tx + ty) & 1) == 0;
+    }
+    CHECK(pb_trace(ctx, t.gs, rays, n, PB_TRACE_CLOSEST, g, NULL, &err) == PB_OK);
+    pb_trace_cpu(s, t.bvh, rays, n, PB_TRACE_CLOSEST, c, 1);
+    CHECK(compare_hits("alpha", rays, g, c, n, NULL) == 0);
+    uint32_t wrong = 0, front = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        int hit_front = g[i].triangle != PB_NO_HIT && fabsf(g[i].t - 1.f) < 1e-5f;
+        front += hit_front;
+        wrong += hit_front != expect_front[i];
+    }
+    fprintf(stderr, "  %u rays: %u stopped by opaque texels, %u disagree with the texture\n", n, front, wrong);
+    CHECK(wrong == 0);
+    CHECK(front == n / 2);
+    /* any-hit with tmax short of the back quad: occluded exactly on opaque texels */
+    CHECK(pb_trace(ctx, t.gs, rays, n, PB_TRACE_ANY, a, NULL, &err) == PB_OK);
+    wrong = 0;
+    for (uint32_t i = 0; i < n; ++i)
+        wrong += (a[i].triangle != PB_NO_HIT) != expect_front[i];
+    CHECK(wrong == 0);
+    free(rays), free(g), free(c), free(a), free(expect_front);
+    release(&t);
+    pb_scene_destroy(s);
+}
+
+/* Splitting the work into many submissions changes no result. */
+static void bounded_submissions_same_bytes(void)
+{
+    pb_scene *s = random_soup(5000, 0.1f, 3, NULL);
+    pb_context_desc d = {NULL, 1, 4096, test_log};
+    pb_context *small = NULL;
+    pb_error err;
+    CHECKF(pb_context_create(&d, &small, &err) == PB_OK, "%s", err.message);
+    if (!small)
+        return;
+    pb_bvh *b = NULL;
+    pb_gpu_scene *g1 = NULL, *g2 = NULL;
+    CHECK(pb_bvh_build(s, NULL, &b, &err) == PB_OK);
+    CHECK(pb_gpu_scene_create(ctx, s, b, &g1, &err) == PB_OK);
+    CHECK(pb_gpu_scene_create(small, s, b, &g2, &err) == PB_OK);
+    uint32_t n = 50000;
+    pb_ray *rays = random_rays(s->bounds_min, s->bounds_max, n, 4);
+    pb_hit *h1 = malloc(n * sizeof *h1), *h2 = malloc(n * sizeof *h2);
+    pb_trace_stats st1, st2;
+    CHECK(pb_trace(ctx, g1, rays, n, PB_TRACE_CLOSEST, h1, &st1, &err) == PB_OK);
+    CHECK(pb_trace(small, g2, rays, n, PB_TRACE_CLOSEST, h2, &st2, &err) == PB_OK);
+    CHECK(st1.submits == 1);
+    CHECKF(st2.submits == (n + 4095) / 4096, "%u submits", st2.submits);
+    CHECK(memcmp(h1, h2, n * sizeof *h1) == 0);
+    CHECK(pb_context_validation_messages(small) == 0);
+    free(rays), free(h1), free(h2);
+    pb_gpu_scene_destroy(g1);
+    pb_gpu_scene_destroy(g2);
+    pb_bvh_destroy(b);
+    pb_context_destroy(small);
+    pb_scene_destroy(s);
+}
+
+static void device_choice_and_refusals(void)
+{
+    pb_context *c = (pb_context *)1;
+    pb_error err;
+    pb_context_desc d = {"no such device", 0, 0, {0}};
+    CHECK(pb_context_create(&d, &c, &err) == PB_ERROR_NO_DEVICE && c == NULL);
+    CHECK(strstr(err.message, "no such device") != NULL);
+    d.device = "99";
+    CHECK(pb_context_create(&d, &c, &err) == PB_ERROR_NO_DEVICE);
+    d.device = "0";
+    CHECK(pb_context_create(&d, &c, &err) == PB_OK);
+    pb_context_destroy(c);
+
+    pb_device_info infos[8];
+    uint32_t count = 0;
+    CHECK(pb_enumerate_devices(infos, 8, &count, &err) == PB_OK && count >= 1);
+    CHECK(count >= 1 && infos[0].name[0] && infos[0].subgroup_size > 0);
+
+    /* an allocation over maxMemoryAllocationSize is refused before Vulkan sees it */
+    pb_buffer big;
+    uint64_t before = ctx->allocated;
+    CHECK(pb_buffer_create(ctx, ctx->max_allocation + 1, PB_MEMORY_DEVICE, "test array", &big, &err) ==
+          PB_ERROR_TOO_LARGE);
+    CHECK(strstr(err.message, "test array") != NULL && ctx->allocated == before);
+}
+
+static void validation_layer_stayed_silent(void)
+{
+    uint32_t n = pb_context_validation_messages(ctx);
+    CHECKF(n == 0, "%u validation messages", n);
+}
+
+int main(void)
+{
+    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, test_log};
+    pb_error err;
+    if (pb_context_create(&d, &ctx, &err) != PB_OK) {
+        fprintf(stderr, "no Vulkan device with validation: %s\n", err.message);
+        printf("0 passed, 1 failed, 0 skipped\n");
+        return 1;
+    }
+    fprintf(stderr, "device: %s (%s)\n", pb_context_device(ctx)->name, pb_context_device(ctx)->driver);
+    RUN(random_soups_gpu_cpu_brute);
+    RUN(demo_scene_gpu_cpu_brute);
+    RUN(shared_scenes_gpu_cpu_brute);
+    RUN(watertight_sphere_gpu);
+    RUN(far_from_origin_same_hits);
+    RUN(alpha_mask_cuts_out);
+    RUN(bounded_submissions_same_bytes);
+    RUN(device_choice_and_refusals);
+    RUN(validation_layer_stayed_silent);
+    pb_context_destroy(ctx);
+    return test_summary();
+}
