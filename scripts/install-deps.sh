@@ -10,7 +10,6 @@ pkgs=(
   libtinygltf-dev nlohmann-json3-dev libstb-dev
   libvulkan-volk-dev
   libembree-dev
-  clang
 )
 
 missing=()

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Command-line behaviour: exit codes, one-line errors naming the file, JSON
+# keys. Usage: test_cli.sh PROBEBAKE SOURCE_DIR
+set -u
+pb=$1
+src=$2
+demo=$src/tests/scenes/demo.gltf
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+
+# expect NAME WANT_EXIT REGEX -- command...: exit code and output (stdout+stderr) must match
+expect() {
+    local name=$1 want=$2 regex=$3
+    shift 4
+    local out rc
+    out=$("$@" 2>&1)
+    rc=$?
+    if [ "$rc" -eq "$want" ] && grep -Eq -- "$regex" <<<"$out"; then
+        passed=$((passed + 1))
+        echo "[  OK  ] $name"
+    else
+        failed=$((failed + 1))
+        echo "[ FAIL ] $name: exit $rc (want $want), output:"
+        sed 's/^/    /' <<<"$out" | head -20
+    fi
+}
+
+# a failure prints exactly one error line
+one_error_line() {
+    local name=$1
+    shift 2
+    local n
+    n=$("$@" 2>&1 >/dev/null | grep -c 'error:')
+    if [ "$n" -eq 1 ]; then
+        passed=$((passed + 1))
+        echo "[  OK  ] $name"
+    else
+        failed=$((failed + 1))
+        echo "[ FAIL ] $name: $n error lines"
+    fi
+}
+
+expect help 0 '^usage:' -- "$pb" --help
+expect version 0 '^probebake [0-9]+\.[0-9]+\.[0-9]+$' -- "$pb" --version
+expect no-command 2 'usage:' -- "$pb"
+expect unknown-command 2 "unknown command 'frobnicate'" -- "$pb" frobnicate
+expect unknown-option 2 "unknown option '--bogus'" -- "$pb" info "$demo" --bogus
+expect info-text 0 'triangles +40 kept of 40' -- "$pb" info "$demo"
+expect info-json-triangles 0 '"triangles": 40,' -- "$pb" info "$demo" --json
+expect info-json-lights 0 '"lights": \[\{"type": "point"' -- "$pb" info "$demo" --json
+expect info-json-bounds 0 '"bounds_min": \[-2, 0, -2.5\]' -- "$pb" info "$demo" --json
+expect info-json-bounds-max 0 '"bounds_max": \[2, 3, 2.5\]' -- "$pb" info "$demo" --json
+expect info-needs-scene 2 'needs a SCENE' -- "$pb" info
+expect info-missing 1 "error: $tmp/missing.gltf: cannot open" -- "$pb" info "$tmp/missing.gltf"
+printf '{"asset": {"version": "2.0"}, "meshes": [' >"$tmp/broken.gltf"
+expect info-malformed 1 "error: $tmp/broken.gltf: " -- "$pb" info "$tmp/broken.gltf"
+one_error_line info-malformed-one-line -- "$pb" info "$tmp/broken.gltf"
+expect rays-zero 2 "--rays '0' is not an integer in \[1, 65536\]" -- "$pb" trace "$demo" --rays 0
+expect probes-negative 2 "--probes '-5'" -- "$pb" trace "$demo" --probes -5
+expect probes-garbage 2 "--probes 'lots'" -- "$pb" trace "$demo" --probes lots
+expect device-missing-value 2 '--device needs a value' -- "$pb" trace "$demo" --device
+
+if [ "${PB_CLI_GPU:-1}" = 1 ]; then
+    expect devices 0 'llvmpipe|GPU|CPU' -- "$pb" devices
+    expect devices-json 0 '"subgroup_size": [0-9]+' -- "$pb" devices --json
+    expect trace-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
+        "$pb" trace "$demo" --verify --validation --probes 64 --rays 128
+    expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
+        "$pb" trace "$demo" --device no-such-gpu
+fi
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
