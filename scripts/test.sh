@@ -15,8 +15,8 @@ fi
 
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPB_SANITIZE=ON -DPB_BUILD_BENCH=OFF >/dev/null
 cmake --build build-asan -j"$jobs"
-echo "== CPU-side tests under AddressSanitizer + UndefinedBehaviorSanitizer"
-ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+echo "== CPU-side tests under AddressSanitizer + UndefinedBehaviorSanitizer (PB_TEST_QUICK: a tenth of the rays)"
+PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan -L cpu --output-on-failure
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null

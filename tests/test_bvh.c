@@ -68,7 +68,7 @@ static void check_structure(const pb_scene *s, const pb_bvh *b, const char *what
 
 static void structure_of_random_soups(void)
 {
-    uint32_t sizes[] = {1, 2, 3, 5, 17, 100, 4096, 30000};
+    uint32_t sizes[] = {1, 2, 3, 5, 17, 100, 4096, scaled(30000)};
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; ++i) {
         pb_scene *s = random_soup(sizes[i], 0.2f, i + 1, NULL);
         pb_bvh *b = NULL;
@@ -103,7 +103,7 @@ static void empty_scene_builds_and_misses(void)
 static void build_is_deterministic_across_threads(void)
 {
     /* large enough for parallel binning (>= 65536) and many tasks */
-    pb_scene *s = random_soup(100000, 0.05f, 42, NULL);
+    pb_scene *s = random_soup(scaled(100000) < 70000 ? 70000 : 100000, 0.05f, 42, NULL); /* >= 65536: parallel binning */
     pb_bvh *b[3] = {NULL, NULL, NULL};
     uint32_t threads[3] = {1, 2, 5};
     pb_error err;
@@ -216,7 +216,7 @@ static void traversal_matches_brute_force(void)
         CHECK(pb_bvh_build(s, NULL, &b, &err) == PB_OK);
         if (!b)
             continue;
-        uint32_t n = 100000;
+        uint32_t n = scaled(100000);
         pb_ray *rays = random_rays(s->bounds_min, s->bounds_max, n, 11 + c);
         pb_hit *h1 = malloc(n * sizeof *h1), *h2 = malloc(n * sizeof *h2), *h3 = malloc(n * sizeof *h3);
         pb_trace_cpu(s, b, rays, n, PB_TRACE_CLOSEST, h1, 0);
@@ -252,7 +252,7 @@ static void watertight_sphere_cpu(void)
     pb_bvh *b = NULL;
     pb_error err;
     CHECK(pb_bvh_build(s, NULL, &b, &err) == PB_OK);
-    uint32_t n = 1000000;
+    uint32_t n = scaled(1000000);
     pb_ray *rays = sphere_probe_rays(s, n, 5);
     pb_hit *h = malloc(n * sizeof *h);
     pb_trace_cpu(s, b, rays, n, PB_TRACE_CLOSEST, h, 0);
@@ -276,7 +276,7 @@ static void robust_offset_avoids_self_intersection(void)
     /* triangles up to 1e5 from the local origin (the frame the kernels see),
      * where a float ulp is ~0.008: rounding of hit points is large */
     test_rng g = {1234};
-    uint32_t nt = 20000;
+    uint32_t nt = scaled(20000);
     double *tp = malloc((size_t)nt * 9 * sizeof(double));
     for (uint32_t t = 0; t < nt; ++t) {
         double c[3];
@@ -293,7 +293,7 @@ static void robust_offset_avoids_self_intersection(void)
     CHECK(s && pb_bvh_build(s, NULL, &b, &err) == PB_OK);
     if (!b)
         return;
-    uint32_t n = 50000;
+    uint32_t n = scaled(50000);
     pb_ray *rays = random_rays(s->bounds_min, s->bounds_max, n, 3);
     pb_hit *h = malloc(n * sizeof *h);
     pb_trace_cpu(s, b, rays, n, PB_TRACE_CLOSEST, h, 0);
@@ -340,7 +340,7 @@ static void robust_offset_avoids_self_intersection(void)
     for (uint32_t i = 0; i < m; ++i)
         self_off += h2[i].triangle == src[i];
     fprintf(stderr, "  %u secondary rays: %u self-hits without offset, %u with\n", m, self_raw, self_off);
-    CHECK(m > 1000);
+    CHECK(m > scaled(1000));
     CHECK(self_raw > 0); /* the test can see the failure it guards against */
     CHECK(self_off == 0);
     free(rays), free(h), free(sec), free(raw), free(src), free(h2);
@@ -384,7 +384,7 @@ static void offset_is_tiny_and_on_the_right_side(void)
 {
     test_rng r = {5};
     uint32_t bad = 0;
-    for (int i = 0; i < 100000; ++i) {
+    for (uint32_t i = 0; i < scaled(100000); ++i) {
         float p[3], n[3], o[3];
         double mag = pow(10.0, 12.0 * rng_uniform(&r) - 6.0);
         for (int k = 0; k < 3; ++k)

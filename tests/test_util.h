@@ -70,6 +70,14 @@ static inline int test_summary(void)
     return t_failed ? 1 : 0;
 }
 
+/* Work sizes: the full counts normally; a tenth when PB_TEST_QUICK=1 (the
+ * sanitizer run, which checks memory safety rather than statistics). */
+static inline uint32_t scaled(uint32_t n)
+{
+    const char *q = getenv("PB_TEST_QUICK");
+    return q && q[0] == '1' ? (n + 9) / 10 : n;
+}
+
 /* Paths: PB_SOURCE_DIR is set by tests/CMakeLists.txt. */
 static inline const char *source_path(const char *rel)
 {

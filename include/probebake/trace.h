@@ -105,9 +105,11 @@ uint32_t pb_probe_grid_count(const pb_probe_grid *grid);
 /* Probe-style rays: for probes [first, first+count) of the grid, `per_probe`
  * directions on a spherical Fibonacci set turned by a random rotation drawn
  * from (seed, probe index) alone, so any subset of probes gets the same rays
- * as the whole. out: count*per_probe rays (tmin 0, tmax +inf). */
-void pb_probe_rays(const pb_probe_grid *grid, uint32_t first, uint32_t count, uint32_t per_probe, uint32_t seed,
-                   pb_ray *out);
+ * as the whole; each probe's rays come in a spatially coherent order (Morton
+ * order of their octahedral coordinates). out: count*per_probe rays (tmin 0,
+ * tmax +inf). Returns PB_ERROR_OUT_OF_HOST_MEMORY if scratch cannot be had. */
+pb_result pb_probe_rays(const pb_probe_grid *grid, uint32_t first, uint32_t count, uint32_t per_probe, uint32_t seed,
+                        pb_ray *out);
 
 /* 32-bit hash (PCG output permutation) and a uniform float in [0,1) from a
  * key tuple. Every random number in probebake comes from these. */

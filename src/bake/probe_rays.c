@@ -1,10 +1,51 @@
 /* Probe grids and their ray sets: spherical Fibonacci directions (Keinert et
  * al. 2015) rotated per probe by a uniformly random rotation (Shoemake's
  * quaternion from three uniforms). Randomness keys only on (seed, probe,
- * stream), so a probe's rays never depend on which other probes are traced. */
+ * stream), so a probe's rays never depend on which other probes are traced.
+ *
+ * Order: consecutive Fibonacci indices lie ~137 degrees apart in azimuth, so
+ * a SIMD group or GPU warp tracing them diverges as much as it can. Each
+ * probe's directions are emitted in Morton order of their octahedral
+ * coordinates instead: the same set, with neighbours traced together. */
 #include "probebake/trace.h"
 
 #include <math.h>
+#include <stdlib.h>
+
+typedef struct keyed {
+    uint32_t key, index;
+} keyed;
+
+static int compare_keyed(const void *a, const void *b)
+{
+    const keyed *x = a, *y = b;
+    return x->key < y->key ? -1 : x->key > y->key ? 1 : (x->index > y->index) - (x->index < y->index);
+}
+
+static uint32_t spread_bits(uint32_t v) /* 16 bits -> even bits of 32 */
+{
+    v &= 0xffffu;
+    v = (v | (v << 8)) & 0x00ff00ffu;
+    v = (v | (v << 4)) & 0x0f0f0f0fu;
+    v = (v | (v << 2)) & 0x33333333u;
+    v = (v | (v << 1)) & 0x55555555u;
+    return v;
+}
+
+/* Morton key of a unit direction's octahedral coordinates. */
+static uint32_t direction_key(const float d[3])
+{
+    float l1 = fabsf(d[0]) + fabsf(d[1]) + fabsf(d[2]);
+    float u = d[0] / l1, v = d[1] / l1;
+    if (d[2] < 0.f) {
+        float pu = (1.f - fabsf(v)) * (u >= 0.f ? 1.f : -1.f);
+        float pv = (1.f - fabsf(u)) * (v >= 0.f ? 1.f : -1.f);
+        u = pu, v = pv;
+    }
+    uint32_t qu = (uint32_t)fminf(65535.f, fmaxf(0.f, (u * 0.5f + 0.5f) * 65535.f));
+    uint32_t qv = (uint32_t)fminf(65535.f, fmaxf(0.f, (v * 0.5f + 0.5f) * 65535.f));
+    return spread_bits(qu) | (spread_bits(qv) << 1);
+}
 
 uint32_t pb_hash32(uint32_t x)
 {
@@ -48,11 +89,28 @@ uint32_t pb_probe_grid_count(const pb_probe_grid *g)
     return g->counts[0] * g->counts[1] * g->counts[2];
 }
 
-void pb_probe_rays(const pb_probe_grid *g, uint32_t first, uint32_t count, uint32_t per_probe, uint32_t seed,
+pb_result pb_probe_rays(const pb_probe_grid *g, uint32_t first, uint32_t count, uint32_t per_probe, uint32_t seed,
                    pb_ray *out)
 {
     const float golden = 1.61803398874989485f;
     const float two_pi = 6.28318530717958648f;
+    /* the unrotated set and its coherent order are the same for every probe */
+    float *dirs = malloc((size_t)per_probe * 3 * sizeof(float));
+    keyed *order = malloc((size_t)per_probe * sizeof(keyed));
+    if (!dirs || !order) {
+        free(dirs), free(order);
+        return PB_ERROR_OUT_OF_HOST_MEMORY;
+    }
+    for (uint32_t r = 0; r < per_probe; ++r) {
+        float z = 1.f - (2.f * (float)r + 1.f) / (float)per_probe;
+        float rad = sqrtf(fmaxf(0.f, 1.f - z * z));
+        float phi = two_pi * ((float)r / golden - floorf((float)r / golden));
+        float *d = dirs + 3 * r;
+        d[0] = rad * cosf(phi), d[1] = rad * sinf(phi), d[2] = z;
+        order[r].key = direction_key(d);
+        order[r].index = r;
+    }
+    qsort(order, per_probe, sizeof *order, compare_keyed);
     for (uint32_t p = first; p < first + count; ++p) {
         uint32_t i = p % g->counts[0], j = (p / g->counts[0]) % g->counts[1], k = p / (g->counts[0] * g->counts[1]);
         float pos[3] = {g->origin[0] + (float)i * g->spacing[0], g->origin[1] + (float)j * g->spacing[1],
@@ -66,10 +124,7 @@ void pb_probe_rays(const pb_probe_grid *g, uint32_t first, uint32_t count, uint3
                       2 * (qx * qy + qz * qw),     1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw),
                       2 * (qx * qz - qy * qw),     2 * (qy * qz + qx * qw),     1 - 2 * (qx * qx + qy * qy)};
         for (uint32_t r = 0; r < per_probe; ++r) {
-            float z = 1.f - (2.f * (float)r + 1.f) / (float)per_probe;
-            float rad = sqrtf(fmaxf(0.f, 1.f - z * z));
-            float phi = two_pi * ((float)r / golden - floorf((float)r / golden));
-            float d[3] = {rad * cosf(phi), rad * sinf(phi), z};
+            const float *d = dirs + 3 * order[r].index;
             pb_ray *ray = &out[(size_t)(p - first) * per_probe + r];
             for (int c = 0; c < 3; ++c) {
                 ray->origin[c] = pos[c];
@@ -79,4 +134,7 @@ void pb_probe_rays(const pb_probe_grid *g, uint32_t first, uint32_t count, uint3
             ray->tmax = INFINITY;
         }
     }
+    free(dirs);
+    free(order);
+    return PB_OK;
 }

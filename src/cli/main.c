@@ -310,7 +310,10 @@ static int cmd_trace(const options *o)
         snprintf(err.message, sizeof err.message, "out of host memory for %u rays", n);
         goto out;
     }
-    pb_probe_rays(&grid, 0, probes, o->rays, o->seed, rays);
+    if (pb_probe_rays(&grid, 0, probes, o->rays, o->seed, rays) != PB_OK) {
+        snprintf(err.message, sizeof err.message, "out of host memory generating rays");
+        goto out;
+    }
     pb_trace_stats ts;
     if (pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &ts, &err) != PB_OK)
         goto out;

@@ -88,24 +88,27 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
             return 1;
         }
     }
-    if (!grow((void **)&b->pos, &b->capacity, b->count + 1, 9 * sizeof(double))) {
-        b->out_of_memory = 1;
-        return 0;
-    }
-    /* the other arrays follow the same capacity */
-    uint64_t cap = b->capacity;
-    float *nrm = realloc(b->nrm, (size_t)(cap * 9 * sizeof(float)));
-    if (nrm)
-        b->nrm = nrm;
-    float *uvs = nrm ? realloc(b->uv, (size_t)(cap * 6 * sizeof(float))) : NULL;
-    if (uvs)
-        b->uv = uvs;
-    uint32_t *mat = uvs ? realloc(b->mat, (size_t)(cap * sizeof(uint32_t))) : NULL;
-    if (mat)
-        b->mat = mat;
-    if (!mat) {
-        b->out_of_memory = 1;
-        return 0;
+    if (b->count + 1 > b->capacity) {
+        /* all four arrays share one capacity and grow together */
+        uint64_t cap = b->capacity;
+        if (!grow((void **)&b->pos, &cap, b->count + 1, 9 * sizeof(double))) {
+            b->out_of_memory = 1;
+            return 0;
+        }
+        float *nrm = realloc(b->nrm, (size_t)(cap * 9 * sizeof(float)));
+        if (nrm)
+            b->nrm = nrm;
+        float *uvs = nrm ? realloc(b->uv, (size_t)(cap * 6 * sizeof(float))) : NULL;
+        if (uvs)
+            b->uv = uvs;
+        uint32_t *mat = uvs ? realloc(b->mat, (size_t)(cap * sizeof(uint32_t))) : NULL;
+        if (mat)
+            b->mat = mat;
+        if (!mat) {
+            b->out_of_memory = 1;
+            return 0;
+        }
+        b->capacity = cap;
     }
     uint64_t i = b->count++;
     memcpy(b->pos + 9 * i, p, 9 * sizeof(double));
