@@ -365,6 +365,36 @@ static void bounded_submissions_same_bytes(void)
     pb_scene_destroy(s);
 }
 
+/* shaders/include/ray_offset.glsl == pb_offset_ray_origin, bit for bit, over
+ * magnitudes from 1e-7 to 1e7 (both sides of the 1/32 switch), signs, zeros. */
+static void ray_offset_gpu_matches_cpu(void)
+{
+    uint32_t n = 100000;
+    float *p = malloc(n * 12), *nn = malloc(n * 12), *g = malloc(n * 12);
+    test_rng r = {31};
+    for (uint32_t i = 0; i < n; ++i) {
+        double mag = pow(10.0, 14.0 * rng_uniform(&r) - 7.0);
+        for (int k = 0; k < 3; ++k)
+            p[3 * i + k] = (i % 97 == 0 && k == 1) ? 0.f : (float)((2 * rng_uniform(&r) - 1) * mag);
+        rng_direction(&r, nn + 3 * i);
+    }
+    pb_error err;
+    CHECKF(pb_offset_ray_origins_gpu(ctx, p, nn, n, g, &err) == PB_OK, "%s", err.message);
+    uint32_t bad = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        float c[3];
+        pb_offset_ray_origin(p + 3 * i, nn + 3 * i, c);
+        if (memcmp(c, g + 3 * i, 12) != 0) {
+            if (bad < 5)
+                fprintf(stderr, "  point %u (%a %a %a): CPU %a %a %a GPU %a %a %a\n", i, p[3 * i], p[3 * i + 1],
+                        p[3 * i + 2], c[0], c[1], c[2], g[3 * i], g[3 * i + 1], g[3 * i + 2]);
+            ++bad;
+        }
+    }
+    CHECKF(bad == 0, "%u of %u origins differ", bad, n);
+    free(p), free(nn), free(g);
+}
+
 static void device_choice_and_refusals(void)
 {
     pb_context *c = (pb_context *)1;
@@ -414,6 +444,7 @@ int main(void)
     RUN(far_from_origin_same_hits);
     RUN(alpha_mask_cuts_out);
     RUN(bounded_submissions_same_bytes);
+    RUN(ray_offset_gpu_matches_cpu);
     RUN(device_choice_and_refusals);
     RUN(validation_layer_stayed_silent);
     pb_context_destroy(ctx);

@@ -9,6 +9,10 @@
  * With `validation` set, VK_LAYER_KHRONOS_validation is enabled and every
  * message it sends is counted (pb_context_validation_messages) and logged:
  * tests fail on any.
+ *
+ * Threads: create and destroy contexts from one thread at a time (volk's
+ * instance-level function table is process-wide); a context, once made, is
+ * used by one thread at a time.
  */
 #ifndef PROBEBAKE_DEVICE_H
 #define PROBEBAKE_DEVICE_H

@@ -88,6 +88,12 @@ void pb_trace_brute(const pb_scene *scene, const pb_ray *rays, uint32_t count,
  * few float ulps of p, or by a fixed tiny amount near the origin. */
 void pb_offset_ray_origin(const float p[3], const float n[3], float out[3]);
 
+/* The same on the device (shaders/include/ray_offset.glsl through
+ * ray_offset.comp), for `count` points: points, normals and origins hold
+ * 3 floats per point. Bit-identical to pb_offset_ray_origin. */
+pb_result pb_offset_ray_origins_gpu(pb_context *ctx, const float *points, const float *normals, uint32_t count,
+                                    float *origins, pb_error *err);
+
 
 /* A regular probe grid: probe (i,j,k) sits at origin + (i,j,k) * spacing. */
 typedef struct pb_probe_grid {

@@ -48,4 +48,10 @@ typedef struct trace_push {
 } trace_push;
 _Static_assert(sizeof(trace_push) == 88, "trace.comp push constants");
 
+typedef struct ray_offset_push {
+    uint64_t points, normals, origins;
+    uint32_t count, pad;
+} ray_offset_push;
+_Static_assert(sizeof(ray_offset_push) == 32, "ray_offset.comp push constants");
+
 #endif

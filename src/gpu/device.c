@@ -121,7 +121,13 @@ static pb_result create_instance(pb_context *ctx, int validation, pb_error *err)
         return pb_vk_fail(NULL, err, vr, "vkCreateInstance");
     volkLoadInstanceOnly(ctx->instance);
     if (validation) {
-        vr = vkCreateDebugUtilsMessengerEXT(ctx->instance, &mi, NULL, &ctx->messenger);
+        PFN_vkCreateDebugUtilsMessengerEXT create_messenger =
+            (PFN_vkCreateDebugUtilsMessengerEXT)vkGetInstanceProcAddr(ctx->instance, "vkCreateDebugUtilsMessengerEXT");
+        ctx->destroy_messenger = (PFN_vkDestroyDebugUtilsMessengerEXT)vkGetInstanceProcAddr(
+            ctx->instance, "vkDestroyDebugUtilsMessengerEXT");
+        if (!create_messenger || !ctx->destroy_messenger)
+            return pb_fail(err, PB_ERROR_UNSUPPORTED, "VK_EXT_debug_utils is not available with validation");
+        vr = create_messenger(ctx->instance, &mi, NULL, &ctx->messenger);
         if (vr != VK_SUCCESS)
             return pb_vk_fail(NULL, err, vr, "vkCreateDebugUtilsMessengerEXT");
     }
@@ -408,8 +414,8 @@ void pb_context_destroy(pb_context *ctx)
             ctx->vk.vkDestroyCommandPool(ctx->device, ctx->pool, NULL);
         ctx->vk.vkDestroyDevice(ctx->device, NULL);
     }
-    if (ctx->messenger)
-        vkDestroyDebugUtilsMessengerEXT(ctx->instance, ctx->messenger, NULL);
+    if (ctx->messenger && ctx->destroy_messenger)
+        ctx->destroy_messenger(ctx->instance, ctx->messenger, NULL);
     if (ctx->instance)
         vkDestroyInstance(ctx->instance, NULL);
     free(ctx);

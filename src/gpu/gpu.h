@@ -23,6 +23,9 @@ typedef struct pb_context {
     pb_device_info info;
     VkInstance instance;
     VkDebugUtilsMessengerEXT messenger;
+    /* extension entry point of *this* instance: volk's instance table is
+     * global and follows the last instance created */
+    PFN_vkDestroyDebugUtilsMessengerEXT destroy_messenger;
     VkPhysicalDevice physical;
     VkDevice device;
     struct VolkDeviceTable vk;
