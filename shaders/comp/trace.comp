@@ -47,12 +47,8 @@ void main()
     h.v = tr.v;
     h.backface = 0u;
     if (tr.tri != PB_NO_HIT) {
-        FloatBuf pos = FloatBuf(pc.scene.tri_pos);
-        uint b = 9u * tr.tri;
-        vec3 v0 = vec3(pos.v[b + 0u], pos.v[b + 1u], pos.v[b + 2u]);
-        vec3 v1 = vec3(pos.v[b + 3u], pos.v[b + 4u], pos.v[b + 5u]);
-        vec3 v2 = vec3(pos.v[b + 6u], pos.v[b + 7u], pos.v[b + 8u]);
-        h.backface = is_backface(v0, v1, v2, dir) ? 1u : 0u;
+        Tri t = load_tri(pc.scene.tris, tr.tri);
+        h.backface = is_backface(t.v0, t.v1, t.v2, dir) ? 1u : 0u;
     }
     HitBuf(pc.hits).h[i] = h;
 }

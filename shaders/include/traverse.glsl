@@ -29,14 +29,11 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
     if (s.triangle_count == 0u)
         return res;
     RayPre r = ray_prepare(org, dir);
-    NodeBuf nodes = NodeBuf(s.nodes);
-    FloatBuf pos = FloatBuf(s.tri_pos);
-    UintBuf flags = UintBuf(s.tri_flags);
     uint stack[STACK_SIZE];
     uint sp = 0u;
     uint node = 0u;
     for (;;) {
-        Node nd = nodes.n[node];
+        Node nd = load_node(s.nodes, node);
         float d[2];
         d[0] = nd.c.x == -1 ? PB_INF : ray_box(r, vec3(nd.x.x, nd.y.x, nd.z.x), vec3(nd.x.y, nd.y.y, nd.z.y), tmin, tmax);
         d[1] = nd.c.y == -1 ? PB_INF : ray_box(r, vec3(nd.x.z, nd.y.z, nd.z.z), vec3(nd.x.w, nd.y.w, nd.z.w), tmin, tmax);
@@ -46,14 +43,11 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
                 continue;
             uint first = uint(nd.c[sl]);
             for (uint k = first; k < first + count; ++k) {
-                uint b = 9u * k;
-                vec3 v0 = vec3(pos.v[b + 0u], pos.v[b + 1u], pos.v[b + 2u]);
-                vec3 v1 = vec3(pos.v[b + 3u], pos.v[b + 4u], pos.v[b + 5u]);
-                vec3 v2 = vec3(pos.v[b + 6u], pos.v[b + 7u], pos.v[b + 8u]);
+                Tri tri = load_tri(s.tris, k);
                 float t, u, v;
-                if (!ray_triangle(r, v0, v1, v2, tmin, tmax, t, u, v))
+                if (!ray_triangle(r, tri.v0, tri.v1, tri.v2, tmin, tmax, t, u, v))
                     continue;
-                uint f = flags.v[k];
+                uint f = tri.flags;
                 if ((f & PB_FLAG_ALPHA_MASK) != 0u && !alpha_opaque(s, k, f, u, v))
                     continue;
                 tmax = t;

@@ -29,19 +29,18 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     if (bvh->stats.depth + 1 > PB_BVH_MAX_DEPTH + 1)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH depth %u exceeds %d", bvh->stats.depth, PB_BVH_MAX_DEPTH);
     uint32_t n = scene->triangle_count;
-    uint64_t sizes[7] = {
+    uint64_t sizes[6] = {
         (uint64_t)bvh->node_count * sizeof(pb_bvh_node),
-        (uint64_t)n * 36u,
-        (uint64_t)n * 4u,
+        (uint64_t)n * sizeof(gpu_tri),
         (uint64_t)n * 24u,
         (uint64_t)scene->material_count * sizeof(gpu_material),
         (uint64_t)scene->texture_count * sizeof(gpu_texture),
         scene->texel_count * 4u,
     };
-    static const char *const names[7] = {"BVH nodes", "triangle positions", "triangle flags", "texture coordinates",
-                                         "materials", "textures", "texels"};
+    static const char *const names[6] = {"BVH nodes", "triangles", "texture coordinates", "materials", "textures",
+                                         "texels"};
     uint64_t total = 0;
-    for (int i = 0; i < 7; ++i) {
+    for (int i = 0; i < 6; ++i) {
         total += sizes[i];
         if (ctx->max_allocation && sizes[i] > ctx->max_allocation)
             return pb_fail(err, PB_ERROR_TOO_LARGE,
@@ -56,14 +55,14 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: more than 2^32 texels", scene->path);
 
     pb_gpu_scene *gs = calloc(1, sizeof *gs);
-    uint32_t *flags = malloc((size_t)(n ? n : 1) * 4);
+    gpu_tri *tris = malloc((size_t)(n ? n : 1) * sizeof *tris);
     float *uvs = malloc((size_t)(n ? n : 1) * 24);
     gpu_material *mats = malloc((size_t)(scene->material_count ? scene->material_count : 1) * sizeof *mats);
     gpu_texture *texs = malloc((size_t)(scene->texture_count ? scene->texture_count : 1) * sizeof *texs);
     if (gs)
         gs->tri_order = malloc((size_t)(n ? n : 1) * 4);
-    if (!gs || !flags || !uvs || !mats || !texs || !gs->tri_order) {
-        free(flags), free(uvs), free(mats), free(texs);
+    if (!gs || !tris || !uvs || !mats || !texs || !gs->tri_order) {
+        free(tris), free(uvs), free(mats), free(texs);
         if (gs)
             free(gs->tri_order);
         free(gs);
@@ -80,7 +79,8 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     for (uint32_t k = 0; k < n; ++k) {
         uint32_t tri = bvh->tri_order[k];
         uint32_t m = scene->material[tri];
-        flags[k] = m | (scene->materials[m].alpha_mode == PB_ALPHA_MASK ? PB_FLAG_ALPHA_MASK : 0u);
+        memcpy(tris[k].v, bvh->tri_positions + 9 * (size_t)k, 36);
+        tris[k].flags = m | (scene->materials[m].alpha_mode == PB_ALPHA_MASK ? PB_FLAG_ALPHA_MASK : 0u);
         memcpy(uvs + 6 * (size_t)k, scene->texcoords + 6 * (size_t)tri, 24);
     }
     memcpy(gs->tri_order, bvh->tri_order, (size_t)n * 4);
@@ -88,13 +88,12 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     gs->bvh_depth = bvh->stats.depth;
 
     pb_result r = upload_array(ctx, &gs->nodes, bvh->nodes, sizes[0], names[0], err);
-    if (r == PB_OK) r = upload_array(ctx, &gs->tri_pos, bvh->tri_positions, sizes[1], names[1], err);
-    if (r == PB_OK) r = upload_array(ctx, &gs->tri_flags, flags, sizes[2], names[2], err);
-    if (r == PB_OK) r = upload_array(ctx, &gs->tri_uv, uvs, sizes[3], names[3], err);
-    if (r == PB_OK) r = upload_array(ctx, &gs->materials, mats, sizes[4], names[4], err);
-    if (r == PB_OK) r = upload_array(ctx, &gs->textures, texs, sizes[5], names[5], err);
-    if (r == PB_OK) r = upload_array(ctx, &gs->texels, scene->texels, sizes[6], names[6], err);
-    free(flags), free(uvs), free(mats), free(texs);
+    if (r == PB_OK) r = upload_array(ctx, &gs->tris, tris, sizes[1], names[1], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->tri_uv, uvs, sizes[2], names[2], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->materials, mats, sizes[3], names[3], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->textures, texs, sizes[4], names[4], err);
+    if (r == PB_OK) r = upload_array(ctx, &gs->texels, scene->texels, sizes[5], names[5], err);
+    free(tris), free(uvs), free(mats), free(texs);
     if (r == PB_OK) {
         uint32_t spec_closest[2] = {gs->bvh_depth + 1, 0}, spec_any[2] = {gs->bvh_depth + 1, 1};
         r = pb_pipeline_create(ctx, pb_spv_trace, sizeof pb_spv_trace, sizeof(trace_push), spec_closest, 2, 64,
@@ -107,11 +106,11 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         pb_gpu_scene_destroy_ctx(ctx, gs);
         return r;
     }
-    gs->refs = (gpu_scene_refs){gs->nodes.address, gs->tri_pos.address, gs->tri_flags.address, gs->tri_uv.address,
-                                gs->materials.address, gs->textures.address, gs->texels.address, n, 0};
+    gs->refs = (gpu_scene_refs){gs->nodes.address, gs->tris.address, gs->tri_uv.address, gs->materials.address,
+                                gs->textures.address, gs->texels.address, n, 0};
     gs->ctx = ctx;
     gs->bytes = total;
-    gs->traversal_bytes = sizes[0] + sizes[1] + sizes[2];
+    gs->traversal_bytes = sizes[0] + sizes[1];
     *out = gs;
     return PB_OK;
 }
@@ -120,9 +119,9 @@ void pb_gpu_scene_destroy_ctx(pb_context *ctx, pb_gpu_scene *gs)
 {
     pb_pipeline_destroy(ctx, &gs->trace_closest);
     pb_pipeline_destroy(ctx, &gs->trace_any);
-    pb_buffer *bufs[9] = {&gs->nodes, &gs->tri_pos, &gs->tri_flags, &gs->tri_uv, &gs->materials,
-                          &gs->textures, &gs->texels, &gs->rays, &gs->hits};
-    for (int i = 0; i < 9; ++i)
+    pb_buffer *bufs[8] = {&gs->nodes, &gs->tris, &gs->tri_uv, &gs->materials, &gs->textures, &gs->texels,
+                          &gs->rays, &gs->hits};
+    for (int i = 0; i < 8; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     free(gs->tri_order);
     free(gs);

@@ -7,7 +7,7 @@
 
 struct pb_gpu_scene {
     pb_context *ctx;          /* the context it lives on (not owned) */
-    pb_buffer nodes, tri_pos, tri_flags, tri_uv, materials, textures, texels;
+    pb_buffer nodes, tris, tri_uv, materials, textures, texels;
     uint32_t *tri_order;      /* leaf -> scene triangle, host copy */
     uint32_t triangle_count;
     uint32_t bvh_depth;

@@ -31,11 +31,18 @@ _Static_assert(sizeof(gpu_texture) == 16, "gpu_texture layout");
 _Static_assert(sizeof(pb_bvh_node) == 64, "Node layout");
 _Static_assert(offsetof(pb_bvh_node, child) == 48 && offsetof(pb_bvh_node, count) == 56, "Node layout");
 
+/* Leaf-ordered triangle record (Tri in scene.glsl), read as 64-bit words. */
+typedef struct gpu_tri {
+    float v[9];
+    uint32_t flags; /* material index | PB_FLAG_ALPHA_MASK */
+} gpu_tri;
+_Static_assert(sizeof(gpu_tri) == 40, "Tri layout");
+
 typedef struct gpu_scene_refs {
-    uint64_t nodes, tri_pos, tri_flags, tri_uv, materials, textures, texels;
+    uint64_t nodes, tris, tri_uv, materials, textures, texels;
     uint32_t triangle_count, pad;
 } gpu_scene_refs;
-_Static_assert(sizeof(gpu_scene_refs) == 64, "SceneRefs layout");
+_Static_assert(sizeof(gpu_scene_refs) == 56, "SceneRefs layout");
 
 /* Ray and Hit of trace.comp are pb_ray and pb_hit. */
 _Static_assert(sizeof(pb_ray) == 32 && offsetof(pb_ray, direction) == 16, "Ray layout");
@@ -46,7 +53,7 @@ typedef struct trace_push {
     uint64_t rays, hits;
     uint32_t count, pad;
 } trace_push;
-_Static_assert(sizeof(trace_push) == 88, "trace.comp push constants");
+_Static_assert(sizeof(trace_push) == 80, "trace.comp push constants");
 
 typedef struct ray_offset_push {
     uint64_t points, normals, origins;
