@@ -3,7 +3,9 @@
  * cores). Prints a table and writes JSON.
  *
  *   trace_bench [--probes N] [--rays N] [--repeat N] [--instanced K]
- *               [--device D] [--json FILE] [SCENE ...]
+ *               [--leaf N] [--tc C] [--device D] [--json FILE] [SCENE ...]
+ *
+ * --leaf and --tc set the BVH's maximum leaf size and SAH traversal cost.
  *
  * Rays: a probe grid over the scene bounds, `--rays` spherical-Fibonacci
  * directions per probe, randomly rotated per probe (pb_probe_rays). GPU rates
@@ -25,6 +27,7 @@
 
 typedef struct options {
     uint32_t probes, rays, repeat, instanced;
+    pb_bvh_desc bvh;
     const char *device, *json;
     const char *scenes[16];
     int scene_count;
@@ -137,7 +140,12 @@ static int bench_scene(pb_context *ctx, RTCDevice edev, const char *path, const 
     pb_bvh *bvh = NULL;
     for (uint32_t r = 0; r < o->repeat; ++r) {
         pb_bvh_destroy(bvh);
-        pb_bvh_build(s, NULL, &bvh, &err);
+        if (pb_bvh_build(s, &o->bvh, &bvh, &err) != PB_OK) {
+            fprintf(stderr, "trace_bench: %s\n", err.message);
+            free(times);
+            pb_scene_destroy(s);
+            return 0;
+        }
         times[r] = bvh->stats.build_ms;
     }
     res->bvh_ms = median(times, o->repeat);
@@ -237,6 +245,10 @@ int main(int argc, char **argv)
             o.repeat = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(a, "--instanced") && v)
             o.instanced = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--leaf") && v)
+            o.bvh.max_leaf_size = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--tc") && v)
+            o.bvh.traversal_cost = (float)atof(argv[++i]);
         else if (!strcmp(a, "--device") && v)
             o.device = argv[++i];
         else if (!strcmp(a, "--json") && v)

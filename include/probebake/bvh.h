@@ -55,10 +55,10 @@ typedef struct pb_bvh {
 
 /* Zero fields mean the defaults listed on each line. */
 typedef struct pb_bvh_desc {
-    uint32_t max_leaf_size;   /* default 4; 1..16 */
+    uint32_t max_leaf_size;   /* default 8; 1..16 */
     uint32_t bins;            /* default 16; 4..64 */
     uint32_t threads;         /* default: all online host cores */
-    float traversal_cost;     /* SAH cost of one node step, default 1.0 */
+    float traversal_cost;     /* SAH cost of one node step, default 2.0 (see docs/bvh.md) */
     float intersection_cost;  /* SAH cost of one triangle test, default 1.0 */
 } pb_bvh_desc;
 
