@@ -1,11 +1,15 @@
 /* Binned SAH BVH build on all host cores, then a depth-first flatten into
  * child-pair nodes (see include/probebake/bvh.h and docs/bvh.md).
  *
- * Parallelism: tasks (a node and its primitive range) go through a shared
+ * Memory: triangles are 32-byte records (box + scene index) that binning
+ * streams through and partitioning swaps in place; a partition also gathers
+ * both children's bounds, so no level needs a separate bounds pass.
+ *
+ * Parallelism: tasks (a node, its range and its bounds) go through a shared
  * stack. A worker splits its range, pushes one child and keeps the other, so
- * every core is busy once the top levels are split. Nodes that see more than
- * PAR_BIN_MIN primitives bin them in parallel, so the root of a 1M-triangle
- * scene does not serialise the build.
+ * every core is busy once the top levels are split. Ranges of PAR_BIN_MIN
+ * triangles or more are binned in parallel, so the first levels of a large
+ * scene do not run on one core.
  *
  * Determinism: a node's split depends only on its primitive range, and the
  * flatten walks the tree in a fixed order, so the output is byte-identical
@@ -23,11 +27,26 @@
 #include <string.h>
 
 #define MAX_BINS 64
-#define PAR_BIN_MIN (1u << 16)
+#define PAR_BIN_MIN (1u << 14) /* bin ranges this large on several threads */
+#define PAR_PARTS 16
 
 typedef struct aabb {
     float lo[3], hi[3];
 } aabb;
+
+/* A triangle as the builder sees it: its box and scene index, 32 bytes,
+ * stored contiguously and swapped in place by partitioning, so binning and
+ * partitioning stream through memory. Centroids are used doubled (lo + hi):
+ * the same ordering without a multiply. */
+typedef struct prim {
+    float lo[3], hi[3];
+    uint32_t index, pad;
+} prim;
+
+/* Bounds of a range: of the boxes, and of the doubled centroids. */
+typedef struct range_info {
+    aabb box, cbox;
+} range_info;
 
 typedef struct build_node {
     aabb box;
@@ -37,12 +56,11 @@ typedef struct build_node {
 
 typedef struct task {
     uint32_t node, begin, end, depth;
+    range_info info;
 } task;
 
 typedef struct builder {
-    const float *centroid; /* 3 per triangle */
-    const aabb *tri_box;
-    uint32_t *index;       /* permuted into leaf order */
+    prim *prims;
     build_node *nodes;
     atomic_uint node_count;
     uint32_t bins, max_leaf;
@@ -52,7 +70,7 @@ typedef struct builder {
     pthread_cond_t cond;
     task *stack;
     uint32_t stack_size, stack_cap;
-    uint32_t busy;         /* tasks being worked on */
+    uint32_t busy; /* tasks being worked on */
     uint32_t threads;
 } builder;
 
@@ -72,6 +90,23 @@ static void box_grow(aabb *b, const aabb *o)
     }
 }
 
+static void info_empty(range_info *ri)
+{
+    box_empty(&ri->box);
+    box_empty(&ri->cbox);
+}
+
+static inline void info_add(range_info *ri, const prim *p)
+{
+    for (int k = 0; k < 3; ++k) {
+        float c = p->lo[k] + p->hi[k];
+        ri->box.lo[k] = p->lo[k] < ri->box.lo[k] ? p->lo[k] : ri->box.lo[k];
+        ri->box.hi[k] = p->hi[k] > ri->box.hi[k] ? p->hi[k] : ri->box.hi[k];
+        ri->cbox.lo[k] = c < ri->cbox.lo[k] ? c : ri->cbox.lo[k];
+        ri->cbox.hi[k] = c > ri->cbox.hi[k] ? c : ri->cbox.hi[k];
+    }
+}
+
 static float box_area(const aabb *b)
 {
     float d[3];
@@ -82,11 +117,6 @@ static float box_area(const aabb *b)
     }
     return 2.f * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
 }
-
-/* Per-range statistics gathered in one pass: bounds, centroid bounds. */
-typedef struct range_info {
-    aabb box, cbox;
-} range_info;
 
 typedef struct bin_set {
     aabb box[3][MAX_BINS];
@@ -113,20 +143,25 @@ static inline uint32_t bin_of(float c, float lo, float scale, uint32_t bins)
     return (uint32_t)b;
 }
 
-static void bin_range(const builder *bd, uint32_t begin, uint32_t end, const aabb *cbox, bin_set *s)
+static void bin_scales(const builder *bd, const aabb *cbox, float scale[3])
 {
-    float scale[3];
     for (int a = 0; a < 3; ++a) {
         float ext = cbox->hi[a] - cbox->lo[a];
         scale[a] = ext > 0.f ? (float)bd->bins / ext : 0.f;
     }
+}
+
+static void bin_range(const builder *bd, uint32_t begin, uint32_t end, const aabb *cbox, bin_set *s)
+{
+    float scale[3];
+    bin_scales(bd, cbox, scale);
     for (uint32_t i = begin; i < end; ++i) {
-        uint32_t t = bd->index[i];
-        const float *c = bd->centroid + 3 * (size_t)t;
+        const prim *p = &bd->prims[i];
+        const aabb *pb = (const aabb *)p;
         for (int a = 0; a < 3; ++a) {
-            uint32_t b = bin_of(c[a], cbox->lo[a], scale[a], bd->bins);
+            uint32_t b = bin_of(p->lo[a] + p->hi[a], cbox->lo[a], scale[a], bd->bins);
             s->count[a][b]++;
-            box_grow(&s->box[a][b], &bd->tri_box[t]);
+            box_grow(&s->box[a][b], pb);
         }
     }
 }
@@ -134,87 +169,49 @@ static void bin_range(const builder *bd, uint32_t begin, uint32_t end, const aab
 typedef struct par_bin {
     const builder *bd;
     const aabb *cbox;
-    uint32_t base;
-    bin_set parts[16];
-    range_info infos[16];
-    uint32_t chunk, nparts;
-    int mode; /* 0: gather range info, 1: bin */
+    uint32_t base, chunk;
+    bin_set parts[PAR_PARTS];
 } par_bin;
-
-static void info_range(const builder *bd, uint32_t begin, uint32_t end, range_info *ri)
-{
-    box_empty(&ri->box);
-    box_empty(&ri->cbox);
-    for (uint32_t i = begin; i < end; ++i) {
-        uint32_t t = bd->index[i];
-        box_grow(&ri->box, &bd->tri_box[t]);
-        const float *c = bd->centroid + 3 * (size_t)t;
-        for (int k = 0; k < 3; ++k) {
-            ri->cbox.lo[k] = c[k] < ri->cbox.lo[k] ? c[k] : ri->cbox.lo[k];
-            ri->cbox.hi[k] = c[k] > ri->cbox.hi[k] ? c[k] : ri->cbox.hi[k];
-        }
-    }
-}
 
 static void par_bin_fn(void *user, uint64_t b, uint64_t e)
 {
     par_bin *pb = user;
     for (uint64_t part = b; part < e; ++part) {
         uint32_t begin = pb->base + (uint32_t)part * pb->chunk;
-        uint32_t end = begin + pb->chunk; /* the remainder past nparts*chunk is done by the caller */
-        if (pb->mode == 0) {
-            info_range(pb->bd, begin, end, &pb->infos[part]);
-        } else {
-            bin_set_clear(&pb->parts[part], pb->bd->bins);
-            bin_range(pb->bd, begin, end, pb->cbox, &pb->parts[part]);
-        }
+        bin_set_clear(&pb->parts[part], pb->bd->bins);
+        bin_range(pb->bd, begin, begin + pb->chunk, pb->cbox, &pb->parts[part]);
     }
 }
 
-/* Gathers info and bins of [begin,end), in parallel for large ranges. The
- * merge order is fixed, so the result does not depend on threads. */
-static void analyse(const builder *bd, uint32_t begin, uint32_t end, range_info *ri, bin_set *s, par_bin *scratch)
+/* Bins [begin,end) by doubled centroid within cbox; on several threads for
+ * large ranges. Parts are merged in a fixed order: thread-count independent. */
+static void bin_all(const builder *bd, uint32_t begin, uint32_t end, const aabb *cbox, bin_set *s, par_bin *scratch)
 {
     uint32_t n = end - begin;
     bin_set_clear(s, bd->bins);
     if (n < PAR_BIN_MIN || bd->threads <= 1) {
-        info_range(bd, begin, end, ri);
-        bin_range(bd, begin, end, &ri->cbox, s);
+        bin_range(bd, begin, end, cbox, s);
         return;
     }
     par_bin *pb = scratch;
     pb->bd = bd;
+    pb->cbox = cbox;
     pb->base = begin;
-    pb->nparts = 16;
-    pb->chunk = n / 16;
-    pb->mode = 0;
-    pb_parallel_for(16, 1, bd->threads, par_bin_fn, pb);
-    uint32_t covered = begin + 16 * pb->chunk;
-    range_info tail;
-    info_range(bd, covered, end, &tail);
-    box_empty(&ri->box);
-    box_empty(&ri->cbox);
-    for (int p = 0; p < 16; ++p) {
-        box_grow(&ri->box, &pb->infos[p].box);
-        box_grow(&ri->cbox, &pb->infos[p].cbox);
-    }
-    box_grow(&ri->box, &tail.box);
-    box_grow(&ri->cbox, &tail.cbox);
-    pb->cbox = &ri->cbox;
-    pb->mode = 1;
-    pb_parallel_for(16, 1, bd->threads, par_bin_fn, pb);
-    for (int p = 0; p < 16; ++p)
+    pb->chunk = n / PAR_PARTS;
+    pb_parallel_for(PAR_PARTS, 1, bd->threads, par_bin_fn, pb);
+    for (int p = 0; p < PAR_PARTS; ++p)
         for (int a = 0; a < 3; ++a)
             for (uint32_t i = 0; i < bd->bins; ++i) {
                 s->count[a][i] += pb->parts[p].count[a][i];
                 box_grow(&s->box[a][i], &pb->parts[p].box[a][i]);
             }
-    bin_range(bd, covered, end, &ri->cbox, s);
+    bin_range(bd, begin + PAR_PARTS * pb->chunk, end, cbox, s); /* remainder */
 }
 
 typedef struct sort_key {
     float key;
-    uint32_t index;
+    uint32_t index; /* scene index: unique, breaks ties deterministically */
+    uint32_t pos;   /* where the record is in the scratch copy */
 } sort_key;
 
 static int compare_keys(const void *pa, const void *pb)
@@ -233,28 +230,60 @@ static uint32_t ceil_log2(uint32_t x)
     return l;
 }
 
-/* Splits the range or makes a leaf. Returns the split position (begin < mid
- * < end) or 0 for a leaf. */
-static uint32_t split_node(builder *bd, build_node *node, uint32_t begin, uint32_t end, uint32_t depth,
-                           par_bin *scratch, bin_set *bins)
+/* Halves [begin,end) after sorting along the longest centroid axis (ties by
+ * scene index: deterministic). Rare: no SAH split exists, or the depth guard. */
+static uint32_t median_split(builder *bd, uint32_t begin, uint32_t end, const aabb *cbox)
 {
     uint32_t n = end - begin;
-    range_info ri;
-    analyse(bd, begin, end, &ri, bins, scratch);
-    node->box = ri.box;
+    int a = 0;
+    for (int k = 1; k < 3; ++k)
+        if (cbox->hi[k] - cbox->lo[k] > cbox->hi[a] - cbox->lo[a])
+            a = k;
+    sort_key *keys = malloc((size_t)n * sizeof *keys);
+    prim *tmp = malloc((size_t)n * sizeof *tmp);
+    if (keys && tmp) {
+        for (uint32_t i = 0; i < n; ++i) {
+            const prim *p = &bd->prims[begin + i];
+            keys[i] = (sort_key){p->lo[a] + p->hi[a], p->index, i};
+            tmp[i] = *p;
+        }
+        qsort(keys, n, sizeof *keys, compare_keys);
+        for (uint32_t i = 0; i < n; ++i)
+            bd->prims[begin + i] = tmp[keys[i].pos];
+    } /* without memory, the unsorted halves still terminate */
+    free(keys);
+    free(tmp);
+    return begin + n / 2;
+}
+static void info_range(const builder *bd, uint32_t begin, uint32_t end, range_info *ri)
+{
+    info_empty(ri);
+    for (uint32_t i = begin; i < end; ++i)
+        info_add(ri, &bd->prims[i]);
+}
+
+/* Splits task t or makes it a leaf. Returns the split position (begin < mid
+ * < end) and both children's bounds, or 0 for a leaf. */
+static uint32_t split_node(builder *bd, build_node *node, const task *t, par_bin *scratch, bin_set *bins,
+                           range_info *left, range_info *right)
+{
+    uint32_t begin = t->begin, end = t->end, n = end - begin;
+    const range_info *ri = &t->info;
+    node->box = ri->box;
     if (n <= 1)
         return 0;
 
     /* depth guard: if the remaining levels could exceed the bound, halve */
     uint32_t leaves_needed = (n + bd->max_leaf - 1) / bd->max_leaf;
-    int force_median = depth + ceil_log2(leaves_needed) + 2 >= PB_BVH_MAX_DEPTH;
+    int force_median = t->depth + ceil_log2(leaves_needed) + 2 >= PB_BVH_MAX_DEPTH;
 
     float best_cost = INFINITY;
     int best_axis = -1;
     uint32_t best_bin = 0;
     if (!force_median) {
+        bin_all(bd, begin, end, &ri->cbox, bins, scratch);
         for (int a = 0; a < 3; ++a) {
-            if (!(ri.cbox.hi[a] > ri.cbox.lo[a]))
+            if (!(ri->cbox.hi[a] > ri->cbox.lo[a]))
                 continue;
             /* sweep from the right, then from the left */
             float right_cost[MAX_BINS];
@@ -282,7 +311,7 @@ static uint32_t split_node(builder *bd, build_node *node, uint32_t begin, uint32
             }
         }
     }
-    float area = box_area(&ri.box);
+    float area = box_area(&ri->box);
     float leaf_cost = bd->ic * (float)n;
     float split_cost = area > 0.f ? bd->tc + bd->ic * best_cost / area : bd->tc + bd->ic * (float)n;
     if (n <= bd->max_leaf && (best_axis < 0 || leaf_cost <= split_cost))
@@ -290,50 +319,42 @@ static uint32_t split_node(builder *bd, build_node *node, uint32_t begin, uint32
 
     uint32_t mid;
     if (best_axis >= 0) {
-        float ext = ri.cbox.hi[best_axis] - ri.cbox.lo[best_axis];
-        float scale = (float)bd->bins / ext;
+        /* partition in place, gathering both children's bounds on the way */
+        const int a = best_axis;
+        float scale[3];
+        bin_scales(bd, &ri->cbox, scale);
+        info_empty(left);
+        info_empty(right);
         uint32_t i = begin, j = end;
         while (i < j) {
-            uint32_t t = bd->index[i];
-            if (bin_of(bd->centroid[3 * (size_t)t + best_axis], ri.cbox.lo[best_axis], scale, bd->bins) < best_bin) {
+            prim *p = &bd->prims[i];
+            if (bin_of(p->lo[a] + p->hi[a], ri->cbox.lo[a], scale[a], bd->bins) < best_bin) {
+                info_add(left, p);
                 ++i;
             } else {
                 --j;
-                bd->index[i] = bd->index[j];
-                bd->index[j] = t;
+                prim tmp = *p;
+                *p = bd->prims[j];
+                bd->prims[j] = tmp;
+                info_add(right, &bd->prims[j]);
             }
         }
         mid = i;
-    } else {
-        /* no usable split (identical centroids) or depth guard: halve the range
-         * after ordering along the longest centroid axis */
-        int a = 0;
-        for (int k = 1; k < 3; ++k)
-            if (ri.cbox.hi[k] - ri.cbox.lo[k] > ri.cbox.hi[a] - ri.cbox.lo[a])
-                a = k;
-        mid = begin + n / 2;
-        sort_key *keys = malloc((size_t)n * sizeof *keys);
-        if (keys) { /* rare path: a full sort is fine; ties broken by index (deterministic) */
-            for (uint32_t i = 0; i < n; ++i) {
-                keys[i].index = bd->index[begin + i];
-                keys[i].key = bd->centroid[3 * (size_t)keys[i].index + a];
-            }
-            qsort(keys, n, sizeof *keys, compare_keys);
-            for (uint32_t i = 0; i < n; ++i)
-                bd->index[begin + i] = keys[i].index;
-            free(keys);
-        }
+        if (mid > begin && mid < end)
+            return mid;
     }
-    if (mid == begin || mid == end)
-        mid = begin + n / 2;
+    /* no usable split (identical centroids) or depth guard: sorted halves */
+    mid = median_split(bd, begin, end, &ri->cbox);
+    info_range(bd, begin, mid, left);
+    info_range(bd, mid, end, right);
     return mid;
 }
 
-static void push_task(builder *bd, task t)
+static void push_task(builder *bd, const task *t)
 {
     pthread_mutex_lock(&bd->lock);
     assert(bd->stack_size < bd->stack_cap);
-    bd->stack[bd->stack_size++] = t;
+    bd->stack[bd->stack_size++] = *t;
     pthread_cond_signal(&bd->cond);
     pthread_mutex_unlock(&bd->lock);
 }
@@ -364,7 +385,8 @@ static void *worker(void *arg)
 
         for (;;) { /* keep one child, share the other */
             build_node *node = &bd->nodes[t.node];
-            uint32_t mid = split_node(bd, node, t.begin, t.end, t.depth, scratch, bins);
+            range_info li, ri;
+            uint32_t mid = split_node(bd, node, &t, scratch, bins, &li, &ri);
             if (!mid) {
                 node->begin = t.begin;
                 node->count = t.end - t.begin;
@@ -374,9 +396,9 @@ static void *worker(void *arg)
             node->left = l;
             node->right = l + 1;
             node->count = 0;
-            task right = {l + 1, mid, t.end, t.depth + 1};
-            push_task(bd, right);
-            t = (task){l, t.begin, mid, t.depth + 1};
+            task right = {l + 1, mid, t.end, t.depth + 1, ri};
+            push_task(bd, &right);
+            t = (task){l, t.begin, mid, t.depth + 1, li};
         }
 
         pthread_mutex_lock(&bd->lock);
@@ -465,34 +487,37 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     builder bd;
     memset(&bd, 0, sizeof bd);
     uint32_t max_nodes = n ? 2 * n : 1;
-    float *centroid = malloc((size_t)(n ? n : 1) * 3 * sizeof(float));
-    aabb *tri_box = malloc((size_t)(n ? n : 1) * sizeof(aabb));
-    bd.index = malloc((size_t)(n ? n : 1) * sizeof(uint32_t));
+    bd.prims = malloc((size_t)(n ? n : 1) * sizeof(prim));
     bd.nodes = calloc(max_nodes, sizeof(build_node));
     bd.stack = malloc((size_t)max_nodes * sizeof(task));
+    uint32_t want = n >= 4096 ? d.threads : 1;
+    worker_arg *args = malloc(want * sizeof *args);
     uint32_t inner_cap = n > 1 ? n : 1;
     if (bvh) {
         bvh->nodes = calloc(inner_cap, sizeof(pb_bvh_node));
         bvh->tri_positions = malloc((size_t)(n ? n : 1) * 9 * sizeof(float));
+        bvh->tri_order = malloc((size_t)(n ? n : 1) * sizeof(uint32_t));
     }
-    if (!bvh || !centroid || !tri_box || !bd.index || !bd.nodes || !bd.stack || !bvh->nodes || !bvh->tri_positions) {
-        free(centroid), free(tri_box), free(bd.index), free(bd.nodes), free(bd.stack);
+    if (!bvh || !bd.prims || !bd.nodes || !bd.stack || !args || !bvh->nodes || !bvh->tri_positions ||
+        !bvh->tri_order) {
+        free(bd.prims), free(bd.nodes), free(bd.stack), free(args);
         pb_bvh_destroy(bvh);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory building the BVH of %u triangles", n);
     }
+    task root_task = {0, 0, n, 0, {{{0}}}};
+    info_empty(&root_task.info);
     for (uint32_t i = 0; i < n; ++i) {
         const float *p = scene->positions + 9 * (size_t)i;
-        aabb *b = &tri_box[i];
+        prim *pr = &bd.prims[i];
         for (int k = 0; k < 3; ++k) {
             float a = p[k], bb = p[3 + k], c = p[6 + k];
-            b->lo[k] = fminf(a, fminf(bb, c));
-            b->hi[k] = fmaxf(a, fmaxf(bb, c));
-            centroid[3 * (size_t)i + k] = 0.5f * (b->lo[k] + b->hi[k]);
+            pr->lo[k] = a < bb ? (a < c ? a : c) : (bb < c ? bb : c);
+            pr->hi[k] = a > bb ? (a > c ? a : c) : (bb > c ? bb : c);
         }
-        bd.index[i] = i;
+        pr->index = i;
+        pr->pad = 0;
+        info_add(&root_task.info, pr);
     }
-    bd.centroid = centroid;
-    bd.tri_box = tri_box;
     bd.bins = d.bins;
     bd.max_leaf = d.max_leaf_size;
     bd.tc = d.traversal_cost;
@@ -503,16 +528,8 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     pthread_mutex_init(&bd.lock, NULL);
     pthread_cond_init(&bd.cond, NULL);
 
-    uint32_t want = n >= 4096 ? d.threads : 1;
-    worker_arg *args = n ? malloc(want * sizeof *args) : NULL;
-    if (n > 0 && !args) {
-        free(centroid), free(tri_box), free(bd.nodes), free(bd.stack);
-        bvh->tri_order = bd.index;
-        pb_bvh_destroy(bvh);
-        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory building the BVH of %u triangles", n);
-    }
     if (n > 0) {
-        bd.stack[bd.stack_size++] = (task){0, 0, n, 0};
+        bd.stack[bd.stack_size++] = root_task;
         pthread_t tids[64];
         uint32_t started = 0;
         for (uint32_t i = 0; i < want; ++i)
@@ -543,9 +560,11 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     }
     bvh->node_count = fs.next;
     bvh->triangle_count = n;
-    bvh->tri_order = bd.index;
-    for (uint32_t k = 0; k < n; ++k)
-        memcpy(bvh->tri_positions + 9 * (size_t)k, scene->positions + 9 * (size_t)bd.index[k], 9 * sizeof(float));
+    for (uint32_t k = 0; k < n; ++k) {
+        uint32_t t = bd.prims[k].index;
+        bvh->tri_order[k] = t;
+        memcpy(bvh->tri_positions + 9 * (size_t)k, scene->positions + 9 * (size_t)t, 9 * sizeof(float));
+    }
     bvh->stats.nodes = fs.next;
     bvh->stats.leaves = fs.leaves;
     bvh->stats.depth = fs.depth;
@@ -555,8 +574,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
 
     pthread_mutex_destroy(&bd.lock);
     pthread_cond_destroy(&bd.cond);
-    free(centroid);
-    free(tri_box);
+    free(bd.prims);
     free(bd.nodes);
     free(bd.stack);
     bvh->stats.build_ms = pb_now_ms() - t0;
