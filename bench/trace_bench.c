@@ -293,7 +293,7 @@ int main(int argc, char **argv)
         }
     }
 
-    pb_context_desc cd = {o.device, 0, 0, {0}};
+    pb_context_desc cd = {o.device, 0, 0, 0, {0}};
     pb_context *ctx = NULL;
     pb_error err;
     if (pb_context_create(&cd, &ctx, &err) != PB_OK) {

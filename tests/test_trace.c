@@ -3,6 +3,7 @@
  * scenes; watertightness; far offsets; alpha masks; any-hit; bounded
  * submissions; refusals. The last test fails on any validation message. */
 #include "scenes_gen.h"
+#include "bake/gpu_scene.h"
 #include "gpu/gpu.h"
 
 #include <stb_image_write.h>
@@ -332,11 +333,12 @@ static void alpha_mask_cuts_out(void)
     pb_scene_destroy(s);
 }
 
-/* Splitting the work into many submissions changes no result. */
+/* Splitting the work into many submissions, and copying through staging
+ * buffers (the discrete-GPU path) instead of mapped memory, changes no result. */
 static void bounded_submissions_same_bytes(void)
 {
     pb_scene *s = random_soup(5000, 0.1f, 3, NULL);
-    pb_context_desc d = {NULL, 1, 4096, test_log};
+    pb_context_desc d = {NULL, 1, 4096, 1, test_log};
     pb_context *small = NULL;
     pb_error err;
     CHECKF(pb_context_create(&d, &small, &err) == PB_OK, "%s", err.message);
@@ -347,6 +349,7 @@ static void bounded_submissions_same_bytes(void)
     CHECK(pb_bvh_build(s, NULL, &b, &err) == PB_OK);
     CHECK(pb_gpu_scene_create(ctx, s, b, &g1, &err) == PB_OK);
     CHECK(pb_gpu_scene_create(small, s, b, &g2, &err) == PB_OK);
+    CHECK(g2 && g2->nodes.mapped == NULL); /* the staging path is the one under test */
     uint32_t n = 50000;
     pb_ray *rays = random_rays(s->bounds_min, s->bounds_max, n, 4);
     pb_hit *h1 = malloc(n * sizeof *h1), *h2 = malloc(n * sizeof *h2);
@@ -399,7 +402,7 @@ static void device_choice_and_refusals(void)
 {
     pb_context *c = (pb_context *)1;
     pb_error err;
-    pb_context_desc d = {"no such device", 0, 0, {0}};
+    pb_context_desc d = {"no such device", 0, 0, 0, {0}};
     CHECK(pb_context_create(&d, &c, &err) == PB_ERROR_NO_DEVICE && c == NULL);
     CHECK(strstr(err.message, "no such device") != NULL);
     d.device = "99";
@@ -429,7 +432,7 @@ static void validation_layer_stayed_silent(void)
 
 int main(void)
 {
-    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, test_log};
+    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, test_log};
     pb_error err;
     if (pb_context_create(&d, &ctx, &err) != PB_OK) {
         fprintf(stderr, "no Vulkan device with validation: %s\n", err.message);

@@ -52,6 +52,8 @@ typedef struct pb_context_desc {
     const char *device;           /* NULL: best device; "N" index or name substring */
     uint32_t validation;          /* 1: enable the Khronos validation layer */
     uint32_t rays_per_submit;     /* default 1<<20: bounds one submit's run time (GPU watchdogs) */
+    uint32_t force_staging;       /* 1: never map device buffers, copy through staging buffers as on a
+                                     discrete GPU (tests that path on UMA devices such as lavapipe) */
     pb_log log;
 } pb_context_desc;
 

@@ -79,7 +79,7 @@ pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind ki
         return pb_vk_fail(ctx, err, vr, what);
     }
     VkMemoryPropertyFlags f = ctx->memory.memoryTypes[type].propertyFlags;
-    if ((f & host) == host) {
+    if ((f & host) == host && !(kind == PB_MEMORY_DEVICE && ctx->desc.force_staging)) {
         if ((vr = ctx->vk.vkMapMemory(ctx->device, out->memory, 0, VK_WHOLE_SIZE, 0, &out->mapped)) != VK_SUCCESS) {
             pb_buffer_destroy(ctx, out);
             return pb_vk_fail(ctx, err, vr, what);
@@ -104,6 +104,37 @@ void pb_buffer_destroy(pb_context *ctx, pb_buffer *b)
     memset(b, 0, sizeof *b);
 }
 
+/* Copies between host memory and a buffer that is not mapped, in chunks
+ * through one staging buffer, one submission per chunk. */
+static pb_result staged_copy(pb_context *ctx, const pb_buffer *buf, VkDeviceSize offset, void *host, VkDeviceSize size,
+                             int to_device, pb_error *err)
+{
+    pb_buffer staging;
+    VkDeviceSize chunk = size < STAGING_CHUNK ? size : STAGING_CHUNK;
+    pb_result r = pb_buffer_create(ctx, chunk, to_device ? PB_MEMORY_UPLOAD : PB_MEMORY_DOWNLOAD, "staging buffer",
+                                   &staging, err);
+    if (r != PB_OK)
+        return r;
+    for (VkDeviceSize done = 0; done < size && r == PB_OK; done += chunk) {
+        VkDeviceSize n = size - done < chunk ? size - done : chunk;
+        char *h = (char *)host + done;
+        if (to_device)
+            memcpy(staging.mapped, h, (size_t)n);
+        if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
+            break;
+        if (to_device)
+            pb_cmd_copy(ctx, &staging, 0, buf, offset + done, n);
+        else
+            pb_cmd_copy(ctx, buf, offset + done, &staging, 0, n);
+        pb_cmd_barrier_to_host(ctx);
+        r = pb_cmd_submit_wait(ctx, NULL, err);
+        if (r == PB_OK && !to_device)
+            memcpy(h, staging.mapped, (size_t)n);
+    }
+    pb_buffer_destroy(ctx, &staging);
+    return r;
+}
+
 pb_result pb_buffer_upload(pb_context *ctx, pb_buffer *dst, VkDeviceSize offset, const void *data, VkDeviceSize size,
                            pb_error *err)
 {
@@ -115,22 +146,7 @@ pb_result pb_buffer_upload(pb_context *ctx, pb_buffer *dst, VkDeviceSize offset,
         memcpy((char *)dst->mapped + offset, data, (size_t)size);
         return PB_OK;
     }
-    pb_buffer staging;
-    VkDeviceSize chunk = size < STAGING_CHUNK ? size : STAGING_CHUNK;
-    pb_result r = pb_buffer_create(ctx, chunk, PB_MEMORY_UPLOAD, "staging buffer", &staging, err);
-    if (r != PB_OK)
-        return r;
-    for (VkDeviceSize done = 0; done < size && r == PB_OK; done += chunk) {
-        VkDeviceSize n = size - done < chunk ? size - done : chunk;
-        memcpy(staging.mapped, (const char *)data + done, (size_t)n);
-        r = pb_cmd_begin(ctx, err);
-        if (r != PB_OK)
-            break;
-        pb_cmd_copy(ctx, &staging, 0, dst, offset + done, n);
-        r = pb_cmd_submit_wait(ctx, NULL, err);
-    }
-    pb_buffer_destroy(ctx, &staging);
-    return r;
+    return staged_copy(ctx, dst, offset, (void *)data, size, 1, err); /* not written through when uploading */
 }
 
 pb_result pb_buffer_download(pb_context *ctx, const pb_buffer *src, VkDeviceSize offset, void *data, VkDeviceSize size,
@@ -144,21 +160,5 @@ pb_result pb_buffer_download(pb_context *ctx, const pb_buffer *src, VkDeviceSize
         memcpy(data, (const char *)src->mapped + offset, (size_t)size);
         return PB_OK;
     }
-    pb_buffer staging;
-    VkDeviceSize chunk = size < STAGING_CHUNK ? size : STAGING_CHUNK;
-    pb_result r = pb_buffer_create(ctx, chunk, PB_MEMORY_DOWNLOAD, "staging buffer", &staging, err);
-    if (r != PB_OK)
-        return r;
-    for (VkDeviceSize done = 0; done < size && r == PB_OK; done += chunk) {
-        VkDeviceSize n = size - done < chunk ? size - done : chunk;
-        r = pb_cmd_begin(ctx, err);
-        if (r != PB_OK)
-            break;
-        pb_cmd_copy(ctx, src, offset + done, &staging, 0, n);
-        r = pb_cmd_submit_wait(ctx, NULL, err);
-        if (r == PB_OK)
-            memcpy((char *)data + done, staging.mapped, (size_t)n);
-    }
-    pb_buffer_destroy(ctx, &staging);
-    return r;
+    return staged_copy(ctx, src, offset, data, size, 0, err);
 }
