@@ -62,6 +62,13 @@ expect probes-negative 2 "--probes '-5'" -- "$pb" trace "$demo" --probes -5
 expect probes-garbage 2 "--probes 'lots'" -- "$pb" trace "$demo" --probes lots
 expect device-missing-value 2 '--device needs a value' -- "$pb" trace "$demo" --device
 
+# no Vulkan driver at all: one clear line, exit 1, nothing else
+expect no-driver-devices 1 'error: no Vulkan 1.2 driver found .*mesa-vulkan-drivers' -- \
+    env VK_DRIVER_FILES=/nonexistent.json VK_ICD_FILENAMES=/nonexistent.json "$pb" devices
+expect no-driver-trace 1 'error: no Vulkan 1.2 driver found' -- \
+    env VK_DRIVER_FILES=/nonexistent.json VK_ICD_FILENAMES=/nonexistent.json "$pb" trace "$demo"
+one_error_line no-driver-one-line -- env VK_DRIVER_FILES=/nonexistent.json VK_ICD_FILENAMES=/nonexistent.json "$pb" trace "$demo"
+
 if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect devices 0 'llvmpipe|GPU|CPU' -- "$pb" devices
     expect devices-json 0 '"subgroup_size": [0-9]+' -- "$pb" devices --json

@@ -116,7 +116,9 @@ static pb_result create_instance(pb_context *ctx, int validation, pb_error *err)
     }
     VkResult vr = vkCreateInstance(&ci, NULL, &ctx->instance);
     if (vr == VK_ERROR_INCOMPATIBLE_DRIVER)
-        return pb_fail(err, PB_ERROR_NO_DEVICE, "no Vulkan 1.2 driver found (VK_ERROR_INCOMPATIBLE_DRIVER)");
+        return pb_fail(err, PB_ERROR_NO_DEVICE,
+                       "no Vulkan 1.2 driver found (VK_ERROR_INCOMPATIBLE_DRIVER); install a GPU driver, or "
+                       "mesa-vulkan-drivers for the CPU device lavapipe");
     if (vr != VK_SUCCESS)
         return pb_vk_fail(NULL, err, vr, "vkCreateInstance");
     volkLoadInstanceOnly(ctx->instance);
