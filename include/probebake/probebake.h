@@ -101,5 +101,7 @@ typedef struct pb_log {
 #include "probebake/bvh.h"
 #include "probebake/device.h"
 #include "probebake/trace.h"
+#include "probebake/sh.h"
+#include "probebake/octahedral.h"
 
 #endif /* PROBEBAKE_H */

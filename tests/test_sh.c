@@ -1,0 +1,201 @@
+/* SH L2 and octahedral mapping: orthonormality, known projections and the
+ * addition theorem (which pins every normalisation constant), the uniform-sky
+ * irradiance, octahedral round trips and border texels. CPU only. */
+#include "test_util.h"
+
+/* n spherical-Fibonacci directions: a uniform quadrature of the sphere. */
+static float *fibonacci(uint32_t n)
+{
+    float *d = malloc((size_t)n * 3 * sizeof(float));
+    for (uint32_t i = 0; i < n; ++i) {
+        double z = 1.0 - (2.0 * i + 1.0) / n, r = sqrt(fmax(0.0, 1.0 - z * z));
+        double phi = 2.0 * 3.141592653589793 * fmod(i * 0.6180339887498949, 1.0);
+        d[3 * i] = (float)(r * cos(phi));
+        d[3 * i + 1] = (float)(r * sin(phi));
+        d[3 * i + 2] = (float)z;
+    }
+    return d;
+}
+
+static void basis_is_orthonormal(void)
+{
+    uint32_t n = scaled(200000);
+    float *d = fibonacci(n);
+    double g[9][9] = {{0}};
+    for (uint32_t k = 0; k < n; ++k) {
+        float y[9];
+        pb_sh_basis(d + 3 * k, y);
+        for (int i = 0; i < 9; ++i)
+            for (int j = 0; j < 9; ++j)
+                g[i][j] += (double)y[i] * y[j];
+    }
+    double worst = 0;
+    for (int i = 0; i < 9; ++i)
+        for (int j = 0; j < 9; ++j) {
+            double v = g[i][j] * 4.0 * 3.141592653589793 / n;
+            worst = fmax(worst, fabs(v - (i == j ? 1.0 : 0.0)));
+        }
+    fprintf(stderr, "  Gram matrix over %u directions: max |G - I| = %.2e\n", n, worst);
+    CHECK(worst < 2e-3);
+    free(d);
+}
+
+static void basis_order_and_axes(void)
+{
+    /* each band-1 function peaks on its documented axis */
+    float x[3] = {1, 0, 0}, y[3] = {0, 1, 0}, z[3] = {0, 0, 1}, b[9];
+    pb_sh_basis(y, b);
+    CHECK(fabsf(b[1] - 0.488603f) < 1e-5f && fabsf(b[2]) < 1e-7f && fabsf(b[3]) < 1e-7f);
+    pb_sh_basis(z, b);
+    CHECK(fabsf(b[2] - 0.488603f) < 1e-5f && fabsf(b[6] - 0.630783f) < 1e-5f);
+    pb_sh_basis(x, b);
+    CHECK(fabsf(b[3] - 0.488603f) < 1e-5f && fabsf(b[8] - 0.546274f) < 1e-5f);
+    CHECK(fabsf(b[0] - 0.282095f) < 1e-6f);
+}
+
+/* Uniform sky of radiance L: irradiance pi L in every direction. */
+static void uniform_sky_gives_pi_l(void)
+{
+    uint32_t n = 4096;
+    float *d = fibonacci(n), c[27] = {0};
+    float L[3] = {0.5f, 1.0f, 2.0f};
+    for (uint32_t k = 0; k < n; ++k)
+        pb_sh_add(c, d + 3 * k, L, 4.f * 3.14159265f / (float)n);
+    pb_sh_radiance_to_irradiance(c);
+    float worst = 0;
+    for (uint32_t k = 0; k < n; k += 7) {
+        float e[3];
+        pb_sh_eval(c, d + 3 * k, e);
+        for (int ch = 0; ch < 3; ++ch)
+            worst = fmaxf(worst, fabsf(e[ch] - 3.14159265f * L[ch]) / (3.14159265f * L[ch]));
+    }
+    CHECKF(worst < 1e-4f, "relative error %g", worst);
+    free(d);
+}
+
+/* A delta from d, convolved and evaluated at normal n, is by the addition
+ * theorem sum_l A_l (2l+1)/(4pi) P_l(cos g): 1/4 + cos/2 + 5/32 (3cos^2 - 1).
+ * This fixes all nine normalisation constants and the band weights. */
+static void delta_matches_addition_theorem(void)
+{
+    test_rng r = {3};
+    float worst = 0;
+    for (int i = 0; i < 10000; ++i) {
+        float d[3], n[3], c[27] = {0}, e[3], one[3] = {1, 1, 1};
+        rng_direction(&r, d);
+        rng_direction(&r, n);
+        pb_sh_add_delta(c, d, one);
+        pb_sh_radiance_to_irradiance(c);
+        pb_sh_eval(c, n, e);
+        double g = (double)d[0] * n[0] + (double)d[1] * n[1] + (double)d[2] * n[2];
+        double want = 0.25 + 0.5 * g + 5.0 / 32.0 * (3 * g * g - 1);
+        worst = fmaxf(worst, (float)fabs(e[0] - want));
+    }
+    CHECKF(worst < 2e-6f, "max error %g", worst);
+}
+
+/* Irradiance from a point light of intensity I at distance d on a surface
+ * facing it is I/d^2; the L2 estimate at the light's own direction is
+ * 1.0625 I/d^2 (the clamped cosine's L2 truncation: 1/4 + 1/2 + 5/16). */
+static void point_light_projection(void)
+{
+    float c[27] = {0}, dir[3] = {0, 1, 0}, e[3];
+    float I = 100.f, dist = 4.f, E = I / (dist * dist);
+    float rgb[3] = {E, E, E};
+    pb_sh_add_delta(c, dir, rgb);
+    pb_sh_radiance_to_irradiance(c);
+    pb_sh_eval(c, dir, e);
+    CHECKF(fabsf(e[0] - 1.0625f * E) < 1e-5f * E, "%g vs %g", e[0], 1.0625f * E);
+    float down[3] = {0, -1, 0};
+    pb_sh_eval(c, down, e);
+    CHECKF(fabsf(e[0] - (0.25f - 0.5f + 0.3125f) * E) < 1e-5f * E, "back side %g", e[0]);
+}
+
+static void octahedral_round_trip(void)
+{
+    test_rng r = {9};
+    float worst = 0;
+    int out_of_range = 0;
+    for (int i = 0; i < 100000; ++i) {
+        float d[3], uv[2], e[3];
+        rng_direction(&r, d);
+        pb_oct_encode(d, uv);
+        out_of_range += fabsf(uv[0]) > 1.f || fabsf(uv[1]) > 1.f;
+        pb_oct_decode(uv, e);
+        for (int k = 0; k < 3; ++k)
+            worst = fmaxf(worst, fabsf(e[k] - d[k]));
+    }
+    CHECK(out_of_range == 0);
+    CHECKF(worst < 1e-6f, "round trip error %g", worst);
+    /* +Z at the centre, -Z at the corners, poles and axes exact */
+    float pz[3] = {0, 0, 1}, nz[3] = {0, 0, -1}, px[3] = {1, 0, 0}, uv[2];
+    pb_oct_encode(pz, uv);
+    CHECK(uv[0] == 0.f && uv[1] == 0.f);
+    pb_oct_encode(nz, uv);
+    CHECK(fabsf(uv[0]) == 1.f && fabsf(uv[1]) == 1.f);
+    pb_oct_encode(px, uv);
+    CHECK(uv[0] == 1.f && uv[1] == 0.f);
+}
+
+/* The octahedral square continues across its edges mirrored: a point just
+ * past u = 1 is the point (2 - u, -v) (and likewise for u < -1, |v| > 1; a
+ * corner folds twice, onto the opposite corner). So a border texel must hold
+ * the interior texel containing its own centre folded back. Checked exactly,
+ * and also that the folded point decodes to the same direction as the
+ * unfolded one extended continuously (the fold really is the map's seam). */
+static void fold(float *u, float *v)
+{
+    if (*u > 1.f) { *u = 2.f - *u; *v = -*v; }
+    if (*u < -1.f) { *u = -2.f - *u; *v = -*v; }
+    if (*v > 1.f) { *v = 2.f - *v; *u = -*u; }
+    if (*v < -1.f) { *v = -2.f - *v; *u = -*u; }
+}
+
+static void border_texels_continue_across_the_fold(void)
+{
+    uint32_t sizes[] = {2, 4, 8, 16, 32};
+    for (int s = 0; s < 5; ++s) {
+        uint32_t n = sizes[s], bad = 0;
+        for (uint32_t by = 0; by < n + 2; ++by)
+            for (uint32_t bx = 0; bx < n + 2; ++bx) {
+                uint32_t x, y;
+                pb_oct_border_source(bx, by, n, &x, &y);
+                float u = -1.f + (2.f * ((float)bx - 1.f) + 1.f) / (float)n;
+                float v = -1.f + (2.f * ((float)by - 1.f) + 1.f) / (float)n;
+                fold(&u, &v);
+                uint32_t fx = (uint32_t)floorf((u + 1.f) * 0.5f * (float)n);
+                uint32_t fy = (uint32_t)floorf((v + 1.f) * 0.5f * (float)n);
+                if (fx != x || fy != y) {
+                    if (bad < 4)
+                        fprintf(stderr, "  n=%u texel (%u,%u): source (%u,%u), folded centre in (%u,%u)\n", n, bx, by,
+                                x, y, fx, fy);
+                    ++bad;
+                }
+            }
+        CHECKF(bad == 0, "n=%u: %u texels disagree with the fold", n, bad);
+    }
+    /* the fold is the map's seam: (1 + e, v) and (1 - e, -v) are one direction */
+    test_rng r = {4};
+    float worst = 0;
+    for (int i = 0; i < 10000; ++i) {
+        float v = (float)(2 * rng_uniform(&r) - 1), e = 1e-3f;
+        float a[2] = {1.f - e, -v}, b[2] = {1.f, v}, da[3], db[3];
+        pb_oct_decode(a, da);
+        pb_oct_decode(b, db);
+        float dot = da[0] * db[0] + da[1] * db[1] + da[2] * db[2];
+        worst = fmaxf(worst, acosf(fminf(1.f, dot)));
+    }
+    CHECKF(worst < 3e-3f, "seam jump %g rad", worst);
+}
+
+int main(void)
+{
+    RUN(basis_is_orthonormal);
+    RUN(basis_order_and_axes);
+    RUN(uniform_sky_gives_pi_l);
+    RUN(delta_matches_addition_theorem);
+    RUN(point_light_projection);
+    RUN(octahedral_round_trip);
+    RUN(border_texels_continue_across_the_fold);
+    return test_summary();
+}
