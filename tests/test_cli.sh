@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Command-line behaviour: exit codes, one-line errors naming the file, JSON
-# keys. Usage: test_cli.sh PROBEBAKE SOURCE_DIR
+# keys. Usage: test_cli.sh PROBEBAKE SOURCE_DIR MAKE_TEST_VOLUME
 set -u
 pb=$1
 src=$2
+make_volume=$3
 demo=$src/tests/scenes/demo.gltf
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -61,6 +62,20 @@ expect rays-zero 2 "--rays '0' is not an integer in \[1, 65536\]" -- "$pb" trace
 expect probes-negative 2 "--probes '-5'" -- "$pb" trace "$demo" --probes -5
 expect probes-garbage 2 "--probes 'lots'" -- "$pb" trace "$demo" --probes lots
 expect device-missing-value 2 '--device needs a value' -- "$pb" trace "$demo" --device
+
+# inspect: a fixture volume (tests/make_test_volume.c)
+"$make_volume" "$tmp/v.probes"
+expect inspect-text 0 'probes +6 = 3 x 2 x 1' -- "$pb" inspect "$tmp/v.probes"
+expect inspect-flags 0 '5 valid, 1 relocated, 1 dilated' -- "$pb" inspect "$tmp/v.probes"
+expect inspect-json-count 0 '"probes": 6,' -- "$pb" inspect "$tmp/v.probes" --json
+expect inspect-json-probe 0 '"index": 1, "position": \[1000001, 2.25, -5\], "offset": \[0, 0.25, 0\], "flags": \["valid", "relocated"\], "sh": \[1, 1.00999999' -- \
+    "$pb" inspect "$tmp/v.probes" --json --probe 1
+expect inspect-json-last 0 '"index": 5, .*"sh": \[5, .*5.26000023\]\}$' -- "$pb" inspect "$tmp/v.probes" --json
+expect inspect-probe-text 0 'probe 4 at .*\["dilated"\]' -- "$pb" inspect "$tmp/v.probes" --probe 4
+expect inspect-probe-missing 1 "probe 6 does not exist \(6 probes\)" -- "$pb" inspect "$tmp/v.probes" --probe 6
+head -c 700 "$tmp/v.probes" >"$tmp/cut.probes"
+expect inspect-truncated 1 "error: $tmp/cut.probes: file is 700 bytes" -- "$pb" inspect "$tmp/cut.probes"
+expect inspect-not-volume 1 "error: $demo: not a probebake volume" -- "$pb" inspect "$demo"
 
 # no Vulkan driver at all: one clear line, exit 1, nothing else
 expect no-driver-devices 1 'error: no Vulkan 1.2 driver found .*mesa-vulkan-drivers' -- \

@@ -103,5 +103,6 @@ typedef struct pb_log {
 #include "probebake/trace.h"
 #include "probebake/sh.h"
 #include "probebake/octahedral.h"
+#include "probebake/volume.h"
 
 #endif /* PROBEBAKE_H */

@@ -47,6 +47,9 @@ static void print_help(void)
            "                                          textures, lights, cameras, bounds\n"
            "  probebake trace SCENE [options]         trace probe-style rays on the device and report\n"
            "                                          throughput; --verify compares with the CPU reference\n"
+           "  probebake inspect VOLUME [--json] [--probe I]\n"
+           "                                          summary of a probe volume file; --json adds every\n"
+           "                                          probe (position, flags, 27 irradiance SH coefficients)\n"
            "  probebake --help | --version\n\n"
            "options:\n"
            "  --device INDEX|NAME     pick a device (default: discrete > integrated > virtual > CPU)\n"
@@ -55,7 +58,8 @@ static void print_help(void)
            "  --rays N                rays per probe (trace; default 256)\n"
            "  --seed S                random seed (default 1)\n"
            "  --verify                trace on the CPU too and compare hit by hit\n"
-           "  --json                  machine-readable output (devices, info)\n"
+           "  --json                  machine-readable output (devices, info, inspect)\n"
+           "  --probe I               inspect: only probe I\n"
            "  --verbose, --quiet      more or fewer messages on stderr\n\n"
            "The bake itself (probebake bake) is not implemented yet; see README.md.\n",
            PB_VERSION_STRING);
@@ -65,8 +69,8 @@ typedef struct options {
     const char *command;
     const char *scene;
     const char *device;
-    int json, validation, verify;
-    uint32_t probes, rays, seed;
+    int json, validation, verify, has_probe;
+    uint32_t probes, rays, seed, probe;
     cli_log log;
 } options;
 
@@ -109,6 +113,13 @@ static int parse(int argc, char **argv, options *o)
             if (!next)
                 return usage_error("%s needs a value", a);
             o->device = argv[++i];
+        } else if (!strcmp(a, "--probe")) {
+            if (!next || !parse_u32(next, 0, UINT32_MAX - 1, &o->probe)) {
+                fprintf(stderr, "probebake: error: --probe needs a probe index (see probebake --help)\n");
+                return 2;
+            }
+            o->has_probe = 1;
+            ++i;
         } else if (!strcmp(a, "--probes") || !strcmp(a, "--rays") || !strcmp(a, "--seed")) {
             if (!next)
                 return usage_error("%s needs a value", a);
@@ -371,6 +382,103 @@ out:
     return rc ? fail(&err) : 0;
 }
 
+static void print_flags(uint32_t f)
+{
+    static const char *const names[] = {"valid", "relocated", "dilated", "outside", "converged"};
+    int first = 1;
+    printf("[");
+    for (int b = 0; b < 5; ++b)
+        if (f & (1u << b)) {
+            printf("%s\"%s\"", first ? "" : ", ", names[b]);
+            first = 0;
+        }
+    printf("]");
+}
+
+static void print_probe_json(const pb_volume *v, uint32_t i, int last)
+{
+    double p[3];
+    pb_volume_probe_position(v, i, p);
+    printf("    {\"index\": %u, \"position\": [%.9g, %.9g, %.9g], \"offset\": [%g, %g, %g], \"flags\": ", i, p[0],
+           p[1], p[2], v->offset[3 * i], v->offset[3 * i + 1], v->offset[3 * i + 2]);
+    print_flags(v->probe_flags[i]);
+    printf(", \"sh\": [");
+    for (int c = 0; c < 27; ++c)
+        printf("%s%.9g", c ? ", " : "", v->sh[27 * (size_t)i + c]);
+    printf("]}%s\n", last ? "" : ",");
+}
+
+static int cmd_inspect(const options *o)
+{
+    if (!o->scene)
+        return usage_error("%s needs a VOLUME file", "inspect");
+    pb_volume v;
+    pb_error err;
+    if (pb_volume_read(o->scene, &v, &err) != PB_OK)
+        return fail(&err);
+    if (o->has_probe && o->probe >= v.probe_count) {
+        fprintf(stderr, "probebake: error: %s: probe %u does not exist (%u probes)\n", o->scene, o->probe,
+                v.probe_count);
+        pb_volume_free(&v);
+        return 1;
+    }
+    uint32_t counts[5] = {0};
+    for (uint32_t i = 0; i < v.probe_count; ++i)
+        for (int b = 0; b < 5; ++b)
+            counts[b] += (v.probe_flags[i] >> b) & 1u;
+    const pb_volume_settings *s = &v.settings;
+    const char *kind = v.flags & PB_VOLUME_IRRADIANCE ? "irradiance" : "radiance";
+    if (o->json) {
+        printf("{\n  \"file\": ");
+        json_string(o->scene);
+        printf(",\n  \"version\": %u,\n  \"probes\": %u,\n  \"grid\": %s,\n  \"counts\": [%u, %u, %u],\n"
+               "  \"origin\": [%.17g, %.17g, %.17g],\n  \"spacing\": [%g, %g, %g],\n  \"sh\": \"%s\",\n"
+               "  \"direct\": %s,\n  \"octmap_res\": %u,\n  \"max_distance\": %g,\n  \"seed\": %llu,\n"
+               "  \"scene_hash\": \"%016llx\",\n  \"rays_per_probe\": %u,\n  \"passes\": %u,\n  \"bounces\": %u,\n"
+               "  \"device\": ",
+               PB_VOLUME_VERSION, v.probe_count, v.flags & PB_VOLUME_GRID ? "true" : "false", v.counts[0], v.counts[1],
+               v.counts[2], v.origin[0], v.origin[1], v.origin[2], v.spacing[0], v.spacing[1], v.spacing[2], kind,
+               v.flags & PB_VOLUME_DIRECT ? "true" : "false", v.octmap_res, s->max_distance,
+               (unsigned long long)s->seed, (unsigned long long)s->scene_hash, s->rays_per_probe, s->passes,
+               s->bounces);
+        json_string(v.device);
+        printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
+               "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
+        if (o->has_probe)
+            print_probe_json(&v, o->probe, 1);
+        else
+            for (uint32_t i = 0; i < v.probe_count; ++i)
+                print_probe_json(&v, i, i + 1 == v.probe_count);
+        printf("  ]\n}\n");
+    } else if (o->has_probe) {
+        double p[3];
+        pb_volume_probe_position(&v, o->probe, p);
+        printf("probe %u at (%.6g, %.6g, %.6g), offset (%g, %g, %g), flags ", o->probe, p[0], p[1], p[2],
+               v.offset[3 * o->probe], v.offset[3 * o->probe + 1], v.offset[3 * o->probe + 2]);
+        print_flags(v.probe_flags[o->probe]);
+        printf("\n%s SH (R G B per coefficient):\n", kind);
+        for (int c = 0; c < 9; ++c)
+            printf("  %d: %12.6g %12.6g %12.6g\n", c, v.sh[27 * (size_t)o->probe + 3 * c],
+                   v.sh[27 * (size_t)o->probe + 3 * c + 1], v.sh[27 * (size_t)o->probe + 3 * c + 2]);
+    } else {
+        printf("volume      %s (format version %u)\n", o->scene, PB_VOLUME_VERSION);
+        if (v.flags & PB_VOLUME_GRID)
+            printf("probes      %u = %u x %u x %u, spacing (%g, %g, %g) m\n", v.probe_count, v.counts[0],
+                   v.counts[1], v.counts[2], v.spacing[0], v.spacing[1], v.spacing[2]);
+        else
+            printf("probes      %u placed points\n", v.probe_count);
+        printf("flags       %u valid, %u relocated, %u dilated, %u outside, %u converged\n", counts[0], counts[1],
+               counts[2], counts[3], counts[4]);
+        printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
+               v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
+        printf("bake        %u rays x %u passes, %u bounces, seed %llu, device %s\n", s->rays_per_probe, s->passes,
+               s->bounces, (unsigned long long)s->seed, v.device[0] ? v.device : "?");
+        printf("time        %.1f ms total\n", v.timings.total);
+    }
+    pb_volume_free(&v);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     options o;
@@ -383,6 +491,8 @@ int main(int argc, char **argv)
         return cmd_info(&o);
     if (!strcmp(o.command, "trace"))
         return cmd_trace(&o);
+    if (!strcmp(o.command, "inspect"))
+        return cmd_inspect(&o);
     if (!strcmp(o.command, "bake")) {
         fprintf(stderr, "probebake: error: 'bake' is not implemented yet (issue 3); 'trace' exercises the "
                         "foundation\n");

@@ -1,0 +1,104 @@
+/*
+ * probebake volume: a baked probe volume in memory and its file (docs/format.md).
+ *
+ * A volume is a set of probes (a regular grid, or points an artist placed),
+ * each with a base position, a relocation offset, flags, 27 SH coefficients
+ * (9 RGB, basis and order of sh.h) and an octahedral depth tile of
+ * (n+2) x (n+2) texels holding (mean distance, mean squared distance).
+ * Positions are in the scene's *original* coordinates: base positions are
+ * float offsets from a double `origin`, so they keep precision anywhere.
+ *
+ * Files are written atomically: to a temporary file beside the target, then
+ * renamed over it, so a failed or interrupted write never leaves a partial
+ * file under the target name.
+ */
+#ifndef PROBEBAKE_VOLUME_H
+#define PROBEBAKE_VOLUME_H
+
+#include "probebake/probebake.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PB_VOLUME_VERSION 1
+
+enum {
+    PB_VOLUME_IRRADIANCE = 1u << 0,     /* SH holds irradiance (else radiance) */
+    PB_VOLUME_DIRECT = 1u << 1,         /* direct light included */
+    PB_VOLUME_GRID = 1u << 2            /* probes form counts[0] x counts[1] x counts[2], x fastest */
+};
+
+enum {
+    PB_PROBE_VALID = 1u << 0,
+    PB_PROBE_RELOCATED = 1u << 1,
+    PB_PROBE_DILATED = 1u << 2,         /* invalid, value taken from valid neighbours */
+    PB_PROBE_OUTSIDE = 1u << 3,         /* every ray left the scene: no surface nearby */
+    PB_PROBE_CONVERGED = 1u << 4        /* reached the target error before the last pass */
+};
+
+typedef struct pb_volume_settings {
+    uint64_t seed;
+    uint64_t scene_hash;
+    uint32_t rays_per_probe;            /* per pass */
+    uint32_t passes;
+    uint32_t bounces;
+    uint32_t indirect_mode;             /* 0 path tracing, 1 previous volume */
+    float target_error;                 /* 0: fixed pass count */
+    float max_distance;                 /* depth of rays that miss, metres */
+} pb_volume_settings;
+
+/* Stage timings in milliseconds (0 for stages that did not run). */
+typedef struct pb_volume_timings {
+    double load, bvh, upload, trace, sh, octmap, relocate, total;
+} pb_volume_timings;
+
+typedef struct pb_volume {
+    uint32_t flags;                     /* PB_VOLUME_* */
+    uint32_t probe_count;
+    uint32_t counts[3];                 /* grid counts; (probe_count, 1, 1) for point sets */
+    uint32_t octmap_res;                /* n: interior texels per side */
+    double origin[3];                   /* original coordinates; base positions are relative to it */
+    double spacing[3];                  /* grid spacing (0 for point sets) */
+    pb_volume_settings settings;
+    pb_volume_timings timings;
+    char device[128];
+    /* per probe, caller- or reader-owned arrays (pb_volume_free frees them) */
+    float *base;                        /* 3 per probe, relative to origin */
+    float *offset;                      /* 3 per probe: relocation, metres */
+    uint32_t *probe_flags;              /* PB_PROBE_* */
+    float *sh;                          /* 27 per probe */
+    uint16_t *depth;                    /* (n+2)^2 texels x 2 halves per probe, tile after tile */
+} pb_volume;
+
+/* Bytes of one depth tile and of the whole file for a volume's sizes. */
+uint64_t pb_volume_tile_halves(uint32_t octmap_res);
+uint64_t pb_volume_file_bytes(const pb_volume *v);
+
+/* Allocates the per-probe arrays for v->probe_count probes and
+ * v->octmap_res, zeroed. Returns PB_ERROR_OUT_OF_HOST_MEMORY or
+ * PB_ERROR_INVALID_ARGUMENT (no probes, octmap_res outside 1..256). */
+pb_result pb_volume_alloc(pb_volume *v, pb_error *err);
+
+/* Frees the per-probe arrays (the struct itself is the caller's). */
+void pb_volume_free(pb_volume *v);
+
+/* Writes v to `path` atomically. Returns PB_ERROR_IO naming the path. */
+pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err);
+
+/* Reads and validates a volume file into *v (arrays owned by v afterwards).
+ * Returns PB_ERROR_IO (cannot read), PB_ERROR_PARSE (not a volume, truncated,
+ * inconsistent sizes), PB_ERROR_UNSUPPORTED (newer version). */
+pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err);
+
+/* Original-coordinate position of probe i: origin + base + offset (double). */
+void pb_volume_probe_position(const pb_volume *v, uint32_t i, double out[3]);
+
+/* IEEE half <-> float, round to nearest even; NaN stays NaN, overflow is Inf. */
+uint16_t pb_half_from_float(float f);
+float pb_half_to_float(uint16_t h);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

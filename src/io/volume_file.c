@@ -1,0 +1,349 @@
+/* Probe volume files (docs/format.md): explicit little-endian serialisation,
+ * atomic writes (temporary file + fsync + rename), validating reads. */
+#define _POSIX_C_SOURCE 200809L
+#include "common/common.h"
+#include "probebake/volume.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define HEADER_BYTES 512u
+#define MAGIC "PBVOLUME"
+#define MAX_PROBES (1u << 28)
+#define DEPTH_FORMAT_F16 1u
+#define SH_FORMAT_F32 1u
+
+/* ------------------------------------------------------------ sizes */
+
+uint64_t pb_volume_tile_halves(uint32_t n)
+{
+    return (uint64_t)(n + 2) * (n + 2) * 2u;
+}
+
+static uint64_t align16(uint64_t x)
+{
+    return (x + 15u) & ~(uint64_t)15u;
+}
+
+typedef struct layout {
+    uint64_t base, offset, flags, sh, depth, end;
+} layout;
+
+static layout layout_of(uint32_t probes, uint32_t n)
+{
+    layout l;
+    l.base = HEADER_BYTES;
+    l.offset = align16(l.base + (uint64_t)probes * 12u);
+    l.flags = align16(l.offset + (uint64_t)probes * 12u);
+    l.sh = align16(l.flags + (uint64_t)probes * 4u);
+    l.depth = align16(l.sh + (uint64_t)probes * 27u * 4u);
+    l.end = l.depth + (uint64_t)probes * pb_volume_tile_halves(n) * 2u;
+    return l;
+}
+
+uint64_t pb_volume_file_bytes(const pb_volume *v)
+{
+    return layout_of(v->probe_count, v->octmap_res).end;
+}
+
+/* ------------------------------------------------------------ memory */
+
+pb_result pb_volume_alloc(pb_volume *v, pb_error *err)
+{
+    if (v->probe_count == 0 || v->probe_count > MAX_PROBES)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "a volume needs 1 to %u probes, not %u", MAX_PROBES,
+                       v->probe_count);
+    if (v->octmap_res < 1 || v->octmap_res > 256)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "octahedral map size %u is outside 1..256", v->octmap_res);
+    size_t n = v->probe_count;
+    v->base = calloc(n * 3, sizeof(float));
+    v->offset = calloc(n * 3, sizeof(float));
+    v->probe_flags = calloc(n, sizeof(uint32_t));
+    v->sh = calloc(n * 27, sizeof(float));
+    v->depth = calloc(n * (size_t)pb_volume_tile_halves(v->octmap_res), sizeof(uint16_t));
+    if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth) {
+        pb_volume_free(v);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", v->probe_count);
+    }
+    return PB_OK;
+}
+
+void pb_volume_free(pb_volume *v)
+{
+    free(v->base);
+    free(v->offset);
+    free(v->probe_flags);
+    free(v->sh);
+    free(v->depth);
+    v->base = v->offset = v->sh = NULL;
+    v->probe_flags = NULL;
+    v->depth = NULL;
+}
+
+void pb_volume_probe_position(const pb_volume *v, uint32_t i, double out[3])
+{
+    for (int k = 0; k < 3; ++k)
+        out[k] = v->origin[k] + (double)v->base[3 * (size_t)i + k] + (double)v->offset[3 * (size_t)i + k];
+}
+
+/* ------------------------------------------------------------ encoding */
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; ++i)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put_u64(unsigned char *p, uint64_t v)
+{
+    for (int i = 0; i < 8; ++i)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static void put_f32(unsigned char *p, float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    put_u32(p, u);
+}
+
+static void put_f64(unsigned char *p, double f)
+{
+    uint64_t u;
+    memcpy(&u, &f, 8);
+    put_u64(p, u);
+}
+
+static uint32_t get_u32(const unsigned char *p)
+{
+    uint32_t v = 0;
+    for (int i = 3; i >= 0; --i)
+        v = v << 8 | p[i];
+    return v;
+}
+
+static uint64_t get_u64(const unsigned char *p)
+{
+    uint64_t v = 0;
+    for (int i = 7; i >= 0; --i)
+        v = v << 8 | p[i];
+    return v;
+}
+
+static float get_f32(const unsigned char *p)
+{
+    uint32_t u = get_u32(p);
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+static double get_f64(const unsigned char *p)
+{
+    uint64_t u = get_u64(p);
+    double f;
+    memcpy(&f, &u, 8);
+    return f;
+}
+
+/* Serialises the whole file into one buffer (volumes are at most a few
+ * hundred MB; one buffer keeps the writer simple and the write atomic). */
+static unsigned char *encode(const pb_volume *v, uint64_t *size)
+{
+    layout l = layout_of(v->probe_count, v->octmap_res);
+    unsigned char *b = calloc(1, (size_t)l.end);
+    if (!b)
+        return NULL;
+    memcpy(b, MAGIC, 8);
+    put_u32(b + 8, PB_VOLUME_VERSION);
+    put_u32(b + 12, HEADER_BYTES);
+    put_u32(b + 16, v->flags);
+    put_u32(b + 20, v->probe_count);
+    for (int k = 0; k < 3; ++k) {
+        put_u32(b + 24 + 4 * k, v->counts[k]);
+        put_f64(b + 40 + 8 * k, v->origin[k]);
+        put_f64(b + 64 + 8 * k, v->spacing[k]);
+    }
+    put_u32(b + 36, v->octmap_res);
+    const pb_volume_settings *s = &v->settings;
+    put_u64(b + 88, s->seed);
+    put_u64(b + 96, s->scene_hash);
+    put_u32(b + 104, s->rays_per_probe);
+    put_u32(b + 108, s->passes);
+    put_u32(b + 112, s->bounces);
+    put_u32(b + 116, s->indirect_mode);
+    put_f32(b + 120, s->target_error);
+    put_f32(b + 124, s->max_distance);
+    put_u32(b + 128, DEPTH_FORMAT_F16);
+    put_u32(b + 132, SH_FORMAT_F32);
+    put_u64(b + 136, l.base);
+    put_u64(b + 144, l.offset);
+    put_u64(b + 152, l.flags);
+    put_u64(b + 160, l.sh);
+    put_u64(b + 168, l.depth);
+    put_u32(b + 176, v->octmap_res + 2);
+    const double *t = &v->timings.load;
+    for (int i = 0; i < 8; ++i)
+        put_f64(b + 184 + 8 * i, t[i]);
+    memcpy(b + 248, v->device, strnlen(v->device, sizeof v->device - 1));
+    size_t n = v->probe_count;
+    for (size_t i = 0; i < 3 * n; ++i) {
+        put_f32(b + l.base + 4 * i, v->base[i]);
+        put_f32(b + l.offset + 4 * i, v->offset[i]);
+    }
+    for (size_t i = 0; i < n; ++i)
+        put_u32(b + l.flags + 4 * i, v->probe_flags[i]);
+    for (size_t i = 0; i < 27 * n; ++i)
+        put_f32(b + l.sh + 4 * i, v->sh[i]);
+    uint64_t halves = n * pb_volume_tile_halves(v->octmap_res);
+    for (uint64_t i = 0; i < halves; ++i) {
+        b[l.depth + 2 * i] = (unsigned char)v->depth[i];
+        b[l.depth + 2 * i + 1] = (unsigned char)(v->depth[i] >> 8);
+    }
+    *size = l.end;
+    return b;
+}
+
+pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err)
+{
+    pb_error_clear(err);
+    if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth || !v->probe_count)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: volume has no probe data to write", path);
+    uint64_t size = 0;
+    unsigned char *bytes = encode(v, &size);
+    if (!bytes)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory encoding the volume", path);
+    size_t plen = strlen(path);
+    char *tmp = malloc(plen + 16);
+    if (!tmp) {
+        free(bytes);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
+    }
+    snprintf(tmp, plen + 16, "%s.tmp-XXXXXX", path);
+    int fd = mkstemp(tmp);
+    pb_result r = PB_OK;
+    if (fd < 0) {
+        r = pb_fail(err, PB_ERROR_IO, "%s: cannot create a file there: %s", path, strerror(errno));
+    } else {
+        uint64_t done = 0;
+        while (done < size) {
+            ssize_t w = write(fd, bytes + done, (size_t)(size - done));
+            if (w <= 0) {
+                r = pb_fail(err, PB_ERROR_IO, "%s: write failed: %s", path, w < 0 ? strerror(errno) : "disk full");
+                break;
+            }
+            done += (uint64_t)w;
+        }
+        if (r == PB_OK && fsync(fd) != 0)
+            r = pb_fail(err, PB_ERROR_IO, "%s: fsync failed: %s", path, strerror(errno));
+        if (close(fd) != 0 && r == PB_OK)
+            r = pb_fail(err, PB_ERROR_IO, "%s: close failed: %s", path, strerror(errno));
+        if (r == PB_OK && rename(tmp, path) != 0)
+            r = pb_fail(err, PB_ERROR_IO, "%s: cannot replace the file: %s", path, strerror(errno));
+        if (r != PB_OK)
+            unlink(tmp); /* never leave a partial file behind */
+    }
+    free(tmp);
+    free(bytes);
+    return r;
+}
+
+pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
+{
+    pb_error_clear(err);
+    memset(v, 0, sizeof *v);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return pb_fail(err, PB_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
+    unsigned char h[HEADER_BYTES];
+    size_t got = fread(h, 1, HEADER_BYTES, f);
+    if (got < 8 || memcmp(h, MAGIC, 8) != 0) {
+        fclose(f);
+        return pb_fail(err, PB_ERROR_PARSE, "%s: not a probebake volume (bad magic)", path);
+    }
+    if (got < HEADER_BYTES) {
+        fclose(f);
+        return pb_fail(err, PB_ERROR_PARSE, "%s: truncated header (%zu of %u bytes)", path, got, HEADER_BYTES);
+    }
+    uint32_t version = get_u32(h + 8);
+    if (version > PB_VOLUME_VERSION || version == 0) {
+        fclose(f);
+        return pb_fail(err, PB_ERROR_UNSUPPORTED, "%s: volume format version %u; this build reads version %u", path,
+                       version, PB_VOLUME_VERSION);
+    }
+    v->flags = get_u32(h + 16);
+    v->probe_count = get_u32(h + 20);
+    for (int k = 0; k < 3; ++k) {
+        v->counts[k] = get_u32(h + 24 + 4 * k);
+        v->origin[k] = get_f64(h + 40 + 8 * k);
+        v->spacing[k] = get_f64(h + 64 + 8 * k);
+    }
+    v->octmap_res = get_u32(h + 36);
+    v->settings.seed = get_u64(h + 88);
+    v->settings.scene_hash = get_u64(h + 96);
+    v->settings.rays_per_probe = get_u32(h + 104);
+    v->settings.passes = get_u32(h + 108);
+    v->settings.bounces = get_u32(h + 112);
+    v->settings.indirect_mode = get_u32(h + 116);
+    v->settings.target_error = get_f32(h + 120);
+    v->settings.max_distance = get_f32(h + 124);
+    double *t = &v->timings.load;
+    for (int i = 0; i < 8; ++i)
+        t[i] = get_f64(h + 184 + 8 * i);
+    memcpy(v->device, h + 248, sizeof v->device - 1);
+    v->device[sizeof v->device - 1] = '\0';
+
+    const char *bad = NULL;
+    if (get_u32(h + 12) != HEADER_BYTES)
+        bad = "unexpected header size";
+    else if (v->probe_count == 0 || v->probe_count > MAX_PROBES)
+        bad = "probe count out of range";
+    else if (v->octmap_res < 1 || v->octmap_res > 256 || get_u32(h + 176) != v->octmap_res + 2)
+        bad = "octahedral map size out of range";
+    else if (get_u32(h + 128) != DEPTH_FORMAT_F16 || get_u32(h + 132) != SH_FORMAT_F32)
+        bad = "unknown SH or depth format";
+    else if ((v->flags & PB_VOLUME_GRID) &&
+             (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != v->probe_count)
+        bad = "grid counts do not match the probe count";
+    layout l = layout_of(v->probe_count, v->octmap_res);
+    if (!bad && (get_u64(h + 136) != l.base || get_u64(h + 144) != l.offset || get_u64(h + 152) != l.flags ||
+                 get_u64(h + 160) != l.sh || get_u64(h + 168) != l.depth))
+        bad = "section offsets do not match the sizes";
+    if (bad) {
+        fclose(f);
+        return pb_fail(err, PB_ERROR_PARSE, "%s: %s", path, bad);
+    }
+    if (fseek(f, 0, SEEK_END) != 0 || (uint64_t)ftell(f) != l.end) {
+        long have = ftell(f);
+        fclose(f);
+        return pb_fail(err, PB_ERROR_PARSE, "%s: file is %ld bytes, the header describes %llu (truncated?)", path,
+                       have, (unsigned long long)l.end);
+    }
+    unsigned char *b = malloc((size_t)l.end);
+    pb_result r = b ? pb_volume_alloc(v, err) : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of memory", path);
+    if (r == PB_OK && (fseek(f, 0, SEEK_SET) != 0 || fread(b, 1, (size_t)l.end, f) != l.end))
+        r = pb_fail(err, PB_ERROR_IO, "%s: read failed", path);
+    fclose(f);
+    if (r != PB_OK) {
+        free(b);
+        pb_volume_free(v);
+        return r;
+    }
+    size_t n = v->probe_count;
+    for (size_t i = 0; i < 3 * n; ++i) {
+        v->base[i] = get_f32(b + l.base + 4 * i);
+        v->offset[i] = get_f32(b + l.offset + 4 * i);
+    }
+    for (size_t i = 0; i < n; ++i)
+        v->probe_flags[i] = get_u32(b + l.flags + 4 * i);
+    for (size_t i = 0; i < 27 * n; ++i)
+        v->sh[i] = get_f32(b + l.sh + 4 * i);
+    uint64_t halves = n * pb_volume_tile_halves(v->octmap_res);
+    for (uint64_t i = 0; i < halves; ++i)
+        v->depth[i] = (uint16_t)(b[l.depth + 2 * i] | b[l.depth + 2 * i + 1] << 8);
+    free(b);
+    return PB_OK;
+}

@@ -1,0 +1,224 @@
+/* Volume files and half floats: exhaustive half round trips, rounding
+ * against a reference, file round trip, atomic writes, every malformed-file
+ * error. CPU only. */
+#include "test_util.h"
+
+#include <dirent.h>
+
+/* Every finite half converts to float and back to itself; NaNs stay NaN;
+ * +-0 and +-Inf keep their bit patterns. (Exhaustive: the domain is small.) */
+static void half_round_trip_exhaustive(void)
+{
+    uint32_t bad = 0;
+    for (uint32_t h = 0; h < 65536; ++h) {
+        float f = pb_half_to_float((uint16_t)h);
+        uint16_t back = pb_half_from_float(f);
+        int is_nan = (h & 0x7c00u) == 0x7c00u && (h & 0x3ffu);
+        if (is_nan ? !(f != f) || (back & 0x7c00u) != 0x7c00u || !(back & 0x3ffu) : back != h) {
+            if (bad < 5)
+                fprintf(stderr, "  half %04x -> %a -> %04x\n", h, f, back);
+            ++bad;
+        }
+    }
+    CHECK(bad == 0);
+    CHECK(pb_half_to_float(0x3c00u) == 1.f && pb_half_to_float(0x0001u) == ldexpf(1.f, -24));
+    CHECK(pb_half_to_float(0x7bffu) == 65504.f);
+}
+
+/* float -> half is the nearest half, ties to even: checked against a search
+ * over the sorted positive halves, on values biased to the hard places. */
+static void half_rounding_matches_reference(void)
+{
+    test_rng r = {17};
+    uint32_t bad = 0, n = scaled(200000);
+    for (uint32_t i = 0; i < n; ++i) {
+        float f;
+        switch (i % 4) {
+        case 0: f = (float)ldexp(rng_uniform(&r) + 0.5, (int)(rng_uniform(&r) * 44) - 28); break;
+        case 1: { uint16_t h = (uint16_t)(rng_uniform(&r) * 0x7bff); /* exact midpoints between halves */
+                  f = 0.5f * (pb_half_to_float(h) + pb_half_to_float((uint16_t)(h + 1))); break; }
+        case 2: f = (float)(rng_uniform(&r) * 70000.0); break;
+        default: f = (float)(rng_uniform(&r) * 1e-4); break;
+        }
+        if (i & 8)
+            f = -f;
+        /* reference: nearest of the two neighbouring halves, ties to even */
+        float a = fabsf(f);
+        uint16_t lo = 0, hi = 0x7c00u; /* find largest half <= a */
+        while (lo < hi) {
+            uint16_t mid = (uint16_t)((lo + hi + 1) / 2);
+            if (pb_half_to_float(mid) <= a) lo = mid; else hi = (uint16_t)(mid - 1);
+        }
+        uint16_t want = lo;
+        if (lo < 0x7c00u) {
+            double dl = (double)a - pb_half_to_float(lo);
+            /* above the largest half (65504) the next step would be 65536: that rounds to Inf */
+            double dh = (lo + 1 == 0x7c00u ? 65536.0 : (double)pb_half_to_float((uint16_t)(lo + 1))) - (double)a;
+            if (dh < dl || (dh == dl && (lo & 1u)))
+                want = (uint16_t)(lo + 1);
+        }
+        want = (uint16_t)(want | (f < 0 || (f == 0 && signbit(f)) ? 0x8000u : 0u));
+        uint16_t got = pb_half_from_float(f);
+        if (got != want) {
+            if (bad < 5)
+                fprintf(stderr, "  %a: got %04x want %04x\n", f, got, want);
+            ++bad;
+        }
+    }
+    CHECKF(bad == 0, "%u of %u conversions differ", bad, n);
+    CHECK(pb_half_from_float(1e6f) == 0x7c00u && pb_half_from_float(-1e6f) == 0xfc00u);
+    CHECK(pb_half_from_float(NAN) != 0x7c00u && (pb_half_from_float(NAN) & 0x7c00u) == 0x7c00u);
+}
+
+static void fill(pb_volume *v, uint32_t nx, uint32_t ny, uint32_t nz, uint32_t n)
+{
+    memset(v, 0, sizeof *v);
+    v->flags = PB_VOLUME_GRID | PB_VOLUME_IRRADIANCE | PB_VOLUME_DIRECT;
+    v->probe_count = nx * ny * nz;
+    v->counts[0] = nx, v->counts[1] = ny, v->counts[2] = nz;
+    v->octmap_res = n;
+    v->origin[0] = 1e7 + 0.25, v->origin[1] = -3.5, v->origin[2] = 42.0;
+    v->spacing[0] = v->spacing[1] = v->spacing[2] = 0.5;
+    v->settings = (pb_volume_settings){0xdeadbeefcafeull, 0x1234567890abcdefull, 256, 8, 3, 0, 0.01f, 64.f};
+    v->timings = (pb_volume_timings){1, 2, 3, 4, 5, 6, 7, 28};
+    snprintf(v->device, sizeof v->device, "test device");
+    CHECK(pb_volume_alloc(v, NULL) == PB_OK);
+    test_rng r = {5};
+    for (uint32_t i = 0; i < v->probe_count; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            v->base[3 * i + k] = (float)((i % (k == 0 ? nx : k == 1 ? ny : nz)) * 0.5);
+            v->offset[3 * i + k] = (float)(rng_uniform(&r) - 0.5) * 0.1f;
+        }
+        v->probe_flags[i] = PB_PROBE_VALID | (i % 3 == 0 ? PB_PROBE_RELOCATED : 0);
+        for (int c = 0; c < 27; ++c)
+            v->sh[27 * i + c] = (float)(rng_uniform(&r) * 10 - 2);
+    }
+    for (uint64_t t = 0; t < v->probe_count * pb_volume_tile_halves(n); ++t)
+        v->depth[t] = pb_half_from_float((float)(rng_uniform(&r) * 20));
+}
+
+static void file_round_trip(void)
+{
+    pb_volume v, w;
+    fill(&v, 4, 3, 2, 16);
+    char path[512];
+    snprintf(path, sizeof path, "%s/grid.probes", temp_dir());
+    pb_error err;
+    CHECKF(pb_volume_write(path, &v, &err) == PB_OK, "%s", err.message);
+    CHECKF(pb_volume_read(path, &w, &err) == PB_OK, "%s", err.message);
+    CHECK(w.probe_count == 24 && w.octmap_res == 16 && w.flags == v.flags);
+    CHECK(memcmp(w.counts, v.counts, sizeof v.counts) == 0 && memcmp(w.origin, v.origin, sizeof v.origin) == 0);
+    CHECK(memcmp(&w.settings, &v.settings, sizeof v.settings) == 0);
+    CHECK(memcmp(&w.timings, &v.timings, sizeof v.timings) == 0);
+    CHECK(strcmp(w.device, "test device") == 0);
+    CHECK(memcmp(w.base, v.base, 24 * 12) == 0 && memcmp(w.offset, v.offset, 24 * 12) == 0);
+    CHECK(memcmp(w.probe_flags, v.probe_flags, 24 * 4) == 0 && memcmp(w.sh, v.sh, 24 * 27 * 4) == 0);
+    CHECK(memcmp(w.depth, v.depth, 24 * pb_volume_tile_halves(16) * 2) == 0);
+    double p[3];
+    pb_volume_probe_position(&w, 1, p);
+    CHECK(fabs(p[0] - (1e7 + 0.25 + 0.5 + w.offset[3])) < 1e-9);
+    /* size per probe at the default octmap size stays under 1.5 KB */
+    double per_probe = (double)(pb_volume_file_bytes(&v) - 512) / v.probe_count;
+    fprintf(stderr, "  %.0f bytes per probe at 16x16 octmaps\n", per_probe);
+    CHECK(per_probe <= 1536);
+    pb_volume_free(&w);
+    pb_volume_free(&v);
+}
+
+static int count_files(const char *dir)
+{
+    DIR *d = opendir(dir);
+    int n = 0;
+    struct dirent *e;
+    while (d && (e = readdir(d)))
+        n += e->d_name[0] != '.';
+    if (d)
+        closedir(d);
+    return n;
+}
+
+/* A write that cannot complete leaves neither the target nor a temporary. */
+static void failed_write_leaves_nothing(void)
+{
+    pb_volume v;
+    fill(&v, 2, 2, 2, 4);
+    char dir[512], path[600];
+    snprintf(dir, sizeof dir, "%s/atomic", temp_dir());
+    mkdir(dir, 0755);
+    pb_error err;
+    snprintf(path, sizeof path, "%s/missing-dir/out.probes", dir);
+    CHECK(pb_volume_write(path, &v, &err) == PB_ERROR_IO && strstr(err.message, path) != NULL);
+    CHECK(count_files(dir) == 0);
+    /* an existing good file survives a failed rewrite untouched */
+    snprintf(path, sizeof path, "%s/keep.probes", dir);
+    CHECK(pb_volume_write(path, &v, &err) == PB_OK);
+    pb_volume broken = v;
+    broken.sh = NULL;
+    CHECK(pb_volume_write(path, &broken, &err) == PB_ERROR_INVALID_ARGUMENT);
+    pb_volume w;
+    CHECK(pb_volume_read(path, &w, &err) == PB_OK && w.probe_count == 8);
+    pb_volume_free(&w);
+    CHECK(count_files(dir) == 1);
+    pb_volume_free(&v);
+}
+
+static void malformed_files_get_clear_errors(void)
+{
+    pb_volume v, w;
+    fill(&v, 2, 2, 1, 8);
+    char path[512];
+    snprintf(path, sizeof path, "%s/src.probes", temp_dir());
+    pb_error err;
+    CHECK(pb_volume_write(path, &v, &err) == PB_OK);
+    char *bytes = malloc(pb_volume_file_bytes(&v));
+    FILE *f = fopen(path, "rb");
+    size_t size = fread(bytes, 1, pb_volume_file_bytes(&v), f);
+    fclose(f);
+    CHECK(size == pb_volume_file_bytes(&v));
+
+    struct {
+        const char *name;
+        size_t offset;
+        uint32_t value;
+        size_t keep;
+        pb_result want;
+        const char *needle;
+    } cases[] = {
+        {"magic.probes", 0, 0x21212121u, 0, PB_ERROR_PARSE, "not a probebake volume"},
+        {"version.probes", 8, 99, 0, PB_ERROR_UNSUPPORTED, "version 99"},
+        {"count.probes", 20, 0, 0, PB_ERROR_PARSE, "probe count"},
+        {"grid.probes", 24, 7, 0, PB_ERROR_PARSE, "grid counts"},
+        {"octmap.probes", 36, 1000, 0, PB_ERROR_PARSE, "octahedral"},
+        {"section.probes", 160, 12345, 0, PB_ERROR_PARSE, "section offsets"},
+        {"truncated.probes", 0, 0, 1000, PB_ERROR_PARSE, "truncated"},
+        {"header.probes", 0, 0, 100, PB_ERROR_PARSE, "truncated header"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char *copy = malloc(size);
+        memcpy(copy, bytes, size);
+        size_t n = size;
+        if (cases[i].keep)
+            n = cases[i].keep < 200 ? cases[i].keep : size - cases[i].keep;
+        else
+            memcpy(copy + cases[i].offset, &cases[i].value, 4);
+        const char *p = write_file(cases[i].name, copy, n);
+        pb_result r = pb_volume_read(p, &w, &err);
+        CHECKF(r == cases[i].want, "%s: got %s (%s)", cases[i].name, pb_result_name(r), err.message);
+        CHECKF(strstr(err.message, p) && strstr(err.message, cases[i].needle), "%s: message '%s'", cases[i].name,
+               err.message);
+        free(copy);
+    }
+    CHECK(pb_volume_read("/nonexistent/x.probes", &w, &err) == PB_ERROR_IO);
+    free(bytes);
+    pb_volume_free(&v);
+}
+
+int main(void)
+{
+    RUN(half_round_trip_exhaustive);
+    RUN(half_rounding_matches_reference);
+    RUN(file_round_trip);
+    RUN(failed_write_leaves_nothing);
+    RUN(malformed_files_get_clear_errors);
+    return test_summary();
+}
