@@ -18,7 +18,8 @@
 #ifndef PROBEBAKE_BVH_H
 #define PROBEBAKE_BVH_H
 
-#include "probebake/probebake.h"
+#include "probebake/base.h"
+#include "probebake/scene.h"
 
 #ifdef __cplusplus
 extern "C" {

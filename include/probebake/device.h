@@ -17,7 +17,7 @@
 #ifndef PROBEBAKE_DEVICE_H
 #define PROBEBAKE_DEVICE_H
 
-#include "probebake/probebake.h"
+#include "probebake/base.h"
 
 #ifdef __cplusplus
 extern "C" {

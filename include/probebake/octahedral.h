@@ -14,7 +14,7 @@
 #ifndef PROBEBAKE_OCTAHEDRAL_H
 #define PROBEBAKE_OCTAHEDRAL_H
 
-#include "probebake/probebake.h"
+#include "probebake/base.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -12,7 +12,7 @@
 #ifndef PROBEBAKE_SCENE_H
 #define PROBEBAKE_SCENE_H
 
-#include "probebake/probebake.h"
+#include "probebake/base.h"
 
 #ifdef __cplusplus
 extern "C" {

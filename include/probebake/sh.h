@@ -17,7 +17,7 @@
 #ifndef PROBEBAKE_SH_H
 #define PROBEBAKE_SH_H
 
-#include "probebake/probebake.h"
+#include "probebake/base.h"
 
 #ifdef __cplusplus
 extern "C" {

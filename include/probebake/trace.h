@@ -10,7 +10,7 @@
 #ifndef PROBEBAKE_TRACE_H
 #define PROBEBAKE_TRACE_H
 
-#include "probebake/probebake.h"
+#include "probebake/base.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -116,6 +116,13 @@ uint32_t pb_probe_grid_count(const pb_probe_grid *grid);
  * tmax +inf). Returns PB_ERROR_OUT_OF_HOST_MEMORY if scratch cannot be had. */
 pb_result pb_probe_rays(const pb_probe_grid *grid, uint32_t first, uint32_t count, uint32_t per_probe, uint32_t seed,
                         pb_ray *out);
+
+/* The unrotated spherical-Fibonacci set of n directions in its coherent
+ * (Morton) order, 4 floats per direction (w = 0). */
+pb_result pb_sf_directions(uint32_t n, float *out4);
+
+/* Uniformly random rotation (row-major 3x3) keyed on (seed, probe, pass). */
+void pb_random_rotation(uint32_t seed, uint32_t probe, uint32_t pass, float m[9]);
 
 /* 32-bit hash (PCG output permutation) and a uniform float in [0,1) from a
  * key tuple. Every random number in probebake comes from these. */

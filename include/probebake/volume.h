@@ -15,7 +15,7 @@
 #ifndef PROBEBAKE_VOLUME_H
 #define PROBEBAKE_VOLUME_H
 
-#include "probebake/probebake.h"
+#include "probebake/base.h"
 
 #ifdef __cplusplus
 extern "C" {

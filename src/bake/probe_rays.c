@@ -89,20 +89,18 @@ uint32_t pb_probe_grid_count(const pb_probe_grid *g)
     return g->counts[0] * g->counts[1] * g->counts[2];
 }
 
-pb_result pb_probe_rays(const pb_probe_grid *g, uint32_t first, uint32_t count, uint32_t per_probe, uint32_t seed,
-                   pb_ray *out)
+pb_result pb_sf_directions(uint32_t n, float *out4)
 {
     const float golden = 1.61803398874989485f;
     const float two_pi = 6.28318530717958648f;
-    /* the unrotated set and its coherent order are the same for every probe */
-    float *dirs = malloc((size_t)per_probe * 3 * sizeof(float));
-    keyed *order = malloc((size_t)per_probe * sizeof(keyed));
+    float *dirs = malloc((size_t)n * 3 * sizeof(float));
+    keyed *order = malloc((size_t)n * sizeof(keyed));
     if (!dirs || !order) {
         free(dirs), free(order);
         return PB_ERROR_OUT_OF_HOST_MEMORY;
     }
-    for (uint32_t r = 0; r < per_probe; ++r) {
-        float z = 1.f - (2.f * (float)r + 1.f) / (float)per_probe;
+    for (uint32_t r = 0; r < n; ++r) {
+        float z = 1.f - (2.f * (float)r + 1.f) / (float)n;
         float rad = sqrtf(fmaxf(0.f, 1.f - z * z));
         float phi = two_pi * ((float)r / golden - floorf((float)r / golden));
         float *d = dirs + 3 * r;
@@ -110,31 +108,53 @@ pb_result pb_probe_rays(const pb_probe_grid *g, uint32_t first, uint32_t count, 
         order[r].key = direction_key(d);
         order[r].index = r;
     }
-    qsort(order, per_probe, sizeof *order, compare_keyed);
+    qsort(order, n, sizeof *order, compare_keyed);
+    for (uint32_t r = 0; r < n; ++r) {
+        const float *d = dirs + 3 * order[r].index;
+        out4[4 * r] = d[0], out4[4 * r + 1] = d[1], out4[4 * r + 2] = d[2], out4[4 * r + 3] = 0.f;
+    }
+    free(dirs);
+    free(order);
+    return PB_OK;
+}
+
+void pb_random_rotation(uint32_t seed, uint32_t probe, uint32_t pass, float m[9])
+{
+    const float two_pi = 6.28318530717958648f;
+    float u1 = pb_random01(seed, probe, pass, 0), u2 = pb_random01(seed, probe, pass, 1),
+          u3 = pb_random01(seed, probe, pass, 2);
+    float a = sqrtf(1.f - u1), b = sqrtf(u1);
+    float qx = a * sinf(two_pi * u2), qy = a * cosf(two_pi * u2), qz = b * sinf(two_pi * u3), qw = b * cosf(two_pi * u3);
+    m[0] = 1 - 2 * (qy * qy + qz * qz), m[1] = 2 * (qx * qy - qz * qw), m[2] = 2 * (qx * qz + qy * qw);
+    m[3] = 2 * (qx * qy + qz * qw), m[4] = 1 - 2 * (qx * qx + qz * qz), m[5] = 2 * (qy * qz - qx * qw);
+    m[6] = 2 * (qx * qz - qy * qw), m[7] = 2 * (qy * qz + qx * qw), m[8] = 1 - 2 * (qx * qx + qy * qy);
+}
+
+pb_result pb_probe_rays(const pb_probe_grid *g, uint32_t first, uint32_t count, uint32_t per_probe, uint32_t seed,
+                        pb_ray *out)
+{
+    float *dirs = malloc((size_t)per_probe * 4 * sizeof(float));
+    if (!dirs || pb_sf_directions(per_probe, dirs) != PB_OK) {
+        free(dirs);
+        return PB_ERROR_OUT_OF_HOST_MEMORY;
+    }
     for (uint32_t p = first; p < first + count; ++p) {
         uint32_t i = p % g->counts[0], j = (p / g->counts[0]) % g->counts[1], k = p / (g->counts[0] * g->counts[1]);
         float pos[3] = {g->origin[0] + (float)i * g->spacing[0], g->origin[1] + (float)j * g->spacing[1],
                         g->origin[2] + (float)k * g->spacing[2]};
-        /* uniform random rotation (unit quaternion) */
-        float u1 = pb_random01(seed, p, 0, 0), u2 = pb_random01(seed, p, 0, 1), u3 = pb_random01(seed, p, 0, 2);
-        float a = sqrtf(1.f - u1), b = sqrtf(u1);
-        float qx = a * sinf(two_pi * u2), qy = a * cosf(two_pi * u2), qz = b * sinf(two_pi * u3),
-              qw = b * cosf(two_pi * u3);
-        float m[9] = {1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw),     2 * (qx * qz + qy * qw),
-                      2 * (qx * qy + qz * qw),     1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw),
-                      2 * (qx * qz - qy * qw),     2 * (qy * qz + qx * qw),     1 - 2 * (qx * qx + qy * qy)};
+        float m[9];
+        pb_random_rotation(seed, p, 0, m);
         for (uint32_t r = 0; r < per_probe; ++r) {
-            const float *d = dirs + 3 * order[r].index;
+            const float *d = dirs + 4 * r;
             pb_ray *ray = &out[(size_t)(p - first) * per_probe + r];
             for (int c = 0; c < 3; ++c) {
                 ray->origin[c] = pos[c];
-                ray->direction[c] = m[3 * c] * d[0] + m[3 * c + 1] * d[1] + m[3 * c + 2] * d[2];
+                ray->direction[c] = (m[3 * c] * d[0] + m[3 * c + 1] * d[1]) + m[3 * c + 2] * d[2];
             }
             ray->tmin = 0.f;
             ray->tmax = INFINITY;
         }
     }
     free(dirs);
-    free(order);
     return PB_OK;
 }

@@ -1,0 +1,82 @@
+/*
+ * probebake bake: light a probe grid (issue 3; first slice).
+ *
+ * Per pass, every probe traces `rays_per_probe` rays (spherical Fibonacci,
+ * turned by a random rotation keyed on (seed, probe, pass)); each returns the
+ * radiance arriving along it, path traced (shaders/include/bake.glsl says
+ * what is modelled). The rays are projected onto SH L2 and filtered into
+ * octahedral depth moments; passes are averaged. Punctual lights the probe
+ * sees directly enter the SH as projected deltas. The result is a pb_volume
+ * with irradiance SH.
+ *
+ * Not in this slice yet: relocation, dilation, target-error stopping,
+ * emissive-triangle / sky next-event estimation, environment maps, --points.
+ */
+#ifndef PROBEBAKE_BAKE_H
+#define PROBEBAKE_BAKE_H
+
+#include "probebake/base.h"
+#include "probebake/scene.h"
+#include "probebake/bvh.h"
+#include "probebake/device.h"
+#include "probebake/trace.h"
+#include "probebake/volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Progress: fraction done in [0,1] and a label; return nonzero to cancel. */
+typedef int (*pb_progress_fn)(float fraction, const char *label, void *user_data);
+
+/* Zero fields mean the defaults listed on each line. */
+typedef struct pb_bake_desc {
+    pb_probe_grid grid;           /* required: counts >= 1 (pb_probe_grid_fit helps) */
+    uint32_t rays_per_probe;      /* default 256 */
+    uint32_t passes;              /* default 4 */
+    uint32_t bounces;             /* default 2: reflections after the first hit */
+    uint32_t octmap_res;          /* default 16 */
+    uint32_t seed;                /* default 0 is a valid seed */
+    uint32_t exclude_direct;      /* 1: only indirect light (renderers that light directly) */
+    float sky[3];                 /* uniform sky radiance, default black */
+    float max_distance;           /* default: the scene's bounding-box diagonal */
+    float lobe_power;             /* cosine power of the depth filter, default 50 */
+    float invalid_backface_fraction; /* default 0.25: above it a probe is invalid */
+    pb_progress_fn progress;
+    void *progress_user;
+} pb_bake_desc;
+
+typedef struct pb_gpu_scene pb_gpu_scene;
+
+/* Bakes into *out (arrays allocated; pb_volume_free releases them).
+ * Returns PB_ERROR_INVALID_ARGUMENT before any GPU work for bad descs,
+ * PB_ERROR_TOO_LARGE when the grid does not fit the device, and
+ * PB_ERROR_CANCELLED when the progress callback asks. */
+pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc, pb_volume *out,
+                  pb_error *err);
+
+/* --- CPU references of the bake kernels (tests) --- */
+
+/* Everything a bake kernel reads for one pass, on the host. */
+typedef struct pb_bake_pass {
+    const pb_scene *scene;
+    const pb_bvh *bvh;
+    const float *probes;          /* 4 per probe, local frame */
+    const float *rotations;       /* 12 per probe (3 rows of 4) */
+    const float *directions;      /* 4 per ray index */
+    uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, octmap_res, direct;
+    float sky[3];
+    float max_distance, lobe_power;
+} pb_bake_pass;
+
+/* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance). */
+void pb_bake_trace_cpu(const pb_bake_pass *p, float *rays);
+/* bake_sh.comp and bake_depth.comp: reduced out, 32 floats per probe then
+ * 2 per probe texel. */
+void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced);
+void pb_bake_depth_cpu(const pb_bake_pass *p, const float *rays, float *reduced);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

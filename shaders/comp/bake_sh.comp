@@ -1,0 +1,75 @@
+#version 460
+// bake_sh: one invocation per probe. Projects this pass's ray radiances onto
+// SH L2 (weight 4pi / rays: the directions are uniform), adds the punctual
+// lights the probe sees directly as projected deltas (irradiance I/d^2 with a
+// shadow ray from the probe; when direct light is included), and counts back
+// faces and hits. Output per probe: 27 radiance coefficients, back-face
+// count, hit count (floats), at reduced[32 * probe_in_submission].
+// CPU reference: pb_bake_sh_cpu (src/bake/bake_cpu.c).
+#extension GL_GOOGLE_include_directive : require
+
+#include "traverse.glsl"
+#include "bake.glsl"
+#include "sh.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(push_constant) uniform Push {
+    uint64_t params;
+} pc;
+
+void main()
+{
+    BakeParams P = BakeParamsBuf(pc.params).p;
+    uint local = gl_GlobalInvocationID.x;
+    if (local >= P.probe_count)
+        return;
+    uint probe = P.first_probe + local;
+    Vec4Buf rays = Vec4Buf(P.rays);
+    float c[27];
+    for (int k = 0; k < 27; ++k)
+        c[k] = 0.0;
+    float backfaces = 0.0, hits = 0.0;
+    float w = 4.0 * PB_PI / float(P.rays_per_probe);
+    for (uint r = 0u; r < P.rays_per_probe; ++r) {
+        vec3 d = probe_ray_direction(P, probe, r);
+        vec4 o = rays.v[local * P.rays_per_probe + r];
+        float y[9];
+        sh_basis(d, y);
+        for (int k = 0; k < 9; ++k) {
+            c[3 * k] += w * o.r * y[k];
+            c[3 * k + 1] += w * o.g * y[k];
+            c[3 * k + 2] += w * o.b * y[k];
+        }
+        backfaces += o.w < 0.0 ? 1.0 : 0.0;
+        hits += abs(o.w) < P.max_distance ? 1.0 : 0.0;
+    }
+    if (P.direct != 0u) {
+        vec3 x = Vec4Buf(P.probes).v[probe].xyz;
+        LightBuf lights = LightBuf(P.lights);
+        for (uint k = 0u; k < P.light_count; ++k) {
+            Light l = lights.l[k];
+            vec3 E = light_irradiance(P.scene, l, x, vec3(0.0), false);
+            if (E == vec3(0.0))
+                continue;
+            vec3 to_light = uint(l.position_type.w) == PB_LIGHT_DIRECTIONAL ? -l.direction_range.xyz
+                                                                              : normalize(l.position_type.xyz - x);
+            float y[9];
+            sh_basis(to_light, y);
+            for (int j = 0; j < 9; ++j) {
+                c[3 * j] += E.r * y[j];
+                c[3 * j + 1] += E.g * y[j];
+                c[3 * j + 2] += E.b * y[j];
+            }
+        }
+    }
+    FloatRW out_ = FloatRW(P.reduced);
+    uint base = 32u * local;
+    for (int k = 0; k < 27; ++k)
+        out_.v[base + uint(k)] = c[k];
+    out_.v[base + 27u] = backfaces;
+    out_.v[base + 28u] = hits;
+    out_.v[base + 29u] = 0.0;
+    out_.v[base + 30u] = 0.0;
+    out_.v[base + 31u] = 0.0;
+}

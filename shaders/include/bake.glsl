@@ -1,0 +1,144 @@
+// Bake data and shading shared by bake_trace.comp and bake_reduce.comp.
+// Mirrors src/bake/bake_types.h; the CPU reference is src/bake/bake_cpu.c.
+//
+// Modelled: Lambertian surfaces, albedo = base colour x texture (nearest
+// texel, sRGB decoded) x (1 - metallic); emission = emissive factor x
+// strength x emissive texture; KHR_lights_punctual lights (point, spot with
+// the glTF cone falloff, directional) with shadow rays and the range window
+// glTF recommends; a uniform sky. Back faces of single-sided materials are
+// black (the ray is inside geometry). Not yet: emissive-triangle and sky
+// next-event estimation (found by bounce rays only), environment maps,
+// stochastic blending.
+#ifndef PB_BAKE_GLSL
+#define PB_BAKE_GLSL
+
+#include "traverse.glsl"
+#include "rng.glsl"
+#include "ray_offset.glsl"
+
+#define PB_PI 3.14159265358979324
+#define PB_LIGHT_DIRECTIONAL 0u
+#define PB_LIGHT_POINT 1u
+#define PB_LIGHT_SPOT 2u
+
+struct ShadeMaterial {
+    vec4 base_color;
+    vec4 emissive_metallic; // rgb emission (strength applied), w metallic
+    ivec4 tex;              // base colour texture, emissive texture, double sided, unused
+};
+
+struct Light {
+    vec4 position_type;     // xyz local position, w type (as float)
+    vec4 direction_range;   // xyz unit direction the light points, w range (0 = infinite)
+    vec4 radiance;          // rgb colour x intensity
+    vec4 cone;              // x cos(outer), y 1 / max(1e-3, cos(inner) - cos(outer))
+};
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer ShadeMaterialBuf { ShadeMaterial m[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer LightBuf { Light l[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Vec4Buf { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4RW { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer FloatRW { float v[]; };
+
+struct BakeParams {
+    SceneRefs scene;
+    uint64_t materials;     // ShadeMaterial[]
+    uint64_t lights;        // Light[]
+    uint64_t probes;        // vec4 per probe: local position
+    uint64_t rotations;     // 3 vec4 rows per probe (this pass)
+    uint64_t directions;    // vec4 per ray index: the unrotated spherical Fibonacci set
+    uint64_t rays;          // out/in: vec4 per ray: radiance rgb, w = distance (negative: back face)
+    uint64_t reduced;       // out: per probe, see bake_reduce.comp
+    vec4 sky;               // rgb radiance of the uniform sky
+    uint first_probe;
+    uint probe_count;       // in this submission
+    uint rays_per_probe;
+    uint pass_index;
+    uint seed;
+    uint bounces;
+    uint light_count;
+    uint octmap_res;
+    float max_distance;
+    float lobe_power;
+    uint direct;            // 1: light straight from lights and sky included
+    uint pad;
+};
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BakeParamsBuf { BakeParams p; };
+
+// Ray direction r of a probe in a pass: the probe's rotation rows times the
+// unrotated direction, summed in a fixed order (not dot(), whose order a
+// driver may choose) so it matches the C reference bit for bit.
+vec3 probe_ray_direction(BakeParams P, uint probe, uint ray)
+{
+    Vec4Buf rot = Vec4Buf(P.rotations);
+    vec3 sf = Vec4Buf(P.directions).v[ray].xyz;
+    vec3 d;
+    for (uint k = 0u; k < 3u; ++k) {
+        vec3 row = rot.v[3u * probe + k].xyz;
+        precise float a = row.x * sf.x;
+        precise float b = row.y * sf.y;
+        precise float c = row.z * sf.z;
+        precise float sum = (a + b) + c;
+        d[k] = sum;
+    }
+    return d;
+}
+
+vec3 srgb_to_linear(vec3 c)
+{
+    vec3 lo = c / 12.92;
+    vec3 hi = pow((c + 0.055) / 1.055, vec3(2.4));
+    return mix(lo, hi, greaterThan(c, vec3(0.04045)));
+}
+
+vec3 texture_rgb(SceneRefs s, int tex, vec2 uv)
+{
+    if (tex < 0)
+        return vec3(1.0);
+    Texture t = TextureBuf(s.textures).t[tex];
+    uint texel = UintBuf(s.texels).v[t.offset + texel_index(uv.x, uv.y, t.width, t.height, t.wrap & 0xffu, t.wrap >> 8)];
+    vec3 c = vec3(float(texel & 0xffu), float((texel >> 8) & 0xffu), float((texel >> 16) & 0xffu)) / 255.0;
+    return srgb_to_linear(c);
+}
+
+// Irradiance a punctual light gives a surface at x with unit normal n (pass
+// n = 0 for a point without orientation: no cosine), with its shadow ray.
+vec3 light_irradiance(SceneRefs s, Light l, vec3 x, vec3 n, bool oriented)
+{
+    uint type = uint(l.position_type.w);
+    vec3 to_light;
+    float dist;
+    float falloff = 1.0;
+    if (type == PB_LIGHT_DIRECTIONAL) {
+        to_light = -l.direction_range.xyz;
+        dist = PB_INF;
+    } else {
+        vec3 v = l.position_type.xyz - x;
+        float d2 = dot(v, v);
+        if (d2 <= 0.0)
+            return vec3(0.0);
+        dist = sqrt(d2);
+        to_light = v / dist;
+        falloff = 1.0 / d2;
+        float range = l.direction_range.w;
+        if (range > 0.0) {
+            float q = dist / range;
+            falloff *= clamp(1.0 - q * q * q * q, 0.0, 1.0);
+        }
+        if (type == PB_LIGHT_SPOT) {
+            float cd = dot(l.direction_range.xyz, -to_light);
+            float a = clamp((cd - l.cone.x) * l.cone.y, 0.0, 1.0);
+            falloff *= a * a;
+        }
+    }
+    float cosine = oriented ? dot(n, to_light) : 1.0;
+    if (cosine <= 0.0 || falloff <= 0.0)
+        return vec3(0.0);
+    TraceResult shadow = trace_ray(s, x, to_light, 0.0, dist, true);
+    if (shadow.tri != PB_NO_HIT)
+        return vec3(0.0);
+    return l.radiance.rgb * (cosine * falloff);
+}
+
+#endif

@@ -1,0 +1,268 @@
+/* pb_bake: the bake's host loop (include/probebake/bake.h).
+ *
+ *   validate desc -> size and check buffers -> upload scene shading data
+ *   per pass:   rotations for every probe
+ *     per chunk of probes (at most rays_per_submit rays): one submission of
+ *       bake_trace -> bake_sh -> bake_depth, then accumulate on the host
+ *   average passes (double) -> irradiance SH, depth tiles with borders, flags
+ *
+ * Accumulation is in double on the host, one float sum per pass and probe
+ * from the GPU: the per-pass sums are over at most rays_per_probe terms, so
+ * adding passes never loses precision however many there are. */
+#include "bake/bake_data.h"
+#include "bake/gpu_scene.h"
+#include "common/common.h"
+#include "probebake/bake.h"
+#include "probebake/octahedral.h"
+#include "probebake/sh.h"
+
+#include "bake_depth.spv.h"
+#include "bake_sh.spv.h"
+#include "bake_trace.spv.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct bake_buffers {
+    pb_buffer params, materials, lights, probes, rotations, directions, rays, reduced;
+    pb_pipeline trace, sh, depth;
+} bake_buffers;
+
+static void release(pb_context *ctx, bake_buffers *b)
+{
+    pb_buffer *bufs[8] = {&b->params, &b->materials, &b->lights, &b->probes, &b->rotations, &b->directions,
+                          &b->rays, &b->reduced};
+    for (int i = 0; i < 8; ++i)
+        pb_buffer_destroy(ctx, bufs[i]);
+    pb_pipeline_destroy(ctx, &b->trace);
+    pb_pipeline_destroy(ctx, &b->sh);
+    pb_pipeline_destroy(ctx, &b->depth);
+}
+
+static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
+{
+    if (!d->rays_per_probe) d->rays_per_probe = 256;
+    if (!d->passes) d->passes = 4;
+    if (!d->octmap_res) d->octmap_res = 16;
+    if (d->lobe_power == 0.f) d->lobe_power = 50.f;
+    if (d->invalid_backface_fraction == 0.f) d->invalid_backface_fraction = 0.25f;
+    if (d->max_distance == 0.f) {
+        float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
+              dz = s->bounds_max[2] - s->bounds_min[2];
+        d->max_distance = fmaxf(1e-3f, sqrtf(dx * dx + dy * dy + dz * dz));
+    }
+    uint64_t probes = (uint64_t)d->grid.counts[0] * d->grid.counts[1] * d->grid.counts[2];
+    if (!probes || probes > (1u << 24))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probe grid %ux%ux%u: need 1 to 2^24 probes",
+                       d->grid.counts[0], d->grid.counts[1], d->grid.counts[2]);
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(d->grid.origin[k]) || !(d->grid.spacing[k] >= 0.f) || !isfinite(d->grid.spacing[k]))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probe grid origin and spacing must be finite, spacing >= 0");
+    if (d->rays_per_probe > 65536)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u rays per probe: at most 65536", d->rays_per_probe);
+    if (d->passes > 1000000)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u passes: at most 1e6", d->passes);
+    if (d->bounces > 64)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u bounces: at most 64", d->bounces);
+    if (d->octmap_res > 64)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "octahedral map %u: at most 64 texels per side", d->octmap_res);
+    for (int k = 0; k < 3; ++k)
+        if (!(d->sky[k] >= 0.f) || !isfinite(d->sky[k]))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sky radiance must be finite and >= 0");
+    if (!(d->max_distance > 0.f) || !isfinite(d->max_distance) || !(d->lobe_power > 0.f) ||
+        !(d->invalid_backface_fraction > 0.f && d->invalid_backface_fraction <= 1.f))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "max distance and lobe power must be positive, the "
+                                                       "invalid back-face fraction in (0, 1]");
+    return PB_OK;
+}
+
+static pb_result make_buffer(pb_context *ctx, pb_buffer *b, uint64_t bytes, pb_memory_kind kind, const char *what,
+                             const void *data, pb_error *err)
+{
+    pb_result r = pb_buffer_create(ctx, bytes, kind, what, b, err);
+    if (r == PB_OK && data)
+        r = pb_buffer_upload(ctx, b, 0, data, bytes, err);
+    return r;
+}
+
+pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc_in,
+                  pb_volume *out, pb_error *err)
+{
+    pb_error_clear(err);
+    memset(out, 0, sizeof *out);
+    double t_start = pb_now_ms();
+    pb_bake_desc d = *desc_in;
+    pb_result r = check_desc(scene, &d, err);
+    if (r != PB_OK)
+        return r;
+    uint32_t P = d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+    uint32_t rpp = d.rays_per_probe, n = d.octmap_res, texels = n * n;
+    uint32_t chunk = ctx->desc.rays_per_submit / rpp;
+    chunk = chunk < 1 ? 1 : (chunk > P ? P : chunk);
+    uint64_t reduced_floats = (uint64_t)chunk * (PB_REDUCED_SH_STRIDE + 2u * texels);
+    uint64_t need = (uint64_t)P * (16 + 48) + (uint64_t)rpp * 16 + (uint64_t)chunk * rpp * 16 + reduced_floats * 4;
+    if (ctx->info.device_local_bytes && need > ctx->info.device_local_bytes / 2)
+        return pb_fail(err, PB_ERROR_TOO_LARGE, "%u probes x %u rays need %.1f MiB of device memory; %s has %.1f MiB",
+                       P, rpp, need / 1048576.0, ctx->info.name, ctx->info.device_local_bytes / 1048576.0);
+
+    /* host side: probe positions, direction set, shading data, accumulators */
+    float *probes = calloc((size_t)P * 4, sizeof(float));
+    float *rotations = malloc((size_t)P * 12 * sizeof(float));
+    float *directions = malloc((size_t)rpp * 4 * sizeof(float));
+    gpu_light *lights = malloc((scene->light_count ? scene->light_count : 1) * sizeof(gpu_light));
+    gpu_shade_material *mats = malloc(scene->material_count * sizeof(gpu_shade_material));
+    double *sh_sum = calloc((size_t)P * 27, sizeof(double));
+    double *depth_sum = calloc((size_t)P * texels * 2, sizeof(double));
+    double *backfaces = calloc(P, sizeof(double)), *hits = calloc(P, sizeof(double));
+    float *reduced = malloc((size_t)reduced_floats * sizeof(float));
+    bake_buffers B;
+    memset(&B, 0, sizeof B);
+    if (!probes || !rotations || !directions || !lights || !mats || !sh_sum || !depth_sum || !backfaces || !hits ||
+        !reduced || pb_sf_directions(rpp, directions) != PB_OK) {
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
+        goto done;
+    }
+    for (uint32_t p = 0; p < P; ++p) {
+        uint32_t i = p % d.grid.counts[0], j = (p / d.grid.counts[0]) % d.grid.counts[1],
+                 k = p / (d.grid.counts[0] * d.grid.counts[1]);
+        probes[4 * p] = d.grid.origin[0] + (float)i * d.grid.spacing[0];
+        probes[4 * p + 1] = d.grid.origin[1] + (float)j * d.grid.spacing[1];
+        probes[4 * p + 2] = d.grid.origin[2] + (float)k * d.grid.spacing[2];
+    }
+    pb_bake_lights(scene, lights);
+    pb_bake_materials(scene, mats);
+
+    r = make_buffer(ctx, &B.params, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "bake parameters", NULL, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.materials, scene->material_count * sizeof *mats, PB_MEMORY_DEVICE, "bake materials",
+                        mats, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.lights, (scene->light_count ? scene->light_count : 1) * sizeof *lights,
+                        PB_MEMORY_DEVICE, "lights", lights, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.probes, (uint64_t)P * 16, PB_MEMORY_DEVICE, "probe positions", probes, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.rotations, (uint64_t)P * 48, PB_MEMORY_DEVICE, "probe rotations", NULL, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.directions, (uint64_t)rpp * 16, PB_MEMORY_DEVICE, "ray directions", directions, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.rays, (uint64_t)chunk * rpp * 16, PB_MEMORY_DEVICE, "probe rays", NULL, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.reduced, reduced_floats * 4, PB_MEMORY_DOWNLOAD, "probe results", NULL, err);
+    uint32_t spec[1] = {gs->bvh_depth + 1};
+    if (r == PB_OK)
+        r = pb_pipeline_create(ctx, pb_spv_bake_trace, sizeof pb_spv_bake_trace, sizeof(bake_push), spec, 1, 64,
+                               "bake_trace", &B.trace, err);
+    if (r == PB_OK)
+        r = pb_pipeline_create(ctx, pb_spv_bake_sh, sizeof pb_spv_bake_sh, sizeof(bake_push), spec, 1, 64, "bake_sh",
+                               &B.sh, err);
+    if (r == PB_OK)
+        r = pb_pipeline_create(ctx, pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 1, 64,
+                               "bake_depth", &B.depth, err);
+    double t_trace = 0;
+    for (uint32_t pass = 0; r == PB_OK && pass < d.passes; ++pass) {
+        pb_bake_rotations(d.seed, pass, 0, P, rotations);
+        r = pb_buffer_upload(ctx, &B.rotations, 0, rotations, (uint64_t)P * 48, err);
+        for (uint32_t first = 0; r == PB_OK && first < P; first += chunk) {
+            uint32_t count = P - first < chunk ? P - first : chunk;
+            gpu_bake_params prm;
+            memset(&prm, 0, sizeof prm);
+            prm.scene = gs->refs;
+            prm.materials = B.materials.address, prm.lights = B.lights.address, prm.probes = B.probes.address;
+            prm.rotations = B.rotations.address, prm.directions = B.directions.address, prm.rays = B.rays.address;
+            prm.reduced = B.reduced.address;
+            memcpy(prm.sky, d.sky, 12);
+            prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
+            prm.seed = d.seed, prm.bounces = d.bounces, prm.light_count = scene->light_count, prm.octmap_res = n;
+            prm.max_distance = d.max_distance, prm.lobe_power = d.lobe_power, prm.direct = !d.exclude_direct;
+            memcpy(B.params.mapped, &prm, sizeof prm);
+            if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
+                break;
+            bake_push push = {B.params.address};
+            pb_cmd_timestamp(ctx);
+            pb_cmd_dispatch(ctx, &B.trace, &push, (count * rpp + 63) / 64);
+            pb_cmd_timestamp(ctx);
+            pb_cmd_barrier(ctx);
+            pb_cmd_dispatch(ctx, &B.sh, &push, (count + 63) / 64);
+            pb_cmd_dispatch(ctx, &B.depth, &push, (count * texels + 63) / 64);
+            pb_cmd_barrier_to_host(ctx);
+            double ms = 0;
+            if ((r = pb_cmd_submit_wait(ctx, &ms, err)) != PB_OK)
+                break;
+            t_trace += ms;
+            memcpy(reduced, B.reduced.mapped, (size_t)count * (PB_REDUCED_SH_STRIDE + 2u * texels) * 4);
+            for (uint32_t l = 0; l < count; ++l) {
+                const float *o = reduced + PB_REDUCED_SH_STRIDE * (size_t)l;
+                uint32_t p = first + l;
+                for (int c = 0; c < 27; ++c)
+                    sh_sum[27 * (size_t)p + c] += o[c];
+                backfaces[p] += o[27];
+                hits[p] += o[28];
+                const float *dm = reduced + PB_REDUCED_SH_STRIDE * (size_t)count + 2 * (size_t)texels * l;
+                for (uint32_t t = 0; t < 2 * texels; ++t)
+                    depth_sum[2 * (size_t)texels * p + t] += dm[t];
+            }
+            if (d.progress) {
+                float f = ((float)pass + (float)(first + count) / (float)P) / (float)d.passes;
+                char label[64];
+                snprintf(label, sizeof label, "pass %u/%u", pass + 1, d.passes);
+                if (d.progress(f, label, d.progress_user))
+                    r = pb_fail(err, PB_ERROR_CANCELLED, "bake cancelled");
+            }
+        }
+    }
+    if (r != PB_OK)
+        goto done;
+
+    /* the volume */
+    out->flags = PB_VOLUME_IRRADIANCE | PB_VOLUME_GRID | (d.exclude_direct ? 0u : PB_VOLUME_DIRECT);
+    out->probe_count = P;
+    memcpy(out->counts, d.grid.counts, sizeof out->counts);
+    out->octmap_res = n;
+    for (int k = 0; k < 3; ++k) {
+        out->origin[k] = scene->origin[k] + (double)d.grid.origin[k];
+        out->spacing[k] = d.grid.spacing[k];
+    }
+    out->settings = (pb_volume_settings){d.seed, 0, rpp, d.passes, d.bounces, 0, 0.f, d.max_distance};
+    out->settings.scene_hash = pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
+                                         pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
+    snprintf(out->device, sizeof out->device, "%.127s", ctx->info.name);
+    if ((r = pb_volume_alloc(out, err)) != PB_OK)
+        goto done;
+    for (uint32_t p = 0; p < P; ++p) {
+        for (int k = 0; k < 3; ++k)
+            out->base[3 * p + k] = probes[4 * p + k] - d.grid.origin[k];
+        float c[27];
+        for (int k = 0; k < 27; ++k)
+            c[k] = (float)(sh_sum[27 * (size_t)p + k] / d.passes);
+        pb_sh_radiance_to_irradiance(c);
+        memcpy(out->sh + 27 * (size_t)p, c, sizeof c);
+        double rays_total = (double)rpp * d.passes;
+        uint32_t f = 0;
+        if (hits[p] == 0)
+            f |= PB_PROBE_OUTSIDE;
+        if (backfaces[p] / rays_total <= d.invalid_backface_fraction)
+            f |= PB_PROBE_VALID;
+        out->probe_flags[p] = f;
+        uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
+        for (uint32_t by = 0; by < n + 2; ++by)
+            for (uint32_t bx = 0; bx < n + 2; ++bx) {
+                uint32_t x, y;
+                pb_oct_border_source(bx, by, n, &x, &y);
+                const double *m = depth_sum + 2 * ((size_t)texels * p + (size_t)y * n + x);
+                tile[2 * (by * (n + 2) + bx)] = pb_half_from_float((float)(m[0] / d.passes));
+                tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / d.passes));
+            }
+    }
+    out->timings.trace = t_trace;
+    out->timings.total = pb_now_ms() - t_start;
+done:
+    release(ctx, &B);
+    free(probes), free(rotations), free(directions), free(lights), free(mats), free(sh_sum), free(depth_sum);
+    free(backfaces), free(hits), free(reduced);
+    if (r != PB_OK)
+        pb_volume_free(out);
+    return r;
+}

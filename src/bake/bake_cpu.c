@@ -1,0 +1,321 @@
+/* CPU references of bake_trace.comp, bake_sh.comp and bake_depth.comp,
+ * written step for step like the GLSL (shaders/include/bake.glsl). Random
+ * numbers are the same integers; transcendental functions (pow, sqrt,
+ * sin/cos of sampling) may differ in the last bits between host and device,
+ * so paths agree exactly only until their first random bounce: tests compare
+ * bounce-0 rays one by one and multi-bounce results statistically. */
+#include "bake/bake_data.h"
+#include "bvh/alpha.h"
+#include "common/common.h"
+#include "probebake/bake.h"
+#include "probebake/octahedral.h"
+#include "probebake/sh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PI_F 3.14159265358979324f
+
+static uint32_t rng_seed(uint32_t seed, uint32_t probe, uint32_t pass, uint32_t ray)
+{
+    return pb_hash32(seed ^ pb_hash32(probe ^ pb_hash32(pass ^ pb_hash32(ray))));
+}
+
+static float rng_next(uint32_t *state)
+{
+    *state = pb_hash32(*state);
+    return (float)(*state >> 8) * (1.0f / 16777216.0f);
+}
+
+static void probe_ray_direction(const pb_bake_pass *p, uint32_t probe, uint32_t ray, float d[3])
+{
+    const float *sf = p->directions + 4 * (size_t)ray;
+    for (int k = 0; k < 3; ++k) {
+        const float *row = p->rotations + 12 * (size_t)probe + 4 * k;
+        float a = row[0] * sf[0], b = row[1] * sf[1], c = row[2] * sf[2];
+        d[k] = (a + b) + c;
+    }
+}
+
+static float srgb_to_linear(float c)
+{
+    return c > 0.04045f ? powf((c + 0.055f) / 1.055f, 2.4f) : c / 12.92f;
+}
+
+static void texture_rgb(const pb_scene *s, int32_t tex, float u, float v, float rgb[3])
+{
+    if (tex < 0) {
+        rgb[0] = rgb[1] = rgb[2] = 1.f;
+        return;
+    }
+    const pb_texture *t = &s->textures[tex];
+    uint32_t texel = s->texels[t->offset + pb_texel_index(u, v, t->width, t->height, t->wrap_s, t->wrap_t)];
+    for (int k = 0; k < 3; ++k)
+        rgb[k] = srgb_to_linear((float)((texel >> (8 * k)) & 0xffu) / 255.f);
+}
+
+typedef struct hit {
+    uint32_t tri;
+    float t, u, v;
+} hit;
+
+static hit trace(const pb_bake_pass *p, const float o[3], const float d[3], float tmax, pb_trace_mode mode)
+{
+    pb_ray ray = {{o[0], o[1], o[2]}, 0.f, {d[0], d[1], d[2]}, tmax};
+    pb_hit h;
+    pb_trace_cpu(p->scene, p->bvh, &ray, 1, mode, &h, 1);
+    hit r = {h.triangle, h.t, h.u, h.v};
+    return r;
+}
+
+/* light_irradiance of bake.glsl */
+static void light_irradiance(const pb_bake_pass *p, const gpu_light *l, const float x[3], const float n[3],
+                             int oriented, float E[3])
+{
+    uint32_t type = (uint32_t)l->position_type[3];
+    float to_light[3], dist, falloff = 1.f;
+    E[0] = E[1] = E[2] = 0.f;
+    if (type == PB_LIGHT_DIRECTIONAL) {
+        for (int k = 0; k < 3; ++k)
+            to_light[k] = -l->direction_range[k];
+        dist = INFINITY;
+    } else {
+        float v[3] = {l->position_type[0] - x[0], l->position_type[1] - x[1], l->position_type[2] - x[2]};
+        float d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+        if (d2 <= 0.f)
+            return;
+        dist = sqrtf(d2);
+        for (int k = 0; k < 3; ++k)
+            to_light[k] = v[k] / dist;
+        falloff = 1.f / d2;
+        float range = l->direction_range[3];
+        if (range > 0.f) {
+            float q = dist / range;
+            float w = 1.f - q * q * q * q;
+            falloff *= w < 0.f ? 0.f : (w > 1.f ? 1.f : w);
+        }
+        if (type == PB_LIGHT_SPOT) {
+            float cd = -(l->direction_range[0] * to_light[0] + l->direction_range[1] * to_light[1] +
+                         l->direction_range[2] * to_light[2]);
+            float a = (cd - l->cone[0]) * l->cone[1];
+            a = a < 0.f ? 0.f : (a > 1.f ? 1.f : a);
+            falloff *= a * a;
+        }
+    }
+    float cosine = oriented ? n[0] * to_light[0] + n[1] * to_light[1] + n[2] * to_light[2] : 1.f;
+    if (cosine <= 0.f || falloff <= 0.f)
+        return;
+    if (trace(p, x, to_light, dist, PB_TRACE_ANY).tri != PB_NO_HIT)
+        return;
+    for (int k = 0; k < 3; ++k)
+        E[k] = l->radiance[k] * (cosine * falloff);
+}
+
+static void cosine_direction(const float n[3], float u1, float u2, float out[3])
+{
+    float sgn = n[2] >= 0.f ? 1.f : -1.f;
+    float a = -1.f / (sgn + n[2]);
+    float b = n[0] * n[1] * a;
+    float t[3] = {1.f + sgn * n[0] * n[0] * a, sgn * b, -sgn * n[0]};
+    float bt[3] = {b, sgn + n[1] * n[1] * a, -n[1]};
+    float r = sqrtf(u1), phi = 2.f * PI_F * u2;
+    float c = r * cosf(phi), s = r * sinf(phi), z = sqrtf(fmaxf(0.f, 1.f - u1));
+    float d[3];
+    for (int k = 0; k < 3; ++k)
+        d[k] = t[k] * c + bt[k] * s + n[k] * z;
+    float l = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int k = 0; k < 3; ++k)
+        out[k] = d[k] / l;
+}
+
+typedef struct trace_ctx {
+    const pb_bake_pass *p;
+    gpu_light *lights;
+    gpu_shade_material *materials;
+    float *rays;
+} trace_ctx;
+
+static void trace_range(void *user, uint64_t begin, uint64_t end)
+{
+    const trace_ctx *c = user;
+    const pb_bake_pass *p = c->p;
+    const pb_scene *s = p->scene;
+    for (uint64_t i = begin; i < end; ++i) {
+        uint32_t probe = p->first_probe + (uint32_t)(i / p->rays_per_probe), ray = (uint32_t)(i % p->rays_per_probe);
+        float d[3];
+        probe_ray_direction(p, probe, ray, d);
+        uint32_t state = rng_seed(p->seed, probe, p->pass_index, ray);
+        float L[3] = {0, 0, 0}, thr[3] = {1, 1, 1}, first = p->max_distance;
+        float o[3] = {p->probes[4 * (size_t)probe], p->probes[4 * (size_t)probe + 1], p->probes[4 * (size_t)probe + 2]};
+        float dir[3] = {d[0], d[1], d[2]};
+        for (uint32_t bounce = 0;; ++bounce) {
+            hit h = trace(p, o, dir, INFINITY, PB_TRACE_CLOSEST);
+            if (h.tri == PB_NO_HIT) {
+                if (bounce > 0 || p->direct)
+                    for (int k = 0; k < 3; ++k)
+                        L[k] += thr[k] * p->sky[k];
+                break;
+            }
+            const float *v0 = s->positions + 9 * (size_t)h.tri, *v1 = v0 + 3, *v2 = v0 + 6;
+            float e1[3], e2[3], ng[3];
+            for (int k = 0; k < 3; ++k)
+                e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
+            ng[0] = e1[1] * e2[2] - e1[2] * e2[1];
+            ng[1] = e1[2] * e2[0] - e1[0] * e2[2];
+            ng[2] = e1[0] * e2[1] - e1[1] * e2[0];
+            float nl = sqrtf(ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2]);
+            for (int k = 0; k < 3; ++k)
+                ng[k] /= nl;
+            int back = ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2] > 0.f;
+            if (bounce == 0) {
+                float t = fminf(h.t, p->max_distance);
+                first = back ? -t : t;
+            }
+            const gpu_shade_material *m = &c->materials[s->material[h.tri]];
+            if (back) {
+                if (m->tex[2] == 0)
+                    break;
+                for (int k = 0; k < 3; ++k)
+                    ng[k] = -ng[k];
+            }
+            const float *uv = s->texcoords + 6 * (size_t)h.tri;
+            float w0 = 1.f - h.u - h.v;
+            float tu = w0 * uv[0] + h.u * uv[2] + h.v * uv[4], tv = w0 * uv[1] + h.u * uv[3] + h.v * uv[5];
+            float em[3], base[3];
+            if (bounce > 0 || p->direct) {
+                texture_rgb(s, m->tex[1], tu, tv, em);
+                for (int k = 0; k < 3; ++k)
+                    L[k] += thr[k] * m->emissive_metallic[k] * em[k];
+            }
+            texture_rgb(s, m->tex[0], tu, tv, base);
+            float albedo[3], xp[3], x[3], E[3] = {0, 0, 0};
+            for (int k = 0; k < 3; ++k) {
+                albedo[k] = m->base_color[k] * base[k] * (1.f - m->emissive_metallic[3]);
+                xp[k] = v0[k] + h.u * e1[k] + h.v * e2[k];
+            }
+            pb_offset_ray_origin(xp, ng, x);
+            for (uint32_t l = 0; l < s->light_count; ++l) {
+                float El[3];
+                light_irradiance(p, &c->lights[l], x, ng, 1, El);
+                for (int k = 0; k < 3; ++k)
+                    E[k] += El[k];
+            }
+            for (int k = 0; k < 3; ++k)
+                L[k] += thr[k] * albedo[k] * (E[k] / PI_F);
+            if (bounce >= p->bounces)
+                break;
+            if (bounce >= 1) {
+                float q = fminf(0.95f, fmaxf(albedo[0], fmaxf(albedo[1], albedo[2])));
+                if (rng_next(&state) >= q)
+                    break;
+                for (int k = 0; k < 3; ++k)
+                    thr[k] /= q;
+            }
+            for (int k = 0; k < 3; ++k)
+                thr[k] *= albedo[k];
+            if (fmaxf(thr[0], fmaxf(thr[1], thr[2])) <= 0.f)
+                break;
+            float u1 = rng_next(&state), u2 = rng_next(&state);
+            cosine_direction(ng, u1, u2, dir);
+            memcpy(o, x, sizeof x);
+        }
+        float *out = c->rays + 4 * i;
+        out[0] = L[0], out[1] = L[1], out[2] = L[2], out[3] = first;
+    }
+}
+
+void pb_bake_trace_cpu(const pb_bake_pass *p, float *rays)
+{
+    const pb_scene *s = p->scene;
+    trace_ctx c = {p, malloc((s->light_count ? s->light_count : 1) * sizeof(gpu_light)),
+                   malloc((s->material_count ? s->material_count : 1) * sizeof(gpu_shade_material)), rays};
+    if (!c.lights || !c.materials) {
+        free(c.lights), free(c.materials);
+        return;
+    }
+    pb_bake_lights(s, c.lights);
+    pb_bake_materials(s, c.materials);
+    pb_parallel_for((uint64_t)p->probe_count * p->rays_per_probe, 64, 0, trace_range, &c);
+    free(c.lights);
+    free(c.materials);
+}
+
+void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
+{
+    const pb_scene *s = p->scene;
+    gpu_light *lights = malloc((s->light_count ? s->light_count : 1) * sizeof(gpu_light));
+    if (!lights)
+        return;
+    pb_bake_lights(s, lights);
+    float w = 4.f * PI_F / (float)p->rays_per_probe;
+    for (uint32_t local = 0; local < p->probe_count; ++local) {
+        uint32_t probe = p->first_probe + local;
+        float c[27] = {0}, backfaces = 0.f, hits = 0.f;
+        for (uint32_t r = 0; r < p->rays_per_probe; ++r) {
+            float d[3], y[9];
+            probe_ray_direction(p, probe, r, d);
+            const float *o = rays + 4 * ((size_t)local * p->rays_per_probe + r);
+            pb_sh_basis(d, y);
+            for (int k = 0; k < 9; ++k) {
+                c[3 * k] += w * o[0] * y[k];
+                c[3 * k + 1] += w * o[1] * y[k];
+                c[3 * k + 2] += w * o[2] * y[k];
+            }
+            backfaces += o[3] < 0.f ? 1.f : 0.f;
+            hits += fabsf(o[3]) < p->max_distance ? 1.f : 0.f;
+        }
+        if (p->direct) {
+            const float *x = p->probes + 4 * (size_t)probe;
+            for (uint32_t k = 0; k < s->light_count; ++k) {
+                const gpu_light *l = &lights[k];
+                float E[3], n0[3] = {0, 0, 0};
+                light_irradiance(p, l, x, n0, 0, E);
+                if (E[0] == 0.f && E[1] == 0.f && E[2] == 0.f)
+                    continue;
+                float to[3];
+                if ((uint32_t)l->position_type[3] == PB_LIGHT_DIRECTIONAL) {
+                    for (int j = 0; j < 3; ++j)
+                        to[j] = -l->direction_range[j];
+                } else {
+                    float v[3] = {l->position_type[0] - x[0], l->position_type[1] - x[1], l->position_type[2] - x[2]};
+                    float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                    for (int j = 0; j < 3; ++j)
+                        to[j] = v[j] / len;
+                }
+                pb_sh_add_delta(c, to, E);
+            }
+        }
+        float *out = reduced + PB_REDUCED_SH_STRIDE * (size_t)local;
+        memcpy(out, c, sizeof c);
+        out[27] = backfaces, out[28] = hits, out[29] = out[30] = out[31] = 0.f;
+    }
+    free(lights);
+}
+
+void pb_bake_depth_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
+{
+    uint32_t n = p->octmap_res, texels = n * n;
+    for (uint64_t i = 0; i < (uint64_t)p->probe_count * texels; ++i) {
+        uint32_t local = (uint32_t)(i / texels), texel = (uint32_t)(i % texels);
+        uint32_t probe = p->first_probe + local;
+        float td[3];
+        pb_oct_texel_direction(texel % n, texel / n, n, td);
+        float wsum = 0.f, m1 = 0.f, m2 = 0.f;
+        for (uint32_t r = 0; r < p->rays_per_probe; ++r) {
+            float d[3];
+            probe_ray_direction(p, probe, r, d);
+            float c = td[0] * d[0] + td[1] * d[1] + td[2] * d[2];
+            if (c <= 0.f)
+                continue;
+            float w = powf(c, p->lobe_power);
+            float dist = fminf(fabsf(rays[4 * ((size_t)local * p->rays_per_probe + r) + 3]), p->max_distance);
+            wsum += w;
+            m1 += w * dist;
+            m2 += w * dist * dist;
+        }
+        float *out = reduced + PB_REDUCED_SH_STRIDE * (size_t)p->probe_count + 2 * i;
+        out[0] = wsum > 0.f ? m1 / wsum : p->max_distance;
+        out[1] = wsum > 0.f ? m2 / wsum : p->max_distance * p->max_distance;
+    }
+}

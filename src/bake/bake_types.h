@@ -1,0 +1,40 @@
+/* C mirrors of shaders/include/bake.glsl, field for field. */
+#ifndef PB_BAKE_TYPES_H
+#define PB_BAKE_TYPES_H
+
+#include "bake/gpu_types.h"
+
+typedef struct gpu_shade_material {
+    float base_color[4];
+    float emissive_metallic[4];
+    int32_t tex[4]; /* base colour texture, emissive texture, double sided, unused */
+} gpu_shade_material;
+_Static_assert(sizeof(gpu_shade_material) == 48, "ShadeMaterial layout");
+
+typedef struct gpu_light {
+    float position_type[4];
+    float direction_range[4];
+    float radiance[4];
+    float cone[4];
+} gpu_light;
+_Static_assert(sizeof(gpu_light) == 64, "Light layout");
+
+typedef struct gpu_bake_params {
+    gpu_scene_refs scene;
+    uint64_t materials, lights, probes, rotations, directions, rays, reduced;
+    float sky[4];
+    uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, light_count, octmap_res;
+    float max_distance, lobe_power;
+    uint32_t direct, pad;
+} gpu_bake_params;
+_Static_assert(offsetof(gpu_bake_params, sky) == 112, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 176, "BakeParams layout");
+
+typedef struct bake_push {
+    uint64_t params;
+} bake_push;
+
+/* Floats per probe in the reduced buffer before the depth block. */
+#define PB_REDUCED_SH_STRIDE 32u
+
+#endif

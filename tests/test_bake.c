@@ -1,0 +1,305 @@
+/* The bake against physics and against its CPU references, on a Vulkan
+ * device with validation: uniform sky, a point light, a closed emissive box,
+ * and the kernels vs bake_cpu.c on the demo scene. */
+#include "scenes_gen.h"
+
+static pb_context *ctx;
+
+static void log_line(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    if (level >= PB_LOG_WARN)
+        fprintf(stderr, "  [%s] %s\n", level == PB_LOG_WARN ? "warn" : "error", msg);
+}
+
+typedef struct baked {
+    pb_bvh *bvh;
+    pb_gpu_scene *gs;
+    pb_volume vol;
+    int ok;
+} baked;
+
+static baked bake(const pb_scene *s, const pb_bake_desc *d)
+{
+    baked b;
+    memset(&b, 0, sizeof b);
+    pb_error err;
+    if (pb_bvh_build(s, NULL, &b.bvh, &err) != PB_OK || pb_gpu_scene_create(ctx, s, b.bvh, &b.gs, &err) != PB_OK ||
+        pb_bake(ctx, s, b.gs, d, &b.vol, &err) != PB_OK) {
+        fprintf(stderr, "  bake: %s\n", err.message);
+        t_failures++;
+        return b;
+    }
+    b.ok = 1;
+    return b;
+}
+
+static void release(baked *b)
+{
+    pb_volume_free(&b->vol);
+    pb_gpu_scene_destroy(b->gs);
+    pb_bvh_destroy(b->bvh);
+}
+
+static pb_probe_grid small_grid(float lo, float hi, uint32_t n)
+{
+    pb_probe_grid g;
+    float a[3] = {lo, lo, lo}, b[3] = {hi, hi, hi};
+    pb_probe_grid_fit(a, b, n * n * n, &g);
+    return g;
+}
+
+/* No geometry, uniform sky L: irradiance pi L in every direction. */
+static void uniform_sky(void)
+{
+    pb_scene *s = random_soup(0, 0.f, 1, NULL);
+    pb_bake_desc d = {0};
+    d.grid = small_grid(-1, 1, 2);
+    d.rays_per_probe = 512;
+    d.passes = 2;
+    float L[3] = {0.5f, 1.f, 2.f};
+    memcpy(d.sky, L, sizeof L);
+    d.max_distance = 10.f;
+    baked b = bake(s, &d);
+    if (b.ok) {
+        test_rng r = {1};
+        float worst = 0;
+        for (uint32_t p = 0; p < b.vol.probe_count; ++p)
+            for (int i = 0; i < 50; ++i) {
+                float n[3], e[3];
+                rng_direction(&r, n);
+                pb_sh_eval(b.vol.sh + 27 * p, n, e);
+                for (int k = 0; k < 3; ++k)
+                    worst = fmaxf(worst, fabsf(e[k] / (3.14159265f * L[k]) - 1.f));
+            }
+        fprintf(stderr, "  E / (pi L) - 1: at most %.2e over %u probes\n", worst, b.vol.probe_count);
+        CHECK(worst < 2e-3f); /* quadrature of the Fibonacci set, no Monte Carlo noise */
+        for (uint32_t p = 0; p < b.vol.probe_count; ++p)
+            CHECK(b.vol.probe_flags[p] == (PB_PROBE_VALID | PB_PROBE_OUTSIDE));
+    }
+    release(&b);
+    pb_scene_destroy(s);
+}
+
+/* One point light, nothing else: the SH is the projected delta E = I/d^2
+ * from the light's direction (exactly, apart from float rounding). */
+static void point_light(void)
+{
+    pb_scene *s = random_soup(0, 0.f, 1, NULL);
+    s->lights = calloc(1, sizeof(pb_light));
+    s->light_count = 1;
+    pb_light *l = &s->lights[0];
+    l->type = PB_LIGHT_POINT;
+    l->color[0] = 1.f, l->color[1] = 0.5f, l->color[2] = 0.25f;
+    l->intensity = 40.f;
+    l->position[0] = 1.f, l->position[1] = 2.f, l->position[2] = -2.f; /* 3 m from the probe */
+    pb_bake_desc d = {0};
+    d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 1;
+    d.rays_per_probe = 64;
+    d.passes = 1;
+    d.max_distance = 10.f;
+    baked b = bake(s, &d);
+    if (b.ok) {
+        float want[27] = {0}, dir[3] = {1.f / 3.f, 2.f / 3.f, -2.f / 3.f};
+        float E[3] = {40.f / 9.f, 20.f / 9.f, 10.f / 9.f};
+        pb_sh_add_delta(want, dir, E);
+        pb_sh_radiance_to_irradiance(want);
+        float worst = 0;
+        for (int k = 0; k < 27; ++k)
+            worst = fmaxf(worst, fabsf(b.vol.sh[k] - want[k]));
+        CHECKF(worst < 1e-5f * 40.f / 9.f, "max coefficient error %g", worst);
+        /* irradiance facing the light is the L2 estimate 1.0625 E */
+        float e[3];
+        pb_sh_eval(b.vol.sh, dir, e);
+        CHECKF(fabsf(e[0] - 1.0625f * E[0]) < 1e-4f * E[0], "%g vs %g", e[0], 1.0625f * E[0]);
+    }
+    release(&b);
+    pb_scene_destroy(s);
+}
+
+/* Closed box, inward faces, emission Le and albedo rho everywhere: radiance
+ * Le (1 + rho + ... + rho^B) with B bounces (Le / (1 - rho) as B grows), so
+ * irradiance pi times that, in every direction, at every probe inside. */
+static void closed_emissive_box(void)
+{
+    double v[8][3];
+    for (int i = 0; i < 8; ++i)
+        for (int k = 0; k < 3; ++k)
+            v[i][k] = (i >> k) & 1 ? 2.0 : -2.0;
+    /* faces as quads of corner indices, counter-clockwise seen from inside */
+    int quads[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+    double tris[12 * 9];
+    for (int q = 0; q < 6; ++q) {
+        int t[2][3] = {{quads[q][0], quads[q][1], quads[q][2]}, {quads[q][0], quads[q][2], quads[q][3]}};
+        for (int h = 0; h < 2; ++h)
+            for (int c = 0; c < 3; ++c)
+                for (int k = 0; k < 3; ++k)
+                    tris[(2 * q + h) * 9 + 3 * c + k] = v[t[h][c]][k];
+    }
+    pb_material m = pb_material_default();
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = 0.5f;
+    m.metallic = 0.f;
+    m.emissive[0] = m.emissive[1] = m.emissive[2] = 1.f;
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECK(pb_scene_from_triangles(tris, 12, NULL, &m, 1, &s, &err) == PB_OK);
+    if (!s)
+        return;
+    /* check the winding: from the centre every face is a front face */
+    pb_ray ray = {{0, 0, 0}, 0, {0.3f, 0.2f, 1.f}, INFINITY};
+    pb_hit h;
+    pb_trace_brute(s, &ray, 1, PB_TRACE_CLOSEST, &h, 1);
+    CHECK(h.triangle != PB_NO_HIT && !h.backface);
+    pb_bake_desc d = {0};
+    d.grid = small_grid(-1.5f, 1.5f, 2);
+    d.rays_per_probe = 256;
+    d.passes = 8;
+    d.bounces = 8;
+    baked b = bake(s, &d);
+    if (b.ok) {
+        double want = 3.14159265 * (1 - pow(0.5, 9)) / 0.5; /* pi Le sum_{k=0}^{8} rho^k */
+        double mean = 0, worst = 0;
+        for (uint32_t p = 0; p < b.vol.probe_count; ++p) {
+            float up[3] = {0, 1, 0}, e[3];
+            pb_sh_eval(b.vol.sh + 27 * p, up, e);
+            mean += e[0] / b.vol.probe_count;
+            worst = fmax(worst, fabs(e[0] / want - 1));
+            CHECK(b.vol.probe_flags[p] == PB_PROBE_VALID);
+        }
+        fprintf(stderr, "  irradiance %.4f (want %.4f, %+.2f%%), worst probe %.2f%%\n", mean, want,
+                100 * (mean / want - 1), 100 * worst);
+        /* Monte Carlo: 2048 paths per probe with Russian roulette; the
+         * standard error of the mean over 8 probes is about 0.5 %, of one
+         * probe about 1.5 %: bounds at about 3 sigma */
+        CHECK(fabs(mean / want - 1) < 0.015);
+        CHECK(worst < 0.05);
+    }
+    release(&b);
+    pb_scene_destroy(s);
+}
+
+/* The kernels against bake_cpu.c on the demo scene, direct light only
+ * (bounces 0: no random directions, so ray by ray equality to rounding). */
+static void kernels_match_cpu_reference(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 27, &d.grid);
+    d.rays_per_probe = 128;
+    d.passes = 1;
+    d.bounces = 0;
+    d.octmap_res = 8;
+    d.sky[0] = d.sky[1] = d.sky[2] = 0.3f;
+    baked b = bake(s, &d);
+    if (b.ok) {
+        uint32_t P = b.vol.probe_count, n = 8;
+        float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
+        float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
+        float *red = calloc((size_t)P * (32 + 2 * n * n), sizeof(float));
+        for (uint32_t p = 0; p < P; ++p) { /* as bake.c places them */
+            uint32_t ijk[3] = {p % d.grid.counts[0], (p / d.grid.counts[0]) % d.grid.counts[1],
+                               p / (d.grid.counts[0] * d.grid.counts[1])};
+            for (int k = 0; k < 3; ++k)
+                probes[4 * p + k] = d.grid.origin[k] + (float)ijk[k] * d.grid.spacing[k];
+        }
+        pb_sf_directions(128, dirs);
+        for (uint32_t p = 0; p < P; ++p) {
+            float m[9];
+            pb_random_rotation(0, p, 0, m);
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 4; ++c)
+                    rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
+        }
+        pb_bake_pass pass = {s, b.bvh, probes, rot, dirs, 0, P, 128, 0, 0, 0, n, 1,
+                             {0.3f, 0.3f, 0.3f}, 0.f, 50.f};
+        float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
+              dz = s->bounds_max[2] - s->bounds_min[2];
+        pass.max_distance = sqrtf(dx * dx + dy * dy + dz * dz);
+        pb_bake_trace_cpu(&pass, rays);
+        pb_bake_sh_cpu(&pass, rays, red);
+        pb_bake_depth_cpu(&pass, rays, red);
+        float worst_sh = 0, scale = 0;
+        uint32_t flag_diff = 0, depth_bad = 0;
+        for (uint32_t p = 0; p < P; ++p) {
+            float c[27];
+            memcpy(c, red + 32 * p, sizeof c);
+            pb_sh_radiance_to_irradiance(c);
+            for (int k = 0; k < 27; ++k) {
+                worst_sh = fmaxf(worst_sh, fabsf(c[k] - b.vol.sh[27 * p + k]));
+                scale = fmaxf(scale, fabsf(c[k]));
+            }
+            uint32_t valid = red[32 * p + 27] / 128.f <= 0.25f ? PB_PROBE_VALID : 0;
+            flag_diff += (b.vol.probe_flags[p] & PB_PROBE_VALID) != valid;
+            for (uint32_t t = 0; t < n * n; ++t) {
+                float cpu = red[32 * P + 2 * (n * n * p + t)];
+                uint32_t x = t % n, y = t / n;
+                float gpu = pb_half_to_float(b.vol.depth[pb_volume_tile_halves(n) * p + 2 * ((y + 1) * (n + 2) + x + 1)]);
+                depth_bad += fabsf(cpu - gpu) > 2e-3f * fmaxf(1.f, cpu); /* half precision */
+            }
+        }
+        fprintf(stderr, "  %u probes: SH max difference %.2e (of %.2e), %u depth texels differ, %u flags differ\n", P,
+                worst_sh, scale, depth_bad, flag_diff);
+        CHECK(scale > 0.f && worst_sh <= 1e-4f * scale);
+        CHECK(depth_bad == 0 && flag_diff == 0);
+        free(probes), free(rot), free(dirs), free(rays), free(red);
+    }
+    release(&b);
+    pb_scene_destroy(s);
+}
+
+static void bad_parameters_refused_before_gpu_work(void)
+{
+    pb_scene *s = random_soup(10, 0.1f, 1, NULL);
+    pb_bvh *bvh = NULL;
+    pb_gpu_scene *gs = NULL;
+    pb_error err;
+    CHECK(pb_bvh_build(s, NULL, &bvh, &err) == PB_OK && pb_gpu_scene_create(ctx, s, bvh, &gs, &err) == PB_OK);
+    pb_volume v;
+    pb_bake_desc d = {0};
+    CHECK(pb_bake(ctx, s, gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT); /* no probes */
+    d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 2;
+    d.grid.spacing[0] = -1.f;
+    CHECK(pb_bake(ctx, s, gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "spacing"));
+    d.grid.spacing[0] = 1.f;
+    d.sky[1] = NAN;
+    CHECK(pb_bake(ctx, s, gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "sky"));
+    d.sky[1] = 0.f;
+    d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 4096; /* 2^36 probes */
+    CHECK(pb_bake(ctx, s, gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT);
+    d.grid.counts[0] = 16384, d.grid.counts[1] = 1024, d.grid.counts[2] = 1; /* 2^24: allowed, but too big here */
+    d.rays_per_probe = 4096;
+    pb_result r = pb_bake(ctx, s, gs, &d, &v, &err);
+    CHECKF(r == PB_ERROR_TOO_LARGE && strstr(err.message, "MiB"), "%s: %s", pb_result_name(r), err.message);
+    pb_gpu_scene_destroy(gs);
+    pb_bvh_destroy(bvh);
+    pb_scene_destroy(s);
+}
+
+static void validation_layer_stayed_silent(void)
+{
+    uint32_t n = pb_context_validation_messages(ctx);
+    CHECKF(n == 0, "%u validation messages", n);
+}
+
+int main(void)
+{
+    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {log_line, NULL}};
+    pb_error err;
+    if (pb_context_create(&d, &ctx, &err) != PB_OK) {
+        fprintf(stderr, "no Vulkan device with validation: %s\n", err.message);
+        printf("0 passed, 1 failed, 0 skipped\n");
+        return 1;
+    }
+    RUN(uniform_sky);
+    RUN(point_light);
+    RUN(closed_emissive_box);
+    RUN(kernels_match_cpu_reference);
+    RUN(bad_parameters_refused_before_gpu_work);
+    RUN(validation_layer_stayed_silent);
+    pb_context_destroy(ctx);
+    return test_summary();
+}
