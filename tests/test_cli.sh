@@ -89,6 +89,22 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect devices-json 0 '"subgroup_size": [0-9]+' -- "$pb" devices --json
     expect trace-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
         "$pb" trace "$demo" --verify --validation --probes 64 --rays 128
+    expect bake-tiny 0 "wrote $tmp/a.probes: 8 probes" -- \
+        "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --validation -o "$tmp/a.probes"
+    expect bake-inspect 0 '"probes": 8,' -- "$pb" inspect "$tmp/a.probes" --json
+    "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 -o "$tmp/b.probes" --quiet >/dev/null
+    "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --seed 9 -o "$tmp/c.probes" --quiet >/dev/null
+    # same seed: identical bytes except the timings block (offsets 184..247, docs/format.md)
+    same=$(cmp -l "$tmp/a.probes" "$tmp/b.probes" | awk '$1 < 185 || $1 > 248' | wc -l)
+    differ=$(cmp -l "$tmp/a.probes" "$tmp/c.probes" | awk '$1 < 185 || $1 > 248' | wc -l)
+    expect bake-same-seed-same-bytes 0 '^0 [1-9]' -- echo "$same $differ"
+    expect bake-bad-spacing 2 "--spacing '-1' is not a positive length" -- "$pb" bake "$demo" --spacing -1 -o "$tmp/x.probes"
+    expect bake-no-output 2 'needs -o OUT.probes' -- "$pb" bake "$demo"
+    expect bake-both-grids 2 'give --spacing or --counts, not both' -- \
+        "$pb" bake "$demo" --spacing 1 --counts 2,2,2 -o "$tmp/x.probes"
+    expect bake-bad-counts 2 "--counts needs 3 comma-separated numbers" -- "$pb" bake "$demo" --counts 2,2 -o "$tmp/x.probes"
+    expect bake-missing-scene 1 "error: $tmp/none.gltf: cannot open" -- "$pb" bake "$tmp/none.gltf" -o "$tmp/x.probes"
+    expect bake-no-partial-file 0 '^absent$' -- bash -c "[ -e '$tmp/x.probes' ] && echo present || echo absent"
     expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
         "$pb" trace "$demo" --device no-such-gpu
 fi

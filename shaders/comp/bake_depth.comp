@@ -1,10 +1,13 @@
 #version 460
-// bake_depth: one invocation per (probe, octahedral texel). Mean distance and
-// mean squared distance of this pass's rays around the texel's direction,
-// weighted by max(0, cos)^lobe_power (a cosine-power lobe: the filter DDGI
-// uses for visibility), misses at max_distance. Output: 2 floats per texel
-// at reduced[32 * probe_count + 2 * (n*n * probe_in_submission + texel)].
-// CPU reference: pb_bake_depth_cpu (src/bake/bake_cpu.c).
+// bake_depth: mean distance and mean squared distance of this pass's rays
+// around each octahedral texel's direction, weighted by max(0, cos)^power (a
+// cosine-power lobe, the filter DDGI uses for visibility; rays below the
+// cutoff weight are skipped), misses at max_distance. Workgroup (x, y) covers
+// texels [64x, 64x + 64) of probe y: the probe's rays (direction, distance)
+// are staged through shared memory 64 at a time, so each is loaded and
+// rotated once per workgroup instead of once per texel; the sum still runs
+// over rays in order, as in the CPU reference (pb_bake_depth_cpu).
+// Output: 2 floats per texel at reduced[32 * probe_count + 2 * (n*n * probe_in_submission + texel)].
 #extension GL_GOOGLE_include_directive : require
 
 #include "bake.glsl"
@@ -16,31 +19,42 @@ layout(push_constant) uniform Push {
     uint64_t params;
 } pc;
 
+shared vec4 cached[64];
+
 void main()
 {
     BakeParams P = BakeParamsBuf(pc.params).p;
     uint texels = P.octmap_res * P.octmap_res;
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= P.probe_count * texels)
-        return;
-    uint local = i / texels, texel = i % texels;
+    uint local = gl_WorkGroupID.y, lane = gl_LocalInvocationID.x;
+    uint texel = gl_WorkGroupID.x * 64u + lane;
     uint probe = P.first_probe + local;
-    vec3 td = oct_texel_direction(texel % P.octmap_res, texel / P.octmap_res, P.octmap_res);
+    bool in_tile = texel < texels;
+    vec3 td = in_tile ? oct_texel_direction(texel % P.octmap_res, texel / P.octmap_res, P.octmap_res) : vec3(0, 0, 1);
     Vec4Buf rays = Vec4Buf(P.rays);
     float wsum = 0.0, m1 = 0.0, m2 = 0.0;
-    for (uint r = 0u; r < P.rays_per_probe; ++r) {
-        vec3 d = probe_ray_direction(P, probe, r);
-        float c = td.x * d.x + td.y * d.y + td.z * d.z;
-        if (c <= 0.0)
-            continue;
-        float w = pow(c, P.lobe_power);
-        float dist = min(abs(rays.v[local * P.rays_per_probe + r].w), P.max_distance);
-        wsum += w;
-        m1 += w * dist;
-        m2 += w * dist * dist;
+    for (uint base = 0u; base < P.rays_per_probe; base += 64u) {
+        uint r = base + lane;
+        if (r < P.rays_per_probe)
+            cached[lane] = vec4(probe_ray_direction(P, probe, r),
+                                min(abs(rays.v[local * P.rays_per_probe + r].w), P.max_distance));
+        barrier();
+        uint m = min(64u, P.rays_per_probe - base);
+        for (uint j = 0u; j < m; ++j) {
+            vec4 c4 = cached[j];
+            precise float c = (td.x * c4.x + td.y * c4.y) + td.z * c4.z;
+            if (c <= P.lobe_cutoff)
+                continue; // weight below cutoff^power: negligible (pb_depth_lobe_cutoff)
+            float w = pow(c, P.lobe_power);
+            wsum += w;
+            m1 += w * c4.w;
+            m2 += w * c4.w * c4.w;
+        }
+        barrier();
     }
+    if (!in_tile)
+        return;
     FloatRW out_ = FloatRW(P.reduced);
-    uint base = 32u * P.probe_count + 2u * i;
-    out_.v[base] = wsum > 0.0 ? m1 / wsum : P.max_distance;
-    out_.v[base + 1u] = wsum > 0.0 ? m2 / wsum : P.max_distance * P.max_distance;
+    uint base_out = 32u * P.probe_count + 2u * (texels * local + texel);
+    out_.v[base_out] = wsum > 0.0 ? m1 / wsum : P.max_distance;
+    out_.v[base_out + 1u] = wsum > 0.0 ? m2 / wsum : P.max_distance * P.max_distance;
 }

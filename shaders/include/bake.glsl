@@ -61,7 +61,7 @@ struct BakeParams {
     float max_distance;
     float lobe_power;
     uint direct;            // 1: light straight from lights and sky included
-    uint pad;
+    float lobe_cutoff;      // depth filter skips rays with cos below this: weight < cutoff^power
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BakeParamsBuf { BakeParams p; };

@@ -101,6 +101,8 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     uint32_t rpp = d.rays_per_probe, n = d.octmap_res, texels = n * n;
     uint32_t chunk = ctx->desc.rays_per_submit / rpp;
     chunk = chunk < 1 ? 1 : (chunk > P ? P : chunk);
+    if (chunk > ctx->limits.maxComputeWorkGroupCount[1]) /* bake_depth dispatches one row per probe */
+        chunk = ctx->limits.maxComputeWorkGroupCount[1];
     uint64_t reduced_floats = (uint64_t)chunk * (PB_REDUCED_SH_STRIDE + 2u * texels);
     uint64_t need = (uint64_t)P * (16 + 48) + (uint64_t)rpp * 16 + (uint64_t)chunk * rpp * 16 + reduced_floats * 4;
     if (ctx->info.device_local_bytes && need > ctx->info.device_local_bytes / 2)
@@ -161,7 +163,7 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 1, 64,
                                "bake_depth", &B.depth, err);
-    double t_trace = 0;
+    double t_trace = 0, t_sh = 0, t_depth = 0; /* GPU timestamps */
     for (uint32_t pass = 0; r == PB_OK && pass < d.passes; ++pass) {
         pb_bake_rotations(d.seed, pass, 0, P, rotations);
         r = pb_buffer_upload(ctx, &B.rotations, 0, rotations, (uint64_t)P * 48, err);
@@ -177,6 +179,7 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
             prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
             prm.seed = d.seed, prm.bounces = d.bounces, prm.light_count = scene->light_count, prm.octmap_res = n;
             prm.max_distance = d.max_distance, prm.lobe_power = d.lobe_power, prm.direct = !d.exclude_direct;
+            prm.lobe_cutoff = pb_depth_lobe_cutoff(d.lobe_power);
             memcpy(B.params.mapped, &prm, sizeof prm);
             if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
                 break;
@@ -185,13 +188,22 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
             pb_cmd_dispatch(ctx, &B.trace, &push, (count * rpp + 63) / 64);
             pb_cmd_timestamp(ctx);
             pb_cmd_barrier(ctx);
+            pb_cmd_timestamp(ctx);
             pb_cmd_dispatch(ctx, &B.sh, &push, (count + 63) / 64);
-            pb_cmd_dispatch(ctx, &B.depth, &push, (count * texels + 63) / 64);
+            pb_cmd_timestamp(ctx);
+            pb_cmd_timestamp(ctx);
+            pb_cmd_dispatch2(ctx, &B.depth, &push, (texels + 63) / 64, count);
+            pb_cmd_timestamp(ctx);
             pb_cmd_barrier_to_host(ctx);
             double ms = 0;
             if ((r = pb_cmd_submit_wait(ctx, &ms, err)) != PB_OK)
                 break;
-            t_trace += ms;
+            if (ctx->interval_count == 3) {
+                t_trace += ctx->intervals_ms[0];
+                t_sh += ctx->intervals_ms[1];
+                t_depth += ctx->intervals_ms[2];
+            }
+            (void)ms;
             memcpy(reduced, B.reduced.mapped, (size_t)count * (PB_REDUCED_SH_STRIDE + 2u * texels) * 4);
             for (uint32_t l = 0; l < count; ++l) {
                 const float *o = reduced + PB_REDUCED_SH_STRIDE * (size_t)l;
@@ -257,6 +269,8 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
             }
     }
     out->timings.trace = t_trace;
+    out->timings.sh = t_sh;
+    out->timings.octmap = t_depth;
     out->timings.total = pb_now_ms() - t_start;
 done:
     release(ctx, &B);

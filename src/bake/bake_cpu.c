@@ -296,6 +296,7 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
 void pb_bake_depth_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
 {
     uint32_t n = p->octmap_res, texels = n * n;
+    float cutoff = pb_depth_lobe_cutoff(p->lobe_power);
     for (uint64_t i = 0; i < (uint64_t)p->probe_count * texels; ++i) {
         uint32_t local = (uint32_t)(i / texels), texel = (uint32_t)(i % texels);
         uint32_t probe = p->first_probe + local;
@@ -305,8 +306,8 @@ void pb_bake_depth_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
         for (uint32_t r = 0; r < p->rays_per_probe; ++r) {
             float d[3];
             probe_ray_direction(p, probe, r, d);
-            float c = td[0] * d[0] + td[1] * d[1] + td[2] * d[2];
-            if (c <= 0.f)
+            float c = (td[0] * d[0] + td[1] * d[1]) + td[2] * d[2];
+            if (c <= cutoff)
                 continue;
             float w = powf(c, p->lobe_power);
             float dist = fminf(fabsf(rays[4 * ((size_t)local * p->rays_per_probe + r) + 3]), p->max_distance);

@@ -49,3 +49,8 @@ void pb_bake_rotations(uint32_t seed, uint32_t pass, uint32_t first, uint32_t co
         }
     }
 }
+
+float pb_depth_lobe_cutoff(float power)
+{
+    return powf(1e-4f, 1.f / power);
+}

@@ -25,7 +25,8 @@ typedef struct gpu_bake_params {
     float sky[4];
     uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, light_count, octmap_res;
     float max_distance, lobe_power;
-    uint32_t direct, pad;
+    uint32_t direct;
+    float lobe_cutoff;
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, sky) == 112, "BakeParams layout");
 _Static_assert(sizeof(gpu_bake_params) == 176, "BakeParams layout");
@@ -33,6 +34,10 @@ _Static_assert(sizeof(gpu_bake_params) == 176, "BakeParams layout");
 typedef struct bake_push {
     uint64_t params;
 } bake_push;
+
+/* The depth filter ignores rays whose lobe weight cos^power is below 1e-4 of
+ * the peak: cutoff = 1e-4^(1/power) (0.83 at power 50). */
+float pb_depth_lobe_cutoff(float power);
 
 /* Floats per probe in the reduced buffer before the depth block. */
 #define PB_REDUCED_SH_STRIDE 32u

@@ -1,11 +1,14 @@
+#define _POSIX_C_SOURCE 200809L
 /* probebake command line: devices, info, trace. Every failure prints one
  * line "probebake: error: FILE: problem" to stderr and exits non-zero. */
 #include "probebake/probebake.h"
 
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 typedef struct cli_log {
@@ -22,6 +25,13 @@ static void log_to_stderr(pb_log_level level, const char *msg, void *user)
         return;
     static const char *const names[] = {"debug", "info", "warning", "error"};
     fprintf(stderr, "probebake: %s: %s\n", names[level], msg);
+}
+
+static double pb_now_ms_cli(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
 static int fail(const pb_error *err)
@@ -47,6 +57,8 @@ static void print_help(void)
            "                                          textures, lights, cameras, bounds\n"
            "  probebake trace SCENE [options]         trace probe-style rays on the device and report\n"
            "                                          throughput; --verify compares with the CPU reference\n"
+           "  probebake bake SCENE -o OUT.probes [bake options]\n"
+           "                                          bake a probe volume (irradiance SH L2 + depth octmaps)\n"
            "  probebake inspect VOLUME [--json] [--probe I]\n"
            "                                          summary of a probe volume file; --json adds every\n"
            "                                          probe (position, flags, 27 irradiance SH coefficients)\n"
@@ -61,7 +73,13 @@ static void print_help(void)
            "  --json                  machine-readable output (devices, info, inspect)\n"
            "  --probe I               inspect: only probe I\n"
            "  --verbose, --quiet      more or fewer messages on stderr\n\n"
-           "The bake itself (probebake bake) is not implemented yet; see README.md.\n",
+           "bake options (defaults printed when baking):\n"
+           "  --spacing M | --counts X,Y,Z   probe grid (default: about 2048 probes over the bounds)\n"
+           "  --bounds x0,y0,z0,x1,y1,z1     grid box in scene coordinates (default: scene bounds)\n"
+           "  --rays N  --passes N  --bounces N  --octmap-res N  --seed S\n"
+           "  --sky R,G,B                    uniform sky radiance (default black)\n"
+           "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
+           "Not yet: --points, --target-error, --indirect volume, --env, relocation and dilation (README).\n",
            PB_VERSION_STRING);
 }
 
@@ -69,6 +87,11 @@ typedef struct options {
     const char *command;
     const char *scene;
     const char *device;
+    const char *output;
+    const char *direct;
+    float spacing, sky[3], bounds[6];
+    uint32_t counts[3], passes, bounces, octmap_res;
+    int has_spacing, has_counts, has_bounds, has_rays, has_seed;
     int json, validation, verify, has_probe;
     uint32_t probes, rays, seed, probe;
     cli_log log;
@@ -109,6 +132,82 @@ static int parse(int argc, char **argv, options *o)
             o->log.verbose = 1;
         } else if (!strcmp(a, "--quiet")) {
             o->log.quiet = 1;
+        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+            if (!next)
+                return usage_error("%s needs a file name", a);
+            o->output = argv[++i];
+        } else if (!strcmp(a, "--direct")) {
+            if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
+                return usage_error("%s takes include or exclude", a);
+            o->direct = argv[++i];
+        } else if (!strcmp(a, "--spacing")) {
+            char *end = NULL;
+            o->spacing = next ? strtof(next, &end) : 0.f;
+            if (!next || *end || !(o->spacing > 0.f) || !isfinite(o->spacing)) {
+                fprintf(stderr, "probebake: error: --spacing '%s' is not a positive length in metres\n",
+                        next ? next : "");
+                return 2;
+            }
+            o->has_spacing = 1;
+            ++i;
+        } else if (!strcmp(a, "--counts") || !strcmp(a, "--sky") || !strcmp(a, "--bounds")) {
+            int want = !strcmp(a, "--bounds") ? 6 : 3, got = 0;
+            double vals[6];
+            const char *c = next;
+            while (c && got < want) {
+                char *end = NULL;
+                vals[got] = strtod(c, &end);
+                if (end == c || !isfinite(vals[got]))
+                    break;
+                ++got;
+                c = *end == ',' ? end + 1 : (*end ? NULL : end);
+                if (c && !*c)
+                    break;
+            }
+            if (!next || got != want || (c && *c)) {
+                fprintf(stderr, "probebake: error: %s needs %d comma-separated numbers, got '%s'\n", a, want,
+                        next ? next : "");
+                return 2;
+            }
+            if (!strcmp(a, "--counts")) {
+                for (int k = 0; k < 3; ++k) {
+                    if (!(vals[k] >= 1 && vals[k] <= 65536 && vals[k] == floor(vals[k]))) {
+                        fprintf(stderr, "probebake: error: --counts '%s': each count must be an integer in 1..65536\n",
+                                next);
+                        return 2;
+                    }
+                    o->counts[k] = (uint32_t)vals[k];
+                }
+                o->has_counts = 1;
+            } else if (!strcmp(a, "--sky")) {
+                for (int k = 0; k < 3; ++k) {
+                    if (!(vals[k] >= 0)) {
+                        fprintf(stderr, "probebake: error: --sky '%s': radiance must be >= 0\n", next);
+                        return 2;
+                    }
+                    o->sky[k] = (float)vals[k];
+                }
+            } else {
+                for (int k = 0; k < 6; ++k)
+                    o->bounds[k] = (float)vals[k];
+                if (!(vals[3] > vals[0] && vals[4] > vals[1] && vals[5] > vals[2])) {
+                    fprintf(stderr, "probebake: error: --bounds '%s': need x0,y0,z0,x1,y1,z1 with x1>x0, y1>y0, z1>z0\n",
+                            next);
+                    return 2;
+                }
+                o->has_bounds = 1;
+            }
+            ++i;
+        } else if (!strcmp(a, "--passes") || !strcmp(a, "--bounces") || !strcmp(a, "--octmap-res")) {
+            uint32_t *dst = !strcmp(a, "--passes") ? &o->passes : !strcmp(a, "--bounces") ? &o->bounces : &o->octmap_res;
+            uint32_t lo = dst == &o->bounces ? 0 : 1, hi = dst == &o->passes ? 1000000 : (dst == &o->bounces ? 64 : 64);
+            if (!next || !parse_u32(next, lo, hi, dst)) {
+                fprintf(stderr, "probebake: error: %s '%s' is not an integer in [%u, %u]\n", a, next ? next : "", lo, hi);
+                return 2;
+            }
+            if (dst == &o->bounces)
+                o->bounces += 1000; /* marks "given"; 0 is a valid bounce count */
+            ++i;
         } else if (!strcmp(a, "--device")) {
             if (!next)
                 return usage_error("%s needs a value", a);
@@ -129,6 +228,8 @@ static int parse(int argc, char **argv, options *o)
                 fprintf(stderr, "probebake: error: %s '%s' is not an integer in [%u, %u]\n", a, next, lo, hi);
                 return 2;
             }
+            o->has_rays |= dst == &o->rays;
+            o->has_seed |= dst == &o->seed;
             ++i;
         } else if (a[0] == '-') {
             return usage_error("unknown option '%s'", a);
@@ -479,6 +580,150 @@ static int cmd_inspect(const options *o)
     return 0;
 }
 
+/* Ctrl-C: the bake's progress callback sees this and cancels; no output
+ * file is written (the volume is only written, atomically, after success). */
+static volatile sig_atomic_t interrupted;
+
+static void on_sigint(int sig)
+{
+    (void)sig;
+    interrupted = 1;
+}
+
+typedef struct progress_state {
+    int show;
+    double start;
+    uint64_t rays_total;
+} progress_state;
+
+static int on_progress(float fraction, const char *label, void *user)
+{
+    progress_state *ps = user;
+    if (ps->show) {
+        double el = (pb_now_ms_cli() - ps->start) / 1000.0;
+        double eta = fraction > 0 ? el * (1 - fraction) / fraction : 0;
+        fprintf(stderr, "\r%-14s %5.1f%%  %6.2f Mrays/s  ETA %5.0f s ", label, 100.0 * fraction,
+                el > 0 ? fraction * (double)ps->rays_total / el / 1e6 : 0.0, eta);
+        fflush(stderr);
+    }
+    return interrupted != 0;
+}
+
+static int cmd_bake(const options *o)
+{
+    if (!o->scene)
+        return usage_error("%s needs a SCENE file", "bake");
+    if (!o->output)
+        return usage_error("%s needs -o OUT.probes", "bake");
+    if (o->has_spacing && o->has_counts)
+        return usage_error("%s: give --spacing or --counts, not both", "bake");
+    pb_log log = {log_to_stderr, (void *)&o->log};
+    pb_scene_desc sd = {log, 0};
+    pb_scene *s = NULL;
+    pb_bvh *bvh = NULL;
+    pb_context *ctx = NULL;
+    pb_gpu_scene *gs = NULL;
+    pb_volume vol;
+    memset(&vol, 0, sizeof vol);
+    pb_error err;
+    int rc = 1;
+    double t0 = pb_now_ms_cli();
+    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
+        goto out;
+    if (s->triangle_count == 0 && !o->has_bounds) {
+        snprintf(err.message, sizeof err.message, "%s: no triangles and no --bounds: nowhere to put probes", o->scene);
+        goto out;
+    }
+    /* grid in the scene's local frame */
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = o->has_bounds ? (float)(o->bounds[k] - s->origin[k]) : s->bounds_min[k];
+        hi[k] = o->has_bounds ? (float)(o->bounds[3 + k] - s->origin[k]) : s->bounds_max[k];
+    }
+    pb_bake_desc d;
+    memset(&d, 0, sizeof d);
+    if (o->has_counts) {
+        for (int k = 0; k < 3; ++k) {
+            d.grid.counts[k] = o->counts[k];
+            d.grid.spacing[k] = (hi[k] - lo[k]) / (float)o->counts[k];
+            d.grid.origin[k] = lo[k] + 0.5f * d.grid.spacing[k];
+        }
+    } else if (o->has_spacing) {
+        for (int k = 0; k < 3; ++k) {
+            double n = floor((hi[k] - lo[k]) / o->spacing);
+            if (n > 65536) {
+                snprintf(err.message, sizeof err.message, "--spacing %g gives %.0f probes along an axis; at most 65536",
+                         o->spacing, n);
+                goto out;
+            }
+            d.grid.counts[k] = n < 1 ? 1u : (uint32_t)n;
+            d.grid.spacing[k] = o->spacing;
+            d.grid.origin[k] = 0.5f * (lo[k] + hi[k]) - 0.5f * o->spacing * (float)(d.grid.counts[k] - 1);
+        }
+    } else {
+        pb_probe_grid_fit(lo, hi, 2048, &d.grid); /* a room at roughly 0.3 m */
+    }
+    d.rays_per_probe = o->has_rays ? o->rays : 256;
+    d.passes = o->passes ? o->passes : 4;
+    d.bounces = o->bounces >= 1000 ? o->bounces - 1000 : 2;
+    d.octmap_res = o->octmap_res ? o->octmap_res : 16;
+    d.seed = o->has_seed ? o->seed : 1;
+    d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");
+    memcpy(d.sky, o->sky, sizeof d.sky);
+    uint64_t probes = (uint64_t)d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+    if (!o->log.quiet)
+        fprintf(stderr,
+                "probebake: baking %s: %u x %u x %u = %llu probes, spacing %.3g m, %u rays x %u passes, %u bounces, "
+                "sky (%g, %g, %g), octmap %u, direct %s, seed %u\n",
+                o->scene, d.grid.counts[0], d.grid.counts[1], d.grid.counts[2], (unsigned long long)probes,
+                d.grid.spacing[0], d.rays_per_probe, d.passes, d.bounces, d.sky[0], d.sky[1], d.sky[2], d.octmap_res,
+                d.exclude_direct ? "excluded" : "included", d.seed);
+    if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
+        goto out;
+    pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
+    if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+        goto out;
+    progress_state ps = {isatty(2) && !o->log.quiet, pb_now_ms_cli(), probes * d.rays_per_probe * d.passes};
+    d.progress = on_progress;
+    d.progress_user = &ps;
+    signal(SIGINT, on_sigint);
+    pb_result r = pb_bake(ctx, s, gs, &d, &vol, &err);
+    signal(SIGINT, SIG_DFL);
+    if (ps.show)
+        fprintf(stderr, "\n");
+    if (r != PB_OK)
+        goto out;
+    vol.timings.load = 0;
+    vol.timings.bvh = bvh->stats.build_ms;
+    vol.timings.total = pb_now_ms_cli() - t0;
+    if (pb_volume_write(o->output, &vol, &err) != PB_OK)
+        goto out;
+    if (o->validation && pb_context_validation_messages(ctx)) {
+        snprintf(err.message, sizeof err.message, "%u Vulkan validation messages", pb_context_validation_messages(ctx));
+        remove(o->output);
+        goto out;
+    }
+    uint32_t valid = 0, outside = 0;
+    for (uint32_t i = 0; i < vol.probe_count; ++i) {
+        valid += (vol.probe_flags[i] & PB_PROBE_VALID) != 0;
+        outside += (vol.probe_flags[i] & PB_PROBE_OUTSIDE) != 0;
+    }
+    double rays = (double)probes * d.rays_per_probe * d.passes;
+    printf("wrote %s: %llu probes (%u valid, %u invalid, %u outside), %.3g rays in %u passes\n", o->output,
+           (unsigned long long)probes, valid, vol.probe_count - valid, outside, rays, d.passes);
+    printf("time: bvh %.1f ms; GPU trace %.0f ms (%.2f Mrays/s), sh %.0f ms, depth %.0f ms; total %.0f ms wall\n",
+           vol.timings.bvh, vol.timings.trace, vol.timings.trace > 0 ? rays / (vol.timings.trace * 1e3) : 0.0,
+           vol.timings.sh, vol.timings.octmap, vol.timings.total);
+    rc = 0;
+out:
+    pb_volume_free(&vol);
+    pb_gpu_scene_destroy(gs);
+    pb_context_destroy(ctx);
+    pb_bvh_destroy(bvh);
+    pb_scene_destroy(s);
+    return rc ? fail(&err) : 0;
+}
+
 int main(int argc, char **argv)
 {
     options o;
@@ -493,10 +738,7 @@ int main(int argc, char **argv)
         return cmd_trace(&o);
     if (!strcmp(o.command, "inspect"))
         return cmd_inspect(&o);
-    if (!strcmp(o.command, "bake")) {
-        fprintf(stderr, "probebake: error: 'bake' is not implemented yet (issue 3); 'trace' exercises the "
-                        "foundation\n");
-        return 2;
-    }
+    if (!strcmp(o.command, "bake"))
+        return cmd_bake(&o);
     return usage_error("unknown command '%s'", o.command);
 }

@@ -43,6 +43,8 @@ typedef struct pb_context {
     VkPhysicalDeviceLimits limits;
     uint64_t max_allocation;
     uint64_t allocated;          /* device-local bytes allocated through pb_buffer_create */
+    double intervals_ms[32];     /* timestamp pairs of the last submission, in order */
+    uint32_t interval_count;
     uint32_t validation_messages;
     int recording;
 } pb_context;
@@ -99,13 +101,15 @@ void pb_pipeline_destroy(pb_context *ctx, pb_pipeline *p);
  * the caller's loop). Timestamps written in between are read after the wait. */
 pb_result pb_cmd_begin(pb_context *ctx, pb_error *err);
 void pb_cmd_dispatch(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups);
+void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups_x, uint32_t groups_y);
 void pb_cmd_barrier(pb_context *ctx); /* all compute/transfer writes -> reads */
 void pb_cmd_barrier_to_host(pb_context *ctx); /* device writes -> host reads after the wait */
 void pb_cmd_copy(pb_context *ctx, const pb_buffer *src, VkDeviceSize src_offset, const pb_buffer *dst,
                  VkDeviceSize dst_offset, VkDeviceSize size);
 void pb_cmd_timestamp(pb_context *ctx); /* no-op without timestamp support */
 /* Submits, waits, and returns the summed intervals between timestamp pairs
- * (0,1), (2,3), ... in milliseconds through gpu_ms (may be NULL). */
+ * (0,1), (2,3), ... in milliseconds through gpu_ms (may be NULL); each pair's
+ * interval is also left in ctx->intervals_ms[0 .. interval_count). */
 pb_result pb_cmd_submit_wait(pb_context *ctx, double *gpu_ms, pb_error *err);
 
 #endif

@@ -19,12 +19,17 @@ pb_result pb_cmd_begin(pb_context *ctx, pb_error *err)
     return PB_OK;
 }
 
-void pb_cmd_dispatch(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups)
+void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups_x, uint32_t groups_y)
 {
     ctx->vk.vkCmdBindPipeline(ctx->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
     if (p->push_size)
         ctx->vk.vkCmdPushConstants(ctx->cmd, p->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, p->push_size, push);
-    ctx->vk.vkCmdDispatch(ctx->cmd, groups, 1, 1);
+    ctx->vk.vkCmdDispatch(ctx->cmd, groups_x, groups_y, 1);
+}
+
+void pb_cmd_dispatch(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups)
+{
+    pb_cmd_dispatch2(ctx, p, push, groups, 1);
 }
 
 void pb_cmd_barrier(pb_context *ctx)
@@ -80,14 +85,19 @@ pb_result pb_cmd_submit_wait(pb_context *ctx, double *gpu_ms, pb_error *err)
         return pb_vk_fail(ctx, err, vr, "vkWaitForFences");
     ctx->vk.vkResetFences(ctx->device, 1, &ctx->fence);
     ctx->vk.vkResetCommandBuffer(ctx->cmd, 0);
-    if (gpu_ms && ctx->timestamp_count >= 2) {
+    ctx->interval_count = 0;
+    if (ctx->timestamp_count >= 2) {
         uint64_t ts[64];
         uint32_t n = ctx->timestamp_count & ~1u;
         vr = ctx->vk.vkGetQueryPoolResults(ctx->device, ctx->timestamps, 0, n, sizeof ts, ts, sizeof(uint64_t),
                                            VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
         if (vr == VK_SUCCESS)
-            for (uint32_t i = 0; i < n; i += 2)
-                *gpu_ms += (double)((ts[i + 1] - ts[i]) & ctx->timestamp_mask) * ctx->timestamp_period_ns * 1e-6;
+            for (uint32_t i = 0; i < n; i += 2) {
+                double ms = (double)((ts[i + 1] - ts[i]) & ctx->timestamp_mask) * ctx->timestamp_period_ns * 1e-6;
+                if (gpu_ms)
+                    *gpu_ms += ms;
+                ctx->intervals_ms[ctx->interval_count++] = ms;
+            }
     }
     return PB_OK;
 }
