@@ -9,8 +9,14 @@
  * sees directly enter the SH as projected deltas. The result is a pb_volume
  * with irradiance SH.
  *
- * Not in this slice yet: relocation, dilation, target-error stopping,
- * emissive-triangle / sky next-event estimation, environment maps, --points.
+ * Before the passes, up to 3 relocation iterations move probes out of
+ * geometry (along the nearest back face) and away from walls they nearly
+ * touch, within 45 % of a cell. After them, probes still seeing more than
+ * invalid_backface_fraction back faces are invalid and take the
+ * distance-weighted mean of valid neighbours (dilation).
+ *
+ * Not in this slice yet: target-error stopping, emissive-triangle / sky
+ * next-event estimation, environment maps, --points.
  */
 #ifndef PROBEBAKE_BAKE_H
 #define PROBEBAKE_BAKE_H
@@ -41,7 +47,8 @@ typedef struct pb_bake_desc {
     float sky[3];                 /* uniform sky radiance, default black */
     float max_distance;           /* default: the scene's bounding-box diagonal */
     float lobe_power;             /* cosine power of the depth filter, default 50 */
-    float invalid_backface_fraction; /* default 0.25: above it a probe is invalid */
+    float invalid_backface_fraction; /* default 0.25: above it a probe is inside geometry (invalid) */
+    uint32_t skip_relocation;     /* 1: probes stay on the grid (default: 3 relocation iterations) */
     pb_progress_fn progress;
     void *progress_user;
 } pb_bake_desc;
@@ -71,8 +78,9 @@ typedef struct pb_bake_pass {
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance). */
 void pb_bake_trace_cpu(const pb_bake_pass *p, float *rays);
-/* bake_sh.comp and bake_depth.comp: reduced out, 32 floats per probe then
- * 2 per probe texel. */
+/* bake_sh.comp and bake_depth.comp: reduced out, 40 floats per probe (27 SH,
+ * back faces, hits, nearest back hit t + direction, nearest front hit t +
+ * direction, 3 zeros) then 2 per probe texel. */
 void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced);
 void pb_bake_depth_cpu(const pb_bake_pass *p, const float *rays, float *reduced);
 

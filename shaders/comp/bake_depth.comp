@@ -7,7 +7,7 @@
 // are staged through shared memory 64 at a time, so each is loaded and
 // rotated once per workgroup instead of once per texel; the sum still runs
 // over rays in order, as in the CPU reference (pb_bake_depth_cpu).
-// Output: 2 floats per texel at reduced[32 * probe_count + 2 * (n*n * probe_in_submission + texel)].
+// Output: 2 floats per texel at reduced[40 * probe_count + 2 * (n*n * probe_in_submission + texel)].
 #extension GL_GOOGLE_include_directive : require
 
 #include "bake.glsl"
@@ -54,7 +54,7 @@ void main()
     if (!in_tile)
         return;
     FloatRW out_ = FloatRW(P.reduced);
-    uint base_out = 32u * P.probe_count + 2u * (texels * local + texel);
+    uint base_out = 40u * P.probe_count + 2u * (texels * local + texel);
     out_.v[base_out] = wsum > 0.0 ? m1 / wsum : P.max_distance;
     out_.v[base_out + 1u] = wsum > 0.0 ? m2 / wsum : P.max_distance * P.max_distance;
 }

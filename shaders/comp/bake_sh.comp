@@ -3,8 +3,11 @@
 // SH L2 (weight 4pi / rays: the directions are uniform), adds the punctual
 // lights the probe sees directly as projected deltas (irradiance I/d^2 with a
 // shadow ray from the probe; when direct light is included), and counts back
-// faces and hits. Output per probe: 27 radiance coefficients, back-face
-// count, hit count (floats), at reduced[32 * probe_in_submission].
+// faces and hits. Output per probe (PB_REDUCED_SH_STRIDE = 40 floats at
+// reduced[40 * probe_in_submission]): 27 radiance coefficients, back-face
+// count, hit count, then the nearest back-face hit (distance, direction) and
+// the nearest front-face hit (distance, direction), which drive relocation;
+// max_distance when there is none.
 // CPU reference: pb_bake_sh_cpu (src/bake/bake_cpu.c).
 #extension GL_GOOGLE_include_directive : require
 
@@ -30,6 +33,8 @@ void main()
     for (int k = 0; k < 27; ++k)
         c[k] = 0.0;
     float backfaces = 0.0, hits = 0.0;
+    float back_t = P.max_distance, front_t = P.max_distance;
+    vec3 back_d = vec3(0.0), front_d = vec3(0.0);
     float w = 4.0 * PB_PI / float(P.rays_per_probe);
     for (uint r = 0u; r < P.rays_per_probe; ++r) {
         vec3 d = probe_ray_direction(P, probe, r);
@@ -43,6 +48,13 @@ void main()
         }
         backfaces += o.w < 0.0 ? 1.0 : 0.0;
         hits += abs(o.w) < P.max_distance ? 1.0 : 0.0;
+        if (o.w < 0.0 && -o.w < back_t) {
+            back_t = -o.w;
+            back_d = d;
+        } else if (o.w >= 0.0 && o.w < front_t) {
+            front_t = o.w;
+            front_d = d;
+        }
     }
     if (P.direct != 0u) {
         vec3 x = Vec4Buf(P.probes).v[probe].xyz;
@@ -64,12 +76,19 @@ void main()
         }
     }
     FloatRW out_ = FloatRW(P.reduced);
-    uint base = 32u * local;
+    uint base = 40u * local;
     for (int k = 0; k < 27; ++k)
         out_.v[base + uint(k)] = c[k];
     out_.v[base + 27u] = backfaces;
     out_.v[base + 28u] = hits;
-    out_.v[base + 29u] = 0.0;
-    out_.v[base + 30u] = 0.0;
-    out_.v[base + 31u] = 0.0;
+    out_.v[base + 29u] = back_t;
+    out_.v[base + 30u] = back_d.x;
+    out_.v[base + 31u] = back_d.y;
+    out_.v[base + 32u] = back_d.z;
+    out_.v[base + 33u] = front_t;
+    out_.v[base + 34u] = front_d.x;
+    out_.v[base + 35u] = front_d.y;
+    out_.v[base + 36u] = front_d.z;
+    for (uint k = 37u; k < 40u; ++k)
+        out_.v[base + k] = 0.0;
 }

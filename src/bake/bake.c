@@ -87,6 +87,196 @@ static pb_result make_buffer(pb_context *ctx, pb_buffer *b, uint64_t bytes, pb_m
     return r;
 }
 
+#define PB_RELOCATION_PASS 0x80000000u
+
+/* What one pass needs; per-probe host arrays are indexed by global probe. */
+typedef struct bake_run {
+    pb_context *ctx;
+    bake_buffers *B;
+    pb_gpu_scene *gs;
+    const pb_bake_desc *d;
+    const pb_scene *scene;
+    uint32_t P, rpp, n, chunk;
+    float *probes, *rotations, *reduced;
+    double *sh_sum, *depth_sum, *backfaces, *hits;
+    double t_trace, t_sh, t_depth; /* GPU timestamps, ms */
+    float *near;                   /* 8 per probe: nearest back t + dir, nearest front t + dir */
+} bake_run;
+
+/* One pass over every probe, in bounded submissions. A relocation pass
+ * (relocating = 1) skips the depth filter and only records back faces and
+ * the nearest hits; a bake pass accumulates SH, depth, back faces and hits. */
+static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, pb_error *err)
+{
+    pb_context *ctx = run->ctx;
+    bake_buffers *B = run->B;
+    const pb_bake_desc *d = run->d;
+    uint32_t P = run->P, rpp = run->rpp, n = run->n, texels = n * n;
+    pb_bake_rotations(d->seed, pass, 0, P, run->rotations);
+    pb_result r = pb_buffer_upload(ctx, &B->rotations, 0, run->rotations, (uint64_t)P * 48, err);
+    for (uint32_t first = 0; r == PB_OK && first < P; first += run->chunk) {
+        uint32_t count = P - first < run->chunk ? P - first : run->chunk;
+        gpu_bake_params prm;
+        memset(&prm, 0, sizeof prm);
+        prm.scene = run->gs->refs;
+        prm.materials = B->materials.address, prm.lights = B->lights.address, prm.probes = B->probes.address;
+        prm.rotations = B->rotations.address, prm.directions = B->directions.address, prm.rays = B->rays.address;
+        prm.reduced = B->reduced.address;
+        memcpy(prm.sky, d->sky, 12);
+        prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
+        prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces, prm.light_count = run->scene->light_count;
+        prm.octmap_res = n, prm.max_distance = d->max_distance, prm.lobe_power = d->lobe_power;
+        prm.direct = !d->exclude_direct, prm.lobe_cutoff = pb_depth_lobe_cutoff(d->lobe_power);
+        memcpy(B->params.mapped, &prm, sizeof prm);
+        if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
+            break;
+        bake_push push = {B->params.address};
+        pb_cmd_timestamp(ctx);
+        pb_cmd_dispatch(ctx, &B->trace, &push, (count * rpp + 63) / 64);
+        pb_cmd_timestamp(ctx);
+        pb_cmd_barrier(ctx);
+        pb_cmd_timestamp(ctx);
+        pb_cmd_dispatch(ctx, &B->sh, &push, (count + 63) / 64);
+        pb_cmd_timestamp(ctx);
+        if (!relocating) {
+            pb_cmd_timestamp(ctx);
+            pb_cmd_dispatch2(ctx, &B->depth, &push, (texels + 63) / 64, count);
+            pb_cmd_timestamp(ctx);
+        }
+        pb_cmd_barrier_to_host(ctx);
+        if ((r = pb_cmd_submit_wait(ctx, NULL, err)) != PB_OK)
+            break;
+        if (ctx->interval_count >= 2) {
+            run->t_trace += ctx->intervals_ms[0];
+            run->t_sh += ctx->intervals_ms[1];
+            run->t_depth += ctx->interval_count >= 3 ? ctx->intervals_ms[2] : 0.0;
+        }
+        memcpy(run->reduced, B->reduced.mapped, (size_t)count * (PB_REDUCED_SH_STRIDE + (relocating ? 0 : 2u * texels)) * 4);
+        for (uint32_t l = 0; l < count; ++l) {
+            const float *o = run->reduced + PB_REDUCED_SH_STRIDE * (size_t)l;
+            uint32_t p = first + l;
+            run->backfaces[p] += o[27];
+            if (relocating) {
+                memcpy(run->near + 8 * (size_t)p, o + 29, 8 * sizeof(float));
+                continue;
+            }
+            for (int c = 0; c < 27; ++c)
+                run->sh_sum[27 * (size_t)p + c] += o[c];
+            run->hits[p] += o[28];
+            const float *dm = run->reduced + PB_REDUCED_SH_STRIDE * (size_t)count + 2 * (size_t)texels * l;
+            for (uint32_t t = 0; t < 2 * texels; ++t)
+                run->depth_sum[2 * (size_t)texels * p + t] += dm[t];
+        }
+        if (d->progress) {
+            char label[64];
+            float f = relocating ? 0.f : ((float)pass + (float)(first + count) / (float)P) / (float)d->passes;
+            if (relocating)
+                snprintf(label, sizeof label, "relocating");
+            else
+                snprintf(label, sizeof label, "pass %u/%u", pass + 1, d->passes);
+            if (d->progress(f, label, d->progress_user))
+                r = pb_fail(err, PB_ERROR_CANCELLED, "bake cancelled");
+        }
+    }
+    return r;
+}
+
+/* Moves probes after a relocation pass: one with too many back faces goes
+ * out along its nearest back-face direction, past the surface; one closer
+ * than min_front to a front face moves away from it. Offsets are bounded to
+ * 45 % of the spacing per axis, so a probe stays inside its cell. Returns the
+ * number of probes whose position changed. */
+static uint32_t relocate(bake_run *run, float *offsets)
+{
+    const pb_bake_desc *d = run->d;
+    float sp = INFINITY;
+    for (int k = 0; k < 3; ++k)
+        if (d->grid.spacing[k] > 0.f)
+            sp = fminf(sp, d->grid.spacing[k]);
+    if (!isfinite(sp))
+        sp = d->max_distance;
+    float margin = 0.05f * sp, min_front = 0.2f * sp;
+    uint32_t moved = 0;
+    for (uint32_t p = 0; p < run->P; ++p) {
+        const float *nr = run->near + 8 * (size_t)p;
+        float *off = offsets + 3 * (size_t)p, step[3] = {0, 0, 0};
+        float back_fraction = (float)(run->backfaces[p] / run->rpp);
+        if (back_fraction > d->invalid_backface_fraction && nr[0] < d->max_distance) {
+            for (int k = 0; k < 3; ++k)
+                step[k] = nr[1 + k] * (nr[0] + margin);
+        } else if (back_fraction <= d->invalid_backface_fraction && nr[4] < min_front) {
+            for (int k = 0; k < 3; ++k)
+                step[k] = -nr[5 + k] * (min_front - nr[4]);
+        } else {
+            continue;
+        }
+        int changed = 0;
+        for (int k = 0; k < 3; ++k) {
+            float bound = 0.45f * d->grid.spacing[k];
+            float o = off[k] + step[k];
+            o = o > bound ? bound : (o < -bound ? -bound : o);
+            changed |= o != off[k];
+            run->probes[4 * (size_t)p + k] += o - off[k];
+            off[k] = o;
+        }
+        moved += changed;
+    }
+    return moved;
+}
+
+/* Invalid probes take the distance-weighted mean of valid (or already
+ * filled) grid neighbours, round after round (Jacobi: each round reads the
+ * previous one), up to `rounds`. */
+static void dilate(pb_volume *v, uint32_t rounds)
+{
+    uint32_t P = v->probe_count, nx = v->counts[0], ny = v->counts[1], nz = v->counts[2];
+    uint32_t *filled = malloc(P * sizeof *filled);
+    if (!filled)
+        return;
+    for (uint32_t p = 0; p < P; ++p)
+        filled[p] = (v->probe_flags[p] & PB_PROBE_VALID) != 0;
+    for (uint32_t round = 0; round < rounds; ++round) {
+        uint32_t *next = malloc(P * sizeof *next);
+        if (!next)
+            break;
+        memcpy(next, filled, P * sizeof *next);
+        int changed = 0;
+        for (uint32_t p = 0; p < P; ++p) {
+            if (filled[p])
+                continue;
+            int x = (int)(p % nx), y = (int)((p / nx) % ny), z = (int)(p / (nx * ny));
+            double sum[27] = {0}, wsum = 0;
+            for (int dz = -1; dz <= 1; ++dz)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        int qx = x + dx, qy = y + dy, qz = z + dz;
+                        if ((dx | dy | dz) == 0 || qx < 0 || qy < 0 || qz < 0 || qx >= (int)nx || qy >= (int)ny ||
+                            qz >= (int)nz)
+                            continue;
+                        uint32_t q = (uint32_t)qx + nx * ((uint32_t)qy + ny * (uint32_t)qz);
+                        if (!filled[q])
+                            continue;
+                        double w = 1.0 / sqrt((double)(dx * dx + dy * dy + dz * dz));
+                        for (int c = 0; c < 27; ++c)
+                            sum[c] += w * v->sh[27 * (size_t)q + c];
+                        wsum += w;
+                    }
+            if (wsum > 0) {
+                for (int c = 0; c < 27; ++c)
+                    v->sh[27 * (size_t)p + c] = (float)(sum[c] / wsum);
+                v->probe_flags[p] |= PB_PROBE_DILATED;
+                next[p] = 1;
+                changed = 1;
+            }
+        }
+        memcpy(filled, next, P * sizeof *next);
+        free(next);
+        if (!changed)
+            break;
+    }
+    free(filled);
+}
+
 pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc_in,
                   pb_volume *out, pb_error *err)
 {
@@ -121,6 +311,7 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     float *reduced = malloc((size_t)reduced_floats * sizeof(float));
     bake_buffers B;
     memset(&B, 0, sizeof B);
+    float *offsets = NULL, *near = NULL;
     if (!probes || !rotations || !directions || !lights || !mats || !sh_sum || !depth_sum || !backfaces || !hits ||
         !reduced || pb_sf_directions(rpp, directions) != PB_OK) {
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
@@ -163,68 +354,30 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 1, 64,
                                "bake_depth", &B.depth, err);
-    double t_trace = 0, t_sh = 0, t_depth = 0; /* GPU timestamps */
-    for (uint32_t pass = 0; r == PB_OK && pass < d.passes; ++pass) {
-        pb_bake_rotations(d.seed, pass, 0, P, rotations);
-        r = pb_buffer_upload(ctx, &B.rotations, 0, rotations, (uint64_t)P * 48, err);
-        for (uint32_t first = 0; r == PB_OK && first < P; first += chunk) {
-            uint32_t count = P - first < chunk ? P - first : chunk;
-            gpu_bake_params prm;
-            memset(&prm, 0, sizeof prm);
-            prm.scene = gs->refs;
-            prm.materials = B.materials.address, prm.lights = B.lights.address, prm.probes = B.probes.address;
-            prm.rotations = B.rotations.address, prm.directions = B.directions.address, prm.rays = B.rays.address;
-            prm.reduced = B.reduced.address;
-            memcpy(prm.sky, d.sky, 12);
-            prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
-            prm.seed = d.seed, prm.bounces = d.bounces, prm.light_count = scene->light_count, prm.octmap_res = n;
-            prm.max_distance = d.max_distance, prm.lobe_power = d.lobe_power, prm.direct = !d.exclude_direct;
-            prm.lobe_cutoff = pb_depth_lobe_cutoff(d.lobe_power);
-            memcpy(B.params.mapped, &prm, sizeof prm);
-            if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
-                break;
-            bake_push push = {B.params.address};
-            pb_cmd_timestamp(ctx);
-            pb_cmd_dispatch(ctx, &B.trace, &push, (count * rpp + 63) / 64);
-            pb_cmd_timestamp(ctx);
-            pb_cmd_barrier(ctx);
-            pb_cmd_timestamp(ctx);
-            pb_cmd_dispatch(ctx, &B.sh, &push, (count + 63) / 64);
-            pb_cmd_timestamp(ctx);
-            pb_cmd_timestamp(ctx);
-            pb_cmd_dispatch2(ctx, &B.depth, &push, (texels + 63) / 64, count);
-            pb_cmd_timestamp(ctx);
-            pb_cmd_barrier_to_host(ctx);
-            double ms = 0;
-            if ((r = pb_cmd_submit_wait(ctx, &ms, err)) != PB_OK)
-                break;
-            if (ctx->interval_count == 3) {
-                t_trace += ctx->intervals_ms[0];
-                t_sh += ctx->intervals_ms[1];
-                t_depth += ctx->intervals_ms[2];
-            }
-            (void)ms;
-            memcpy(reduced, B.reduced.mapped, (size_t)count * (PB_REDUCED_SH_STRIDE + 2u * texels) * 4);
-            for (uint32_t l = 0; l < count; ++l) {
-                const float *o = reduced + PB_REDUCED_SH_STRIDE * (size_t)l;
-                uint32_t p = first + l;
-                for (int c = 0; c < 27; ++c)
-                    sh_sum[27 * (size_t)p + c] += o[c];
-                backfaces[p] += o[27];
-                hits[p] += o[28];
-                const float *dm = reduced + PB_REDUCED_SH_STRIDE * (size_t)count + 2 * (size_t)texels * l;
-                for (uint32_t t = 0; t < 2 * texels; ++t)
-                    depth_sum[2 * (size_t)texels * p + t] += dm[t];
-            }
-            if (d.progress) {
-                float f = ((float)pass + (float)(first + count) / (float)P) / (float)d.passes;
-                char label[64];
-                snprintf(label, sizeof label, "pass %u/%u", pass + 1, d.passes);
-                if (d.progress(f, label, d.progress_user))
-                    r = pb_fail(err, PB_ERROR_CANCELLED, "bake cancelled");
-            }
-        }
+    bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
+                    hits, 0, 0, 0, NULL};
+    /* relocation: probes in geometry move out, probes against a wall move
+     * away; iterations use their own pass numbers (RNG streams), so the bake
+     * passes that follow are the same whatever relocation did */
+    uint32_t relocated_any = 0;
+    offsets = calloc((size_t)P * 3, sizeof(float));
+    near = malloc((size_t)P * 8 * sizeof(float));
+    run.near = near;
+    if (!offsets || !near)
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
+    uint32_t iterations = d.skip_relocation || scene->triangle_count == 0 ? 0 : 3;
+    for (uint32_t it = 0; r == PB_OK && it < iterations; ++it) {
+        memset(backfaces, 0, P * sizeof(double));
+        r = run_pass(&run, PB_RELOCATION_PASS + it, 1, err);
+        if (r == PB_OK)
+            relocated_any += relocate(&run, offsets);
+        if (r == PB_OK && relocated_any)
+            r = pb_buffer_upload(ctx, &B.probes, 0, probes, (uint64_t)P * 16, err);
     }
+    memset(backfaces, 0, P * sizeof(double));
+    memset(hits, 0, P * sizeof(double));
+    for (uint32_t pass = 0; r == PB_OK && pass < d.passes; ++pass)
+        r = run_pass(&run, pass, 0, err);
     if (r != PB_OK)
         goto done;
 
@@ -244,8 +397,12 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if ((r = pb_volume_alloc(out, err)) != PB_OK)
         goto done;
     for (uint32_t p = 0; p < P; ++p) {
-        for (int k = 0; k < 3; ++k)
-            out->base[3 * p + k] = probes[4 * p + k] - d.grid.origin[k];
+        uint32_t ijk[3] = {p % d.grid.counts[0], (p / d.grid.counts[0]) % d.grid.counts[1],
+                           p / (d.grid.counts[0] * d.grid.counts[1])};
+        for (int k = 0; k < 3; ++k) {
+            out->base[3 * p + k] = (float)ijk[k] * d.grid.spacing[k];
+            out->offset[3 * p + k] = offsets[3 * p + k];
+        }
         float c[27];
         for (int k = 0; k < 27; ++k)
             c[k] = (float)(sh_sum[27 * (size_t)p + k] / d.passes);
@@ -257,6 +414,8 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
             f |= PB_PROBE_OUTSIDE;
         if (backfaces[p] / rays_total <= d.invalid_backface_fraction)
             f |= PB_PROBE_VALID;
+        if (offsets[3 * p] != 0.f || offsets[3 * p + 1] != 0.f || offsets[3 * p + 2] != 0.f)
+            f |= PB_PROBE_RELOCATED;
         out->probe_flags[p] = f;
         uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
         for (uint32_t by = 0; by < n + 2; ++by)
@@ -268,14 +427,15 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
                 tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / d.passes));
             }
     }
-    out->timings.trace = t_trace;
-    out->timings.sh = t_sh;
-    out->timings.octmap = t_depth;
+    dilate(out, 8);
+    out->timings.trace = run.t_trace;
+    out->timings.sh = run.t_sh;
+    out->timings.octmap = run.t_depth;
     out->timings.total = pb_now_ms() - t_start;
 done:
     release(ctx, &B);
     free(probes), free(rotations), free(directions), free(lights), free(mats), free(sh_sum), free(depth_sum);
-    free(backfaces), free(hits), free(reduced);
+    free(backfaces), free(hits), free(reduced), free(offsets), free(near);
     if (r != PB_OK)
         pb_volume_free(out);
     return r;

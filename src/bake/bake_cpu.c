@@ -252,6 +252,7 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
     for (uint32_t local = 0; local < p->probe_count; ++local) {
         uint32_t probe = p->first_probe + local;
         float c[27] = {0}, backfaces = 0.f, hits = 0.f;
+        float back_t = p->max_distance, front_t = p->max_distance, back_d[3] = {0, 0, 0}, front_d[3] = {0, 0, 0};
         for (uint32_t r = 0; r < p->rays_per_probe; ++r) {
             float d[3], y[9];
             probe_ray_direction(p, probe, r, d);
@@ -264,6 +265,13 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
             }
             backfaces += o[3] < 0.f ? 1.f : 0.f;
             hits += fabsf(o[3]) < p->max_distance ? 1.f : 0.f;
+            if (o[3] < 0.f && -o[3] < back_t) {
+                back_t = -o[3];
+                memcpy(back_d, d, sizeof d);
+            } else if (o[3] >= 0.f && o[3] < front_t) {
+                front_t = o[3];
+                memcpy(front_d, d, sizeof d);
+            }
         }
         if (p->direct) {
             const float *x = p->probes + 4 * (size_t)probe;
@@ -288,7 +296,10 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
         }
         float *out = reduced + PB_REDUCED_SH_STRIDE * (size_t)local;
         memcpy(out, c, sizeof c);
-        out[27] = backfaces, out[28] = hits, out[29] = out[30] = out[31] = 0.f;
+        out[27] = backfaces, out[28] = hits;
+        out[29] = back_t, out[30] = back_d[0], out[31] = back_d[1], out[32] = back_d[2];
+        out[33] = front_t, out[34] = front_d[0], out[35] = front_d[1], out[36] = front_d[2];
+        out[37] = out[38] = out[39] = 0.f;
     }
     free(lights);
 }

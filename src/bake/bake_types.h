@@ -40,6 +40,6 @@ typedef struct bake_push {
 float pb_depth_lobe_cutoff(float power);
 
 /* Floats per probe in the reduced buffer before the depth block. */
-#define PB_REDUCED_SH_STRIDE 32u
+#define PB_REDUCED_SH_STRIDE 40u
 
 #endif
