@@ -703,14 +703,17 @@ static int cmd_bake(const options *o)
         remove(o->output);
         goto out;
     }
-    uint32_t valid = 0, outside = 0;
+    uint32_t valid = 0, outside = 0, relocated = 0, dilated = 0;
     for (uint32_t i = 0; i < vol.probe_count; ++i) {
         valid += (vol.probe_flags[i] & PB_PROBE_VALID) != 0;
         outside += (vol.probe_flags[i] & PB_PROBE_OUTSIDE) != 0;
+        relocated += (vol.probe_flags[i] & PB_PROBE_RELOCATED) != 0;
+        dilated += (vol.probe_flags[i] & PB_PROBE_DILATED) != 0;
     }
     double rays = (double)probes * d.rays_per_probe * d.passes;
-    printf("wrote %s: %llu probes (%u valid, %u invalid, %u outside), %.3g rays in %u passes\n", o->output,
-           (unsigned long long)probes, valid, vol.probe_count - valid, outside, rays, d.passes);
+    printf("wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside), %.3g rays in "
+           "%u passes\n", o->output, (unsigned long long)probes, valid, relocated, vol.probe_count - valid, dilated,
+           outside, rays, d.passes);
     printf("time: bvh %.1f ms; GPU trace %.0f ms (%.2f Mrays/s), sh %.0f ms, depth %.0f ms; total %.0f ms wall\n",
            vol.timings.bvh, vol.timings.trace, vol.timings.trace > 0 ? rays / (vol.timings.trace * 1e3) : 0.0,
            vol.timings.sh, vol.timings.octmap, vol.timings.total);
