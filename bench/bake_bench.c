@@ -1,0 +1,174 @@
+/* bake_bench: bake time per stage and error against a long bake.
+ *
+ *   bake_bench [--probes N] [--reference-passes N] [--bounces N] [--json FILE] [SCENE ...]
+ *
+ * For each scene: a reference bake (256 rays x --reference-passes passes,
+ * default 32), then bakes at 64, 128 and 256 rays per probe (1 pass, other
+ * seeds). Error: relative RMSE of irradiance over valid probes and 64
+ * directions, sqrt(mean (E - E_ref)^2) / mean(E_ref), luminance-weighted RGB.
+ * Time: GPU timestamps of the trace, SH and depth kernels, and wall time. */
+#define _POSIX_C_SOURCE 200809L
+#include "common/common.h"
+#include "probebake/probebake.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+typedef struct row {
+    char scene[128];
+    uint32_t probes, rays, passes;
+    double trace_ms, sh_ms, depth_ms, wall_ms, rmse;
+} row;
+
+static double luminance(const float c[3])
+{
+    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+}
+
+static double relative_rmse(const pb_volume *a, const pb_volume *ref)
+{
+    float dirs[64 * 4];
+    pb_sf_directions(64, dirs);
+    double se = 0, sum = 0;
+    uint64_t n = 0;
+    for (uint32_t p = 0; p < ref->probe_count; ++p) {
+        if (!(ref->probe_flags[p] & PB_PROBE_VALID))
+            continue;
+        for (int i = 0; i < 64; ++i) {
+            float e[3], r[3];
+            pb_sh_eval(a->sh + 27 * (size_t)p, dirs + 4 * i, e);
+            pb_sh_eval(ref->sh + 27 * (size_t)p, dirs + 4 * i, r);
+            double d = luminance(e) - luminance(r);
+            se += d * d;
+            sum += luminance(r);
+            ++n;
+        }
+    }
+    return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;
+}
+
+int main(int argc, char **argv)
+{
+    uint32_t probes = 256, ref_passes = 32, bounces = 2;
+    const char *json = "bench/out/bake_bench.json";
+    const char *scenes[16];
+    int nscenes = 0;
+    for (int i = 1; i < argc; ++i) {
+        if (!strcmp(argv[i], "--probes") && i + 1 < argc)
+            probes = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--reference-passes") && i + 1 < argc)
+            ref_passes = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--bounces") && i + 1 < argc)
+            bounces = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--json") && i + 1 < argc)
+            json = argv[++i];
+        else if (argv[i][0] == '-') {
+            fprintf(stderr, "bake_bench: unknown option %s\n", argv[i]);
+            return 2;
+        } else if (nscenes < 16)
+            scenes[nscenes++] = argv[i];
+    }
+    if (!nscenes) {
+        static const char *def[] = {"tests/scenes/demo.gltf", "../shared/scenes/cornell/cornellBox.gltf",
+                                    "../shared/scenes/openarena/oacmpdm1.glb"};
+        for (int i = 0; i < 3; ++i) {
+            struct stat st;
+            if (stat(def[i], &st) == 0)
+                scenes[nscenes++] = def[i];
+            else
+                fprintf(stderr, "bake_bench: %s not present, skipped\n", def[i]);
+        }
+    }
+    pb_context *ctx = NULL;
+    pb_error err;
+    if (pb_context_create(NULL, &ctx, &err) != PB_OK) {
+        fprintf(stderr, "bake_bench: %s\n", err.message);
+        return 1;
+    }
+    printf("device: %s; %u probes, %u bounces, reference 256 rays x %u passes\n", pb_context_device(ctx)->name, probes,
+           bounces, ref_passes);
+    printf("%-18s %6s %6s %9s %8s %8s %9s %9s %8s\n", "scene", "rays", "passes", "trace ms", "sh ms", "depth ms",
+           "wall ms", "Mrays/s", "rel RMSE");
+    row rows[64];
+    int nrows = 0;
+    for (int si = 0; si < nscenes; ++si) {
+        pb_scene *s = NULL;
+        pb_bvh *bvh = NULL;
+        pb_gpu_scene *gs = NULL;
+        pb_scene_desc sd = {{0}, 0};
+        if (pb_scene_load(scenes[si], &sd, &s, &err) != PB_OK || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK ||
+            pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK) {
+            fprintf(stderr, "bake_bench: %s\n", err.message);
+            pb_bvh_destroy(bvh);
+            pb_scene_destroy(s);
+            continue;
+        }
+        const char *name = strrchr(scenes[si], '/') ? strrchr(scenes[si], '/') + 1 : scenes[si];
+        pb_bake_desc d = {0};
+        pb_probe_grid_fit(s->bounds_min, s->bounds_max, probes, &d.grid);
+        d.bounces = bounces;
+        d.octmap_res = 16;
+        /* scenes with emissive surfaces light themselves; a dim sky for the rest */
+        d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
+        pb_volume ref;
+        d.rays_per_probe = 256;
+        d.passes = ref_passes;
+        d.seed = 1000;
+        double t0 = pb_now_ms();
+        if (pb_bake(ctx, s, gs, &d, &ref, &err) != PB_OK) {
+            fprintf(stderr, "bake_bench: %s: %s\n", name, err.message);
+        } else {
+            double ref_ms = pb_now_ms() - t0;
+            uint32_t rays_list[3] = {64, 128, 256};
+            for (int ri = 0; ri < 3; ++ri) {
+                pb_volume v;
+                d.rays_per_probe = rays_list[ri];
+                d.passes = 1;
+                d.seed = 7;
+                t0 = pb_now_ms();
+                if (pb_bake(ctx, s, gs, &d, &v, &err) != PB_OK) {
+                    fprintf(stderr, "bake_bench: %s\n", err.message);
+                    continue;
+                }
+                row *r = &rows[nrows++];
+                snprintf(r->scene, sizeof r->scene, "%s", name);
+                r->probes = v.probe_count;
+                r->rays = rays_list[ri];
+                r->passes = 1;
+                r->wall_ms = pb_now_ms() - t0;
+                r->trace_ms = v.timings.trace, r->sh_ms = v.timings.sh, r->depth_ms = v.timings.octmap;
+                r->rmse = relative_rmse(&v, &ref);
+                double rays = (double)v.probe_count * r->rays;
+                printf("%-18.18s %6u %6u %9.1f %8.1f %8.1f %9.1f %9.3f %8.4f\n", name, r->rays, 1, r->trace_ms, r->sh_ms,
+                       r->depth_ms, r->wall_ms, r->trace_ms > 0 ? rays / (r->trace_ms * 1e3) : 0.0, r->rmse);
+                fflush(stdout);
+                pb_volume_free(&v);
+            }
+            printf("%-18.18s reference: %.0f ms wall\n", name, ref_ms);
+            pb_volume_free(&ref);
+        }
+        pb_gpu_scene_destroy(gs);
+        pb_bvh_destroy(bvh);
+        pb_scene_destroy(s);
+    }
+    mkdir("bench/out", 0755);
+    FILE *f = fopen(json, "w");
+    if (f) {
+        fprintf(f, "{\n  \"bench\": \"bake\",\n  \"device\": \"%s\",\n  \"bounces\": %u,\n  \"reference_passes\": %u,\n"
+                   "  \"results\": [\n", pb_context_device(ctx)->name, bounces, ref_passes);
+        for (int i = 0; i < nrows; ++i)
+            fprintf(f,
+                    "    {\"scene\": \"%s\", \"probes\": %u, \"rays_per_probe\": %u, \"passes\": %u, \"trace_ms\": %.3f, "
+                    "\"sh_ms\": %.3f, \"depth_ms\": %.3f, \"wall_ms\": %.3f, \"relative_rmse\": %.6f}%s\n",
+                    rows[i].scene, rows[i].probes, rows[i].rays, rows[i].passes, rows[i].trace_ms, rows[i].sh_ms,
+                    rows[i].depth_ms, rows[i].wall_ms, rows[i].rmse, i + 1 < nrows ? "," : "");
+        fprintf(f, "  ]\n}\n");
+        fclose(f);
+        printf("wrote %s\n", json);
+    }
+    pb_context_destroy(ctx);
+    return 0;
+}
