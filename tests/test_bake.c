@@ -175,6 +175,26 @@ static void closed_emissive_box(void)
         CHECK(worst < 0.05);
     }
     release(&b);
+    /* the same with a 1 % target error: more passes where needed, converged */
+    d.passes = 0;
+    d.target_error = 0.01f;
+    b = bake(s, &d);
+    if (b.ok) {
+        double want = 3.14159265 * (1 - pow(0.5, 9)) / 0.5;
+        uint32_t converged = 0;
+        double worst = 0;
+        for (uint32_t p = 0; p < b.vol.probe_count; ++p) {
+            float up[3] = {0, 1, 0}, e[3];
+            pb_sh_eval(b.vol.sh + 27 * p, up, e);
+            worst = fmax(worst, fabs(e[0] / want - 1));
+            converged += (b.vol.probe_flags[p] & PB_PROBE_CONVERGED) != 0;
+        }
+        fprintf(stderr, "  target 1%%: %u of %u probes converged, at most %u passes, worst probe %.2f%%\n", converged,
+                b.vol.probe_count, b.vol.settings.passes, 100 * worst);
+        CHECK(converged == b.vol.probe_count && b.vol.settings.passes > 4 && b.vol.settings.passes < 64);
+        CHECK(worst < 0.04);
+    }
+    release(&b);
     pb_scene_destroy(s);
 }
 
@@ -206,6 +226,7 @@ static void kernels_match_cpu_reference(void)
                                p / (d.grid.counts[0] * d.grid.counts[1])};
             for (int k = 0; k < 3; ++k)
                 probes[4 * p + k] = d.grid.origin[k] + (float)ijk[k] * d.grid.spacing[k];
+            memcpy(&probes[4 * p + 3], &p, 4); /* probe id */
         }
         pb_sf_directions(128, dirs);
         for (uint32_t p = 0; p < P; ++p) {
@@ -215,7 +236,7 @@ static void kernels_match_cpu_reference(void)
                 for (int c = 0; c < 4; ++c)
                     rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
         }
-        pb_bake_pass pass = {s, b.bvh, probes, rot, dirs, 0, P, 128, 0, 0, 0, n, 1,
+        pb_bake_pass pass = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, 0, 0, 0, n, 1,
                              {0.3f, 0.3f, 0.3f}, 0.f, 50.f};
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
               dz = s->bounds_max[2] - s->bounds_min[2];
@@ -281,6 +302,7 @@ static void multi_bounce_matches_cpu_reference(void)
                                p / (d.grid.counts[0] * d.grid.counts[1])};
             for (int k = 0; k < 3; ++k)
                 probes[4 * p + k] = d.grid.origin[k] + (float)ijk[k] * d.grid.spacing[k];
+            memcpy(&probes[4 * p + 3], &p, 4); /* probe id */
         }
         pb_sf_directions(128, dirs);
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
@@ -293,7 +315,7 @@ static void multi_bounce_matches_cpu_reference(void)
                     for (int c = 0; c < 4; ++c)
                         rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
             }
-            pb_bake_pass pp = {s, b.bvh, probes, rot, dirs, 0, P, 128, pass, 0, 3, 4, 1,
+            pb_bake_pass pp = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, pass, 0, 3, 4, 1,
                                {0, 0, 0}, sqrtf(dx * dx + dy * dy + dz * dz), 50.f};
             pb_bake_trace_cpu(&pp, rays);
             pb_bake_sh_cpu(&pp, rays, red);
@@ -324,6 +346,29 @@ static void multi_bounce_matches_cpu_reference(void)
     }
     release(&b);
     pb_scene_destroy(s);
+}
+
+/* With a target error, probes stop once their estimate has converged: under
+ * a uniform sky every pass gives the same value (zero variance), so the bake
+ * stops after the minimum 4 passes; in the noisy closed box the probes run
+ * until their standard error is 1 %, and land within a few of those of the
+ * analytic irradiance. */
+static void target_error_stops_converged_probes(void)
+{
+    pb_scene *sky = random_soup(0, 0.f, 1, NULL);
+    pb_bake_desc d = {0};
+    d.grid = small_grid(-1, 1, 2);
+    d.rays_per_probe = 64;
+    d.target_error = 0.01f;
+    d.sky[0] = d.sky[1] = d.sky[2] = 1.f;
+    d.max_distance = 10.f;
+    baked b = bake(sky, &d);
+    if (b.ok) {
+        CHECKF(b.vol.settings.passes == 4, "uniform sky ran %u passes", b.vol.settings.passes);
+        CHECK(b.vol.settings.target_error == 0.01f);
+    }
+    release(&b);
+    pb_scene_destroy(sky);
 }
 
 /* Appends an axis-aligned solid box (outward faces) to a triangle list. */
@@ -465,6 +510,7 @@ int main(void)
     RUN(kernels_match_cpu_reference);
     RUN(multi_bounce_matches_cpu_reference);
     RUN(relocation_and_dilation);
+    RUN(target_error_stops_converged_probes);
     RUN(bad_parameters_refused_before_gpu_work);
     RUN(validation_layer_stayed_silent);
     pb_context_destroy(ctx);

@@ -15,7 +15,7 @@
  * invalid_backface_fraction back faces are invalid and take the
  * distance-weighted mean of valid neighbours (dilation).
  *
- * Not in this slice yet: target-error stopping, emissive-triangle / sky
+ * Not in this slice yet: emissive-triangle / sky
  * next-event estimation, environment maps, --points.
  */
 #ifndef PROBEBAKE_BAKE_H
@@ -39,7 +39,10 @@ typedef int (*pb_progress_fn)(float fraction, const char *label, void *user_data
 typedef struct pb_bake_desc {
     pb_probe_grid grid;           /* required: counts >= 1 (pb_probe_grid_fit helps) */
     uint32_t rays_per_probe;      /* default 256 */
-    uint32_t passes;              /* default 4 */
+    uint32_t passes;              /* default 4; with target_error, the most passes (default 64) */
+    float target_error;           /* 0: fixed passes; else a probe stops once the standard error of its
+                                     irradiance (DC luminance) is below target_error x its mean, after at
+                                     least 4 passes; the bake stops when all have */
     uint32_t bounces;             /* default 2: reflections after the first hit */
     uint32_t octmap_res;          /* default 16 */
     uint32_t seed;                /* default 0 is a valid seed */
@@ -68,7 +71,8 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
 typedef struct pb_bake_pass {
     const pb_scene *scene;
     const pb_bvh *bvh;
-    const float *probes;          /* 4 per probe, local frame */
+    const float *probes;          /* 4 per probe slot: local position, w = probe id (uint bits) */
+    const uint32_t *probe_list;   /* NULL: slots first_probe.. in order; else slots from probe_list[first_probe] */
     const float *rotations;       /* 12 per probe (3 rows of 4) */
     const float *directions;      /* 4 per ray index */
     uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, octmap_res, direct;

@@ -27,7 +27,7 @@ void main()
     uint texels = P.octmap_res * P.octmap_res;
     uint local = gl_WorkGroupID.y, lane = gl_LocalInvocationID.x;
     uint texel = gl_WorkGroupID.x * 64u + lane;
-    uint probe = P.first_probe + local;
+    uint probe = probe_slot(P, local);
     bool in_tile = texel < texels;
     vec3 td = in_tile ? oct_texel_direction(texel % P.octmap_res, texel / P.octmap_res, P.octmap_res) : vec3(0, 0, 1);
     Vec4Buf rays = Vec4Buf(P.rays);

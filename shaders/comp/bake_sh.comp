@@ -27,7 +27,7 @@ void main()
     uint local = gl_GlobalInvocationID.x;
     if (local >= P.probe_count)
         return;
-    uint probe = P.first_probe + local;
+    uint probe = probe_slot(P, local);
     Vec4Buf rays = Vec4Buf(P.rays);
     float c[27];
     for (int k = 0; k < 27; ++k)

@@ -35,10 +35,10 @@ void main()
     uint i = gl_GlobalInvocationID.x;
     if (i >= P.probe_count * P.rays_per_probe)
         return;
-    uint probe = P.first_probe + i / P.rays_per_probe, ray = i % P.rays_per_probe;
+    uint probe = probe_slot(P, i / P.rays_per_probe), ray = i % P.rays_per_probe;
     vec3 d = probe_ray_direction(P, probe, ray);
     vec3 origin = Vec4Buf(P.probes).v[probe].xyz;
-    uint state = rng_seed(P.seed, probe, P.pass_index, ray);
+    uint state = rng_seed(P.seed, probe_id(P, probe), P.pass_index, ray);
     SceneRefs s = P.scene;
     ShadeMaterialBuf mats = ShadeMaterialBuf(P.materials);
     LightBuf lights = LightBuf(P.lights);

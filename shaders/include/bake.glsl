@@ -44,11 +44,13 @@ struct BakeParams {
     SceneRefs scene;
     uint64_t materials;     // ShadeMaterial[]
     uint64_t lights;        // Light[]
-    uint64_t probes;        // vec4 per probe: local position
+    uint64_t probes;        // vec4 per probe slot: local position, w = probe id (uint bits; keys its random numbers)
     uint64_t rotations;     // 3 vec4 rows per probe (this pass)
     uint64_t directions;    // vec4 per ray index: the unrotated spherical Fibonacci set
     uint64_t rays;          // out/in: vec4 per ray: radiance rgb, w = distance (negative: back face)
-    uint64_t reduced;       // out: per probe, see bake_reduce.comp
+    uint64_t reduced;       // out: per probe, see bake_sh.comp and bake_depth.comp
+    uint64_t probe_list;    // 0: probes first_probe.. in order; else uint slots, read from first_probe on
+    uint64_t pad0;
     vec4 sky;               // rgb radiance of the uniform sky
     uint first_probe;
     uint probe_count;       // in this submission
@@ -65,6 +67,19 @@ struct BakeParams {
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BakeParamsBuf { BakeParams p; };
+
+// The probe slot the `local`-th invocation of this submission works on.
+uint probe_slot(BakeParams P, uint local)
+{
+    return P.probe_list != 0ul ? UintBuf(P.probe_list).v[P.first_probe + local] : P.first_probe + local;
+}
+
+// Read as an integer: small ids are denormal floats, and a float load may
+// flush them to zero (lavapipe does), which would give probes one stream.
+uint probe_id(BakeParams P, uint slot)
+{
+    return UintBuf(P.probes).v[4u * slot + 3u];
+}
 
 // Ray direction r of a probe in a pass: the probe's rotation rows times the
 // unrotated direction, summed in a fixed order (not dot(), whose order a

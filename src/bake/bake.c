@@ -26,15 +26,15 @@
 #include <string.h>
 
 typedef struct bake_buffers {
-    pb_buffer params, materials, lights, probes, rotations, directions, rays, reduced;
+    pb_buffer params, materials, lights, probes, rotations, directions, rays, reduced, list;
     pb_pipeline trace, sh, depth;
 } bake_buffers;
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[8] = {&b->params, &b->materials, &b->lights, &b->probes, &b->rotations, &b->directions,
-                          &b->rays, &b->reduced};
-    for (int i = 0; i < 8; ++i)
+    pb_buffer *bufs[9] = {&b->params, &b->materials, &b->lights, &b->probes, &b->rotations, &b->directions,
+                          &b->rays, &b->reduced, &b->list};
+    for (int i = 0; i < 9; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_pipeline_destroy(ctx, &b->trace);
     pb_pipeline_destroy(ctx, &b->sh);
@@ -44,7 +44,10 @@ static void release(pb_context *ctx, bake_buffers *b)
 static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
 {
     if (!d->rays_per_probe) d->rays_per_probe = 256;
-    if (!d->passes) d->passes = 4;
+    if (!d->passes) d->passes = d->target_error > 0.f ? 64 : 4;
+    if (!(d->target_error >= 0.f) || !(d->target_error < 1.f))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "target error %g: must be in [0, 1) (a relative error)",
+                       d->target_error);
     if (!d->octmap_res) d->octmap_res = 16;
     if (d->lobe_power == 0.f) d->lobe_power = 50.f;
     if (d->invalid_backface_fraction == 0.f) d->invalid_backface_fraction = 0.25f;
@@ -101,27 +104,33 @@ typedef struct bake_run {
     double *sh_sum, *depth_sum, *backfaces, *hits;
     double t_trace, t_sh, t_depth; /* GPU timestamps, ms */
     float *near;                   /* 8 per probe: nearest back t + dir, nearest front t + dir */
+    uint32_t *passes_done;         /* per probe */
+    double *dc_sum, *dc_sq;        /* per probe: luminance of each pass's DC coefficient, for the standard error */
 } bake_run;
 
 /* One pass over every probe, in bounded submissions. A relocation pass
  * (relocating = 1) skips the depth filter and only records back faces and
  * the nearest hits; a bake pass accumulates SH, depth, back faces and hits. */
-static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, pb_error *err)
+static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const uint32_t *list, uint32_t total,
+                          pb_error *err)
 {
     pb_context *ctx = run->ctx;
     bake_buffers *B = run->B;
     const pb_bake_desc *d = run->d;
     uint32_t P = run->P, rpp = run->rpp, n = run->n, texels = n * n;
-    pb_bake_rotations(d->seed, pass, 0, P, run->rotations);
+    pb_bake_rotations(d->seed, pass, run->probes, P, run->rotations);
     pb_result r = pb_buffer_upload(ctx, &B->rotations, 0, run->rotations, (uint64_t)P * 48, err);
-    for (uint32_t first = 0; r == PB_OK && first < P; first += run->chunk) {
-        uint32_t count = P - first < run->chunk ? P - first : run->chunk;
+    if (r == PB_OK && list)
+        r = pb_buffer_upload(ctx, &B->list, 0, list, (uint64_t)total * 4, err);
+    for (uint32_t first = 0; r == PB_OK && first < total; first += run->chunk) {
+        uint32_t count = total - first < run->chunk ? total - first : run->chunk;
         gpu_bake_params prm;
         memset(&prm, 0, sizeof prm);
         prm.scene = run->gs->refs;
         prm.materials = B->materials.address, prm.lights = B->lights.address, prm.probes = B->probes.address;
         prm.rotations = B->rotations.address, prm.directions = B->directions.address, prm.rays = B->rays.address;
         prm.reduced = B->reduced.address;
+        prm.probe_list = list ? B->list.address : 0;
         memcpy(prm.sky, d->sky, 12);
         prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
         prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces, prm.light_count = run->scene->light_count;
@@ -154,7 +163,7 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, pb_error
         memcpy(run->reduced, B->reduced.mapped, (size_t)count * (PB_REDUCED_SH_STRIDE + (relocating ? 0 : 2u * texels)) * 4);
         for (uint32_t l = 0; l < count; ++l) {
             const float *o = run->reduced + PB_REDUCED_SH_STRIDE * (size_t)l;
-            uint32_t p = first + l;
+            uint32_t p = list ? list[first + l] : first + l;
             run->backfaces[p] += o[27];
             if (relocating) {
                 memcpy(run->near + 8 * (size_t)p, o + 29, 8 * sizeof(float));
@@ -163,13 +172,17 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, pb_error
             for (int c = 0; c < 27; ++c)
                 run->sh_sum[27 * (size_t)p + c] += o[c];
             run->hits[p] += o[28];
+            double dc = 0.2126 * o[0] + 0.7152 * o[1] + 0.0722 * o[2];
+            run->dc_sum[p] += dc;
+            run->dc_sq[p] += dc * dc;
+            run->passes_done[p]++;
             const float *dm = run->reduced + PB_REDUCED_SH_STRIDE * (size_t)count + 2 * (size_t)texels * l;
             for (uint32_t t = 0; t < 2 * texels; ++t)
                 run->depth_sum[2 * (size_t)texels * p + t] += dm[t];
         }
         if (d->progress) {
             char label[64];
-            float f = relocating ? 0.f : ((float)pass + (float)(first + count) / (float)P) / (float)d->passes;
+            float f = relocating ? 0.f : ((float)pass + (float)(first + count) / (float)total) / (float)d->passes;
             if (relocating)
                 snprintf(label, sizeof label, "relocating");
             else
@@ -312,8 +325,10 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     bake_buffers B;
     memset(&B, 0, sizeof B);
     float *offsets = NULL, *near = NULL;
+    uint32_t *passes_done = NULL, *active = NULL, *converged_at = calloc(P, sizeof(uint32_t));
+    double *dc_sum = NULL, *dc_sq = NULL;
     if (!probes || !rotations || !directions || !lights || !mats || !sh_sum || !depth_sum || !backfaces || !hits ||
-        !reduced || pb_sf_directions(rpp, directions) != PB_OK) {
+        !reduced || !converged_at || pb_sf_directions(rpp, directions) != PB_OK) {
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
         goto done;
     }
@@ -323,6 +338,7 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
         probes[4 * p] = d.grid.origin[0] + (float)i * d.grid.spacing[0];
         probes[4 * p + 1] = d.grid.origin[1] + (float)j * d.grid.spacing[1];
         probes[4 * p + 2] = d.grid.origin[2] + (float)k * d.grid.spacing[2];
+        memcpy(&probes[4 * p + 3], &p, 4); /* probe id: its grid index */
     }
     pb_bake_lights(scene, lights);
     pb_bake_materials(scene, mats);
@@ -354,8 +370,16 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 1, 64,
                                "bake_depth", &B.depth, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.list, (uint64_t)P * 4, PB_MEMORY_DEVICE, "active probe list", NULL, err);
+    passes_done = calloc(P, sizeof *passes_done);
+    dc_sum = calloc(P, sizeof *dc_sum);
+    dc_sq = calloc(P, sizeof *dc_sq);
+    active = malloc(P * sizeof *active);
+    if (r == PB_OK && (!passes_done || !dc_sum || !dc_sq || !active))
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
     bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
-                    hits, 0, 0, 0, NULL};
+                    hits, 0, 0, 0, NULL, passes_done, dc_sum, dc_sq};
     /* relocation: probes in geometry move out, probes against a wall move
      * away; iterations use their own pass numbers (RNG streams), so the bake
      * passes that follow are the same whatever relocation did */
@@ -368,7 +392,7 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     uint32_t iterations = d.skip_relocation || scene->triangle_count == 0 ? 0 : 3;
     for (uint32_t it = 0; r == PB_OK && it < iterations; ++it) {
         memset(backfaces, 0, P * sizeof(double));
-        r = run_pass(&run, PB_RELOCATION_PASS + it, 1, err);
+        r = run_pass(&run, PB_RELOCATION_PASS + it, 1, NULL, P, err);
         if (r == PB_OK)
             relocated_any += relocate(&run, offsets);
         if (r == PB_OK && relocated_any)
@@ -376,8 +400,29 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     }
     memset(backfaces, 0, P * sizeof(double));
     memset(hits, 0, P * sizeof(double));
-    for (uint32_t pass = 0; r == PB_OK && pass < d.passes; ++pass)
-        r = run_pass(&run, pass, 0, err);
+    /* bake passes; with a target error, probes whose irradiance estimate has
+     * converged (standard error of the mean below target x mean, after at
+     * least 4 passes) drop out and the rest keep going */
+    uint32_t active_count = P;
+    for (uint32_t p = 0; p < P; ++p)
+        active[p] = p;
+    for (uint32_t pass = 0; r == PB_OK && pass < d.passes && active_count > 0; ++pass) {
+        r = run_pass(&run, pass, 0, d.target_error > 0.f ? active : NULL, active_count, err);
+        if (r != PB_OK || !(d.target_error > 0.f) || pass + 1 < 4)
+            continue;
+        uint32_t keep = 0;
+        for (uint32_t i = 0; i < active_count; ++i) {
+            uint32_t p = active[i];
+            double k = passes_done[p], mean = dc_sum[p] / k;
+            double var = fmax(0.0, (dc_sq[p] - k * mean * mean) / (k - 1));
+            double se = sqrt(var / k);
+            if (se <= d.target_error * fabs(mean))
+                converged_at[p] = pass + 1;
+            else
+                active[keep++] = p;
+        }
+        active_count = keep;
+    }
     if (r != PB_OK)
         goto done;
 
@@ -390,7 +435,12 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
         out->origin[k] = scene->origin[k] + (double)d.grid.origin[k];
         out->spacing[k] = d.grid.spacing[k];
     }
-    out->settings = (pb_volume_settings){d.seed, 0, rpp, d.passes, d.bounces, 0, 0.f, d.max_distance};
+    uint32_t passes_max = 0;
+    for (uint32_t p = 0; p < P; ++p) {
+        passes_max = passes_done[p] > passes_max ? passes_done[p] : passes_max;
+        out->rays_traced += (uint64_t)passes_done[p] * rpp;
+    }
+    out->settings = (pb_volume_settings){d.seed, 0, rpp, passes_max, d.bounces, 0, d.target_error, d.max_distance};
     out->settings.scene_hash = pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
                                          pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
     snprintf(out->device, sizeof out->device, "%.127s", ctx->info.name);
@@ -404,11 +454,12 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
             out->offset[3 * p + k] = offsets[3 * p + k];
         }
         float c[27];
+        uint32_t done_p = passes_done[p] ? passes_done[p] : 1;
         for (int k = 0; k < 27; ++k)
-            c[k] = (float)(sh_sum[27 * (size_t)p + k] / d.passes);
+            c[k] = (float)(sh_sum[27 * (size_t)p + k] / done_p);
         pb_sh_radiance_to_irradiance(c);
         memcpy(out->sh + 27 * (size_t)p, c, sizeof c);
-        double rays_total = (double)rpp * d.passes;
+        double rays_total = (double)rpp * done_p;
         uint32_t f = 0;
         if (hits[p] == 0)
             f |= PB_PROBE_OUTSIDE;
@@ -416,6 +467,8 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
             f |= PB_PROBE_VALID;
         if (offsets[3 * p] != 0.f || offsets[3 * p + 1] != 0.f || offsets[3 * p + 2] != 0.f)
             f |= PB_PROBE_RELOCATED;
+        if (converged_at[p] && converged_at[p] < d.passes)
+            f |= PB_PROBE_CONVERGED;
         out->probe_flags[p] = f;
         uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
         for (uint32_t by = 0; by < n + 2; ++by)
@@ -423,8 +476,8 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
                 uint32_t x, y;
                 pb_oct_border_source(bx, by, n, &x, &y);
                 const double *m = depth_sum + 2 * ((size_t)texels * p + (size_t)y * n + x);
-                tile[2 * (by * (n + 2) + bx)] = pb_half_from_float((float)(m[0] / d.passes));
-                tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / d.passes));
+                tile[2 * (by * (n + 2) + bx)] = pb_half_from_float((float)(m[0] / done_p));
+                tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / done_p));
             }
     }
     dilate(out, 8);
@@ -436,6 +489,7 @@ done:
     release(ctx, &B);
     free(probes), free(rotations), free(directions), free(lights), free(mats), free(sh_sum), free(depth_sum);
     free(backfaces), free(hits), free(reduced), free(offsets), free(near);
+    free(passes_done), free(active), free(converged_at), free(dc_sum), free(dc_sq);
     if (r != PB_OK)
         pb_volume_free(out);
     return r;

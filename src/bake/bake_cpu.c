@@ -28,6 +28,11 @@ static float rng_next(uint32_t *state)
     return (float)(*state >> 8) * (1.0f / 16777216.0f);
 }
 
+static uint32_t slot_of(const pb_bake_pass *p, uint32_t local)
+{
+    return p->probe_list ? p->probe_list[p->first_probe + local] : p->first_probe + local;
+}
+
 static void probe_ray_direction(const pb_bake_pass *p, uint32_t probe, uint32_t ray, float d[3])
 {
     const float *sf = p->directions + 4 * (size_t)ray;
@@ -142,10 +147,10 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
     const pb_bake_pass *p = c->p;
     const pb_scene *s = p->scene;
     for (uint64_t i = begin; i < end; ++i) {
-        uint32_t probe = p->first_probe + (uint32_t)(i / p->rays_per_probe), ray = (uint32_t)(i % p->rays_per_probe);
+        uint32_t probe = slot_of(p, (uint32_t)(i / p->rays_per_probe)), ray = (uint32_t)(i % p->rays_per_probe);
         float d[3];
         probe_ray_direction(p, probe, ray, d);
-        uint32_t state = rng_seed(p->seed, probe, p->pass_index, ray);
+        uint32_t state = rng_seed(p->seed, pb_probe_record_id(p->probes + 4 * (size_t)probe), p->pass_index, ray);
         float L[3] = {0, 0, 0}, thr[3] = {1, 1, 1}, first = p->max_distance;
         float o[3] = {p->probes[4 * (size_t)probe], p->probes[4 * (size_t)probe + 1], p->probes[4 * (size_t)probe + 2]};
         float dir[3] = {d[0], d[1], d[2]};
@@ -250,7 +255,7 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
     pb_bake_lights(s, lights);
     float w = 4.f * PI_F / (float)p->rays_per_probe;
     for (uint32_t local = 0; local < p->probe_count; ++local) {
-        uint32_t probe = p->first_probe + local;
+        uint32_t probe = slot_of(p, local);
         float c[27] = {0}, backfaces = 0.f, hits = 0.f;
         float back_t = p->max_distance, front_t = p->max_distance, back_d[3] = {0, 0, 0}, front_d[3] = {0, 0, 0};
         for (uint32_t r = 0; r < p->rays_per_probe; ++r) {
@@ -310,7 +315,7 @@ void pb_bake_depth_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
     float cutoff = pb_depth_lobe_cutoff(p->lobe_power);
     for (uint64_t i = 0; i < (uint64_t)p->probe_count * texels; ++i) {
         uint32_t local = (uint32_t)(i / texels), texel = (uint32_t)(i % texels);
-        uint32_t probe = p->first_probe + local;
+        uint32_t probe = slot_of(p, local);
         float td[3];
         pb_oct_texel_direction(texel % n, texel / n, n, td);
         float wsum = 0.f, m1 = 0.f, m2 = 0.f;

@@ -38,11 +38,18 @@ void pb_bake_materials(const pb_scene *scene, gpu_shade_material *out)
     }
 }
 
-void pb_bake_rotations(uint32_t seed, uint32_t pass, uint32_t first, uint32_t count, float *out12)
+uint32_t pb_probe_record_id(const float *probe4)
+{
+    uint32_t id;
+    memcpy(&id, &probe4[3], 4);
+    return id;
+}
+
+void pb_bake_rotations(uint32_t seed, uint32_t pass, const float *probes4, uint32_t count, float *out12)
 {
     for (uint32_t p = 0; p < count; ++p) {
         float m[9];
-        pb_random_rotation(seed, first + p, pass, m);
+        pb_random_rotation(seed, pb_probe_record_id(probes4 + 4 * (size_t)p), pass, m);
         float *o = out12 + 12 * (size_t)p;
         for (int r = 0; r < 3; ++r) {
             o[4 * r] = m[3 * r], o[4 * r + 1] = m[3 * r + 1], o[4 * r + 2] = m[3 * r + 2], o[4 * r + 3] = 0.f;

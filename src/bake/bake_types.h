@@ -21,15 +21,15 @@ _Static_assert(sizeof(gpu_light) == 64, "Light layout");
 
 typedef struct gpu_bake_params {
     gpu_scene_refs scene;
-    uint64_t materials, lights, probes, rotations, directions, rays, reduced;
+    uint64_t materials, lights, probes, rotations, directions, rays, reduced, probe_list, pad0;
     float sky[4];
     uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, light_count, octmap_res;
     float max_distance, lobe_power;
     uint32_t direct;
     float lobe_cutoff;
 } gpu_bake_params;
-_Static_assert(offsetof(gpu_bake_params, sky) == 112, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 176, "BakeParams layout");
+_Static_assert(offsetof(gpu_bake_params, sky) == 128, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 192, "BakeParams layout");
 
 typedef struct bake_push {
     uint64_t params;

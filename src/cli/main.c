@@ -77,9 +77,11 @@ static void print_help(void)
            "  --spacing M | --counts X,Y,Z   probe grid (default: about 2048 probes over the bounds)\n"
            "  --bounds x0,y0,z0,x1,y1,z1     grid box in scene coordinates (default: scene bounds)\n"
            "  --rays N  --passes N  --bounces N  --octmap-res N  --seed S\n"
+           "  --target-error E                trace each probe until the standard error of its irradiance\n"
+           "                                 is below E x its value (at least 4, at most --passes passes)\n"
            "  --sky R,G,B                    uniform sky radiance (default black)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
-           "Not yet: --points, --target-error, --indirect volume, --env, relocation and dilation (README).\n",
+           "Not yet: --points, --indirect volume, --env (README).\n",
            PB_VERSION_STRING);
 }
 
@@ -89,7 +91,7 @@ typedef struct options {
     const char *device;
     const char *output;
     const char *direct;
-    float spacing, sky[3], bounds[6];
+    float spacing, sky[3], bounds[6], target_error;
     uint32_t counts[3], passes, bounces, octmap_res;
     int has_spacing, has_counts, has_bounds, has_rays, has_seed;
     int json, validation, verify, has_probe;
@@ -140,6 +142,15 @@ static int parse(int argc, char **argv, options *o)
             if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
                 return usage_error("%s takes include or exclude", a);
             o->direct = argv[++i];
+        } else if (!strcmp(a, "--target-error")) {
+            char *end = NULL;
+            o->target_error = next ? strtof(next, &end) : -1.f;
+            if (!next || *end || !(o->target_error > 0.f && o->target_error < 1.f)) {
+                fprintf(stderr, "probebake: error: --target-error '%s' is not a relative error in (0, 1)\n",
+                        next ? next : "");
+                return 2;
+            }
+            ++i;
         } else if (!strcmp(a, "--spacing")) {
             char *end = NULL;
             o->spacing = next ? strtof(next, &end) : 0.f;
@@ -664,7 +675,8 @@ static int cmd_bake(const options *o)
         pb_probe_grid_fit(lo, hi, 2048, &d.grid); /* a room at roughly 0.3 m */
     }
     d.rays_per_probe = o->has_rays ? o->rays : 256;
-    d.passes = o->passes ? o->passes : 4;
+    d.target_error = o->target_error;
+    d.passes = o->passes ? o->passes : (o->target_error > 0.f ? 64 : 4);
     d.bounces = o->bounces >= 1000 ? o->bounces - 1000 : 2;
     d.octmap_res = o->octmap_res ? o->octmap_res : 16;
     d.seed = o->has_seed ? o->seed : 1;
@@ -673,11 +685,12 @@ static int cmd_bake(const options *o)
     uint64_t probes = (uint64_t)d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
     if (!o->log.quiet)
         fprintf(stderr,
-                "probebake: baking %s: %u x %u x %u = %llu probes, spacing %.3g m, %u rays x %u passes, %u bounces, "
+                "probebake: baking %s: %u x %u x %u = %llu probes, spacing %.3g m, %u rays x %s%u passes%s, %u bounces, "
                 "sky (%g, %g, %g), octmap %u, direct %s, seed %u\n",
                 o->scene, d.grid.counts[0], d.grid.counts[1], d.grid.counts[2], (unsigned long long)probes,
-                d.grid.spacing[0], d.rays_per_probe, d.passes, d.bounces, d.sky[0], d.sky[1], d.sky[2], d.octmap_res,
-                d.exclude_direct ? "excluded" : "included", d.seed);
+                d.grid.spacing[0], d.rays_per_probe, d.target_error > 0.f ? "up to " : "", d.passes,
+                d.target_error > 0.f ? " (until converged)" : "", d.bounces, d.sky[0], d.sky[1], d.sky[2],
+                d.octmap_res, d.exclude_direct ? "excluded" : "included", d.seed);
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
@@ -703,17 +716,20 @@ static int cmd_bake(const options *o)
         remove(o->output);
         goto out;
     }
-    uint32_t valid = 0, outside = 0, relocated = 0, dilated = 0;
+    uint32_t valid = 0, outside = 0, relocated = 0, dilated = 0, converged = 0;
     for (uint32_t i = 0; i < vol.probe_count; ++i) {
         valid += (vol.probe_flags[i] & PB_PROBE_VALID) != 0;
         outside += (vol.probe_flags[i] & PB_PROBE_OUTSIDE) != 0;
         relocated += (vol.probe_flags[i] & PB_PROBE_RELOCATED) != 0;
         dilated += (vol.probe_flags[i] & PB_PROBE_DILATED) != 0;
+        converged += (vol.probe_flags[i] & PB_PROBE_CONVERGED) != 0;
     }
-    double rays = (double)probes * d.rays_per_probe * d.passes;
-    printf("wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside), %.3g rays in "
-           "%u passes\n", o->output, (unsigned long long)probes, valid, relocated, vol.probe_count - valid, dilated,
-           outside, rays, d.passes);
+    double rays = (double)vol.rays_traced;
+    printf("wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside", o->output,
+           (unsigned long long)probes, valid, relocated, vol.probe_count - valid, dilated, outside);
+    if (d.target_error > 0.f)
+        printf(", %u converged before the last pass", converged);
+    printf("), %.3g probe rays in %s%u passes\n", rays, d.target_error > 0.f ? "up to " : "", vol.settings.passes);
     printf("time: bvh %.1f ms; GPU trace %.0f ms (%.2f Mrays/s), sh %.0f ms, depth %.0f ms; total %.0f ms wall\n",
            vol.timings.bvh, vol.timings.trace, vol.timings.trace > 0 ? rays / (vol.timings.trace * 1e3) : 0.0,
            vol.timings.sh, vol.timings.octmap, vol.timings.total);
