@@ -222,11 +222,9 @@ static void kernels_match_cpu_reference(void)
         float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
         float *red = calloc((size_t)P * (40 + 2 * n * n), sizeof(float));
         for (uint32_t p = 0; p < P; ++p) { /* as bake.c places them */
-            uint32_t ijk[3] = {p % d.grid.counts[0], (p / d.grid.counts[0]) % d.grid.counts[1],
-                               p / (d.grid.counts[0] * d.grid.counts[1])};
-            for (int k = 0; k < 3; ++k)
-                probes[4 * p + k] = d.grid.origin[k] + (float)ijk[k] * d.grid.spacing[k];
-            memcpy(&probes[4 * p + 3], &p, 4); /* probe id */
+            uint32_t id;
+            pb_bake_probe_position(s, &d, p, probes + 4 * p, &id);
+            memcpy(&probes[4 * p + 3], &id, 4);
         }
         pb_sf_directions(128, dirs);
         for (uint32_t p = 0; p < P; ++p) {
@@ -297,12 +295,10 @@ static void multi_bounce_matches_cpu_reference(void)
         float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
         float *red = calloc((size_t)P * (40 + 32), sizeof(float));
         double *sum = calloc((size_t)P * 27, sizeof(double));
-        for (uint32_t p = 0; p < P; ++p) {
-            uint32_t ijk[3] = {p % d.grid.counts[0], (p / d.grid.counts[0]) % d.grid.counts[1],
-                               p / (d.grid.counts[0] * d.grid.counts[1])};
-            for (int k = 0; k < 3; ++k)
-                probes[4 * p + k] = d.grid.origin[k] + (float)ijk[k] * d.grid.spacing[k];
-            memcpy(&probes[4 * p + 3], &p, 4); /* probe id */
+        for (uint32_t p = 0; p < P; ++p) { /* as bake.c places them */
+            uint32_t id;
+            pb_bake_probe_position(s, &d, p, probes + 4 * p, &id);
+            memcpy(&probes[4 * p + 3], &id, 4);
         }
         pb_sf_directions(128, dirs);
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
@@ -461,6 +457,66 @@ static void relocation_and_dilation(void)
     pb_scene_destroy(s);
 }
 
+/* Probes given as points (world positions and ids of some grid probes, as a
+ * points file with 17-digit numbers would carry them) bake to exactly the
+ * values those probes get in the whole grid: same position, same random
+ * numbers, same relocation. */
+static void points_subset_bakes_like_the_grid(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECK(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK);
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 64, &d.grid);
+    d.rays_per_probe = 64;
+    d.passes = 2;
+    d.octmap_res = 4;
+    baked whole = bake(s, &d);
+    uint32_t pick[6] = {0, 5, 17, 30, 41, 0};
+    pick[5] = whole.ok ? whole.vol.probe_count - 1 : 1;
+    double positions[18];
+    pb_points pts = {6, positions, pick, d.grid.spacing[0]};
+    for (int i = 0; i < 6; ++i) {
+        uint32_t p = pick[i];
+        uint32_t ijk[3] = {p % d.grid.counts[0], (p / d.grid.counts[0]) % d.grid.counts[1],
+                           p / (d.grid.counts[0] * d.grid.counts[1])};
+        for (int k = 0; k < 3; ++k)
+            positions[3 * i + k] = s->origin[k] + ((double)d.grid.origin[k] + (double)ijk[k] * d.grid.spacing[k]);
+    }
+    CHECK(d.grid.spacing[0] == d.grid.spacing[1] && d.grid.spacing[1] == d.grid.spacing[2]);
+    pb_bake_desc dp = d;
+    dp.points = &pts;
+    baked sub = bake(s, &dp);
+    if (whole.ok && sub.ok) {
+        uint32_t same = 0, compared = 0, relocated = 0;
+        for (int i = 0; i < 6; ++i) {
+            uint32_t p = pick[i];
+            if (whole.vol.probe_flags[p] & PB_PROBE_DILATED)
+                continue; /* grids dilate, point sets do not */
+            ++compared;
+            relocated += (whole.vol.probe_flags[p] & PB_PROBE_RELOCATED) != 0;
+            int eq = memcmp(whole.vol.sh + 27 * (size_t)p, sub.vol.sh + 27 * (size_t)i, 27 * sizeof(float)) == 0 &&
+                     memcmp(whole.vol.offset + 3 * (size_t)p, sub.vol.offset + 3 * (size_t)i, 12) == 0 &&
+                     whole.vol.probe_flags[p] == sub.vol.probe_flags[i];
+            double a[3], b2[3];
+            pb_volume_probe_position(&whole.vol, p, a);
+            pb_volume_probe_position(&sub.vol, (uint32_t)i, b2);
+            eq &= fabs(a[0] - b2[0]) < 1e-5 && fabs(a[1] - b2[1]) < 1e-5 && fabs(a[2] - b2[2]) < 1e-5;
+            same += eq;
+            if (!eq)
+                fprintf(stderr, "  probe %u differs as a point\n", p);
+        }
+        fprintf(stderr, "  %u of %u subset probes identical to the grid's (%u relocated)\n", same, compared, relocated);
+        CHECK(compared >= 4 && same == compared);
+        CHECK(!(sub.vol.flags & PB_VOLUME_GRID) && sub.vol.probe_count == 6);
+    }
+    release(&whole);
+    release(&sub);
+    pb_scene_destroy(s);
+}
+
 static void bad_parameters_refused_before_gpu_work(void)
 {
     pb_scene *s = random_soup(10, 0.1f, 1, NULL);
@@ -511,6 +567,7 @@ int main(void)
     RUN(multi_bounce_matches_cpu_reference);
     RUN(relocation_and_dilation);
     RUN(target_error_stops_converged_probes);
+    RUN(points_subset_bakes_like_the_grid);
     RUN(bad_parameters_refused_before_gpu_work);
     RUN(validation_layer_stayed_silent);
     pb_context_destroy(ctx);

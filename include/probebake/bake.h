@@ -32,12 +32,26 @@
 extern "C" {
 #endif
 
+/* Probes at given positions (docs/bake.md, --points). */
+typedef struct pb_points {
+    uint32_t count;
+    double *positions;            /* 3 per point, scene (glTF world) coordinates */
+    uint32_t *ids;                /* per point: keys its random numbers */
+    double spacing;               /* relocation bound: 45 % of it per axis; 0: no relocation */
+} pb_points;
+
+/* Reads a points file ({"spacing": s, "points": [[x,y,z] | {"id": i, "position": [x,y,z]}, ...]}).
+ * Returns PB_ERROR_IO or PB_ERROR_PARSE naming the file and the problem. */
+pb_result pb_points_read(const char *path, pb_points *out, pb_error *err);
+void pb_points_free(pb_points *p);
+
 /* Progress: fraction done in [0,1] and a label; return nonzero to cancel. */
 typedef int (*pb_progress_fn)(float fraction, const char *label, void *user_data);
 
 /* Zero fields mean the defaults listed on each line. */
 typedef struct pb_bake_desc {
-    pb_probe_grid grid;           /* required: counts >= 1 (pb_probe_grid_fit helps) */
+    pb_probe_grid grid;           /* counts >= 1 (pb_probe_grid_fit helps), unless points is set */
+    const pb_points *points;      /* NULL: the grid; else these probes (no grid, no dilation) */
     uint32_t rays_per_probe;      /* default 256 */
     uint32_t passes;              /* default 4; with target_error, the most passes (default 64) */
     float target_error;           /* 0: fixed passes; else a probe stops once the standard error of its
@@ -57,6 +71,15 @@ typedef struct pb_bake_desc {
 } pb_bake_desc;
 
 typedef struct pb_gpu_scene pb_gpu_scene;
+
+/* Where probe `probe` starts, in the scene's local frame, and its id. The one
+ * rounding rule for grids and points alike: the world position in double
+ * (scene origin + grid origin + index x spacing, or the point), then
+ * (float)(world - scene origin). So a points file holding a grid's world
+ * positions (printed with 17 digits) and grid indices as ids places and
+ * keys its probes exactly as the grid does. */
+void pb_bake_probe_position(const pb_scene *scene, const pb_bake_desc *desc, uint32_t probe, float local[3],
+                            uint32_t *id);
 
 /* Bakes into *out (arrays allocated; pb_volume_free releases them).
  * Returns PB_ERROR_INVALID_ARGUMENT before any GPU work for bad descs,

@@ -56,13 +56,24 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
               dz = s->bounds_max[2] - s->bounds_min[2];
         d->max_distance = fmaxf(1e-3f, sqrtf(dx * dx + dy * dy + dz * dz));
     }
-    uint64_t probes = (uint64_t)d->grid.counts[0] * d->grid.counts[1] * d->grid.counts[2];
-    if (!probes || probes > (1u << 24))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probe grid %ux%ux%u: need 1 to 2^24 probes",
-                       d->grid.counts[0], d->grid.counts[1], d->grid.counts[2]);
-    for (int k = 0; k < 3; ++k)
-        if (!isfinite(d->grid.origin[k]) || !(d->grid.spacing[k] >= 0.f) || !isfinite(d->grid.spacing[k]))
-            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probe grid origin and spacing must be finite, spacing >= 0");
+    if (d->points) {
+        if (d->points->count == 0 || d->points->count > (1u << 24))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u probe points: need 1 to 2^24", d->points->count);
+        if (!(d->points->spacing >= 0) || !isfinite(d->points->spacing))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "points spacing must be finite and >= 0");
+        for (uint64_t i = 0; i < 3ull * d->points->count; ++i)
+            if (!isfinite(d->points->positions[i]))
+                return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probe point %llu is not finite",
+                               (unsigned long long)(i / 3));
+    } else {
+        uint64_t probes = (uint64_t)d->grid.counts[0] * d->grid.counts[1] * d->grid.counts[2];
+        if (!probes || probes > (1u << 24))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probe grid %ux%ux%u: need 1 to 2^24 probes",
+                           d->grid.counts[0], d->grid.counts[1], d->grid.counts[2]);
+        for (int k = 0; k < 3; ++k)
+            if (!isfinite(d->grid.origin[k]) || !(d->grid.spacing[k] >= 0.f) || !isfinite(d->grid.spacing[k]))
+                return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probe grid origin and spacing must be finite, spacing >= 0");
+    }
     if (d->rays_per_probe > 65536)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u rays per probe: at most 65536", d->rays_per_probe);
     if (d->passes > 1000000)
@@ -202,10 +213,13 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
 static uint32_t relocate(bake_run *run, float *offsets)
 {
     const pb_bake_desc *d = run->d;
-    float sp = INFINITY;
-    for (int k = 0; k < 3; ++k)
-        if (d->grid.spacing[k] > 0.f)
-            sp = fminf(sp, d->grid.spacing[k]);
+    float sp = INFINITY, bounds[3];
+    for (int k = 0; k < 3; ++k) {
+        float spacing_k = d->points ? (float)d->points->spacing : d->grid.spacing[k];
+        bounds[k] = 0.45f * spacing_k;
+        if (spacing_k > 0.f)
+            sp = fminf(sp, spacing_k);
+    }
     if (!isfinite(sp))
         sp = d->max_distance;
     float margin = 0.05f * sp, min_front = 0.2f * sp;
@@ -225,7 +239,7 @@ static uint32_t relocate(bake_run *run, float *offsets)
         }
         int changed = 0;
         for (int k = 0; k < 3; ++k) {
-            float bound = 0.45f * d->grid.spacing[k];
+            float bound = bounds[k];
             float o = off[k] + step[k];
             o = o > bound ? bound : (o < -bound ? -bound : o);
             changed |= o != off[k];
@@ -290,6 +304,24 @@ static void dilate(pb_volume *v, uint32_t rounds)
     free(filled);
 }
 
+void pb_bake_probe_position(const pb_scene *scene, const pb_bake_desc *d, uint32_t p, float local[3], uint32_t *id)
+{
+    double world[3];
+    if (d->points) {
+        for (int k = 0; k < 3; ++k)
+            world[k] = d->points->positions[3 * (size_t)p + k];
+        *id = d->points->ids ? d->points->ids[p] : p;
+    } else {
+        uint32_t ijk[3] = {p % d->grid.counts[0], (p / d->grid.counts[0]) % d->grid.counts[1],
+                           p / (d->grid.counts[0] * d->grid.counts[1])};
+        for (int k = 0; k < 3; ++k)
+            world[k] = scene->origin[k] + ((double)d->grid.origin[k] + (double)ijk[k] * (double)d->grid.spacing[k]);
+        *id = p;
+    }
+    for (int k = 0; k < 3; ++k)
+        local[k] = (float)(world[k] - scene->origin[k]);
+}
+
 pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc_in,
                   pb_volume *out, pb_error *err)
 {
@@ -300,7 +332,7 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     pb_result r = check_desc(scene, &d, err);
     if (r != PB_OK)
         return r;
-    uint32_t P = d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+    uint32_t P = d.points ? d.points->count : d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
     uint32_t rpp = d.rays_per_probe, n = d.octmap_res, texels = n * n;
     uint32_t chunk = ctx->desc.rays_per_submit / rpp;
     chunk = chunk < 1 ? 1 : (chunk > P ? P : chunk);
@@ -333,12 +365,9 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
         goto done;
     }
     for (uint32_t p = 0; p < P; ++p) {
-        uint32_t i = p % d.grid.counts[0], j = (p / d.grid.counts[0]) % d.grid.counts[1],
-                 k = p / (d.grid.counts[0] * d.grid.counts[1]);
-        probes[4 * p] = d.grid.origin[0] + (float)i * d.grid.spacing[0];
-        probes[4 * p + 1] = d.grid.origin[1] + (float)j * d.grid.spacing[1];
-        probes[4 * p + 2] = d.grid.origin[2] + (float)k * d.grid.spacing[2];
-        memcpy(&probes[4 * p + 3], &p, 4); /* probe id: its grid index */
+        uint32_t id;
+        pb_bake_probe_position(scene, &d, p, probes + 4 * (size_t)p, &id);
+        memcpy(&probes[4 * p + 3], &id, 4); /* probe id: keys its random numbers */
     }
     pb_bake_lights(scene, lights);
     pb_bake_materials(scene, mats);
@@ -390,6 +419,8 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if (!offsets || !near)
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
     uint32_t iterations = d.skip_relocation || scene->triangle_count == 0 ? 0 : 3;
+    if (d.points && !(d.points->spacing > 0))
+        iterations = 0; /* no cell to stay in */
     for (uint32_t it = 0; r == PB_OK && it < iterations; ++it) {
         memset(backfaces, 0, P * sizeof(double));
         r = run_pass(&run, PB_RELOCATION_PASS + it, 1, NULL, P, err);
@@ -427,13 +458,17 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
         goto done;
 
     /* the volume */
-    out->flags = PB_VOLUME_IRRADIANCE | PB_VOLUME_GRID | (d.exclude_direct ? 0u : PB_VOLUME_DIRECT);
+    out->flags = PB_VOLUME_IRRADIANCE | (d.points ? 0u : PB_VOLUME_GRID) | (d.exclude_direct ? 0u : PB_VOLUME_DIRECT);
     out->probe_count = P;
-    memcpy(out->counts, d.grid.counts, sizeof out->counts);
+    if (d.points) {
+        out->counts[0] = P, out->counts[1] = out->counts[2] = 1;
+    } else {
+        memcpy(out->counts, d.grid.counts, sizeof out->counts);
+    }
     out->octmap_res = n;
     for (int k = 0; k < 3; ++k) {
-        out->origin[k] = scene->origin[k] + (double)d.grid.origin[k];
-        out->spacing[k] = d.grid.spacing[k];
+        out->origin[k] = scene->origin[k] + (d.points ? 0.0 : (double)d.grid.origin[k]);
+        out->spacing[k] = d.points ? 0.0 : d.grid.spacing[k];
     }
     uint32_t passes_max = 0;
     for (uint32_t p = 0; p < P; ++p) {
@@ -447,10 +482,12 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if ((r = pb_volume_alloc(out, err)) != PB_OK)
         goto done;
     for (uint32_t p = 0; p < P; ++p) {
-        uint32_t ijk[3] = {p % d.grid.counts[0], (p / d.grid.counts[0]) % d.grid.counts[1],
-                           p / (d.grid.counts[0] * d.grid.counts[1])};
+        uint32_t id;
+        float local[3];
+        pb_bake_probe_position(scene, &d, p, local, &id);
         for (int k = 0; k < 3; ++k) {
-            out->base[3 * p + k] = (float)ijk[k] * d.grid.spacing[k];
+            /* relative to the volume origin (the grid's first probe, or the scene origin for points) */
+            out->base[3 * p + k] = d.points ? local[k] : (float)((double)local[k] - (double)d.grid.origin[k]);
             out->offset[3 * p + k] = offsets[3 * p + k];
         }
         float c[27];
@@ -480,7 +517,8 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
                 tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / done_p));
             }
     }
-    dilate(out, 8);
+    if (!d.points)
+        dilate(out, 8); /* points have no grid neighbourhood: invalid ones stay flagged */
     out->timings.trace = run.t_trace;
     out->timings.sh = run.t_sh;
     out->timings.octmap = run.t_depth;
