@@ -105,6 +105,20 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-bad-counts 2 "--counts needs 3 comma-separated numbers" -- "$pb" bake "$demo" --counts 2,2 -o "$tmp/x.probes"
     expect bake-missing-scene 1 "error: $tmp/none.gltf: cannot open" -- "$pb" bake "$tmp/none.gltf" -o "$tmp/x.probes"
     expect bake-no-partial-file 0 '^absent$' -- bash -c "[ -e '$tmp/x.probes' ] && echo present || echo absent"
+    printf '{"spacing": 0.5, "points": [[0, 1.5, 0], {"id": 7, "position": [1, 1, -1]}, [-1.2, 2.5, 2]]}' >"$tmp/p.json"
+    expect bake-points 0 "wrote $tmp/p.probes: 3 probes" -- \
+        "$pb" bake "$demo" --points "$tmp/p.json" --rays 32 --passes 1 --octmap-res 4 -o "$tmp/p.probes" --validation
+    expect bake-points-inspect 0 '"index": 1, "position": \[1, 1, -1\]' -- "$pb" inspect "$tmp/p.probes" --json --probe 1
+    expect bake-points-grid-false 0 '"grid": false' -- "$pb" inspect "$tmp/p.probes" --json
+    printf '{"points": [[0, 1, 0], [1, 2]]}' >"$tmp/bad1.json"
+    expect points-short-vector 1 "error: $tmp/bad1.json: expected ','" -- "$pb" bake "$demo" --points "$tmp/bad1.json" -o "$tmp/x.probes"
+    printf '{"points": [{"id": 3, "position": [0,1,0]}, {"id": 3, "position": [1,1,0]}]}' >"$tmp/bad2.json"
+    expect points-duplicate-id 1 "two points share id 3" -- "$pb" bake "$demo" --points "$tmp/bad2.json" -o "$tmp/x.probes"
+    printf '{"points": []}' >"$tmp/bad3.json"
+    expect points-empty 1 "$tmp/bad3.json: no points" -- "$pb" bake "$demo" --points "$tmp/bad3.json" -o "$tmp/x.probes"
+    printf '{"pointz": []}' >"$tmp/bad4.json"
+    expect points-unknown-key 1 'unknown key "pointz"' -- "$pb" bake "$demo" --points "$tmp/bad4.json" -o "$tmp/x.probes"
+    expect points-with-grid 2 '--points replaces the grid' -- "$pb" bake "$demo" --points "$tmp/p.json" --spacing 1 -o "$tmp/x.probes"
     expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
         "$pb" trace "$demo" --device no-such-gpu
 fi

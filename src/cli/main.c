@@ -79,9 +79,11 @@ static void print_help(void)
            "  --rays N  --passes N  --bounces N  --octmap-res N  --seed S\n"
            "  --target-error E                trace each probe until the standard error of its irradiance\n"
            "                                 is below E x its value (at least 4, at most --passes passes)\n"
+           "  --points FILE.json             probes at given positions instead of a grid:\n"
+           "                                 {\"spacing\": S, \"points\": [[x,y,z] | {\"id\": I, \"position\": [x,y,z]}]}\n"
            "  --sky R,G,B                    uniform sky radiance (default black)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
-           "Not yet: --points, --indirect volume, --env (README).\n",
+           "Not yet: --indirect volume, --env (README).\n",
            PB_VERSION_STRING);
 }
 
@@ -91,6 +93,7 @@ typedef struct options {
     const char *device;
     const char *output;
     const char *direct;
+    const char *points;
     float spacing, sky[3], bounds[6], target_error;
     uint32_t counts[3], passes, bounces, octmap_res;
     int has_spacing, has_counts, has_bounds, has_rays, has_seed;
@@ -138,6 +141,10 @@ static int parse(int argc, char **argv, options *o)
             if (!next)
                 return usage_error("%s needs a file name", a);
             o->output = argv[++i];
+        } else if (!strcmp(a, "--points")) {
+            if (!next)
+                return usage_error("%s needs a points file (JSON)", a);
+            o->points = argv[++i];
         } else if (!strcmp(a, "--direct")) {
             if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
                 return usage_error("%s takes include or exclude", a);
@@ -628,6 +635,8 @@ static int cmd_bake(const options *o)
         return usage_error("%s needs -o OUT.probes", "bake");
     if (o->has_spacing && o->has_counts)
         return usage_error("%s: give --spacing or --counts, not both", "bake");
+    if (o->points && (o->has_spacing || o->has_counts || o->has_bounds))
+        return usage_error("%s: --points replaces the grid; drop --spacing, --counts and --bounds", "bake");
     pb_log log = {log_to_stderr, (void *)&o->log};
     pb_scene_desc sd = {log, 0};
     pb_scene *s = NULL;
@@ -636,12 +645,16 @@ static int cmd_bake(const options *o)
     pb_gpu_scene *gs = NULL;
     pb_volume vol;
     memset(&vol, 0, sizeof vol);
+    pb_points pts;
+    memset(&pts, 0, sizeof pts);
     pb_error err;
     int rc = 1;
     double t0 = pb_now_ms_cli();
+    if (o->points && pb_points_read(o->points, &pts, &err) != PB_OK)
+        goto out;
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
         goto out;
-    if (s->triangle_count == 0 && !o->has_bounds) {
+    if (s->triangle_count == 0 && !o->has_bounds && !o->points) {
         snprintf(err.message, sizeof err.message, "%s: no triangles and no --bounds: nowhere to put probes", o->scene);
         goto out;
     }
@@ -674,6 +687,10 @@ static int cmd_bake(const options *o)
     } else {
         pb_probe_grid_fit(lo, hi, 2048, &d.grid); /* a room at roughly 0.3 m */
     }
+    if (o->points) {
+        d.points = &pts;
+        memset(&d.grid, 0, sizeof d.grid);
+    }
     d.rays_per_probe = o->has_rays ? o->rays : 256;
     d.target_error = o->target_error;
     d.passes = o->passes ? o->passes : (o->target_error > 0.f ? 64 : 4);
@@ -682,13 +699,18 @@ static int cmd_bake(const options *o)
     d.seed = o->has_seed ? o->seed : 1;
     d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");
     memcpy(d.sky, o->sky, sizeof d.sky);
-    uint64_t probes = (uint64_t)d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+    uint64_t probes = o->points ? pts.count : (uint64_t)d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+    char where[160];
+    if (o->points)
+        snprintf(where, sizeof where, "%u points from %.100s", pts.count, o->points);
+    else
+        snprintf(where, sizeof where, "%u x %u x %u = %llu probes, spacing %.3g m", d.grid.counts[0], d.grid.counts[1],
+                 d.grid.counts[2], (unsigned long long)probes, d.grid.spacing[0]);
     if (!o->log.quiet)
         fprintf(stderr,
-                "probebake: baking %s: %u x %u x %u = %llu probes, spacing %.3g m, %u rays x %s%u passes%s, %u bounces, "
+                "probebake: baking %s: %s, %u rays x %s%u passes%s, %u bounces, "
                 "sky (%g, %g, %g), octmap %u, direct %s, seed %u\n",
-                o->scene, d.grid.counts[0], d.grid.counts[1], d.grid.counts[2], (unsigned long long)probes,
-                d.grid.spacing[0], d.rays_per_probe, d.target_error > 0.f ? "up to " : "", d.passes,
+                o->scene, where, d.rays_per_probe, d.target_error > 0.f ? "up to " : "", d.passes,
                 d.target_error > 0.f ? " (until converged)" : "", d.bounces, d.sky[0], d.sky[1], d.sky[2],
                 d.octmap_res, d.exclude_direct ? "excluded" : "included", d.seed);
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
@@ -736,6 +758,7 @@ static int cmd_bake(const options *o)
     rc = 0;
 out:
     pb_volume_free(&vol);
+    pb_points_free(&pts);
     pb_gpu_scene_destroy(gs);
     pb_context_destroy(ctx);
     pb_bvh_destroy(bvh);
