@@ -234,8 +234,10 @@ static void kernels_match_cpu_reference(void)
                 for (int c = 0; c < 4; ++c)
                     rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
         }
+        pb_bake_emitters em;
+        CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK && em.count == 2); /* the ceiling panel */
         pb_bake_pass pass = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, 0, 0, 0, n, 1,
-                             {0.3f, 0.3f, 0.3f}, 0.f, 50.f};
+                             {0.3f, 0.3f, 0.3f}, 0.f, 50.f, &em};
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
               dz = s->bounds_max[2] - s->bounds_min[2];
         pass.max_distance = sqrtf(dx * dx + dy * dy + dz * dz);
@@ -261,6 +263,7 @@ static void kernels_match_cpu_reference(void)
                 depth_bad += fabsf(cpu - gpu) > 2e-3f * fmaxf(1.f, cpu); /* half precision */
             }
         }
+        pb_bake_emitters_free(&em);
         fprintf(stderr, "  %u probes: SH max difference %.2e (of %.2e), %u depth texels differ, %u flags differ\n", P,
                 worst_sh, scale, depth_bad, flag_diff);
         CHECK(scale > 0.f && worst_sh <= 1e-4f * scale);
@@ -303,6 +306,8 @@ static void multi_bounce_matches_cpu_reference(void)
         pb_sf_directions(128, dirs);
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
               dz = s->bounds_max[2] - s->bounds_min[2];
+        pb_bake_emitters em;
+        CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
         for (uint32_t pass = 0; pass < 8; ++pass) {
             for (uint32_t p = 0; p < P; ++p) {
                 float m[9];
@@ -312,13 +317,14 @@ static void multi_bounce_matches_cpu_reference(void)
                         rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
             }
             pb_bake_pass pp = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, pass, 0, 3, 4, 1,
-                               {0, 0, 0}, sqrtf(dx * dx + dy * dy + dz * dz), 50.f};
+                               {0, 0, 0}, sqrtf(dx * dx + dy * dy + dz * dz), 50.f, &em};
             pb_bake_trace_cpu(&pp, rays);
             pb_bake_sh_cpu(&pp, rays, red);
             for (uint32_t p = 0; p < P; ++p)
                 for (int k = 0; k < 27; ++k)
                     sum[27 * p + k] += red[40 * p + k] / 8.0;
         }
+        pb_bake_emitters_free(&em);
         double worst = 0;
         uint32_t compared = 0;
         for (uint32_t p = 0; p < P; ++p) {

@@ -2,6 +2,7 @@
  * addition theorem (which pins every normalisation constant), the uniform-sky
  * irradiance, octahedral round trips and border texels. CPU only. */
 #include "test_util.h"
+#include "bake/alias.h"
 
 /* n spherical-Fibonacci directions: a uniform quadrature of the sphere. */
 static float *fibonacci(uint32_t n)
@@ -188,6 +189,27 @@ static void border_texels_continue_across_the_fold(void)
     CHECKF(worst < 3e-3f, "seam jump %g rad", worst);
 }
 
+/* Alias-table sampling frequencies match the weights (zero weights are never
+ * drawn); 10^6 draws on a stratified u, so the error is tiny. */
+static void alias_table_samples_in_proportion(void)
+{
+    double w[7] = {1, 0, 5, 0.25, 10, 3, 0.75};
+    float prob[7];
+    uint32_t alias[7], hits[7] = {0};
+    CHECK(pb_alias_build(w, 7, prob, alias) == 1);
+    uint32_t n = 1000000;
+    for (uint32_t i = 0; i < n; ++i)
+        hits[pb_alias_sample(prob, alias, 7, ((float)i + 0.5f) / (float)n)]++;
+    double total = 20.0;
+    for (int i = 0; i < 7; ++i) {
+        double want = w[i] / total;
+        CHECKF(fabs(hits[i] / (double)n - want) < 2e-3, "slot %d: %g vs %g", i, hits[i] / (double)n, want);
+    }
+    CHECK(hits[1] == 0 && hits[3] > 0);
+    double zero[2] = {0, 0};
+    CHECK(pb_alias_build(zero, 2, prob, alias) == 0);
+}
+
 int main(void)
 {
     RUN(basis_is_orthonormal);
@@ -197,5 +219,6 @@ int main(void)
     RUN(point_light_projection);
     RUN(octahedral_round_trip);
     RUN(border_texels_continue_across_the_fold);
+    RUN(alias_table_samples_in_proportion);
     return test_summary();
 }

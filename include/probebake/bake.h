@@ -88,6 +88,21 @@ void pb_bake_probe_position(const pb_scene *scene, const pb_bake_desc *desc, uin
 pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc, pb_volume *out,
                   pb_error *err);
 
+/* Emissive triangles as next-event-estimation light sources: an alias table
+ * over their power (area x luminance of the emissive factor x strength), in
+ * scene triangle order, and per scene triangle the area density of a sampled
+ * point (probability / area; 0 for non-emitters). */
+typedef struct pb_bake_emitters {
+    uint32_t count;
+    uint32_t *tri;                /* scene triangle of each emitter */
+    float *prob;                  /* alias table */
+    uint32_t *alias;
+    float *pdf_area;              /* per scene triangle */
+} pb_bake_emitters;
+
+pb_result pb_bake_emitters_build(const pb_scene *scene, pb_bake_emitters *out, pb_error *err);
+void pb_bake_emitters_free(pb_bake_emitters *e);
+
 /* --- CPU references of the bake kernels (tests) --- */
 
 /* Everything a bake kernel reads for one pass, on the host. */
@@ -101,6 +116,7 @@ typedef struct pb_bake_pass {
     uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, octmap_res, direct;
     float sky[3];
     float max_distance, lobe_power;
+    const pb_bake_emitters *emitters; /* NULL or count 0: no next-event estimation of emitters */
 } pb_bake_pass;
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance). */

@@ -29,6 +29,52 @@ vec3 cosine_direction(vec3 n, float u1, float u2)
     return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u1)));
 }
 
+// Next-event estimation of one emissive triangle, picked by power (alias
+// table), a uniform point on it, a shadow ray, and the MIS weight against
+// cosine-weighted bounce sampling (power heuristic). Returns emitted radiance
+// x cos / (pi pdf) x weight: the caller multiplies by throughput x albedo.
+// (A function of its own also keeps glslang's `precise` analysis of main()
+// small: inlined here, it ran out of memory.)
+vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
+{
+    SceneRefs s = P.scene;
+    float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
+    EmitterBuf table = EmitterBuf(P.emitters);
+    float xe = u0 * float(P.emitter_count);
+    uint ei = min(uint(xe), P.emitter_count - 1u);
+    Emitter e = table.e[ei];
+    uint etri = xe - float(ei) < e.prob ? e.tri : table.e[e.alias].tri;
+    Tri et = load_tri(s.tris, etri);
+    float su = sqrt(u1);
+    float b1 = su * (1.0 - u2), b2 = su * u2;
+    vec3 ee1 = et.v1 - et.v0, ee2 = et.v2 - et.v0;
+    vec3 y = et.v0 + b1 * ee1 + b2 * ee2;
+    vec3 to = y - x;
+    float d2 = dot(to, to);
+    float dist = sqrt(d2);
+    vec3 w = to / dist;
+    float cos_x = dot(ng, w);
+    ShadeMaterial em = ShadeMaterialBuf(P.materials).m[et.flags & ~PB_FLAG_ALPHA_MASK];
+    float cos_e = -dot(normalize(cross(ee1, ee2)), w);
+    if (em.tex.z != 0)
+        cos_e = abs(cos_e);
+    if (!(cos_x > 0.0 && cos_e > 0.0 && d2 > 0.0))
+        return vec3(0.0);
+    TraceResult shadow = trace_ray(s, x, w, 0.0, dist * 0.9999, true);
+    if (shadow.tri != PB_NO_HIT)
+        return vec3(0.0);
+    float pl = FloatBuf(P.emit_pdf).v[etri] * d2 / cos_e;
+    float pb = cos_x / PB_PI;
+    float wl = pl * pl / (pl * pl + pb * pb);
+    FloatBuf euv = FloatBuf(s.tri_uv);
+    uint eb = 6u * etri;
+    float ew0 = 1.0 - b1 - b2;
+    vec2 yuv = ew0 * vec2(euv.v[eb], euv.v[eb + 1u]) + b1 * vec2(euv.v[eb + 2u], euv.v[eb + 3u]) +
+               b2 * vec2(euv.v[eb + 4u], euv.v[eb + 5u]);
+    vec3 Le = em.emissive_metallic.rgb * texture_rgb(s, em.tex.y, yuv);
+    return Le * (cos_x / (PB_PI * pl) * wl);
+}
+
 void main()
 {
     BakeParams P = BakeParamsBuf(pc.params).p;
@@ -45,6 +91,8 @@ void main()
 
     vec3 L = vec3(0.0), throughput = vec3(1.0);
     float first_distance = P.max_distance;
+    float bsdf_pdf = 0.0; // of the direction that led to the current hit (0: a probe ray, not MIS-weighted)
+    FloatBuf emit_pdf = FloatBuf(P.emit_pdf);
     vec3 o = origin, dir = d;
     for (uint bounce = 0u;; ++bounce) {
         TraceResult tr = trace_ray(s, o, dir, 0.0, PB_INF, false);
@@ -70,14 +118,23 @@ void main()
         float w0 = 1.0 - tr.u - tr.v;
         vec2 uv = w0 * vec2(uvs.v[b], uvs.v[b + 1u]) + tr.u * vec2(uvs.v[b + 2u], uvs.v[b + 3u]) +
                   tr.v * vec2(uvs.v[b + 4u], uvs.v[b + 5u]);
-        if (bounce > 0u || P.direct != 0u)
-            L += throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv);
+        if ((bounce > 0u || P.direct != 0u) && m.emissive_metallic.rgb != vec3(0.0)) {
+            float w = 1.0;
+            float pa = P.emitter_count > 0u ? emit_pdf.v[tr.tri] : 0.0;
+            if (bsdf_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
+                float pl = pa * tr.t * tr.t / abs(dot(ng, dir));
+                w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pl * pl);
+            }
+            L += throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w;
+        }
         vec3 albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * (1.0 - m.emissive_metallic.w);
         vec3 x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);
         vec3 E = vec3(0.0);
         for (uint k = 0u; k < P.light_count; ++k)
             E += light_irradiance(s, lights.l[k], x, ng, true);
         L += throughput * albedo * (E / PB_PI);
+        if (P.emitter_count > 0u && albedo != vec3(0.0))
+            L += throughput * albedo * emitter_nee(P, x, ng, state);
         if (bounce >= P.bounces)
             break;
         if (bounce >= 1u) { // Russian roulette from the second reflection on
@@ -91,6 +148,7 @@ void main()
             break;
         float u1 = rng_next(state), u2 = rng_next(state);
         dir = cosine_direction(ng, u1, u2);
+        bsdf_pdf = max(0.0, dot(ng, dir)) / PB_PI;
         o = x;
     }
     Vec4RW(P.rays).v[i] = vec4(L, first_distance);

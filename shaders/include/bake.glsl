@@ -5,10 +5,11 @@
 // texel, sRGB decoded) x (1 - metallic); emission = emissive factor x
 // strength x emissive texture; KHR_lights_punctual lights (point, spot with
 // the glTF cone falloff, directional) with shadow rays and the range window
-// glTF recommends; a uniform sky. Back faces of single-sided materials are
-// black (the ray is inside geometry). Not yet: emissive-triangle and sky
-// next-event estimation (found by bounce rays only), environment maps,
-// stochastic blending.
+// glTF recommends; a uniform sky; emissive triangles sampled at every
+// surface hit by power (alias table) and combined with bounce hits by
+// multiple importance sampling (power heuristic). Back faces of single-sided
+// materials are black (the ray is inside geometry). Not yet: sky next-event
+// estimation, environment maps, stochastic blending. docs/bake.md.
 #ifndef PB_BAKE_GLSL
 #define PB_BAKE_GLSL
 
@@ -50,6 +51,8 @@ struct BakeParams {
     uint64_t rays;          // out/in: vec4 per ray: radiance rgb, w = distance (negative: back face)
     uint64_t reduced;       // out: per probe, see bake_sh.comp and bake_depth.comp
     uint64_t probe_list;    // 0: probes first_probe.. in order; else uint slots, read from first_probe on
+    uint64_t emitters;      // Emitter[]: the alias table over emissive triangles by power
+    uint64_t emit_pdf;      // float per leaf-ordered triangle: area density when sampled (p_i / area), 0 if not an emitter
     uint64_t pad0;
     vec4 sky;               // rgb radiance of the uniform sky
     uint first_probe;
@@ -64,7 +67,18 @@ struct BakeParams {
     float lobe_power;
     uint direct;            // 1: light straight from lights and sky included
     float lobe_cutoff;      // depth filter skips rays with cos below this: weight < cutoff^power
+    uint emitter_count;
+    uint pad1, pad2, pad3;
 };
+
+struct Emitter {
+    uint tri;               // leaf-ordered triangle
+    float prob;             // alias table: keep this slot with this probability
+    uint alias;             // else take this one
+    float pad;
+};
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer EmitterBuf { Emitter e[]; };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BakeParamsBuf { BakeParams p; };
 
@@ -82,8 +96,11 @@ uint probe_id(BakeParams P, uint slot)
 }
 
 // Ray direction r of a probe in a pass: the probe's rotation rows times the
-// unrotated direction, summed in a fixed order (not dot(), whose order a
-// driver may choose) so it matches the C reference bit for bit.
+// unrotated direction, summed in a fixed order. Not `precise`: glslang 12's
+// NoContraction propagation from here through the traversal's precise code
+// exhausts memory (24 GB) on bake_trace.comp, so a driver may fuse these
+// multiply-adds and directions can differ from the C reference by an ulp; the
+// bake tests compare with tolerances for that.
 vec3 probe_ray_direction(BakeParams P, uint probe, uint ray)
 {
     Vec4Buf rot = Vec4Buf(P.rotations);
@@ -91,11 +108,7 @@ vec3 probe_ray_direction(BakeParams P, uint probe, uint ray)
     vec3 d;
     for (uint k = 0u; k < 3u; ++k) {
         vec3 row = rot.v[3u * probe + k].xyz;
-        precise float a = row.x * sf.x;
-        precise float b = row.y * sf.y;
-        precise float c = row.z * sf.z;
-        precise float sum = (a + b) + c;
-        d[k] = sum;
+        d[k] = (row.x * sf.x + row.y * sf.y) + row.z * sf.z;
     }
     return d;
 }

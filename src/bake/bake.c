@@ -26,15 +26,15 @@
 #include <string.h>
 
 typedef struct bake_buffers {
-    pb_buffer params, materials, lights, probes, rotations, directions, rays, reduced, list;
+    pb_buffer params, materials, lights, probes, rotations, directions, rays, reduced, list, emitters, emit_pdf;
     pb_pipeline trace, sh, depth;
 } bake_buffers;
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[9] = {&b->params, &b->materials, &b->lights, &b->probes, &b->rotations, &b->directions,
-                          &b->rays, &b->reduced, &b->list};
-    for (int i = 0; i < 9; ++i)
+    pb_buffer *bufs[11] = {&b->params, &b->materials, &b->lights, &b->probes, &b->rotations, &b->directions,
+                           &b->rays, &b->reduced, &b->list, &b->emitters, &b->emit_pdf};
+    for (int i = 0; i < 11; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_pipeline_destroy(ctx, &b->trace);
     pb_pipeline_destroy(ctx, &b->sh);
@@ -115,6 +115,7 @@ typedef struct bake_run {
     double *sh_sum, *depth_sum, *backfaces, *hits;
     double t_trace, t_sh, t_depth; /* GPU timestamps, ms */
     float *near;                   /* 8 per probe: nearest back t + dir, nearest front t + dir */
+    uint32_t emitter_count;
     uint32_t *passes_done;         /* per probe */
     double *dc_sum, *dc_sq;        /* per probe: luminance of each pass's DC coefficient, for the standard error */
 } bake_run;
@@ -142,6 +143,8 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         prm.rotations = B->rotations.address, prm.directions = B->directions.address, prm.rays = B->rays.address;
         prm.reduced = B->reduced.address;
         prm.probe_list = list ? B->list.address : 0;
+        prm.emitters = B->emitters.address, prm.emit_pdf = B->emit_pdf.address;
+        prm.emitter_count = run->emitter_count;
         memcpy(prm.sky, d->sky, 12);
         prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
         prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces, prm.light_count = run->scene->light_count;
@@ -357,6 +360,8 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     bake_buffers B;
     memset(&B, 0, sizeof B);
     float *offsets = NULL, *near = NULL;
+    pb_bake_emitters emitters;
+    memset(&emitters, 0, sizeof emitters);
     uint32_t *passes_done = NULL, *active = NULL, *converged_at = calloc(P, sizeof(uint32_t));
     double *dc_sum = NULL, *dc_sq = NULL;
     if (!probes || !rotations || !directions || !lights || !mats || !sh_sum || !depth_sum || !backfaces || !hits ||
@@ -407,8 +412,33 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     active = malloc(P * sizeof *active);
     if (r == PB_OK && (!passes_done || !dc_sum || !dc_sq || !active))
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
+    /* emissive triangles for next-event estimation, in the kernels' leaf order */
+    if (r == PB_OK)
+        r = pb_bake_emitters_build(scene, &emitters, err);
+    if (r == PB_OK) {
+        uint32_t T = scene->triangle_count ? scene->triangle_count : 1;
+        uint32_t *leaf_of = malloc(T * sizeof *leaf_of);
+        float *pdf_leaf = calloc(T, sizeof *pdf_leaf);
+        gpu_emitter *ge = malloc((emitters.count ? emitters.count : 1) * sizeof *ge);
+        if (!leaf_of || !pdf_leaf || !ge) {
+            r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for emitters");
+        } else {
+            for (uint32_t k = 0; k < scene->triangle_count; ++k)
+                leaf_of[gs->tri_order[k]] = k;
+            for (uint32_t t = 0; t < scene->triangle_count; ++t)
+                pdf_leaf[leaf_of[t]] = emitters.pdf_area[t];
+            for (uint32_t i = 0; i < emitters.count; ++i)
+                ge[i] = (gpu_emitter){leaf_of[emitters.tri[i]], emitters.prob[i], emitters.alias[i], 0.f};
+            r = make_buffer(ctx, &B.emitters, (emitters.count ? emitters.count : 1) * sizeof *ge, PB_MEMORY_DEVICE,
+                            "emitter table", ge, err);
+            if (r == PB_OK)
+                r = make_buffer(ctx, &B.emit_pdf, (uint64_t)T * 4, PB_MEMORY_DEVICE, "emitter densities", pdf_leaf,
+                                err);
+        }
+        free(leaf_of), free(pdf_leaf), free(ge);
+    }
     bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
-                    hits, 0, 0, 0, NULL, passes_done, dc_sum, dc_sq};
+                    hits, 0, 0, 0, NULL, emitters.count, passes_done, dc_sum, dc_sq};
     /* relocation: probes in geometry move out, probes against a wall move
      * away; iterations use their own pass numbers (RNG streams), so the bake
      * passes that follow are the same whatever relocation did */
@@ -528,6 +558,7 @@ done:
     free(probes), free(rotations), free(directions), free(lights), free(mats), free(sh_sum), free(depth_sum);
     free(backfaces), free(hits), free(reduced), free(offsets), free(near);
     free(passes_done), free(active), free(converged_at), free(dc_sum), free(dc_sq);
+    pb_bake_emitters_free(&emitters);
     if (r != PB_OK)
         pb_volume_free(out);
     return r;

@@ -4,6 +4,7 @@
  * sin/cos of sampling) may differ in the last bits between host and device,
  * so paths agree exactly only until their first random bounce: tests compare
  * bounce-0 rays one by one and multi-bounce results statistically. */
+#include "bake/alias.h"
 #include "bake/bake_data.h"
 #include "bvh/alpha.h"
 #include "common/common.h"
@@ -141,6 +142,45 @@ typedef struct trace_ctx {
     float *rays;
 } trace_ctx;
 
+/* Next-event estimation of one emissive triangle (bake_trace.comp). */
+static void emitter_nee(const trace_ctx *c, const pb_bake_emitters *em, const float x[3], const float ng[3],
+                        const float albedo[3], const float thr[3], uint32_t *state, float L[3])
+{
+    const pb_bake_pass *p = c->p;
+    const pb_scene *s = p->scene;
+    float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
+    uint32_t etri = em->tri[pb_alias_sample(em->prob, em->alias, em->count, u0)];
+    const float *v0 = s->positions + 9 * (size_t)etri, *v1 = v0 + 3, *v2 = v0 + 6;
+    float su = sqrtf(u1), b1 = su * (1.f - u2), b2 = su * u2;
+    float e1[3], e2[3], y[3], to[3];
+    for (int k = 0; k < 3; ++k) {
+        e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
+        y[k] = v0[k] + b1 * e1[k] + b2 * e2[k];
+        to[k] = y[k] - x[k];
+    }
+    float d2 = to[0] * to[0] + to[1] * to[1] + to[2] * to[2];
+    float dist = sqrtf(d2), w[3] = {to[0] / dist, to[1] / dist, to[2] / dist};
+    float cos_x = ng[0] * w[0] + ng[1] * w[1] + ng[2] * w[2];
+    float ne[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    float nl = sqrtf(ne[0] * ne[0] + ne[1] * ne[1] + ne[2] * ne[2]);
+    const gpu_shade_material *m = &c->materials[s->material[etri]];
+    float cos_e = -(ne[0] * w[0] + ne[1] * w[1] + ne[2] * w[2]) / nl;
+    if (m->tex[2] != 0)
+        cos_e = fabsf(cos_e);
+    if (!(cos_x > 0.f && cos_e > 0.f && d2 > 0.f))
+        return;
+    if (trace(p, x, w, dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
+        return;
+    float pl = em->pdf_area[etri] * d2 / cos_e, pb = cos_x / PI_F;
+    float wl = pl * pl / (pl * pl + pb * pb);
+    const float *uv = s->texcoords + 6 * (size_t)etri;
+    float w0 = 1.f - b1 - b2, tu = w0 * uv[0] + b1 * uv[2] + b2 * uv[4], tv = w0 * uv[1] + b1 * uv[3] + b2 * uv[5];
+    float et[3];
+    texture_rgb(s, m->tex[1], tu, tv, et);
+    for (int k = 0; k < 3; ++k)
+        L[k] += thr[k] * albedo[k] * (m->emissive_metallic[k] * et[k]) * (cos_x / (PI_F * pl) * wl);
+}
+
 static void trace_range(void *user, uint64_t begin, uint64_t end)
 {
     const trace_ctx *c = user;
@@ -152,6 +192,8 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
         probe_ray_direction(p, probe, ray, d);
         uint32_t state = rng_seed(p->seed, pb_probe_record_id(p->probes + 4 * (size_t)probe), p->pass_index, ray);
         float L[3] = {0, 0, 0}, thr[3] = {1, 1, 1}, first = p->max_distance;
+        float bsdf_pdf = 0.f;
+        const pb_bake_emitters *em = p->emitters && p->emitters->count ? p->emitters : NULL;
         float o[3] = {p->probes[4 * (size_t)probe], p->probes[4 * (size_t)probe + 1], p->probes[4 * (size_t)probe + 2]};
         float dir[3] = {d[0], d[1], d[2]};
         for (uint32_t bounce = 0;; ++bounce) {
@@ -187,11 +229,18 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
             const float *uv = s->texcoords + 6 * (size_t)h.tri;
             float w0 = 1.f - h.u - h.v;
             float tu = w0 * uv[0] + h.u * uv[2] + h.v * uv[4], tv = w0 * uv[1] + h.u * uv[3] + h.v * uv[5];
-            float em[3], base[3];
-            if (bounce > 0 || p->direct) {
-                texture_rgb(s, m->tex[1], tu, tv, em);
+            float base[3];
+            if ((bounce > 0 || p->direct) &&
+                (m->emissive_metallic[0] != 0.f || m->emissive_metallic[1] != 0.f || m->emissive_metallic[2] != 0.f)) {
+                float w = 1.f, pa = em ? em->pdf_area[h.tri] : 0.f;
+                if (bsdf_pdf > 0.f && pa > 0.f) {
+                    float pl = pa * h.t * h.t / fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]);
+                    w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pl * pl);
+                }
+                float et[3];
+                texture_rgb(s, m->tex[1], tu, tv, et);
                 for (int k = 0; k < 3; ++k)
-                    L[k] += thr[k] * m->emissive_metallic[k] * em[k];
+                    L[k] += thr[k] * m->emissive_metallic[k] * et[k] * w;
             }
             texture_rgb(s, m->tex[0], tu, tv, base);
             float albedo[3], xp[3], x[3], E[3] = {0, 0, 0};
@@ -208,6 +257,8 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
             }
             for (int k = 0; k < 3; ++k)
                 L[k] += thr[k] * albedo[k] * (E[k] / PI_F);
+            if (em && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
+                emitter_nee(c, em, x, ng, albedo, thr, &state, L);
             if (bounce >= p->bounces)
                 break;
             if (bounce >= 1) {
@@ -223,6 +274,7 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
                 break;
             float u1 = rng_next(&state), u2 = rng_next(&state);
             cosine_direction(ng, u1, u2, dir);
+            bsdf_pdf = fmaxf(0.f, ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]) / PI_F;
             memcpy(o, x, sizeof x);
         }
         float *out = c->rays + 4 * i;

@@ -1,7 +1,11 @@
 #include "bake/bake_data.h"
+#include "bake/alias.h"
+#include "common/common.h"
+#include "probebake/bake.h"
 #include "probebake/trace.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 void pb_bake_lights(const pb_scene *scene, gpu_light *out)
@@ -60,4 +64,61 @@ void pb_bake_rotations(uint32_t seed, uint32_t pass, const float *probes4, uint3
 float pb_depth_lobe_cutoff(float power)
 {
     return powf(1e-4f, 1.f / power);
+}
+
+pb_result pb_bake_emitters_build(const pb_scene *s, pb_bake_emitters *out, pb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    uint32_t n = 0;
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        const float *e = s->materials[s->material[t]].emissive;
+        n += e[0] > 0.f || e[1] > 0.f || e[2] > 0.f;
+    }
+    out->pdf_area = calloc(s->triangle_count ? s->triangle_count : 1, sizeof(float));
+    if (!out->pdf_area)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for emitters");
+    if (n == 0)
+        return PB_OK;
+    double *power = malloc((size_t)n * sizeof *power), *area = malloc((size_t)n * sizeof *area);
+    out->tri = malloc((size_t)n * sizeof *out->tri);
+    out->prob = malloc((size_t)n * sizeof *out->prob);
+    out->alias = malloc((size_t)n * sizeof *out->alias);
+    if (!power || !area || !out->tri || !out->prob || !out->alias) {
+        free(power), free(area);
+        pb_bake_emitters_free(out);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u emitters", n);
+    }
+    double total = 0;
+    uint32_t k = 0;
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        const pb_material *m = &s->materials[s->material[t]];
+        const float *e = m->emissive;
+        if (!(e[0] > 0.f || e[1] > 0.f || e[2] > 0.f))
+            continue;
+        const float *p = s->positions + 9 * (size_t)t;
+        double e1[3], e2[3];
+        for (int c = 0; c < 3; ++c)
+            e1[c] = (double)p[3 + c] - p[c], e2[c] = (double)p[6 + c] - p[c];
+        double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2], cz = e1[0] * e2[1] - e1[1] * e2[0];
+        area[k] = 0.5 * sqrt(cx * cx + cy * cy + cz * cz);
+        power[k] = area[k] * (0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2]) * (m->double_sided ? 2.0 : 1.0);
+        total += power[k];
+        out->tri[k++] = t;
+    }
+    if (!pb_alias_build(power, n, out->prob, out->alias)) {
+        free(power), free(area);
+        pb_bake_emitters_free(out);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the emitter table");
+    }
+    for (uint32_t i = 0; i < n; ++i)
+        out->pdf_area[out->tri[i]] = area[i] > 0 ? (float)(power[i] / total / area[i]) : 0.f;
+    out->count = n;
+    free(power), free(area);
+    return PB_OK;
+}
+
+void pb_bake_emitters_free(pb_bake_emitters *e)
+{
+    free(e->tri), free(e->prob), free(e->alias), free(e->pdf_area);
+    memset(e, 0, sizeof *e);
 }

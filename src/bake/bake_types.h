@@ -21,15 +21,24 @@ _Static_assert(sizeof(gpu_light) == 64, "Light layout");
 
 typedef struct gpu_bake_params {
     gpu_scene_refs scene;
-    uint64_t materials, lights, probes, rotations, directions, rays, reduced, probe_list, pad0;
+    uint64_t materials, lights, probes, rotations, directions, rays, reduced, probe_list, emitters, emit_pdf, pad0;
     float sky[4];
     uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, light_count, octmap_res;
     float max_distance, lobe_power;
     uint32_t direct;
     float lobe_cutoff;
+    uint32_t emitter_count, pad1, pad2, pad3;
 } gpu_bake_params;
-_Static_assert(offsetof(gpu_bake_params, sky) == 128, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 192, "BakeParams layout");
+_Static_assert(offsetof(gpu_bake_params, sky) == 144, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 224, "BakeParams layout");
+
+typedef struct gpu_emitter {
+    uint32_t tri;
+    float prob;
+    uint32_t alias;
+    float pad;
+} gpu_emitter;
+_Static_assert(sizeof(gpu_emitter) == 16, "Emitter layout");
 
 typedef struct bake_push {
     uint64_t params;
