@@ -198,6 +198,24 @@ static void closed_emissive_box(void)
     pb_scene_destroy(s);
 }
 
+/* Host inputs of one pass for the CPU reference, built as pb_bake builds
+ * them: probe records (position, id), rotations, the direction set. */
+static void reference_inputs(const pb_scene *s, const pb_bake_desc *d, uint32_t P, uint32_t rpp, uint32_t pass,
+                             float *probes, float *rot, float *dirs)
+{
+    for (uint32_t p = 0; p < P; ++p) {
+        uint32_t id;
+        pb_bake_probe_position(s, d, p, probes + 4 * p, &id);
+        memcpy(&probes[4 * p + 3], &id, 4);
+        float m[9];
+        pb_random_rotation(d->seed, id, pass, m);
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c)
+                rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
+    }
+    pb_sf_directions(rpp, dirs);
+}
+
 /* The kernels against bake_cpu.c on the demo scene, direct light only
  * (bounces 0: no random directions, so ray by ray equality to rounding). */
 static void kernels_match_cpu_reference(void)
@@ -221,19 +239,7 @@ static void kernels_match_cpu_reference(void)
         float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
         float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
         float *red = calloc((size_t)P * (40 + 2 * n * n), sizeof(float));
-        for (uint32_t p = 0; p < P; ++p) { /* as bake.c places them */
-            uint32_t id;
-            pb_bake_probe_position(s, &d, p, probes + 4 * p, &id);
-            memcpy(&probes[4 * p + 3], &id, 4);
-        }
-        pb_sf_directions(128, dirs);
-        for (uint32_t p = 0; p < P; ++p) {
-            float m[9];
-            pb_random_rotation(0, p, 0, m);
-            for (int r = 0; r < 3; ++r)
-                for (int c = 0; c < 4; ++c)
-                    rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
-        }
+        reference_inputs(s, &d, P, 128, 0, probes, rot, dirs);
         pb_bake_emitters em;
         CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK && em.count == 2); /* the ceiling panel */
         pb_bake_pass pass = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, 0, 0, 0, n, 1,
@@ -298,24 +304,12 @@ static void multi_bounce_matches_cpu_reference(void)
         float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
         float *red = calloc((size_t)P * (40 + 32), sizeof(float));
         double *sum = calloc((size_t)P * 27, sizeof(double));
-        for (uint32_t p = 0; p < P; ++p) { /* as bake.c places them */
-            uint32_t id;
-            pb_bake_probe_position(s, &d, p, probes + 4 * p, &id);
-            memcpy(&probes[4 * p + 3], &id, 4);
-        }
-        pb_sf_directions(128, dirs);
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
               dz = s->bounds_max[2] - s->bounds_min[2];
         pb_bake_emitters em;
         CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
         for (uint32_t pass = 0; pass < 8; ++pass) {
-            for (uint32_t p = 0; p < P; ++p) {
-                float m[9];
-                pb_random_rotation(0, p, pass, m);
-                for (int r = 0; r < 3; ++r)
-                    for (int c = 0; c < 4; ++c)
-                        rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
-            }
+            reference_inputs(s, &d, P, 128, pass, probes, rot, dirs);
             pb_bake_pass pp = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, pass, 0, 3, 4, 1,
                                {0, 0, 0}, sqrtf(dx * dx + dy * dy + dz * dz), 50.f, &em};
             pb_bake_trace_cpu(&pp, rays);
