@@ -41,6 +41,14 @@ static void release(baked *b)
     pb_bvh_destroy(b->bvh);
 }
 
+static pb_scene *load_demo(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    return s;
+}
+
 static pb_probe_grid small_grid(float lo, float hi, uint32_t n)
 {
     pb_probe_grid g;
@@ -220,9 +228,7 @@ static void reference_inputs(const pb_scene *s, const pb_bake_desc *d, uint32_t 
  * (bounces 0: no random directions, so ray by ray equality to rounding). */
 static void kernels_match_cpu_reference(void)
 {
-    pb_scene *s = NULL;
-    pb_error err;
-    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    pb_scene *s = load_demo();
     if (!s)
         return;
     pb_bake_desc d = {0};
@@ -285,9 +291,7 @@ static void kernels_match_cpu_reference(void)
  * the irradiance of each probe must agree within a small Monte Carlo margin. */
 static void multi_bounce_matches_cpu_reference(void)
 {
-    pb_scene *s = NULL;
-    pb_error err;
-    CHECK(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK);
+    pb_scene *s = load_demo();
     if (!s)
         return;
     pb_bake_desc d = {0};
@@ -463,9 +467,7 @@ static void relocation_and_dilation(void)
  * numbers, same relocation. */
 static void points_subset_bakes_like_the_grid(void)
 {
-    pb_scene *s = NULL;
-    pb_error err;
-    CHECK(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK);
+    pb_scene *s = load_demo();
     if (!s)
         return;
     pb_bake_desc d = {0};

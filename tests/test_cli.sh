@@ -77,6 +77,16 @@ head -c 700 "$tmp/v.probes" >"$tmp/cut.probes"
 expect inspect-truncated 1 "error: $tmp/cut.probes: file is 700 bytes" -- "$pb" inspect "$tmp/cut.probes"
 expect inspect-not-volume 1 "error: $demo: not a probebake volume" -- "$pb" inspect "$demo"
 
+# points files: parsed before any device work
+printf '{"points": [[0, 1, 0], [1, 2]]}' >"$tmp/bad1.json"
+expect points-short-vector 1 "error: $tmp/bad1.json: expected ','" -- "$pb" bake "$demo" --points "$tmp/bad1.json" -o "$tmp/x.probes"
+printf '{"points": [{"id": 3, "position": [0,1,0]}, {"id": 3, "position": [1,1,0]}]}' >"$tmp/bad2.json"
+expect points-duplicate-id 1 "two points share id 3" -- "$pb" bake "$demo" --points "$tmp/bad2.json" -o "$tmp/x.probes"
+printf '{"points": []}' >"$tmp/bad3.json"
+expect points-empty 1 "$tmp/bad3.json: no points" -- "$pb" bake "$demo" --points "$tmp/bad3.json" -o "$tmp/x.probes"
+printf '{"pointz": []}' >"$tmp/bad4.json"
+expect points-unknown-key 1 'unknown key "pointz"' -- "$pb" bake "$demo" --points "$tmp/bad4.json" -o "$tmp/x.probes"
+
 # no Vulkan driver at all: one clear line, exit 1, nothing else
 expect no-driver-devices 1 'error: no Vulkan 1.2 driver found .*mesa-vulkan-drivers' -- \
     env VK_DRIVER_FILES=/nonexistent.json VK_ICD_FILENAMES=/nonexistent.json "$pb" devices
@@ -98,6 +108,10 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     same=$(cmp -l "$tmp/a.probes" "$tmp/b.probes" | awk '$1 < 185 || $1 > 248' | wc -l)
     differ=$(cmp -l "$tmp/a.probes" "$tmp/c.probes" | awk '$1 < 185 || $1 > 248' | wc -l)
     expect bake-same-seed-same-bytes 0 '^0 [1-9]' -- echo "$same $differ"
+    expect bake-zero-bounces 0 ', 0 bounces,' -- \
+        "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --bounces 0 -o "$tmp/z.probes"
+    expect bake-bounces-range 2 "--bounces '65' is not an integer in \[0, 64\]" -- \
+        "$pb" bake "$demo" --bounces 65 -o "$tmp/x.probes"
     expect bake-bad-spacing 2 "--spacing '-1' is not a positive length" -- "$pb" bake "$demo" --spacing -1 -o "$tmp/x.probes"
     expect bake-no-output 2 'needs -o OUT.probes' -- "$pb" bake "$demo"
     expect bake-both-grids 2 'give --spacing or --counts, not both' -- \
@@ -110,14 +124,6 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
         "$pb" bake "$demo" --points "$tmp/p.json" --rays 32 --passes 1 --octmap-res 4 -o "$tmp/p.probes" --validation
     expect bake-points-inspect 0 '"index": 1, "position": \[1, 1, -1\]' -- "$pb" inspect "$tmp/p.probes" --json --probe 1
     expect bake-points-grid-false 0 '"grid": false' -- "$pb" inspect "$tmp/p.probes" --json
-    printf '{"points": [[0, 1, 0], [1, 2]]}' >"$tmp/bad1.json"
-    expect points-short-vector 1 "error: $tmp/bad1.json: expected ','" -- "$pb" bake "$demo" --points "$tmp/bad1.json" -o "$tmp/x.probes"
-    printf '{"points": [{"id": 3, "position": [0,1,0]}, {"id": 3, "position": [1,1,0]}]}' >"$tmp/bad2.json"
-    expect points-duplicate-id 1 "two points share id 3" -- "$pb" bake "$demo" --points "$tmp/bad2.json" -o "$tmp/x.probes"
-    printf '{"points": []}' >"$tmp/bad3.json"
-    expect points-empty 1 "$tmp/bad3.json: no points" -- "$pb" bake "$demo" --points "$tmp/bad3.json" -o "$tmp/x.probes"
-    printf '{"pointz": []}' >"$tmp/bad4.json"
-    expect points-unknown-key 1 'unknown key "pointz"' -- "$pb" bake "$demo" --points "$tmp/bad4.json" -o "$tmp/x.probes"
     expect points-with-grid 2 '--points replaces the grid' -- "$pb" bake "$demo" --points "$tmp/p.json" --spacing 1 -o "$tmp/x.probes"
     expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
         "$pb" trace "$demo" --device no-such-gpu

@@ -96,7 +96,7 @@ typedef struct options {
     const char *points;
     float spacing, sky[3], bounds[6], target_error;
     uint32_t counts[3], passes, bounces, octmap_res;
-    int has_spacing, has_counts, has_bounds, has_rays, has_seed;
+    int has_spacing, has_counts, has_bounds, has_rays, has_seed, has_bounces;
     int json, validation, verify, has_probe;
     uint32_t probes, rays, seed, probe;
     cli_log log;
@@ -218,13 +218,12 @@ static int parse(int argc, char **argv, options *o)
             ++i;
         } else if (!strcmp(a, "--passes") || !strcmp(a, "--bounces") || !strcmp(a, "--octmap-res")) {
             uint32_t *dst = !strcmp(a, "--passes") ? &o->passes : !strcmp(a, "--bounces") ? &o->bounces : &o->octmap_res;
-            uint32_t lo = dst == &o->bounces ? 0 : 1, hi = dst == &o->passes ? 1000000 : (dst == &o->bounces ? 64 : 64);
+            uint32_t lo = dst == &o->bounces ? 0 : 1, hi = dst == &o->passes ? 1000000 : 64;
             if (!next || !parse_u32(next, lo, hi, dst)) {
                 fprintf(stderr, "probebake: error: %s '%s' is not an integer in [%u, %u]\n", a, next ? next : "", lo, hi);
                 return 2;
             }
-            if (dst == &o->bounces)
-                o->bounces += 1000; /* marks "given"; 0 is a valid bounce count */
+            o->has_bounces |= dst == &o->bounces; /* 0 is a valid bounce count */
             ++i;
         } else if (!strcmp(a, "--device")) {
             if (!next)
@@ -694,7 +693,7 @@ static int cmd_bake(const options *o)
     d.rays_per_probe = o->has_rays ? o->rays : 256;
     d.target_error = o->target_error;
     d.passes = o->passes ? o->passes : (o->target_error > 0.f ? 64 : 4);
-    d.bounces = o->bounces >= 1000 ? o->bounces - 1000 : 2;
+    d.bounces = o->has_bounces ? o->bounces : 2;
     d.octmap_res = o->octmap_res ? o->octmap_res : 16;
     d.seed = o->has_seed ? o->seed : 1;
     d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");

@@ -76,10 +76,84 @@ static int key(cursor *c, char *buf, size_t size)
     return expect(c, '"') && expect(c, ':');
 }
 
+/* After a member or element: 1 when a ',' announces another, 0 when the
+ * container ends with `close` (or on an error, which sets c->failed). */
+static int more(cursor *c, char close)
+{
+    ws(c);
+    if (*c->s == ',') {
+        c->s++;
+        return 1;
+    }
+    expect(c, close);
+    return 0;
+}
+
 static int vec3(cursor *c, double v[3])
 {
     return expect(c, '[') && number(c, &v[0]) && expect(c, ',') && number(c, &v[1]) && expect(c, ',') &&
            number(c, &v[2]) && expect(c, ']');
+}
+
+/* One element of "points": [x, y, z] or {"id": i, "position": [x, y, z]},
+ * appended to out (growing it); its id defaults to its index. 0 on error. */
+static int read_point(cursor *c, pb_points *out, uint32_t *cap)
+{
+    if (out->count == *cap) {
+        *cap = *cap ? 2 * *cap : 64;
+        double *pp = realloc(out->positions, (size_t)*cap * 3 * sizeof(double));
+        uint32_t *ii = pp ? realloc(out->ids, (size_t)*cap * sizeof(uint32_t)) : NULL;
+        if (pp)
+            out->positions = pp;
+        if (ii)
+            out->ids = ii;
+        if (!pp || !ii) {
+            pb_fail(c->err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of memory", c->path);
+            c->failed = 1;
+            return 0;
+        }
+    }
+    double *v = out->positions + 3 * (size_t)out->count;
+    uint32_t id = out->count;
+    ws(c);
+    if (*c->s == '[') {
+        vec3(c, v);
+    } else if (expect(c, '{')) {
+        int have_pos = 0;
+        for (;;) {
+            char pk[32];
+            if (!key(c, pk, sizeof pk))
+                break;
+            if (!strcmp(pk, "id")) {
+                double x;
+                if (!number(c, &x))
+                    break;
+                if (!(x >= 0 && x < 4294967295.0 && x == floor(x))) {
+                    pb_fail(c->err, PB_ERROR_PARSE, "%s: point %u: id must be a non-negative integer", c->path,
+                            out->count);
+                    c->failed = 1;
+                    break;
+                }
+                id = (uint32_t)x;
+            } else if (!strcmp(pk, "position")) {
+                have_pos = vec3(c, v);
+            } else {
+                pb_fail(c->err, PB_ERROR_PARSE, "%s: point %u: unknown key \"%s\"", c->path, out->count, pk);
+                c->failed = 1;
+                break;
+            }
+            if (!more(c, '}'))
+                break;
+        }
+        if (!c->failed && !have_pos) {
+            pb_fail(c->err, PB_ERROR_PARSE, "%s: point %u has no position", c->path, out->count);
+            c->failed = 1;
+        }
+    }
+    if (c->failed)
+        return 0;
+    out->ids[out->count++] = id;
+    return 1;
 }
 
 pb_result pb_points_read(const char *path, pb_points *out, pb_error *err)
@@ -127,89 +201,18 @@ pb_result pb_points_read(const char *path, pb_points *out, pb_error *err)
                 if (!expect(&c, '['))
                     break;
                 ws(&c);
-                while (!c.failed && *c.s != ']') {
-                    if (out->count == cap) {
-                        cap = cap ? 2 * cap : 64;
-                        double *pp = realloc(out->positions, (size_t)cap * 3 * sizeof(double));
-                        uint32_t *ii = pp ? realloc(out->ids, (size_t)cap * sizeof(uint32_t)) : NULL;
-                        if (pp)
-                            out->positions = pp;
-                        if (ii)
-                            out->ids = ii;
-                        if (!pp || !ii) {
-                            pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of memory", path);
-                            c.failed = 1;
-                            break;
-                        }
-                    }
-                    double *v = out->positions + 3 * (size_t)out->count;
-                    uint32_t id = out->count;
-                    ws(&c);
-                    if (*c.s == '[') {
-                        vec3(&c, v);
-                    } else if (expect(&c, '{')) {
-                        int have_pos = 0;
-                        for (;;) {
-                            char pk[32];
-                            if (!key(&c, pk, sizeof pk))
-                                break;
-                            if (!strcmp(pk, "id")) {
-                                double x;
-                                if (!number(&c, &x))
-                                    break;
-                                if (!(x >= 0 && x < 4294967295.0 && x == floor(x))) {
-                                    pb_fail(err, PB_ERROR_PARSE, "%s: point %u: id must be a non-negative integer", path,
-                                            out->count);
-                                    c.failed = 1;
-                                    break;
-                                }
-                                id = (uint32_t)x;
-                            } else if (!strcmp(pk, "position")) {
-                                have_pos = vec3(&c, v);
-                            } else {
-                                pb_fail(err, PB_ERROR_PARSE, "%s: point %u: unknown key \"%s\"", path, out->count, pk);
-                                c.failed = 1;
-                                break;
-                            }
-                            ws(&c);
-                            if (*c.s == ',') {
-                                c.s++;
-                                continue;
-                            }
-                            expect(&c, '}');
-                            break;
-                        }
-                        if (!c.failed && !have_pos) {
-                            pb_fail(err, PB_ERROR_PARSE, "%s: point %u has no position", path, out->count);
-                            c.failed = 1;
-                        }
-                    }
-                    if (c.failed)
-                        break;
-                    out->ids[out->count++] = id;
-                    ws(&c);
-                    if (*c.s == ',')
-                        c.s++;
-                    else if (*c.s != ']') {
-                        expect(&c, ']');
-                        break;
-                    }
-                    ws(&c);
-                }
-                if (!c.failed)
-                    expect(&c, ']');
+                if (*c.s == ']') /* an empty array: reported as "no points" below */
+                    c.s++;
+                else
+                    while (read_point(&c, out, &cap) && more(&c, ']'))
+                        ;
             } else {
                 pb_fail(err, PB_ERROR_PARSE, "%s: unknown key \"%s\" (expected \"points\" or \"spacing\")", path, k);
                 c.failed = 1;
                 break;
             }
-            ws(&c);
-            if (*c.s == ',') {
-                c.s++;
-                continue;
-            }
-            expect(&c, '}');
-            break;
+            if (!more(&c, '}'))
+                break;
         }
     }
     free(text);
