@@ -333,6 +333,66 @@ static void alpha_mask_cuts_out(void)
     pb_scene_destroy(s);
 }
 
+/* An alpha-BLEND quad of alpha 0.3 over an opaque one: each ray stops on it
+ * with probability 0.3 (hashed threshold, src/bvh/alpha.h), the fraction is
+ * within 4 sigma of the binomial, and GPU and CPU make the same choices. */
+static void alpha_blend_stochastic(void)
+{
+    double quads[2][4][3] = {{{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}},
+                             {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}}};
+    double p[4 * 9];
+    uint32_t mat[4];
+    for (int q = 0; q < 2; ++q)
+        for (int t = 0; t < 2; ++t) {
+            int idx[2][3] = {{0, 1, 2}, {0, 2, 3}};
+            for (int v = 0; v < 3; ++v)
+                for (int k = 0; k < 3; ++k)
+                    p[9 * (2 * q + t) + 3 * v + k] = quads[q][idx[t][v]][k];
+            mat[2 * q + t] = (uint32_t)q;
+        }
+    pb_material m[2] = {pb_material_default(), pb_material_default()};
+    m[0].alpha_mode = PB_ALPHA_BLEND;
+    m[0].base_color[3] = 0.3f;
+    m[0].double_sided = 1;
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(p, 4, mat, m, 2, &s, &err) == PB_OK, "%s", err.message);
+    traced t;
+    if (!s || !prepare(s, &t)) {
+        pb_scene_destroy(s);
+        return;
+    }
+    uint32_t n = 1u << 16;
+    pb_ray *rays = malloc(n * sizeof *rays);
+    pb_hit *g = malloc(n * sizeof *g), *c = malloc(n * sizeof *c), *a = malloc(n * sizeof *a);
+    test_rng r = {77};
+    float zf = 0.f - (float)s->origin[2];
+    for (uint32_t i = 0; i < n; ++i) {
+        pb_ray ray = {{(float)(1.8 * rng_uniform(&r) - 0.9), (float)(1.8 * rng_uniform(&r) - 0.9), zf + 1.f}, 0.f,
+                      {0, 0, -1}, 2.5f};
+        rays[i] = ray;
+    }
+    CHECK(pb_trace(ctx, t.gs, rays, n, PB_TRACE_CLOSEST, g, NULL, &err) == PB_OK);
+    pb_trace_cpu(s, t.bvh, rays, n, PB_TRACE_CLOSEST, c, 1);
+    CHECK(compare_hits("blend", rays, g, c, n, NULL) == 0);
+    CHECK(pb_trace(ctx, t.gs, rays, n, PB_TRACE_ANY, a, NULL, &err) == PB_OK);
+    uint32_t front = 0, back = 0, any_diff = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        front += g[i].triangle != PB_NO_HIT && s->material[g[i].triangle] == 0;
+        back += g[i].triangle != PB_NO_HIT && s->material[g[i].triangle] == 1;
+        any_diff += (a[i].triangle != PB_NO_HIT) != (g[i].triangle != PB_NO_HIT);
+    }
+    double f = (double)front / n, sigma = sqrt(0.3 * 0.7 / n);
+    fprintf(stderr, "  %u rays: %.4f stopped by the alpha-0.3 blend quad (sigma %.4f), %u went on to the back\n", n,
+            f, sigma, back);
+    CHECK(fabs(f - 0.3) < 4 * sigma);
+    CHECK(front + back == n);
+    CHECK(any_diff == 0);
+    free(rays), free(g), free(c), free(a);
+    release(&t);
+    pb_scene_destroy(s);
+}
+
 /* Splitting the work into many submissions, and copying through staging
  * buffers (the discrete-GPU path) instead of mapped memory, changes no result. */
 static void bounded_submissions_same_bytes(void)
@@ -446,6 +506,7 @@ int main(void)
     RUN(watertight_sphere_gpu);
     RUN(far_from_origin_same_hits);
     RUN(alpha_mask_cuts_out);
+    RUN(alpha_blend_stochastic);
     RUN(bounded_submissions_same_bytes);
     RUN(ray_offset_gpu_matches_cpu);
     RUN(device_choice_and_refusals);

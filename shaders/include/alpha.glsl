@@ -4,6 +4,7 @@
 #define PB_ALPHA_GLSL
 
 #include "scene.glsl"
+#include "rng.glsl"
 
 float wrap_coord(float x, uint mode)
 {
@@ -29,6 +30,14 @@ uint texel_index(float s, float t, uint w, uint h, uint wrap_s, uint wrap_t)
     return uint(iy) * w + uint(ix);
 }
 
+// Threshold of an alpha-blended surface at a hit: src/bvh/alpha.h says why
+// a hash of the hit point.
+float alpha_blend_threshold(uint material, float u, float v)
+{
+    uint h = pb_hash32(material ^ pb_hash32(floatBitsToUint(u) ^ pb_hash32(floatBitsToUint(v))));
+    return float(h >> 8) * (1.0 / 16777216.0);
+}
+
 // True when leaf-ordered triangle `tri` (flags f) is opaque at (u, v).
 bool alpha_opaque(SceneRefs s, uint tri, uint f, float u, float v)
 {
@@ -44,6 +53,8 @@ bool alpha_opaque(SceneRefs s, uint tri, uint f, float u, float v)
         uint texel = UintBuf(s.texels).v[tx.offset + texel_index(ts, tt, tx.width, tx.height, tx.wrap & 0xffu, tx.wrap >> 8)];
         a *= float(texel >> 24) * (1.0 / 255.0);
     }
+    if (m.mode == 2u) // glTF BLEND
+        return a > alpha_blend_threshold(f & ~PB_FLAG_ALPHA_MASK, u, v);
     return a >= m.cutoff;
 }
 

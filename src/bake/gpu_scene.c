@@ -80,7 +80,7 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         uint32_t tri = bvh->tri_order[k];
         uint32_t m = scene->material[tri];
         memcpy(tris[k].v, bvh->tri_positions + 9 * (size_t)k, 36);
-        tris[k].flags = m | (scene->materials[m].alpha_mode == PB_ALPHA_MASK ? PB_FLAG_ALPHA_MASK : 0u);
+        tris[k].flags = m | (scene->materials[m].alpha_mode != PB_ALPHA_OPAQUE ? PB_FLAG_ALPHA_MASK : 0u);
         memcpy(uvs + 6 * (size_t)k, scene->texcoords + 6 * (size_t)tri, 24);
     }
     memcpy(gs->tri_order, bvh->tri_order, (size_t)n * 4);

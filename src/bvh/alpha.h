@@ -6,8 +6,10 @@
 #define PB_ALPHA_H
 
 #include "probebake/scene.h"
+#include "probebake/trace.h"
 
 #include <math.h>
+#include <string.h>
 
 static inline float pb_wrap_coord(float x, uint32_t mode)
 {
@@ -33,11 +35,27 @@ static inline uint32_t pb_texel_index(float s, float t, uint32_t w, uint32_t h, 
     return (uint32_t)iy * w + (uint32_t)ix;
 }
 
-/* 1 when scene triangle `tri` is opaque at barycentrics (u, v). */
+/* The stochastic threshold of an alpha-blended surface at a hit: a hash of
+ * the material and the hit's barycentric bits ("hashed alpha testing",
+ * Wyman and McGuire 2017, keyed on the surface point instead of a per-ray
+ * random number). Every ray meets a different point, so a ray passes with
+ * probability 1 - alpha, and CPU and GPU decide alike without a random
+ * stream threaded through the traversal. */
+static inline float pb_alpha_blend_threshold(uint32_t material, float u, float v)
+{
+    uint32_t ub, vb;
+    memcpy(&ub, &u, 4), memcpy(&vb, &v, 4);
+    uint32_t h = pb_hash32(material ^ pb_hash32(ub ^ pb_hash32(vb)));
+    return (float)(h >> 8) * (1.f / 16777216.f);
+}
+
+/* 1 when scene triangle `tri` is opaque at barycentrics (u, v): MASK
+ * surfaces where alpha >= cutoff, BLEND ones where alpha > a hashed
+ * threshold (so alpha 0 always passes, alpha 1 never). */
 static inline int pb_alpha_opaque(const pb_scene *s, uint32_t tri, float u, float v)
 {
     const pb_material *m = &s->materials[s->material[tri]];
-    if (m->alpha_mode != PB_ALPHA_MASK)
+    if (m->alpha_mode != PB_ALPHA_MASK && m->alpha_mode != PB_ALPHA_BLEND)
         return 1;
     float a = m->base_color[3];
     if (m->base_color_texture >= 0) {
@@ -49,6 +67,8 @@ static inline int pb_alpha_opaque(const pb_scene *s, uint32_t tri, float u, floa
         uint32_t texel = s->texels[tx->offset + pb_texel_index(ts, tt, tx->width, tx->height, tx->wrap_s, tx->wrap_t)];
         a *= (float)(texel >> 24) * (1.f / 255.f);
     }
+    if (m->alpha_mode == PB_ALPHA_BLEND)
+        return a > pb_alpha_blend_threshold(s->material[tri], u, v);
     return a >= m->alpha_cutoff;
 }
 
