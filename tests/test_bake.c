@@ -89,6 +89,154 @@ static void uniform_sky(void)
     pb_scene_destroy(s);
 }
 
+/* An equirectangular test map: `upper` above the horizon, `lower` below, and
+ * a sun patch of (2 half + 1)^2 texels of radiance `sun` around texel
+ * (sx, sy). */
+static int make_env(pb_environment *e, uint32_t w, uint32_t h, float upper, float lower, uint32_t sx, uint32_t sy,
+                    uint32_t half, float sun, float rotation_deg)
+{
+    memset(e, 0, sizeof *e);
+    e->width = w, e->height = h, e->rotation_deg = rotation_deg;
+    e->rgb = malloc(3ull * w * h * sizeof(float));
+    if (!e->rgb)
+        return 0;
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) {
+            float L = y < h / 2 ? upper : lower;
+            if (x + half >= sx && x <= sx + half && y + half >= sy && y <= sy + half)
+                L = sun;
+            for (int k = 0; k < 3; ++k)
+                e->rgb[3 * ((size_t)y * w + x) + k] = L * (k == 0 ? 1.f : k == 1 ? 0.8f : 0.6f);
+        }
+    return 1;
+}
+
+/* No geometry, an environment map turned by 90 degrees: the probe's SH is
+ * the map's projection (a fine quadrature over the sphere), and its
+ * irradiance peaks where the documented mapping puts the sun: texel column
+ * 3/4 (+X in the map's frame), 45 degrees up, turned counter-clockwise seen
+ * from above to (0, 0.707, -0.707). */
+static void environment_map_projection(void)
+{
+    pb_scene *s = random_soup(0, 0.f, 1, NULL);
+    pb_environment env;
+    CHECK(make_env(&env, 64, 32, 0.2f, 0.05f, 48, 8, 3, 20.f, 90.f));
+    pb_bake_desc d = {0};
+    d.grid = small_grid(-1, 1, 1);
+    d.rays_per_probe = 4096;
+    d.passes = 4;
+    d.environment = &env;
+    d.max_distance = 10.f;
+    baked b = bake(s, &d);
+    if (b.ok) {
+        /* expected radiance SH by quadrature: 1024 x 512 cells of the sphere */
+        double c[27] = {0};
+        for (int i = 0; i < 512; ++i)
+            for (int j = 0; j < 1024; ++j) {
+                double th = 3.141592653589793 * (i + 0.5) / 512, ph = 6.283185307179586 * (j + 0.5) / 1024;
+                float dir[3] = {(float)(sin(th) * cos(ph)), (float)cos(th), (float)(sin(th) * sin(ph))};
+                double dw = sin(th) * (3.141592653589793 / 512) * (6.283185307179586 / 1024);
+                float y[9], L[3];
+                pb_sh_basis(dir, y);
+                pb_environment_radiance(&env, dir, L);
+                for (int k = 0; k < 9; ++k)
+                    for (int ch = 0; ch < 3; ++ch)
+                        c[3 * k + ch] += L[ch] * y[k] * dw;
+            }
+        float want[27];
+        for (int k = 0; k < 27; ++k)
+            want[k] = (float)c[k];
+        pb_sh_radiance_to_irradiance(want);
+        float worst = 0;
+        for (int k = 0; k < 27; ++k)
+            worst = fmaxf(worst, fabsf(b.vol.sh[k] - want[k]) / want[k % 3]);
+        /* where the irradiance peaks, over 20k directions */
+        test_rng r = {5};
+        float best = -1, best_dir[3] = {0, 0, 0};
+        for (int i = 0; i < 20000; ++i) {
+            float n[3], e3[3];
+            rng_direction(&r, n);
+            pb_sh_eval(b.vol.sh, n, e3);
+            if (e3[0] > best)
+                best = e3[0], memcpy(best_dir, n, sizeof n);
+        }
+        /* the sun's centre: texel (48.5, 8.5) of 64 x 32 by the mapping's formula, turned by 90 degrees */
+        double th = 3.141592653589793 * 8.5 / 32, ph = 6.283185307179586 * (48.5 / 64 - 0.5);
+        double e[3] = {sin(th) * sin(ph), cos(th), -sin(th) * cos(ph)}, sun[3] = {e[2], e[1], -e[0]};
+        float cosang = (float)(best_dir[0] * sun[0] + best_dir[1] * sun[1] + best_dir[2] * sun[2]);
+        fprintf(stderr, "  SH vs quadrature: worst coefficient %.2f%% of DC; peak (%.3f, %.3f, %.3f), %.1f deg from "
+                "the sun\n", 100 * worst, best_dir[0], best_dir[1], best_dir[2],
+                acosf(fminf(1.f, cosang)) * 57.29578f);
+        CHECK(worst < 0.01f);
+        CHECK(cosang > cosf(3.f / 57.29578f));
+    }
+    release(&b);
+    pb_environment_free(&env);
+    pb_scene_destroy(s);
+}
+
+/* A 400 m floor of albedo 0.5 under a map with a small, bright sun, a probe
+ * 1 m above, direct light excluded: the probe sees only the floor, of
+ * radiance rho E / pi, where E is the map's irradiance on an upward surface
+ * (per texel in closed form). SH of a lower-hemisphere step is exact at L1:
+ * E(n) = rho E (1 - n_y) / 2. bounces 0 checks next-event estimation of the
+ * map alone (weight 1 at a path's last vertex); bounces 1 checks its MIS
+ * with bounce rays, which here all leave to the sky. */
+static void environment_lights_floor(void)
+{
+    double floor[18] = {-200, 0, -200, -200, 0, 200, 200, 0, 200, -200, 0, -200, 200, 0, 200, 200, 0, -200};
+    pb_material m = pb_material_default();
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = 0.5f;
+    m.metallic = 0.f; /* glTF's default is 1: no diffuse */
+    uint32_t ids[2] = {0, 0};
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(floor, 2, ids, &m, 1, &s, &err) == PB_OK, "%s", err.message);
+    pb_environment env;
+    CHECK(make_env(&env, 128, 64, 0.3f, 0.f, 20, 12, 1, 3000.f, 30.f));
+    /* E on an upward surface: sum of L cos dOmega over upper texels, exactly */
+    double E[3] = {0, 0, 0};
+    for (uint32_t y = 0; y < 32; ++y) {
+        double t0 = 3.141592653589793 * y / 64, t1 = 3.141592653589793 * (y + 1) / 64;
+        double band = (sin(t1) * sin(t1) - sin(t0) * sin(t0)) / 2 * (6.283185307179586 / 128);
+        for (uint32_t x = 0; x < 128; ++x)
+            for (int k = 0; k < 3; ++k)
+                E[k] += env.rgb[3 * (y * 128 + x) + k] * band;
+    }
+    for (uint32_t bounces = 0; bounces <= 1; ++bounces) {
+        pb_bake_desc d = {0};
+        d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 1;
+        d.grid.origin[1] = 1.f - (float)s->origin[1];
+        d.grid.origin[0] = -(float)s->origin[0], d.grid.origin[2] = -(float)s->origin[2];
+        d.rays_per_probe = 2048;
+        d.passes = 8;
+        d.bounces = bounces;
+        d.exclude_direct = 1;
+        d.skip_relocation = 1;
+        d.environment = &env;
+        baked b = bake(s, &d);
+        if (b.ok) {
+            float worst = 0, down[3];
+            float dirs[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 1, 0}};
+            pb_sh_eval(b.vol.sh, dirs[0], down);
+            for (int i = 0; i < 3; ++i) {
+                float e3[3];
+                pb_sh_eval(b.vol.sh, dirs[i], e3);
+                for (int k = 0; k < 3; ++k) {
+                    double want = 0.5 * E[k] * (1 - dirs[i][1]) / 2;
+                    worst = fmaxf(worst, (float)(fabs(e3[k] - want) / (0.5 * E[k])));
+                }
+            }
+            fprintf(stderr, "  bounces %u: irradiance from the floor %.4f (want %.4f), worst of 3 normals %.2f%% of it; "
+                    "%.2f traversals per probe ray\n", bounces, down[0], 0.5 * E[0], 100 * worst, (double)b.vol.traversals / (double)b.vol.rays_traced);
+            CHECK(worst < 0.01f);
+        }
+        release(&b);
+    }
+    pb_environment_free(&env);
+    pb_scene_destroy(s);
+}
+
 /* One point light, nothing else: the SH is the projected delta E = I/d^2
  * from the light's direction (exactly, apart from float rounding). */
 static void point_light(void)
@@ -248,8 +396,10 @@ static void kernels_match_cpu_reference(void)
         reference_inputs(s, &d, P, 128, 0, probes, rot, dirs);
         pb_bake_emitters em;
         CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK && em.count == 2); /* the ceiling panel */
-        pb_bake_pass pass = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, 0, 0, 0, n, 1,
-                             {0.3f, 0.3f, 0.3f}, 0.f, 50.f, &em};
+        pb_environment sky;
+        pb_env_table env;
+        CHECK(pb_environment_uniform(d.sky, &sky, NULL) == PB_OK && pb_env_table_build(&sky, &env, NULL) == PB_OK);
+        pb_bake_pass pass = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, 0, 0, 0, n, 1, &env, 0.f, 50.f, &em};
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
               dz = s->bounds_max[2] - s->bounds_min[2];
         pass.max_distance = sqrtf(dx * dx + dy * dy + dz * dz);
@@ -276,6 +426,8 @@ static void kernels_match_cpu_reference(void)
             }
         }
         pb_bake_emitters_free(&em);
+        pb_env_table_free(&env);
+        pb_environment_free(&sky);
         fprintf(stderr, "  %u probes: SH max difference %.2e (of %.2e), %u depth texels differ, %u flags differ\n", P,
                 worst_sh, scale, depth_bad, flag_diff);
         CHECK(scale > 0.f && worst_sh <= 1e-4f * scale);
@@ -315,7 +467,7 @@ static void multi_bounce_matches_cpu_reference(void)
         for (uint32_t pass = 0; pass < 8; ++pass) {
             reference_inputs(s, &d, P, 128, pass, probes, rot, dirs);
             pb_bake_pass pp = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, pass, 0, 3, 4, 1,
-                               {0, 0, 0}, sqrtf(dx * dx + dy * dy + dz * dz), 50.f, &em};
+                               NULL, sqrtf(dx * dx + dy * dy + dz * dz), 50.f, &em};
             pb_bake_trace_cpu(&pp, rays);
             pb_bake_sh_cpu(&pp, rays, red);
             for (uint32_t p = 0; p < P; ++p)
@@ -345,6 +497,86 @@ static void multi_bounce_matches_cpu_reference(void)
         free(probes), free(rot), free(dirs), free(rays), free(red), free(sum);
     }
     release(&b);
+    pb_scene_destroy(s);
+}
+
+/* An open scene (random double-sided triangles, albedo 0.7) under a turned
+ * environment map with a sun: the kernels against bake_cpu.c for the
+ * environment's lookup, sampling and MIS, per probe over 8 passes of 2
+ * bounces, and the BVH traversals both count (their paths part only where
+ * host and device round sin/cos differently). */
+static void environment_kernels_match_cpu(void)
+{
+    pb_scene *soup = random_soup(300, 0.5f, 11, NULL);
+    if (!soup)
+        return;
+    uint32_t T = soup->triangle_count;
+    double *pos = malloc((size_t)T * 9 * sizeof(double));
+    for (uint32_t i = 0; i < T * 9; ++i)
+        pos[i] = soup->positions[i] + soup->origin[i % 3];
+    pb_material m = pb_material_default();
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = 0.7f;
+    m.metallic = 0.f;
+    m.double_sided = 1;
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(pos, T, NULL, &m, 1, &s, &err) == PB_OK, "%s", err.message);
+    free(pos);
+    pb_scene_destroy(soup);
+    pb_environment envmap;
+    CHECK(make_env(&envmap, 64, 32, 0.5f, 0.1f, 10, 6, 1, 400.f, 30.f));
+    pb_env_table env;
+    CHECK(pb_env_table_build(&envmap, &env, NULL) == PB_OK && env.count == 64 * 32);
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 27, &d.grid);
+    d.rays_per_probe = 128;
+    d.passes = 8;
+    d.bounces = 2;
+    d.octmap_res = 4;
+    d.skip_relocation = 1;
+    d.environment = &envmap;
+    baked b = bake(s, &d);
+    if (b.ok) {
+        uint32_t P = b.vol.probe_count;
+        float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
+        float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
+        float *red = calloc((size_t)P * (40 + 32), sizeof(float));
+        double *sum = calloc((size_t)P * 27, sizeof(double));
+        uint64_t traversals = 0;
+        for (uint32_t pass = 0; pass < 8; ++pass) {
+            reference_inputs(s, &d, P, 128, pass, probes, rot, dirs);
+            pb_bake_pass pp = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, pass, 0, 2, 4, 1,
+                               &env, b.vol.settings.max_distance, 50.f, NULL};
+            traversals += pb_bake_trace_cpu(&pp, rays);
+            pb_bake_sh_cpu(&pp, rays, red);
+            for (uint32_t p = 0; p < P; ++p)
+                for (int k = 0; k < 27; ++k)
+                    sum[27 * p + k] += red[40 * p + k] / 8.0;
+        }
+        double worst = 0;
+        uint32_t compared = 0;
+        for (uint32_t p = 0; p < P; ++p) {
+            if (b.vol.probe_flags[p] & PB_PROBE_DILATED)
+                continue;
+            ++compared;
+            float c[27];
+            for (int k = 0; k < 27; ++k)
+                c[k] = (float)sum[27 * p + k];
+            pb_sh_radiance_to_irradiance(c);
+            worst = fmax(worst, fabs(c[0] - b.vol.sh[27 * p]) / fmax(1e-6, fabs(c[0])));
+        }
+        double trav_diff = fabs((double)traversals - (double)b.vol.traversals) / (double)traversals;
+        fprintf(stderr, "  %u probes (%u compared), 2 bounces, 8 passes: DC irradiance differs by at most %.3f%%; "
+                "traversals GPU %llu CPU %llu (%.3f%%)\n", P, compared, 100 * worst,
+                (unsigned long long)b.vol.traversals, (unsigned long long)traversals, 100 * trav_diff);
+        CHECK(compared >= P / 2);
+        CHECK(worst < 0.01);
+        CHECK(b.vol.traversals > b.vol.rays_traced && trav_diff < 0.005);
+        free(probes), free(rot), free(dirs), free(rays), free(red), free(sum);
+    }
+    release(&b);
+    pb_env_table_free(&env);
+    pb_environment_free(&envmap);
     pb_scene_destroy(s);
 }
 
@@ -564,9 +796,12 @@ int main(void)
     }
     RUN(uniform_sky);
     RUN(point_light);
+    RUN(environment_map_projection);
+    RUN(environment_lights_floor);
     RUN(closed_emissive_box);
     RUN(kernels_match_cpu_reference);
     RUN(multi_bounce_matches_cpu_reference);
+    RUN(environment_kernels_match_cpu);
     RUN(relocation_and_dilation);
     RUN(target_error_stops_converged_probes);
     RUN(points_subset_bakes_like_the_grid);

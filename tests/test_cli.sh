@@ -87,6 +87,28 @@ expect points-empty 1 "$tmp/bad3.json: no points" -- "$pb" bake "$demo" --points
 printf '{"pointz": []}' >"$tmp/bad4.json"
 expect points-unknown-key 1 'unknown key "pointz"' -- "$pb" bake "$demo" --points "$tmp/bad4.json" -o "$tmp/x.probes"
 
+# environment maps: read and checked before any device work. A 4x2 flat
+# Radiance file: radiance 1 (RGBE 128,128,128,129) everywhere.
+{
+    printf '#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 4\n'
+    for _ in 1 2 3 4 5 6 7 8; do printf '\x80\x80\x80\x81'; done
+} >"$tmp/sky.hdr"
+head -c 40 "$tmp/sky.hdr" >"$tmp/cut.hdr"
+expect env-missing 1 "error: $tmp/none.hdr: cannot open environment map" -- \
+    "$pb" bake "$demo" --env "$tmp/none.hdr" -o "$tmp/x.probes"
+expect env-not-hdr 1 "error: $demo: not a Radiance .hdr file" -- "$pb" bake "$demo" --env "$demo" -o "$tmp/x.probes"
+expect env-truncated 1 "error: $tmp/cut.hdr: cannot decode the .hdr file" -- \
+    "$pb" bake "$demo" --env "$tmp/cut.hdr" -o "$tmp/x.probes"
+expect env-and-sky 1 '--sky and --env both give the environment: choose one' -- \
+    "$pb" bake "$demo" --env "$tmp/sky.hdr" --sky 1,1,1 -o "$tmp/x.probes"
+expect env-bad-intensity 2 "--env-intensity '-1' is not a finite scale >= 0" -- \
+    "$pb" bake "$demo" --env "$tmp/sky.hdr" --env-intensity -1 -o "$tmp/x.probes"
+expect env-bad-rotation 2 "--env-rotation 'nan' is not an angle in degrees" -- \
+    "$pb" bake "$demo" --env "$tmp/sky.hdr" --env-rotation nan -o "$tmp/x.probes"
+expect indirect-volume-not-yet 2 '--indirect volume needs the run-time sampler' -- \
+    "$pb" bake "$demo" --indirect volume -o "$tmp/x.probes"
+expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
+
 # no Vulkan driver at all: one clear line, exit 1, nothing else
 expect no-driver-devices 1 'error: no Vulkan 1.2 driver found .*mesa-vulkan-drivers' -- \
     env VK_DRIVER_FILES=/nonexistent.json VK_ICD_FILENAMES=/nonexistent.json "$pb" devices
@@ -125,6 +147,19 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-points-inspect 0 '"index": 1, "position": \[1, 1, -1\]' -- "$pb" inspect "$tmp/p.probes" --json --probe 1
     expect bake-points-grid-false 0 '"grid": false' -- "$pb" inspect "$tmp/p.probes" --json
     expect points-with-grid 2 '--points replaces the grid' -- "$pb" bake "$demo" --points "$tmp/p.json" --spacing 1 -o "$tmp/x.probes"
+    expect bake-env 0 "environment $tmp/sky.hdr \(4x2, x2, turned 30 deg\)" -- \
+        "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --env "$tmp/sky.hdr" --env-intensity 2 \
+        --env-rotation 30 --validation -o "$tmp/e.probes"
+    # Ctrl-C during a long bake: exit 130 after 'bake cancelled', and no file
+    "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/int.probes" >"$tmp/int.log" 2>&1 &
+    bake_pid=$!
+    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/int.log" && break; sleep 0.1; done
+    sleep 1
+    kill -INT "$bake_pid"
+    wait "$bake_pid"
+    int_rc=$?
+    expect bake-interrupted 0 "^130 absent .*bake cancelled" -- \
+        bash -c "echo $int_rc \$([ -e '$tmp/int.probes' ] && echo present || echo absent) \$(tr '\n' ' ' <'$tmp/int.log')"
     expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
         "$pb" trace "$demo" --device no-such-gpu
 fi

@@ -15,8 +15,8 @@
  * invalid_backface_fraction back faces are invalid and take the
  * distance-weighted mean of valid neighbours (dilation).
  *
- * Not in this slice yet: emissive-triangle / sky
- * next-event estimation, environment maps, --points.
+ * Light: punctual lights, emissive triangles and the environment, each
+ * sampled at every surface hit (docs/bake.md says what is modelled).
  */
 #ifndef PROBEBAKE_BAKE_H
 #define PROBEBAKE_BAKE_H
@@ -27,6 +27,7 @@
 #include "probebake/device.h"
 #include "probebake/trace.h"
 #include "probebake/volume.h"
+#include "probebake/environment.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -57,11 +58,12 @@ typedef struct pb_bake_desc {
     float target_error;           /* 0: fixed passes; else a probe stops once the standard error of its
                                      irradiance (DC luminance) is below target_error x its mean, after at
                                      least 4 passes; the bake stops when all have */
-    uint32_t bounces;             /* default 2: reflections after the first hit */
+    uint32_t bounces;             /* reflections after the first hit (0 is direct light only; the CLI defaults to 2) */
     uint32_t octmap_res;          /* default 16 */
     uint32_t seed;                /* default 0 is a valid seed */
     uint32_t exclude_direct;      /* 1: only indirect light (renderers that light directly) */
-    float sky[3];                 /* uniform sky radiance, default black */
+    float sky[3];                 /* uniform sky radiance, default black (ignored with an environment) */
+    const pb_environment *environment; /* NULL: the uniform sky; else this map (pb_environment_load) */
     float max_distance;           /* default: the scene's bounding-box diagonal */
     float lobe_power;             /* cosine power of the depth filter, default 50 */
     float invalid_backface_fraction; /* default 0.25: above it a probe is inside geometry (invalid) */
@@ -114,13 +116,14 @@ typedef struct pb_bake_pass {
     const float *rotations;       /* 12 per probe (3 rows of 4) */
     const float *directions;      /* 4 per ray index */
     uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, octmap_res, direct;
-    float sky[3];
+    const pb_env_table *env;      /* NULL: black */
     float max_distance, lobe_power;
     const pb_bake_emitters *emitters; /* NULL or count 0: no next-event estimation of emitters */
 } pb_bake_pass;
 
-/* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance). */
-void pb_bake_trace_cpu(const pb_bake_pass *p, float *rays);
+/* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).
+ * Returns the BVH traversals it made (rays, shadow rays), as the kernel counts. */
+uint64_t pb_bake_trace_cpu(const pb_bake_pass *p, float *rays);
 /* bake_sh.comp and bake_depth.comp: reduced out, 40 floats per probe (27 SH,
  * back faces, hits, nearest back hit t + direction, nearest front hit t +
  * direction, 3 zeros) then 2 per probe texel. */

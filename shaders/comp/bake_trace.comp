@@ -2,12 +2,13 @@
 // bake_trace: one invocation per probe ray of this pass. The ray leaves the
 // probe along the spherical-Fibonacci direction turned by the probe's
 // rotation for this pass, and returns the radiance arriving along it (path
-// traced: emission, punctual lights with shadow rays, Lambertian bounces with
+// traced: emission, punctual lights, emitters and the environment with shadow rays, Lambertian bounces with
 // Russian roulette after the second) and the distance to the first hit
 // (negative on a back face; max_distance on a miss).
 // CPU reference: pb_bake_trace_cpu (src/bake/bake_cpu.c).
 #extension GL_GOOGLE_include_directive : require
 
+#define PB_COUNT_TRAVERSALS
 #include "traverse.glsl"
 #include "bake.glsl"
 
@@ -33,9 +34,11 @@ vec3 cosine_direction(vec3 n, float u1, float u2)
 // table), a uniform point on it, a shadow ray, and the MIS weight against
 // cosine-weighted bounce sampling (power heuristic). Returns emitted radiance
 // x cos / (pi pdf) x weight: the caller multiplies by throughput x albedo.
+// At a path's last vertex no bounce ray follows to find the same light, so
+// the weight is 1 there (with MIS it would lose the bounce strategy's share).
 // (A function of its own also keeps glslang's `precise` analysis of main()
 // small: inlined here, it ran out of memory.)
-vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
+vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, bool last, inout uint state)
 {
     SceneRefs s = P.scene;
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
@@ -65,7 +68,7 @@ vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
         return vec3(0.0);
     float pl = FloatBuf(P.emit_pdf).v[etri] * d2 / cos_e;
     float pb = cos_x / PB_PI;
-    float wl = pl * pl / (pl * pl + pb * pb);
+    float wl = last ? 1.0 : pl * pl / (pl * pl + pb * pb);
     FloatBuf euv = FloatBuf(s.tri_uv);
     uint eb = 6u * etri;
     float ew0 = 1.0 - b1 - b2;
@@ -73,6 +76,25 @@ vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
                b2 * vec2(euv.v[eb + 4u], euv.v[eb + 5u]);
     vec3 Le = em.emissive_metallic.rgb * texture_rgb(s, em.tex.y, yuv);
     return Le * (cos_x / (PB_PI * pl) * wl);
+}
+
+// Next-event estimation of the environment: a direction by texel power, a
+// shadow ray, MIS against cosine-weighted bounce sampling (power heuristic).
+// Returns radiance x cos / (pi pdf) x weight, like emitter_nee.
+vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, bool last, inout uint state)
+{
+    float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
+    vec3 w = env_sample(env, u0, u1, u2).xyz;
+    float cos_x = dot(ng, w);
+    float pe = env_pdf(env, w);
+    if (!(cos_x > 0.0 && pe > 0.0))
+        return vec3(0.0);
+    TraceResult shadow = trace_ray(s, x, w, 0.0, PB_INF, true);
+    if (shadow.tri != PB_NO_HIT)
+        return vec3(0.0);
+    float pb = cos_x / PB_PI;
+    float wl = last ? 1.0 : pe * pe / (pe * pe + pb * pb);
+    return env_radiance(env, w) * (cos_x / (PB_PI * pe) * wl);
 }
 
 void main()
@@ -86,6 +108,7 @@ void main()
     vec3 origin = Vec4Buf(P.probes).v[probe].xyz;
     uint state = rng_seed(P.seed, probe_id(P, probe), P.pass_index, ray);
     SceneRefs s = P.scene;
+    Env env = bake_env(P);
     ShadeMaterialBuf mats = ShadeMaterialBuf(P.materials);
     LightBuf lights = LightBuf(P.lights);
 
@@ -97,8 +120,14 @@ void main()
     for (uint bounce = 0u;; ++bounce) {
         TraceResult tr = trace_ray(s, o, dir, 0.0, PB_INF, false);
         if (tr.tri == PB_NO_HIT) {
-            if (bounce > 0u || P.direct != 0u)
-                L += throughput * P.sky.rgb;
+            if (bounce > 0u || P.direct != 0u) {
+                float w = 1.0;
+                if (bsdf_pdf > 0.0 && env.count > 0u) { // the environment could also have been sampled: MIS
+                    float pe = env_pdf(env, dir);
+                    w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pe * pe);
+                }
+                L += throughput * env_radiance(env, dir) * w;
+            }
             break;
         }
         Tri t = load_tri(s.tris, tr.tri);
@@ -133,9 +162,12 @@ void main()
         for (uint k = 0u; k < P.light_count; ++k)
             E += light_irradiance(s, lights.l[k], x, ng, true);
         L += throughput * albedo * (E / PB_PI);
+        bool last = bounce >= P.bounces;
         if (P.emitter_count > 0u && albedo != vec3(0.0))
-            L += throughput * albedo * emitter_nee(P, x, ng, state);
-        if (bounce >= P.bounces)
+            L += throughput * albedo * emitter_nee(P, x, ng, last, state);
+        if (env.count > 0u && albedo != vec3(0.0))
+            L += throughput * albedo * env_nee(env, s, x, ng, last, state);
+        if (last)
             break;
         if (bounce >= 1u) { // Russian roulette from the second reflection on
             float q = min(0.95, max(albedo.r, max(albedo.g, albedo.b)));
@@ -152,4 +184,6 @@ void main()
         o = x;
     }
     Vec4RW(P.rays).v[i] = vec4(L, first_distance);
+    if (P.counters != 0ul)
+        atomicAdd(UintRW(P.counters).v[0], pb_traversals);
 }

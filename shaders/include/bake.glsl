@@ -5,17 +5,19 @@
 // texel, sRGB decoded) x (1 - metallic); emission = emissive factor x
 // strength x emissive texture; KHR_lights_punctual lights (point, spot with
 // the glTF cone falloff, directional) with shadow rays and the range window
-// glTF recommends; a uniform sky; emissive triangles sampled at every
-// surface hit by power (alias table) and combined with bounce hits by
-// multiple importance sampling (power heuristic). Back faces of single-sided
-// materials are black (the ray is inside geometry). Not yet: sky next-event
-// estimation, environment maps, stochastic blending. docs/bake.md.
+// glTF recommends; an environment (uniform or an equirectangular map);
+// emissive triangles and the environment sampled at every surface hit
+// (alias tables) and combined with bounce rays by multiple importance
+// sampling (power heuristic). Back faces of single-sided materials are black
+// (the ray is inside geometry); alpha-blended surfaces pass light
+// stochastically (alpha.glsl). docs/bake.md.
 #ifndef PB_BAKE_GLSL
 #define PB_BAKE_GLSL
 
 #include "traverse.glsl"
 #include "rng.glsl"
 #include "ray_offset.glsl"
+#include "environment.glsl"
 
 #define PB_PI 3.14159265358979324
 #define PB_LIGHT_DIRECTIONAL 0u
@@ -40,6 +42,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Li
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Vec4Buf { vec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4RW { vec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer FloatRW { float v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer UintRW { uint v[]; };
 
 struct BakeParams {
     SceneRefs scene;
@@ -53,8 +56,10 @@ struct BakeParams {
     uint64_t probe_list;    // 0: probes first_probe.. in order; else uint slots, read from first_probe on
     uint64_t emitters;      // Emitter[]: the alias table over emissive triangles by power
     uint64_t emit_pdf;      // float per leaf-ordered triangle: area density when sampled (p_i / area), 0 if not an emitter
+    uint64_t env;           // EnvTexel[] (environment.glsl); 0: no environment (black)
+    uint64_t counters;      // uint: BVH traversals of this submission are added here; 0: not counted
     uint64_t pad0;
-    vec4 sky;               // rgb radiance of the uniform sky
+    vec4 env_rotation;      // x cos, y sin of the environment's rotation about +Y
     uint first_probe;
     uint probe_count;       // in this submission
     uint rays_per_probe;
@@ -68,8 +73,14 @@ struct BakeParams {
     uint direct;            // 1: light straight from lights and sky included
     float lobe_cutoff;      // depth filter skips rays with cos below this: weight < cutoff^power
     uint emitter_count;
-    uint pad1, pad2, pad3;
+    uint env_width, env_height;
+    uint env_count;         // texels to sample; 0: none (black environment)
 };
+
+Env bake_env(BakeParams P)
+{
+    return Env(P.env, P.env_width, P.env_height, P.env_count, P.env_rotation.x, P.env_rotation.y);
+}
 
 struct Emitter {
     uint tri;               // leaf-ordered triangle

@@ -19,8 +19,15 @@ struct TraceResult {
     float v;
 };
 
+#ifdef PB_COUNT_TRAVERSALS
+uint pb_traversals = 0u; // this invocation's traversals (bake throughput accounting)
+#endif
+
 TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, bool any_hit)
 {
+#ifdef PB_COUNT_TRAVERSALS
+    ++pb_traversals;
+#endif
     TraceResult res;
     res.tri = PB_NO_HIT;
     res.u = 0.0;

@@ -26,15 +26,16 @@
 #include <string.h>
 
 typedef struct bake_buffers {
-    pb_buffer params, materials, lights, probes, rotations, directions, rays, reduced, list, emitters, emit_pdf;
+    pb_buffer params, materials, lights, probes, rotations, directions, rays, reduced, list, emitters, emit_pdf, env,
+        counters;
     pb_pipeline trace, sh, depth;
 } bake_buffers;
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[11] = {&b->params, &b->materials, &b->lights, &b->probes, &b->rotations, &b->directions,
-                           &b->rays, &b->reduced, &b->list, &b->emitters, &b->emit_pdf};
-    for (int i = 0; i < 11; ++i)
+    pb_buffer *bufs[13] = {&b->params, &b->materials, &b->lights, &b->probes, &b->rotations, &b->directions,
+                           &b->rays, &b->reduced, &b->list, &b->emitters, &b->emit_pdf, &b->env, &b->counters};
+    for (int i = 0; i < 13; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_pipeline_destroy(ctx, &b->trace);
     pb_pipeline_destroy(ctx, &b->sh);
@@ -85,6 +86,10 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
     for (int k = 0; k < 3; ++k)
         if (!(d->sky[k] >= 0.f) || !isfinite(d->sky[k]))
             return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sky radiance must be finite and >= 0");
+    if (d->environment && (!d->environment->rgb || !d->environment->width || !d->environment->height ||
+                           (uint64_t)d->environment->width * d->environment->height > (1u << 24) ||
+                           !isfinite(d->environment->rotation_deg)))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "environment map: empty, over 2^24 texels, or a non-finite rotation");
     if (!(d->max_distance > 0.f) || !isfinite(d->max_distance) || !(d->lobe_power > 0.f) ||
         !(d->invalid_backface_fraction > 0.f && d->invalid_backface_fraction <= 1.f))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "max distance and lobe power must be positive, the "
@@ -116,6 +121,8 @@ typedef struct bake_run {
     double t_trace, t_sh, t_depth; /* GPU timestamps, ms */
     float *near;                   /* 8 per probe: nearest back t + dir, nearest front t + dir */
     uint32_t emitter_count;
+    const pb_env_table *env;
+    uint64_t traversals;           /* BVH traversals of the bake passes (counted by bake_trace) */
     uint32_t *passes_done;         /* per probe */
     double *dc_sum, *dc_sq;        /* per probe: luminance of each pass's DC coefficient, for the standard error */
 } bake_run;
@@ -145,7 +152,14 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         prm.probe_list = list ? B->list.address : 0;
         prm.emitters = B->emitters.address, prm.emit_pdf = B->emit_pdf.address;
         prm.emitter_count = run->emitter_count;
-        memcpy(prm.sky, d->sky, 12);
+        if (run->env->width) {
+            prm.env = B->env.address;
+            prm.env_width = run->env->width, prm.env_height = run->env->height, prm.env_count = run->env->count;
+            prm.env_rotation[0] = run->env->cos_rot, prm.env_rotation[1] = run->env->sin_rot;
+        }
+        prm.counters = relocating ? 0 : B->counters.address;
+        if (!relocating)
+            memset(B->counters.mapped, 0, 4);
         prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
         prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces, prm.light_count = run->scene->light_count;
         prm.octmap_res = n, prm.max_distance = d->max_distance, prm.lobe_power = d->lobe_power;
@@ -173,6 +187,11 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
             run->t_trace += ctx->intervals_ms[0];
             run->t_sh += ctx->intervals_ms[1];
             run->t_depth += ctx->interval_count >= 3 ? ctx->intervals_ms[2] : 0.0;
+        }
+        if (!relocating) {
+            uint32_t n_trav;
+            memcpy(&n_trav, B->counters.mapped, 4);
+            run->traversals += n_trav;
         }
         memcpy(run->reduced, B->reduced.mapped, (size_t)count * (PB_REDUCED_SH_STRIDE + (relocating ? 0 : 2u * texels)) * 4);
         for (uint32_t l = 0; l < count; ++l) {
@@ -362,6 +381,10 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     float *offsets = NULL, *near = NULL;
     pb_bake_emitters emitters;
     memset(&emitters, 0, sizeof emitters);
+    pb_environment sky_env;
+    memset(&sky_env, 0, sizeof sky_env);
+    pb_env_table env;
+    memset(&env, 0, sizeof env);
     uint32_t *passes_done = NULL, *active = NULL, *converged_at = calloc(P, sizeof(uint32_t));
     double *dc_sum = NULL, *dc_sq = NULL;
     if (!probes || !rotations || !directions || !lights || !mats || !sh_sum || !depth_sum || !backfaces || !hits ||
@@ -437,8 +460,20 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
         }
         free(leaf_of), free(pdf_leaf), free(ge);
     }
+    /* the environment: a map, or the uniform sky as one; black is none */
+    if (r == PB_OK && !d.environment && (d.sky[0] > 0.f || d.sky[1] > 0.f || d.sky[2] > 0.f))
+        r = pb_environment_uniform(d.sky, &sky_env, err);
+    if (r == PB_OK)
+        r = pb_env_table_build(d.environment ? d.environment : &sky_env, &env, err);
+    if (r == PB_OK && env.count == 0)
+        pb_env_table_free(&env); /* black: nothing to look up or sample */
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.env, (env.count ? env.count : 1) * sizeof(pb_env_texel), PB_MEMORY_DEVICE,
+                        "environment map", env.count ? (const void *)env.texels : NULL, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B.counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
     bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
-                    hits, 0, 0, 0, NULL, emitters.count, passes_done, dc_sum, dc_sq};
+                    hits, 0, 0, 0, NULL, emitters.count, &env, 0, passes_done, dc_sum, dc_sq};
     /* relocation: probes in geometry move out, probes against a wall move
      * away; iterations use their own pass numbers (RNG streams), so the bake
      * passes that follow are the same whatever relocation did */
@@ -549,6 +584,7 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     }
     if (!d.points)
         dilate(out, 8); /* points have no grid neighbourhood: invalid ones stay flagged */
+    out->traversals = run.traversals;
     out->timings.trace = run.t_trace;
     out->timings.sh = run.t_sh;
     out->timings.octmap = run.t_depth;
@@ -559,6 +595,8 @@ done:
     free(backfaces), free(hits), free(reduced), free(offsets), free(near);
     free(passes_done), free(active), free(converged_at), free(dc_sum), free(dc_sq);
     pb_bake_emitters_free(&emitters);
+    pb_env_table_free(&env);
+    pb_environment_free(&sky_env);
     if (r != PB_OK)
         pb_volume_free(out);
     return r;

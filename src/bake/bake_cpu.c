@@ -13,6 +13,7 @@
 #include "probebake/sh.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -66,8 +67,13 @@ typedef struct hit {
     float t, u, v;
 } hit;
 
+/* traversals made by the calling thread's current range (pb_parallel_for
+ * runs a range on one thread) */
+static _Thread_local uint64_t traversals;
+
 static hit trace(const pb_bake_pass *p, const float o[3], const float d[3], float tmax, pb_trace_mode mode)
 {
+    ++traversals;
     pb_ray ray = {{o[0], o[1], o[2]}, 0.f, {d[0], d[1], d[2]}, tmax};
     pb_hit h;
     pb_trace_cpu(p->scene, p->bvh, &ray, 1, mode, &h, 1);
@@ -140,11 +146,12 @@ typedef struct trace_ctx {
     gpu_light *lights;
     gpu_shade_material *materials;
     float *rays;
+    _Atomic uint64_t traversals;
 } trace_ctx;
 
 /* Next-event estimation of one emissive triangle (bake_trace.comp). */
 static void emitter_nee(const trace_ctx *c, const pb_bake_emitters *em, const float x[3], const float ng[3],
-                        const float albedo[3], const float thr[3], uint32_t *state, float L[3])
+                        const float albedo[3], const float thr[3], int last, uint32_t *state, float L[3])
 {
     const pb_bake_pass *p = c->p;
     const pb_scene *s = p->scene;
@@ -172,7 +179,7 @@ static void emitter_nee(const trace_ctx *c, const pb_bake_emitters *em, const fl
     if (trace(p, x, w, dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
     float pl = em->pdf_area[etri] * d2 / cos_e, pb = cos_x / PI_F;
-    float wl = pl * pl / (pl * pl + pb * pb);
+    float wl = last ? 1.f : pl * pl / (pl * pl + pb * pb);
     const float *uv = s->texcoords + 6 * (size_t)etri;
     float w0 = 1.f - b1 - b2, tu = w0 * uv[0] + b1 * uv[2] + b2 * uv[4], tv = w0 * uv[1] + b1 * uv[3] + b2 * uv[5];
     float et[3];
@@ -181,11 +188,32 @@ static void emitter_nee(const trace_ctx *c, const pb_bake_emitters *em, const fl
         L[k] += thr[k] * albedo[k] * (m->emissive_metallic[k] * et[k]) * (cos_x / (PI_F * pl) * wl);
 }
 
+/* env_nee of bake_trace.comp */
+static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], const float albedo[3],
+                    const float thr[3], int last, uint32_t *state, float L[3])
+{
+    const pb_env_table *env = p->env;
+    float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
+    float w[3];
+    pb_env_sample(env, u0, u1, u2, w);
+    float cos_x = ng[0] * w[0] + ng[1] * w[1] + ng[2] * w[2];
+    float pe = pb_env_pdf(env, w);
+    if (!(cos_x > 0.f && pe > 0.f))
+        return;
+    if (trace(p, x, w, INFINITY, PB_TRACE_ANY).tri != PB_NO_HIT)
+        return;
+    float pb = cos_x / PI_F, wl = last ? 1.f : pe * pe / (pe * pe + pb * pb);
+    const float *Le = env->texels[pb_env_texel_of(env, w)].rgb;
+    for (int k = 0; k < 3; ++k)
+        L[k] += thr[k] * albedo[k] * (Le[k] * (cos_x / (PI_F * pe) * wl));
+}
+
 static void trace_range(void *user, uint64_t begin, uint64_t end)
 {
-    const trace_ctx *c = user;
+    trace_ctx *c = user;
     const pb_bake_pass *p = c->p;
     const pb_scene *s = p->scene;
+    traversals = 0;
     for (uint64_t i = begin; i < end; ++i) {
         uint32_t probe = slot_of(p, (uint32_t)(i / p->rays_per_probe)), ray = (uint32_t)(i % p->rays_per_probe);
         float d[3];
@@ -199,9 +227,16 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
         for (uint32_t bounce = 0;; ++bounce) {
             hit h = trace(p, o, dir, INFINITY, PB_TRACE_CLOSEST);
             if (h.tri == PB_NO_HIT) {
-                if (bounce > 0 || p->direct)
+                if ((bounce > 0 || p->direct) && p->env && p->env->width) {
+                    float w = 1.f;
+                    if (bsdf_pdf > 0.f && p->env->count) {
+                        float pe = pb_env_pdf(p->env, dir);
+                        w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pe * pe);
+                    }
+                    const float *Le = p->env->texels[pb_env_texel_of(p->env, dir)].rgb;
                     for (int k = 0; k < 3; ++k)
-                        L[k] += thr[k] * p->sky[k];
+                        L[k] += thr[k] * Le[k] * w;
+                }
                 break;
             }
             const float *v0 = s->positions + 9 * (size_t)h.tri, *v1 = v0 + 3, *v2 = v0 + 6;
@@ -257,9 +292,12 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
             }
             for (int k = 0; k < 3; ++k)
                 L[k] += thr[k] * albedo[k] * (E[k] / PI_F);
+            int last = bounce >= p->bounces;
             if (em && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-                emitter_nee(c, em, x, ng, albedo, thr, &state, L);
-            if (bounce >= p->bounces)
+                emitter_nee(c, em, x, ng, albedo, thr, last, &state, L);
+            if (p->env && p->env->count && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
+                env_nee(p, x, ng, albedo, thr, last, &state, L);
+            if (last)
                 break;
             if (bounce >= 1) {
                 float q = fminf(0.95f, fmaxf(albedo[0], fmaxf(albedo[1], albedo[2])));
@@ -280,22 +318,24 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
         float *out = c->rays + 4 * i;
         out[0] = L[0], out[1] = L[1], out[2] = L[2], out[3] = first;
     }
+    atomic_fetch_add(&c->traversals, traversals);
 }
 
-void pb_bake_trace_cpu(const pb_bake_pass *p, float *rays)
+uint64_t pb_bake_trace_cpu(const pb_bake_pass *p, float *rays)
 {
     const pb_scene *s = p->scene;
     trace_ctx c = {p, malloc((s->light_count ? s->light_count : 1) * sizeof(gpu_light)),
-                   malloc((s->material_count ? s->material_count : 1) * sizeof(gpu_shade_material)), rays};
+                   malloc((s->material_count ? s->material_count : 1) * sizeof(gpu_shade_material)), rays, 0};
     if (!c.lights || !c.materials) {
         free(c.lights), free(c.materials);
-        return;
+        return 0;
     }
     pb_bake_lights(s, c.lights);
     pb_bake_materials(s, c.materials);
     pb_parallel_for((uint64_t)p->probe_count * p->rays_per_probe, 64, 0, trace_range, &c);
     free(c.lights);
     free(c.materials);
+    return atomic_load(&c.traversals);
 }
 
 void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)

@@ -3,6 +3,7 @@
 #define PB_BAKE_TYPES_H
 
 #include "bake/gpu_types.h"
+#include "probebake/environment.h"
 
 typedef struct gpu_shade_material {
     float base_color[4];
@@ -21,16 +22,18 @@ _Static_assert(sizeof(gpu_light) == 64, "Light layout");
 
 typedef struct gpu_bake_params {
     gpu_scene_refs scene;
-    uint64_t materials, lights, probes, rotations, directions, rays, reduced, probe_list, emitters, emit_pdf, pad0;
-    float sky[4];
+    uint64_t materials, lights, probes, rotations, directions, rays, reduced, probe_list, emitters, emit_pdf, env,
+        counters, pad0;
+    float env_rotation[4];
     uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, light_count, octmap_res;
     float max_distance, lobe_power;
     uint32_t direct;
     float lobe_cutoff;
-    uint32_t emitter_count, pad1, pad2, pad3;
+    uint32_t emitter_count, env_width, env_height, env_count;
 } gpu_bake_params;
-_Static_assert(offsetof(gpu_bake_params, sky) == 144, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 224, "BakeParams layout");
+_Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 240, "BakeParams layout");
+_Static_assert(sizeof(pb_env_texel) == 32, "EnvTexel layout");
 
 typedef struct gpu_emitter {
     uint32_t tri;

@@ -37,7 +37,7 @@ static double pb_now_ms_cli(void)
 static int fail(const pb_error *err)
 {
     fprintf(stderr, "probebake: error: %s\n", err->message[0] ? err->message : pb_result_name(err->code));
-    return 1;
+    return err->code == PB_ERROR_CANCELLED ? 130 : 1; /* 128 + SIGINT, as shells report it */
 }
 
 static int usage_error(const char *fmt, const char *arg)
@@ -82,8 +82,11 @@ static void print_help(void)
            "  --points FILE.json             probes at given positions instead of a grid:\n"
            "                                 {\"spacing\": S, \"points\": [[x,y,z] | {\"id\": I, \"position\": [x,y,z]}]}\n"
            "  --sky R,G,B                    uniform sky radiance (default black)\n"
+           "  --env FILE.hdr                 equirectangular Radiance environment map instead of --sky\n"
+           "  --env-intensity K              scale of the map (default 1)\n"
+           "  --env-rotation DEG             turn the map about +Y, counter-clockwise from above (default 0)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
-           "Not yet: --indirect volume, --env (README).\n",
+           "  --indirect path                path-traced indirect light (default; 'volume' is not there yet)\n",
            PB_VERSION_STRING);
 }
 
@@ -94,7 +97,9 @@ typedef struct options {
     const char *output;
     const char *direct;
     const char *points;
-    float spacing, sky[3], bounds[6], target_error;
+    const char *env;
+    float spacing, sky[3], bounds[6], target_error, env_intensity, env_rotation;
+    int has_sky;
     uint32_t counts[3], passes, bounces, octmap_res;
     int has_spacing, has_counts, has_bounds, has_rays, has_seed, has_bounces;
     int json, validation, verify, has_probe;
@@ -118,6 +123,7 @@ static int parse(int argc, char **argv, options *o)
     o->probes = 4096;
     o->rays = 256;
     o->seed = 1;
+    o->env_intensity = 1.f;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *next = i + 1 < argc ? argv[i + 1] : NULL;
@@ -149,6 +155,28 @@ static int parse(int argc, char **argv, options *o)
             if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
                 return usage_error("%s takes include or exclude", a);
             o->direct = argv[++i];
+        } else if (!strcmp(a, "--env")) {
+            if (!next)
+                return usage_error("%s needs a .hdr file", a);
+            o->env = argv[++i];
+        } else if (!strcmp(a, "--indirect")) {
+            if (!next || (strcmp(next, "path") && strcmp(next, "volume")))
+                return usage_error("%s takes path or volume", a);
+            if (!strcmp(next, "volume"))
+                return usage_error("%s volume needs the run-time sampler, which is not in this version; "
+                                   "use --indirect path", a);
+            ++i;
+        } else if (!strcmp(a, "--env-intensity") || !strcmp(a, "--env-rotation")) {
+            char *end = NULL;
+            float v = next ? strtof(next, &end) : NAN;
+            int intensity = !strcmp(a, "--env-intensity");
+            if (!next || *end || !isfinite(v) || (intensity && v < 0.f) || (!intensity && fabsf(v) > 36000.f)) {
+                fprintf(stderr, "probebake: error: %s '%s' is not %s\n", a, next ? next : "",
+                        intensity ? "a finite scale >= 0" : "an angle in degrees");
+                return 2;
+            }
+            *(intensity ? &o->env_intensity : &o->env_rotation) = v;
+            ++i;
         } else if (!strcmp(a, "--target-error")) {
             char *end = NULL;
             o->target_error = next ? strtof(next, &end) : -1.f;
@@ -205,6 +233,7 @@ static int parse(int argc, char **argv, options *o)
                     }
                     o->sky[k] = (float)vals[k];
                 }
+                o->has_sky = 1;
             } else {
                 for (int k = 0; k < 6; ++k)
                     o->bounds[k] = (float)vals[k];
@@ -646,10 +675,18 @@ static int cmd_bake(const options *o)
     memset(&vol, 0, sizeof vol);
     pb_points pts;
     memset(&pts, 0, sizeof pts);
+    pb_environment env;
+    memset(&env, 0, sizeof env);
     pb_error err;
     int rc = 1;
     double t0 = pb_now_ms_cli();
+    if (o->env && o->has_sky) {
+        snprintf(err.message, sizeof err.message, "--sky and --env both give the environment: choose one");
+        goto out;
+    }
     if (o->points && pb_points_read(o->points, &pts, &err) != PB_OK)
+        goto out;
+    if (o->env && pb_environment_load(o->env, o->env_intensity, o->env_rotation, &env, &err) != PB_OK)
         goto out;
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
         goto out;
@@ -698,6 +735,13 @@ static int cmd_bake(const options *o)
     d.seed = o->has_seed ? o->seed : 1;
     d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");
     memcpy(d.sky, o->sky, sizeof d.sky);
+    d.environment = o->env ? &env : NULL;
+    char light[1200];
+    if (o->env)
+        snprintf(light, sizeof light, "environment %s (%ux%u, x%g, turned %g deg)", o->env, env.width, env.height,
+                 o->env_intensity, o->env_rotation);
+    else
+        snprintf(light, sizeof light, "sky (%g, %g, %g)", d.sky[0], d.sky[1], d.sky[2]);
     uint64_t probes = o->points ? pts.count : (uint64_t)d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
     char where[160];
     if (o->points)
@@ -708,10 +752,9 @@ static int cmd_bake(const options *o)
     if (!o->log.quiet)
         fprintf(stderr,
                 "probebake: baking %s: %s, %u rays x %s%u passes%s, %u bounces, "
-                "sky (%g, %g, %g), octmap %u, direct %s, seed %u\n",
+                "%s, octmap %u, direct %s, seed %u\n",
                 o->scene, where, d.rays_per_probe, d.target_error > 0.f ? "up to " : "", d.passes,
-                d.target_error > 0.f ? " (until converged)" : "", d.bounces, d.sky[0], d.sky[1], d.sky[2],
-                d.octmap_res, d.exclude_direct ? "excluded" : "included", d.seed);
+                d.target_error > 0.f ? " (until converged)" : "", d.bounces, light, d.octmap_res, d.exclude_direct ? "excluded" : "included", d.seed);
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
@@ -751,13 +794,16 @@ static int cmd_bake(const options *o)
     if (d.target_error > 0.f)
         printf(", %u converged before the last pass", converged);
     printf("), %.3g probe rays in %s%u passes\n", rays, d.target_error > 0.f ? "up to " : "", vol.settings.passes);
-    printf("time: bvh %.1f ms; GPU trace %.0f ms (%.2f Mrays/s), sh %.0f ms, depth %.0f ms; total %.0f ms wall\n",
+    printf("time: bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, depth %.0f ms; "
+           "total %.0f ms wall\n",
            vol.timings.bvh, vol.timings.trace, vol.timings.trace > 0 ? rays / (vol.timings.trace * 1e3) : 0.0,
-           vol.timings.sh, vol.timings.octmap, vol.timings.total);
+           vol.timings.trace > 0 ? (double)vol.traversals / (vol.timings.trace * 1e3) : 0.0, vol.timings.sh,
+           vol.timings.octmap, vol.timings.total);
     rc = 0;
 out:
     pb_volume_free(&vol);
     pb_points_free(&pts);
+    pb_environment_free(&env);
     pb_gpu_scene_destroy(gs);
     pb_context_destroy(ctx);
     pb_bvh_destroy(bvh);
