@@ -6,7 +6,14 @@
  * default 32), then bakes at 64, 128 and 256 rays per probe (1 pass, other
  * seeds). Error: relative RMSE of irradiance over valid probes and 64
  * directions, sqrt(mean (E - E_ref)^2) / mean(E_ref), luminance-weighted RGB.
- * Time: GPU timestamps of the trace, SH and depth kernels, and wall time. */
+ * Time: GPU timestamps of the trace, SH and depth kernels, and wall time.
+ *
+ * Throughput: the bake's BVH traversals (probe, bounce and shadow rays,
+ * relocation included, counted by the kernel) per second of all its GPU
+ * time (trace + SH + depth), against the trace kernel's rays per second on
+ * 256 probe rays per probe of the same grid, same device, same run. The
+ * target is a ratio >= 0.7: shading, projection, filtering and relocation
+ * cost at most 30 %. */
 #define _POSIX_C_SOURCE 200809L
 #include "common/common.h"
 #include "probebake/probebake.h"
@@ -21,6 +28,8 @@ typedef struct row {
     char scene[128];
     uint32_t probes, rays, passes;
     double trace_ms, sh_ms, depth_ms, wall_ms, rmse;
+    uint64_t traversals;
+    double trace_kernel_mrays;    /* trace.comp on this scene's probe rays */
 } row;
 
 static double luminance(const float c[3])
@@ -90,8 +99,8 @@ int main(int argc, char **argv)
     }
     printf("device: %s; %u probes, %u bounces, reference 256 rays x %u passes\n", pb_context_device(ctx)->name, probes,
            bounces, ref_passes);
-    printf("%-18s %6s %6s %9s %8s %8s %9s %9s %8s\n", "scene", "rays", "passes", "trace ms", "sh ms", "depth ms",
-           "wall ms", "Mrays/s", "rel RMSE");
+    printf("%-18s %6s %6s %9s %8s %8s %9s %9s %9s %7s %8s\n", "scene", "rays", "passes", "trace ms", "sh ms", "depth ms",
+           "wall ms", "Mrays/s", "Mtrav/s", "vs trc", "rel RMSE");
     row rows[64];
     int nrows = 0;
     for (int si = 0; si < nscenes; ++si) {
@@ -113,6 +122,19 @@ int main(int argc, char **argv)
         d.octmap_res = 16;
         /* scenes with emissive surfaces light themselves; a dim sky for the rest */
         d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
+        /* the trace kernel's throughput on 256 probe rays per probe of this grid */
+        double trace_mrays = 0;
+        {
+            uint32_t P = pb_probe_grid_count(&d.grid), n = P * 256;
+            pb_ray *rays = malloc((size_t)n * sizeof *rays);
+            pb_hit *hits = malloc((size_t)n * sizeof *hits);
+            pb_trace_stats st;
+            if (rays && hits && pb_probe_rays(&d.grid, 0, P, 256, 1, rays) == PB_OK &&
+                pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, NULL, &err) == PB_OK && /* warm-up */
+                pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err) == PB_OK && st.kernel_ms > 0)
+                trace_mrays = n / (st.kernel_ms * 1e3);
+            free(rays), free(hits);
+        }
         pb_volume ref;
         d.rays_per_probe = 256;
         d.passes = ref_passes;
@@ -141,13 +163,17 @@ int main(int argc, char **argv)
                 r->wall_ms = pb_now_ms() - t0;
                 r->trace_ms = v.timings.trace, r->sh_ms = v.timings.sh, r->depth_ms = v.timings.octmap;
                 r->rmse = relative_rmse(&v, &ref);
-                double rays = (double)v.probe_count * r->rays;
-                printf("%-18.18s %6u %6u %9.1f %8.1f %8.1f %9.1f %9.3f %8.4f\n", name, r->rays, 1, r->trace_ms, r->sh_ms,
-                       r->depth_ms, r->wall_ms, r->trace_ms > 0 ? rays / (r->trace_ms * 1e3) : 0.0, r->rmse);
+                r->traversals = v.traversals;
+                r->trace_kernel_mrays = trace_mrays;
+                double rays = (double)v.probe_count * r->rays, gpu_ms = r->trace_ms + r->sh_ms + r->depth_ms;
+                double mtrav = gpu_ms > 0 ? (double)v.traversals / (gpu_ms * 1e3) : 0.0;
+                printf("%-18.18s %6u %6u %9.1f %8.1f %8.1f %9.1f %9.3f %9.3f %7.2f %8.4f\n", name, r->rays, 1, r->trace_ms,
+                       r->sh_ms, r->depth_ms, r->wall_ms, r->trace_ms > 0 ? rays / (r->trace_ms * 1e3) : 0.0, mtrav,
+                       trace_mrays > 0 ? mtrav / trace_mrays : 0.0, r->rmse);
                 fflush(stdout);
                 pb_volume_free(&v);
             }
-            printf("%-18.18s reference: %.0f ms wall\n", name, ref_ms);
+            printf("%-18.18s reference: %.0f ms wall; trace kernel alone %.3f Mrays/s\n", name, ref_ms, trace_mrays);
             pb_volume_free(&ref);
         }
         pb_gpu_scene_destroy(gs);
@@ -162,9 +188,11 @@ int main(int argc, char **argv)
         for (int i = 0; i < nrows; ++i)
             fprintf(f,
                     "    {\"scene\": \"%s\", \"probes\": %u, \"rays_per_probe\": %u, \"passes\": %u, \"trace_ms\": %.3f, "
-                    "\"sh_ms\": %.3f, \"depth_ms\": %.3f, \"wall_ms\": %.3f, \"relative_rmse\": %.6f}%s\n",
+                    "\"sh_ms\": %.3f, \"depth_ms\": %.3f, \"wall_ms\": %.3f, \"relative_rmse\": %.6f, "
+                    "\"traversals\": %llu, \"trace_kernel_mrays_per_s\": %.4f}%s\n",
                     rows[i].scene, rows[i].probes, rows[i].rays, rows[i].passes, rows[i].trace_ms, rows[i].sh_ms,
-                    rows[i].depth_ms, rows[i].wall_ms, rows[i].rmse, i + 1 < nrows ? "," : "");
+                    rows[i].depth_ms, rows[i].wall_ms, rows[i].rmse, (unsigned long long)rows[i].traversals,
+                    rows[i].trace_kernel_mrays, i + 1 < nrows ? "," : "");
         fprintf(f, "  ]\n}\n");
         fclose(f);
         printf("wrote %s\n", json);

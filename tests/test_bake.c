@@ -179,9 +179,9 @@ static void environment_map_projection(void)
  * 1 m above, direct light excluded: the probe sees only the floor, of
  * radiance rho E / pi, where E is the map's irradiance on an upward surface
  * (per texel in closed form). SH of a lower-hemisphere step is exact at L1:
- * E(n) = rho E (1 - n_y) / 2. bounces 0 checks next-event estimation of the
- * map alone (weight 1 at a path's last vertex); bounces 1 checks its MIS
- * with bounce rays, which here all leave to the sky. */
+ * E(n) = rho E (1 - n_y) / 2: next-event estimation of the map, MIS-combined
+ * with the (terminal) bounce rays that leave to the sky, is unbiased. With
+ * bounces 0 and 1 alike (the floor cannot see itself). */
 static void environment_lights_floor(void)
 {
     double floor[18] = {-200, 0, -200, -200, 0, 200, 200, 0, 200, -200, 0, -200, 200, 0, 200, 200, 0, -200};

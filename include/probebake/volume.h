@@ -64,7 +64,7 @@ typedef struct pb_volume {
     pb_volume_timings timings;
     char device[128];
     uint64_t rays_traced;               /* probe rays of the bake passes (set by pb_bake; not stored in files) */
-    uint64_t traversals;                /* BVH traversals of the bake passes: probe, bounce and shadow rays (ditto) */
+    uint64_t traversals;                /* BVH traversals of relocation and bake passes: probe, bounce, shadow rays (ditto) */
     /* per probe, caller- or reader-owned arrays (pb_volume_free frees them) */
     float *base;                        /* 3 per probe, relative to origin */
     float *offset;                      /* 3 per probe: relocation, metres */

@@ -34,11 +34,9 @@ vec3 cosine_direction(vec3 n, float u1, float u2)
 // table), a uniform point on it, a shadow ray, and the MIS weight against
 // cosine-weighted bounce sampling (power heuristic). Returns emitted radiance
 // x cos / (pi pdf) x weight: the caller multiplies by throughput x albedo.
-// At a path's last vertex no bounce ray follows to find the same light, so
-// the weight is 1 there (with MIS it would lose the bounce strategy's share).
 // (A function of its own also keeps glslang's `precise` analysis of main()
 // small: inlined here, it ran out of memory.)
-vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, bool last, inout uint state)
+vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
 {
     SceneRefs s = P.scene;
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
@@ -68,7 +66,7 @@ vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, bool last, inout uint state)
         return vec3(0.0);
     float pl = FloatBuf(P.emit_pdf).v[etri] * d2 / cos_e;
     float pb = cos_x / PB_PI;
-    float wl = last ? 1.0 : pl * pl / (pl * pl + pb * pb);
+    float wl = pl * pl / (pl * pl + pb * pb);
     FloatBuf euv = FloatBuf(s.tri_uv);
     uint eb = 6u * etri;
     float ew0 = 1.0 - b1 - b2;
@@ -81,7 +79,7 @@ vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, bool last, inout uint state)
 // Next-event estimation of the environment: a direction by texel power, a
 // shadow ray, MIS against cosine-weighted bounce sampling (power heuristic).
 // Returns radiance x cos / (pi pdf) x weight, like emitter_nee.
-vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, bool last, inout uint state)
+vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, inout uint state)
 {
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
     vec3 w = env_sample(env, u0, u1, u2).xyz;
@@ -93,7 +91,7 @@ vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, bool last, inout uint state)
     if (shadow.tri != PB_NO_HIT)
         return vec3(0.0);
     float pb = cos_x / PB_PI;
-    float wl = last ? 1.0 : pe * pe / (pe * pe + pb * pb);
+    float wl = pe * pe / (pe * pe + pb * pb);
     return env_radiance(env, w) * (cos_x / (PB_PI * pe) * wl);
 }
 
@@ -156,18 +154,23 @@ void main()
             }
             L += throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w;
         }
+        if (bounce > P.bounces)
+            break; // the terminal ray: it only gathers emission (see below)
         vec3 albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * (1.0 - m.emissive_metallic.w);
         vec3 x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);
         vec3 E = vec3(0.0);
         for (uint k = 0u; k < P.light_count; ++k)
             E += light_irradiance(s, lights.l[k], x, ng, true);
         L += throughput * albedo * (E / PB_PI);
-        bool last = bounce >= P.bounces;
         if (P.emitter_count > 0u && albedo != vec3(0.0))
-            L += throughput * albedo * emitter_nee(P, x, ng, last, state);
+            L += throughput * albedo * emitter_nee(P, x, ng, state);
         if (env.count > 0u && albedo != vec3(0.0))
-            L += throughput * albedo * env_nee(env, s, x, ng, last, state);
-        if (last)
+            L += throughput * albedo * env_nee(env, s, x, ng, state);
+        // After the last reflection one more (terminal) bounce ray gathers the
+        // emission and environment the light samples above are MIS-weighted
+        // against; without it their weights would miss the bounce share (a
+        // bias), and weight 1 instead gives fireflies near emitters.
+        if (bounce >= P.bounces && P.emitter_count == 0u && env.count == 0u)
             break;
         if (bounce >= 1u) { // Russian roulette from the second reflection on
             float q = min(0.95, max(albedo.r, max(albedo.g, albedo.b)));

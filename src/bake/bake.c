@@ -122,7 +122,7 @@ typedef struct bake_run {
     float *near;                   /* 8 per probe: nearest back t + dir, nearest front t + dir */
     uint32_t emitter_count;
     const pb_env_table *env;
-    uint64_t traversals;           /* BVH traversals of the bake passes (counted by bake_trace) */
+    uint64_t traversals;           /* BVH traversals of relocation and bake passes (counted by bake_trace) */
     uint32_t *passes_done;         /* per probe */
     double *dc_sum, *dc_sq;        /* per probe: luminance of each pass's DC coefficient, for the standard error */
 } bake_run;
@@ -157,9 +157,8 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
             prm.env_width = run->env->width, prm.env_height = run->env->height, prm.env_count = run->env->count;
             prm.env_rotation[0] = run->env->cos_rot, prm.env_rotation[1] = run->env->sin_rot;
         }
-        prm.counters = relocating ? 0 : B->counters.address;
-        if (!relocating)
-            memset(B->counters.mapped, 0, 4);
+        prm.counters = B->counters.address;
+        memset(B->counters.mapped, 0, 4);
         prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
         prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces, prm.light_count = run->scene->light_count;
         prm.octmap_res = n, prm.max_distance = d->max_distance, prm.lobe_power = d->lobe_power;
@@ -188,11 +187,9 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
             run->t_sh += ctx->intervals_ms[1];
             run->t_depth += ctx->interval_count >= 3 ? ctx->intervals_ms[2] : 0.0;
         }
-        if (!relocating) {
-            uint32_t n_trav;
-            memcpy(&n_trav, B->counters.mapped, 4);
-            run->traversals += n_trav;
-        }
+        uint32_t n_trav;
+        memcpy(&n_trav, B->counters.mapped, 4);
+        run->traversals += n_trav;
         memcpy(run->reduced, B->reduced.mapped, (size_t)count * (PB_REDUCED_SH_STRIDE + (relocating ? 0 : 2u * texels)) * 4);
         for (uint32_t l = 0; l < count; ++l) {
             const float *o = run->reduced + PB_REDUCED_SH_STRIDE * (size_t)l;

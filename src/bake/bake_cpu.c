@@ -151,7 +151,7 @@ typedef struct trace_ctx {
 
 /* Next-event estimation of one emissive triangle (bake_trace.comp). */
 static void emitter_nee(const trace_ctx *c, const pb_bake_emitters *em, const float x[3], const float ng[3],
-                        const float albedo[3], const float thr[3], int last, uint32_t *state, float L[3])
+                        const float albedo[3], const float thr[3], uint32_t *state, float L[3])
 {
     const pb_bake_pass *p = c->p;
     const pb_scene *s = p->scene;
@@ -179,7 +179,7 @@ static void emitter_nee(const trace_ctx *c, const pb_bake_emitters *em, const fl
     if (trace(p, x, w, dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
     float pl = em->pdf_area[etri] * d2 / cos_e, pb = cos_x / PI_F;
-    float wl = last ? 1.f : pl * pl / (pl * pl + pb * pb);
+    float wl = pl * pl / (pl * pl + pb * pb);
     const float *uv = s->texcoords + 6 * (size_t)etri;
     float w0 = 1.f - b1 - b2, tu = w0 * uv[0] + b1 * uv[2] + b2 * uv[4], tv = w0 * uv[1] + b1 * uv[3] + b2 * uv[5];
     float et[3];
@@ -190,7 +190,7 @@ static void emitter_nee(const trace_ctx *c, const pb_bake_emitters *em, const fl
 
 /* env_nee of bake_trace.comp */
 static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], const float albedo[3],
-                    const float thr[3], int last, uint32_t *state, float L[3])
+                    const float thr[3], uint32_t *state, float L[3])
 {
     const pb_env_table *env = p->env;
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
@@ -202,7 +202,7 @@ static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], 
         return;
     if (trace(p, x, w, INFINITY, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
-    float pb = cos_x / PI_F, wl = last ? 1.f : pe * pe / (pe * pe + pb * pb);
+    float pb = cos_x / PI_F, wl = pe * pe / (pe * pe + pb * pb);
     const float *Le = env->texels[pb_env_texel_of(env, w)].rgb;
     for (int k = 0; k < 3; ++k)
         L[k] += thr[k] * albedo[k] * (Le[k] * (cos_x / (PI_F * pe) * wl));
@@ -277,6 +277,8 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
                 for (int k = 0; k < 3; ++k)
                     L[k] += thr[k] * m->emissive_metallic[k] * et[k] * w;
             }
+            if (bounce > p->bounces)
+                break; /* the terminal ray only gathers emission */
             texture_rgb(s, m->tex[0], tu, tv, base);
             float albedo[3], xp[3], x[3], E[3] = {0, 0, 0};
             for (int k = 0; k < 3; ++k) {
@@ -292,13 +294,13 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
             }
             for (int k = 0; k < 3; ++k)
                 L[k] += thr[k] * albedo[k] * (E[k] / PI_F);
-            int last = bounce >= p->bounces;
+            int env_sampled = p->env && p->env->count;
             if (em && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-                emitter_nee(c, em, x, ng, albedo, thr, last, &state, L);
-            if (p->env && p->env->count && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-                env_nee(p, x, ng, albedo, thr, last, &state, L);
-            if (last)
-                break;
+                emitter_nee(c, em, x, ng, albedo, thr, &state, L);
+            if (env_sampled && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
+                env_nee(p, x, ng, albedo, thr, &state, L);
+            if (bounce >= p->bounces && !em && !env_sampled)
+                break; /* no terminal ray needed: nothing to MIS against */
             if (bounce >= 1) {
                 float q = fminf(0.95f, fmaxf(albedo[0], fmaxf(albedo[1], albedo[2])));
                 if (rng_next(&state) >= q)
