@@ -120,8 +120,13 @@ int main(int argc, char **argv)
         pb_probe_grid_fit(s->bounds_min, s->bounds_max, probes, &d.grid);
         d.bounces = bounces;
         d.octmap_res = 16;
-        /* scenes with emissive surfaces light themselves; a dim sky for the rest */
-        d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
+        /* scenes with lights or emissive surfaces light themselves; a dim sky for the rest */
+        int self_lit = s->light_count > 0;
+        for (uint32_t m = 0; m < s->material_count && !self_lit; ++m)
+            self_lit = s->materials[m].emissive[0] > 0.f || s->materials[m].emissive[1] > 0.f ||
+                       s->materials[m].emissive[2] > 0.f;
+        if (!self_lit)
+            d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
         /* the trace kernel's throughput on 256 probe rays per probe of this grid */
         double trace_mrays = 0;
         {

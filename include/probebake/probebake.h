@@ -50,5 +50,7 @@
 #include "probebake/octahedral.h"
 #include "probebake/volume.h"
 #include "probebake/bake.h"
+#include "probebake/environment.h"
+#include "probebake/sample.h"
 
 #endif /* PROBEBAKE_H */

@@ -1,0 +1,61 @@
+/*
+ * probebake sample: the run-time half. Irradiance at a shading point from a
+ * baked grid volume: the 8-probe cage, trilinear weights, a smooth backface
+ * term, Chebyshev visibility from the depth moments, normal and view bias,
+ * tiny-weight crushing, renormalisation and SH evaluation (docs/sampling.md).
+ *
+ * The GLSL is shaders/include/probe_sample_core.glsl (Vulkan wrapper
+ * probe_sample.glsl, WebGL2 runtime/probe_sample.glsl); pb_sample_cpu is its
+ * C reference, operation for operation.
+ */
+#ifndef PROBEBAKE_SAMPLE_H
+#define PROBEBAKE_SAMPLE_H
+
+#include "probebake/base.h"
+#include "probebake/volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Defaults: biases as fractions of the smallest grid spacing. */
+#define PB_SAMPLE_NORMAL_BIAS 0.1f
+#define PB_SAMPLE_VIEW_BIAS 0.1f
+
+/* A grid volume laid out as the shaders read it, in a chosen frame (the
+ * renderer's: scene-local coordinates). */
+typedef struct pb_sample_volume {
+    float origin[3];            /* probe (0,0,0) before relocation, in the frame */
+    float spacing[3];
+    int32_t counts[3];
+    int32_t octmap_res;
+    float normal_bias, view_bias;
+    uint32_t probe_count;
+    float *probes;              /* 4 per probe: relocated position in the frame, w = PB_PROBE_* flags (uint bits) */
+    float *sh;                  /* 27 per probe: irradiance SH, coefficient major, RGB */
+    uint32_t *depth;            /* (n+2)^2 per probe: halves (mean, mean squared), as in the file */
+} pb_sample_volume;
+
+/* Lays out volume v for sampling in the frame whose origin is frame_origin
+ * (original coordinates). Biases <= 0 take the defaults. Returns
+ * PB_ERROR_INVALID_ARGUMENT for a point-set volume (no grid to interpolate
+ * in) and PB_ERROR_OUT_OF_HOST_MEMORY. */
+pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3], float normal_bias,
+                                 float view_bias, pb_sample_volume *out, pb_error *err);
+void pb_sample_volume_free(pb_sample_volume *s);
+
+/* Irradiance at p (frame coordinates) with unit normal n, seen from unit
+ * direction view (from p towards the viewer). */
+void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3]);
+
+typedef struct pb_context pb_context;
+
+/* The shader on the device for `count` queries (4 floats each for p, n,
+ * view; rgb out 4 floats each): the test of the GLSL against pb_sample_cpu. */
+pb_result pb_sample_gpu(pb_context *ctx, const pb_sample_volume *s, const float *p4, const float *n4,
+                        const float *view4, uint32_t count, float *rgb4, pb_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

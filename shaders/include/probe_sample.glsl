@@ -1,0 +1,61 @@
+// Run-time sampling, Vulkan GLSL: probe data in buffers reached by device
+// address. Set pb_volume (a private global) before calling
+// pb_sample_irradiance; the sampling itself is probe_sample_core.glsl.
+// Layout (src/bake/probe_sample.c, pb_sample_volume): per probe a vec4
+// (position, flags as uint bits), 27 floats of irradiance SH (coefficient
+// major, RGB), and (n+2)^2 uints per depth tile, each two halves
+// (mean, mean squared) as in the volume file.
+#ifndef PB_PROBE_SAMPLE_GLSL
+#define PB_PROBE_SAMPLE_GLSL
+
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer PbVec4Buf { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer PbFloatBuf { float v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer PbUintBuf { uint v[]; };
+
+struct PbVolumeRefs {
+    uint64_t probes;    // vec4 per probe
+    uint64_t sh;        // 27 floats per probe
+    uint64_t depth;     // (n+2)^2 uints per probe
+    uint64_t pad;
+    vec4 origin_nbias;  // grid origin, normal bias
+    vec4 spacing_vbias; // grid spacing, view bias
+    ivec4 counts_res;   // probes per axis, octmap_res
+};
+
+PbVolumeRefs pb_volume;
+
+vec4 pb_probe_position(int probe)
+{
+    return PbVec4Buf(pb_volume.probes).v[probe];
+}
+
+uint pb_probe_flags(int probe)
+{
+    return PbUintBuf(pb_volume.probes).v[4 * probe + 3];
+}
+
+vec3 pb_probe_sh(int probe, int k)
+{
+    PbFloatBuf b = PbFloatBuf(pb_volume.sh);
+    int i = 27 * probe + 3 * k;
+    return vec3(b.v[i], b.v[i + 1], b.v[i + 2]);
+}
+
+vec2 pb_probe_depth(int probe, ivec2 texel)
+{
+    int side = pb_volume.counts_res.w + 2;
+    return unpackHalf2x16(PbUintBuf(pb_volume.depth).v[side * side * probe + side * texel.y + texel.x]);
+}
+
+#include "probe_sample_core.glsl"
+
+PbVolumeGrid pb_volume_grid(PbVolumeRefs r)
+{
+    return PbVolumeGrid(r.origin_nbias.xyz, r.spacing_vbias.xyz, r.counts_res.xyz, r.counts_res.w, r.origin_nbias.w,
+                        r.spacing_vbias.w);
+}
+
+#endif

@@ -1,0 +1,134 @@
+// Run-time sampling of a probebake volume: irradiance at a shading point
+// from the 8-probe cage around it (docs/sampling.md). Written in the common
+// subset of Vulkan GLSL 4.60 and GLSL ES 3.00, so the same text serves the
+// baker (probe_sample.glsl), WebGL2 (runtime/probe_sample.glsl) and any
+// renderer. C reference: src/bake/probe_sample.c (pb_sample_cpu).
+//
+// The includer defines, over its own storage:
+//   vec4 pb_probe_position(int probe)            relocated position (xyz), same frame as p
+//   uint pb_probe_flags(int probe)               PB_PROBE_* of docs/format.md
+//   vec3 pb_probe_sh(int probe, int k)           irradiance SH coefficient k (RGB)
+//   vec2 pb_probe_depth(int probe, ivec2 texel)  (mean, mean squared) distance, bordered tile texel
+#ifndef PB_PROBE_SAMPLE_CORE_GLSL
+#define PB_PROBE_SAMPLE_CORE_GLSL
+
+#define PB_SAMPLE_PROBE_VALID 1u
+
+struct PbVolumeGrid {
+    vec3 origin;        // probe (0,0,0) before relocation, same frame as the shading points
+    vec3 spacing;       // metres per cell on each axis (unused on axes with one probe)
+    ivec3 counts;       // probes per axis, x fastest
+    int octmap_res;     // n: interior texels per side of a depth tile
+    float normal_bias;  // shading point moved along the normal by this x the smallest spacing
+    float view_bias;    // and towards the viewer by this x the smallest spacing
+};
+
+// Octahedral encoding (Cigolle et al. 2014), +Z hemisphere in the centre.
+vec2 pb_oct_encode(vec3 d)
+{
+    float l1 = abs(d.x) + abs(d.y) + abs(d.z);
+    vec2 uv = d.xy / l1;
+    if (d.z < 0.0) {
+        vec2 s = vec2(uv.x >= 0.0 ? 1.0 : -1.0, uv.y >= 0.0 ? 1.0 : -1.0);
+        uv = (1.0 - abs(uv.yx)) * s;
+    }
+    return uv;
+}
+
+// Irradiance SH L2 (basis order and constants of docs/conventions.md) at normal n.
+vec3 pb_sh_irradiance(int probe, vec3 n)
+{
+    vec3 e = pb_probe_sh(probe, 0) * 0.28209479177387814;
+    e += pb_probe_sh(probe, 1) * (0.48860251190291992 * n.y);
+    e += pb_probe_sh(probe, 2) * (0.48860251190291992 * n.z);
+    e += pb_probe_sh(probe, 3) * (0.48860251190291992 * n.x);
+    e += pb_probe_sh(probe, 4) * (1.09254843059207907 * n.x * n.y);
+    e += pb_probe_sh(probe, 5) * (1.09254843059207907 * n.y * n.z);
+    e += pb_probe_sh(probe, 6) * (0.31539156525252005 * (3.0 * n.z * n.z - 1.0));
+    e += pb_probe_sh(probe, 7) * (1.09254843059207907 * n.x * n.z);
+    e += pb_probe_sh(probe, 8) * (0.54627421529603953 * (n.x * n.x - n.y * n.y));
+    return e;
+}
+
+// Depth moments towards dir, bilinear over the bordered tile (the border
+// makes the four texels valid across the octahedral folds).
+vec2 pb_depth_moments(int probe, int n, vec3 dir)
+{
+    vec2 f = (pb_oct_encode(dir) * 0.5 + 0.5) * float(n) + 0.5;
+    vec2 i0 = clamp(floor(f), vec2(0.0), vec2(float(n)));
+    vec2 t = clamp(f - i0, vec2(0.0), vec2(1.0));
+    ivec2 b = ivec2(i0);
+    vec2 m00 = pb_probe_depth(probe, b);
+    vec2 m10 = pb_probe_depth(probe, b + ivec2(1, 0));
+    vec2 m01 = pb_probe_depth(probe, b + ivec2(0, 1));
+    vec2 m11 = pb_probe_depth(probe, b + ivec2(1, 1));
+    return mix(mix(m00, m10, t.x), mix(m01, m11, t.x), t.y);
+}
+
+// Chebyshev's bound on the chance that the point at distance r is visible
+// from the probe, given the mean and mean square of its depth; cubed to
+// sharpen the falloff (as DDGI does). 1 in front of the mean.
+float pb_chebyshev(vec2 m, float r)
+{
+    if (r <= m.x)
+        return 1.0;
+    float var = abs(m.y - m.x * m.x);
+    float d = r - m.x;
+    float c = var / (var + d * d);
+    return c * c * c;
+}
+
+// Irradiance at point p with unit normal n, seen from unit direction v
+// (from p towards the viewer; pass n where there is no viewer).
+vec3 pb_sample_irradiance(PbVolumeGrid g, vec3 p, vec3 n, vec3 v)
+{
+    float smin = 1e30;
+    for (int k = 0; k < 3; ++k)
+        if (g.counts[k] > 1)
+            smin = min(smin, g.spacing[k]);
+    if (smin >= 1e30)
+        smin = 0.0; // a single probe: no scale to bias by
+    vec3 biased = p + (n * g.normal_bias + v * g.view_bias) * smin;
+    vec3 rel = vec3(0.0);
+    for (int k = 0; k < 3; ++k)
+        rel[k] = g.counts[k] > 1 ? (biased[k] - g.origin[k]) / g.spacing[k] : 0.0;
+    ivec3 base = clamp(ivec3(floor(rel)), ivec3(0), max(g.counts - 2, ivec3(0)));
+    vec3 alpha = clamp(rel - vec3(base), vec3(0.0), vec3(1.0));
+    vec3 sum = vec3(0.0), sum_tri = vec3(0.0);
+    float wsum = 0.0, wsum_tri = 0.0;
+    for (int i = 0; i < 8; ++i) {
+        ivec3 off = ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+        ivec3 ijk = min(base + off, g.counts - 1);
+        int probe = ijk.x + g.counts.x * (ijk.y + g.counts.y * ijk.z);
+        vec3 tri3 = mix(1.0 - alpha, alpha, vec3(off));
+        float wt = tri3.x * tri3.y * tri3.z;
+        vec3 e = pb_sh_irradiance(probe, n);
+        sum_tri += wt * e;
+        wsum_tri += wt;
+        if ((pb_probe_flags(probe) & PB_SAMPLE_PROBE_VALID) == 0u)
+            continue; // inside geometry: its value was dilated, its depth is meaningless
+        vec3 pp = pb_probe_position(probe).xyz;
+        // smooth backface term: probes behind the surface count less
+        vec3 to_probe = pp - p;
+        float dl = length(to_probe);
+        float wb = (dl > 0.0 ? dot(to_probe / dl, n) : 1.0) * 0.5 + 0.5;
+        float w = wb * wb + 0.2;
+        // visibility from the probe's depth moments
+        vec3 from_probe = biased - pp;
+        float r = length(from_probe);
+        vec2 m = pb_depth_moments(probe, g.octmap_res, r > 0.0 ? from_probe / r : n);
+        w *= pb_chebyshev(m, r);
+        w = max(w, 1e-6);
+        // crush tiny weights: a probe that barely counts should not count at all
+        if (w < 0.2)
+            w *= w * w * 25.0;
+        w *= wt;
+        sum += w * e;
+        wsum += w;
+    }
+    // all eight probes invalid or weightless: plain trilinear of their (dilated) values
+    vec3 e = wsum > 0.0 ? sum / wsum : (wsum_tri > 0.0 ? sum_tri / wsum_tri : vec3(0.0));
+    return max(e, vec3(0.0)); // SH ringing can go negative; light cannot
+}
+
+#endif

@@ -1,0 +1,173 @@
+/* C reference of shaders/include/probe_sample_core.glsl, step for step (the
+ * same float operations in the same order, so results agree to rounding of
+ * sqrt and the fused multiply-adds a driver may form). */
+#include "common/common.h"
+#include "probebake/sample.h"
+#include "probebake/sh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3], float normal_bias,
+                                 float view_bias, pb_sample_volume *out, pb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (!(v->flags & PB_VOLUME_GRID))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "the volume is a point set: run-time sampling interpolates in a grid");
+    uint32_t P = v->probe_count, side = v->octmap_res + 2;
+    out->probes = malloc((size_t)P * 4 * sizeof(float));
+    out->sh = malloc((size_t)P * 27 * sizeof(float));
+    out->depth = malloc((size_t)P * side * side * sizeof(uint32_t));
+    if (!out->probes || !out->sh || !out->depth) {
+        pb_sample_volume_free(out);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
+    }
+    for (int k = 0; k < 3; ++k) {
+        out->origin[k] = (float)(v->origin[k] - frame_origin[k]);
+        out->spacing[k] = (float)v->spacing[k];
+        out->counts[k] = (int32_t)v->counts[k];
+    }
+    out->octmap_res = (int32_t)v->octmap_res;
+    out->normal_bias = normal_bias > 0.f ? normal_bias : PB_SAMPLE_NORMAL_BIAS;
+    out->view_bias = view_bias > 0.f ? view_bias : PB_SAMPLE_VIEW_BIAS;
+    out->probe_count = P;
+    for (uint32_t p = 0; p < P; ++p) {
+        double pos[3];
+        pb_volume_probe_position(v, p, pos);
+        for (int k = 0; k < 3; ++k)
+            out->probes[4 * (size_t)p + k] = (float)(pos[k] - frame_origin[k]);
+        memcpy(&out->probes[4 * (size_t)p + 3], &v->probe_flags[p], 4);
+    }
+    memcpy(out->sh, v->sh, (size_t)P * 27 * sizeof(float));
+    for (uint64_t t = 0; t < (uint64_t)P * side * side; ++t)
+        out->depth[t] = (uint32_t)v->depth[2 * t] | (uint32_t)v->depth[2 * t + 1] << 16;
+    return PB_OK;
+}
+
+void pb_sample_volume_free(pb_sample_volume *s)
+{
+    free(s->probes), free(s->sh), free(s->depth);
+    memset(s, 0, sizeof *s);
+}
+
+static float clampf(float x, float lo, float hi)
+{
+    return x < lo ? lo : (x > hi ? hi : x);
+}
+
+static void oct_encode(const float d[3], float uv[2])
+{
+    float l1 = fabsf(d[0]) + fabsf(d[1]) + fabsf(d[2]);
+    float u = d[0] / l1, v = d[1] / l1;
+    if (d[2] < 0.f) {
+        float su = u >= 0.f ? 1.f : -1.f, sv = v >= 0.f ? 1.f : -1.f;
+        float fu = (1.f - fabsf(v)) * su, fv = (1.f - fabsf(u)) * sv;
+        u = fu, v = fv;
+    }
+    uv[0] = u, uv[1] = v;
+}
+
+static void depth_at(const pb_sample_volume *s, int probe, int x, int y, float m[2])
+{
+    int side = s->octmap_res + 2;
+    uint32_t t = s->depth[(size_t)side * side * probe + (size_t)side * y + x];
+    m[0] = pb_half_to_float((uint16_t)(t & 0xffffu));
+    m[1] = pb_half_to_float((uint16_t)(t >> 16));
+}
+
+static void depth_moments(const pb_sample_volume *s, int probe, const float dir[3], float m[2])
+{
+    int n = s->octmap_res;
+    float uv[2], f[2], t[2];
+    int b[2];
+    oct_encode(dir, uv);
+    for (int k = 0; k < 2; ++k) {
+        f[k] = (uv[k] * 0.5f + 0.5f) * (float)n + 0.5f;
+        float i0 = clampf(floorf(f[k]), 0.f, (float)n);
+        t[k] = clampf(f[k] - i0, 0.f, 1.f);
+        b[k] = (int)i0;
+    }
+    float m00[2], m10[2], m01[2], m11[2];
+    depth_at(s, probe, b[0], b[1], m00);
+    depth_at(s, probe, b[0] + 1, b[1], m10);
+    depth_at(s, probe, b[0], b[1] + 1, m01);
+    depth_at(s, probe, b[0] + 1, b[1] + 1, m11);
+    for (int k = 0; k < 2; ++k) {
+        /* GLSL mix(x, y, a) = x (1 - a) + y a */
+        float a = m00[k] * (1.f - t[0]) + m10[k] * t[0], c = m01[k] * (1.f - t[0]) + m11[k] * t[0];
+        m[k] = a * (1.f - t[1]) + c * t[1];
+    }
+}
+
+static float chebyshev(const float m[2], float r)
+{
+    if (r <= m[0])
+        return 1.f;
+    float var = fabsf(m[1] - m[0] * m[0]);
+    float d = r - m[0];
+    float c = var / (var + d * d);
+    return c * c * c;
+}
+
+void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3])
+{
+    float smin = 1e30f;
+    for (int k = 0; k < 3; ++k)
+        if (s->counts[k] > 1)
+            smin = fminf(smin, s->spacing[k]);
+    if (smin >= 1e30f)
+        smin = 0.f;
+    float biased[3], rel[3], alpha[3];
+    int base[3];
+    for (int k = 0; k < 3; ++k) {
+        biased[k] = p[k] + (n[k] * s->normal_bias + view[k] * s->view_bias) * smin;
+        rel[k] = s->counts[k] > 1 ? (biased[k] - s->origin[k]) / s->spacing[k] : 0.f;
+        int hi = s->counts[k] - 2 > 0 ? s->counts[k] - 2 : 0;
+        int b = (int)floorf(rel[k]);
+        base[k] = b < 0 ? 0 : (b > hi ? hi : b);
+        alpha[k] = clampf(rel[k] - (float)base[k], 0.f, 1.f);
+    }
+    float sum[3] = {0, 0, 0}, sum_tri[3] = {0, 0, 0}, wsum = 0.f, wsum_tri = 0.f;
+    for (int i = 0; i < 8; ++i) {
+        int off[3] = {i & 1, (i >> 1) & 1, (i >> 2) & 1}, ijk[3];
+        float wt = 1.f;
+        for (int k = 0; k < 3; ++k) {
+            ijk[k] = base[k] + off[k] < s->counts[k] - 1 ? base[k] + off[k] : s->counts[k] - 1;
+            wt *= off[k] ? alpha[k] : 1.f - alpha[k];
+        }
+        int probe = ijk[0] + s->counts[0] * (ijk[1] + s->counts[1] * ijk[2]);
+        float e[3];
+        pb_sh_eval(s->sh + 27 * (size_t)probe, n, e);
+        for (int k = 0; k < 3; ++k)
+            sum_tri[k] += wt * e[k];
+        wsum_tri += wt;
+        uint32_t flags;
+        memcpy(&flags, &s->probes[4 * (size_t)probe + 3], 4);
+        if (!(flags & PB_PROBE_VALID))
+            continue;
+        const float *pp = s->probes + 4 * (size_t)probe;
+        float to[3] = {pp[0] - p[0], pp[1] - p[1], pp[2] - p[2]};
+        float dl = sqrtf(to[0] * to[0] + to[1] * to[1] + to[2] * to[2]);
+        float wb = (dl > 0.f ? (to[0] / dl * n[0] + to[1] / dl * n[1] + to[2] / dl * n[2]) : 1.f) * 0.5f + 0.5f;
+        float w = wb * wb + 0.2f;
+        float from[3] = {biased[0] - pp[0], biased[1] - pp[1], biased[2] - pp[2]};
+        float r = sqrtf(from[0] * from[0] + from[1] * from[1] + from[2] * from[2]);
+        float dir[3] = {r > 0.f ? from[0] / r : n[0], r > 0.f ? from[1] / r : n[1], r > 0.f ? from[2] / r : n[2]};
+        float m[2];
+        depth_moments(s, probe, dir, m);
+        w *= chebyshev(m, r);
+        w = fmaxf(w, 1e-6f);
+        if (w < 0.2f)
+            w *= w * w * 25.f;
+        w *= wt;
+        for (int k = 0; k < 3; ++k)
+            sum[k] += w * e[k];
+        wsum += w;
+    }
+    for (int k = 0; k < 3; ++k) {
+        float e = wsum > 0.f ? sum[k] / wsum : (wsum_tri > 0.f ? sum_tri[k] / wsum_tri : 0.f);
+        rgb[k] = fmaxf(e, 0.f);
+    }
+}

@@ -1,0 +1,95 @@
+/* The sampling volume on the device, and pb_sample_gpu: the probe_sample
+ * kernel over a batch of queries (the test of the shipped GLSL). */
+#include "sample/sample_gpu.h"
+#include "common/common.h"
+
+#include "probe_sample.spv.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+pb_result pb_sample_upload(pb_context *ctx, const pb_sample_volume *s, pb_sample_buffers *out, pb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    uint64_t P = s->probe_count, side = (uint64_t)s->octmap_res + 2;
+    pb_result r = pb_buffer_create(ctx, P * 16, PB_MEMORY_DEVICE, "volume probes", &out->probes, err);
+    if (r == PB_OK)
+        r = pb_buffer_upload(ctx, &out->probes, 0, s->probes, P * 16, err);
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, P * 27 * 4, PB_MEMORY_DEVICE, "volume SH", &out->sh, err);
+    if (r == PB_OK)
+        r = pb_buffer_upload(ctx, &out->sh, 0, s->sh, P * 27 * 4, err);
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, P * side * side * 4, PB_MEMORY_DEVICE, "volume depth", &out->depth, err);
+    if (r == PB_OK)
+        r = pb_buffer_upload(ctx, &out->depth, 0, s->depth, P * side * side * 4, err);
+    if (r != PB_OK) {
+        pb_sample_release(ctx, out);
+        return r;
+    }
+    gpu_volume_refs *g = &out->refs;
+    g->probes = out->probes.address, g->sh = out->sh.address, g->depth = out->depth.address;
+    for (int k = 0; k < 3; ++k) {
+        g->origin_nbias[k] = s->origin[k];
+        g->spacing_vbias[k] = s->spacing[k];
+        g->counts_res[k] = s->counts[k];
+    }
+    g->origin_nbias[3] = s->normal_bias;
+    g->spacing_vbias[3] = s->view_bias;
+    g->counts_res[3] = s->octmap_res;
+    return PB_OK;
+}
+
+void pb_sample_release(pb_context *ctx, pb_sample_buffers *b)
+{
+    pb_buffer_destroy(ctx, &b->probes);
+    pb_buffer_destroy(ctx, &b->sh);
+    pb_buffer_destroy(ctx, &b->depth);
+    memset(b, 0, sizeof *b);
+}
+
+typedef struct sample_push {
+    gpu_volume_refs volume;
+    uint64_t points, normals, views, out;
+    uint32_t count, pad;
+} sample_push;
+
+pb_result pb_sample_gpu(pb_context *ctx, const pb_sample_volume *s, const float *p4, const float *n4,
+                        const float *view4, uint32_t count, float *rgb4, pb_error *err)
+{
+    pb_error_clear(err);
+    if (count == 0)
+        return PB_OK;
+    uint64_t bytes = (uint64_t)count * 16;
+    pb_sample_buffers vb;
+    pb_buffer q[3] = {{0}}, out = {0};
+    pb_pipeline pipe = {0};
+    pb_result r = pb_sample_upload(ctx, s, &vb, err);
+    const float *src[3] = {p4, n4, view4};
+    for (int i = 0; i < 3 && r == PB_OK; ++i) {
+        r = pb_buffer_create(ctx, bytes, PB_MEMORY_DEVICE, "sample queries", &q[i], err);
+        if (r == PB_OK)
+            r = pb_buffer_upload(ctx, &q[i], 0, src[i], bytes, err);
+    }
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, bytes, PB_MEMORY_DOWNLOAD, "sample results", &out, err);
+    if (r == PB_OK)
+        r = pb_pipeline_create(ctx, pb_spv_probe_sample, sizeof pb_spv_probe_sample, sizeof(sample_push), NULL, 0, 64,
+                               "probe_sample", &pipe, err);
+    if (r == PB_OK)
+        r = pb_cmd_begin(ctx, err);
+    if (r == PB_OK) {
+        sample_push push = {vb.refs, q[0].address, q[1].address, q[2].address, out.address, count, 0};
+        pb_cmd_dispatch(ctx, &pipe, &push, (count + 63) / 64);
+        pb_cmd_barrier_to_host(ctx);
+        r = pb_cmd_submit_wait(ctx, NULL, err);
+    }
+    if (r == PB_OK)
+        memcpy(rgb4, out.mapped, (size_t)bytes);
+    pb_pipeline_destroy(ctx, &pipe);
+    for (int i = 0; i < 3; ++i)
+        pb_buffer_destroy(ctx, &q[i]);
+    pb_buffer_destroy(ctx, &out);
+    pb_sample_release(ctx, &vb);
+    return r;
+}

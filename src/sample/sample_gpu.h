@@ -1,0 +1,28 @@
+/* C mirror of PbVolumeRefs (shaders/include/probe_sample.glsl) and the
+ * device copy of a pb_sample_volume, shared by pb_sample_gpu and the
+ * renderer. */
+#ifndef PB_SAMPLE_GPU_H
+#define PB_SAMPLE_GPU_H
+
+#include "gpu/gpu.h"
+#include "probebake/sample.h"
+
+#include <stddef.h>
+
+typedef struct gpu_volume_refs {
+    uint64_t probes, sh, depth, pad;
+    float origin_nbias[4];
+    float spacing_vbias[4];
+    int32_t counts_res[4];
+} gpu_volume_refs;
+_Static_assert(sizeof(gpu_volume_refs) == 80, "PbVolumeRefs layout");
+
+typedef struct pb_sample_buffers {
+    pb_buffer probes, sh, depth;
+    gpu_volume_refs refs;
+} pb_sample_buffers;
+
+pb_result pb_sample_upload(pb_context *ctx, const pb_sample_volume *s, pb_sample_buffers *out, pb_error *err);
+void pb_sample_release(pb_context *ctx, pb_sample_buffers *b);
+
+#endif

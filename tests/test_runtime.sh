@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The shipped WebGL2 sampler: runtime/probe_sample.glsl is what
+# scripts/make_runtime_glsl.sh generates from the shared GLSL (so the web
+# and Vulkan samplers cannot drift apart), and runtime/example.frag with it
+# pasted in compiles as a GLSL ES 3.00 fragment shader.
+# Usage: test_runtime.sh SOURCE_DIR GLSLANG
+set -u
+src=$1
+glslang=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+failed=0
+bash "$src/scripts/make_runtime_glsl.sh" "$tmp/probe_sample.glsl"
+if cmp -s "$tmp/probe_sample.glsl" "$src/runtime/probe_sample.glsl"; then
+    echo "[  OK  ] runtime/probe_sample.glsl is up to date"
+else
+    echo "[ FAIL ] runtime/probe_sample.glsl differs from scripts/make_runtime_glsl.sh's output: run it"
+    failed=1
+fi
+awk -v f="$src/runtime/probe_sample.glsl" '/@PROBE_SAMPLE@/ { while ((getline l < f) > 0) print l; next } { print }' \
+    "$src/runtime/example.frag" >"$tmp/example.frag"
+if out=$("$glslang" "$tmp/example.frag" 2>&1); then
+    echo "[  OK  ] runtime/example.frag with the sampler compiles as GLSL ES 3.00"
+else
+    echo "[ FAIL ] GLSL ES 3.00 compile:"
+    sed 's/^/    /' <<<"$out" | head -20
+    failed=1
+fi
+[ "$failed" -eq 0 ]

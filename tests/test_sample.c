@@ -1,0 +1,244 @@
+/* The run-time sampling function (shaders/include/probe_sample_core.glsl)
+ * against its C reference, and against physics: a volume baked under a
+ * constant sky samples to pi L everywhere; behind a thin wall the probes on
+ * the lit side are not seen (Chebyshev visibility), in front of it they are. */
+#include "scenes_gen.h"
+
+static pb_context *ctx;
+
+static void log_line(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    if (level >= PB_LOG_WARN)
+        fprintf(stderr, "  [%s] %s\n", level == PB_LOG_WARN ? "warn" : "error", msg);
+}
+
+/* Bakes s with d; the volume is the caller's (pb_volume_free). */
+static int bake(const pb_scene *s, const pb_bake_desc *d, pb_volume *v)
+{
+    pb_bvh *bvh = NULL;
+    pb_gpu_scene *gs = NULL;
+    pb_error err;
+    int ok = pb_bvh_build(s, NULL, &bvh, &err) == PB_OK && pb_gpu_scene_create(ctx, s, bvh, &gs, &err) == PB_OK &&
+             pb_bake(ctx, s, gs, d, v, &err) == PB_OK;
+    if (!ok) {
+        fprintf(stderr, "  bake: %s\n", err.message);
+        t_failures++;
+    }
+    pb_gpu_scene_destroy(gs);
+    pb_bvh_destroy(bvh);
+    return ok;
+}
+
+/* Random queries over the demo scene's volume: points in the bounds (and a
+ * margin outside, where the cage clamps), random normals and views. */
+static void shader_matches_c_reference(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 60, &d.grid);
+    d.rays_per_probe = 64;
+    d.passes = 1;
+    d.bounces = 1;
+    d.octmap_res = 8;
+    pb_volume v;
+    if (bake(s, &d, &v)) {
+        pb_sample_volume sv;
+        CHECK(pb_sample_volume_build(&v, s->origin, 0.f, 0.f, &sv, &err) == PB_OK);
+        uint32_t n = 20000;
+        float *p = malloc(n * 16), *nn = malloc(n * 16), *vw = malloc(n * 16), *g = malloc(n * 16);
+        test_rng r = {3};
+        for (uint32_t i = 0; i < n; ++i) {
+            for (int k = 0; k < 3; ++k) {
+                float lo = s->bounds_min[k] - 0.3f, hi = s->bounds_max[k] + 0.3f;
+                p[4 * i + k] = lo + (hi - lo) * (float)rng_uniform(&r);
+            }
+            rng_direction(&r, nn + 4 * i);
+            rng_direction(&r, vw + 4 * i);
+            p[4 * i + 3] = nn[4 * i + 3] = vw[4 * i + 3] = 0.f;
+        }
+        CHECKF(pb_sample_gpu(ctx, &sv, p, nn, vw, n, g, &err) == PB_OK, "%s", err.message);
+        double worst = 0, scale = 0;
+        uint32_t bad = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            float c[3];
+            pb_sample_cpu(&sv, p + 4 * i, nn + 4 * i, vw + 4 * i, c);
+            for (int k = 0; k < 3; ++k) {
+                double diff = fabs(c[k] - g[4 * i + k]);
+                worst = fmax(worst, diff);
+                scale = fmax(scale, fabs(c[k]));
+                bad += diff > 1e-4 * fmax(1.0, fabs(c[k])) || !isfinite(g[4 * i + k]);
+            }
+        }
+        fprintf(stderr, "  %u queries: largest |GPU - CPU| %.2e (values up to %.2f), %u beyond 1e-4 relative\n", n,
+                worst, scale, bad);
+        CHECK(scale > 0 && bad == 0);
+        free(p), free(nn), free(vw), free(g);
+        pb_sample_volume_free(&sv);
+        pb_volume_free(&v);
+    }
+    pb_scene_destroy(s);
+}
+
+/* A floor under a constant sky, probes 3x2x3 above it: the sampled
+ * irradiance is pi L for upward normals at any point over the floor, since
+ * every probe sees the sky's upper hemisphere unoccluded (the floor itself
+ * is black), and a hemisphere's irradiance is exact at SH L1. The floor is
+ * 10 km wide: the sky a probe sees below its horizon past the floor's edge
+ * would otherwise add about Omega / 4 pi (0.5 % at 50 m). */
+static void constant_sky_constant_irradiance(void)
+{
+    double floor[18] = {-5e3, 0, -5e3, -5e3, 0, 5e3, 5e3, 0, 5e3, -5e3, 0, -5e3, 5e3, 0, 5e3, 5e3, 0, -5e3};
+    pb_material m = pb_material_default();
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = 0.f;
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(floor, 2, NULL, &m, 1, &s, &err) == PB_OK, "%s", err.message);
+    pb_bake_desc d = {0};
+    d.grid.counts[0] = 3, d.grid.counts[1] = 2, d.grid.counts[2] = 3;
+    for (int k = 0; k < 3; ++k) {
+        d.grid.spacing[k] = 1.f;
+        d.grid.origin[k] = (k == 1 ? 0.5f : -1.f) - (float)s->origin[k];
+    }
+    d.rays_per_probe = 1024;
+    d.passes = 1;
+    d.octmap_res = 8;
+    d.sky[0] = 0.5f, d.sky[1] = 1.f, d.sky[2] = 2.f;
+    pb_volume v;
+    if (bake(s, &d, &v)) {
+        pb_sample_volume sv;
+        CHECK(pb_sample_volume_build(&v, s->origin, 0.f, 0.f, &sv, &err) == PB_OK);
+        test_rng r = {9};
+        float worst = 0;
+        for (int i = 0; i < 2000; ++i) {
+            float p[3] = {(float)(3 * rng_uniform(&r) - 1.5), (float)(0.01 + 1.5 * rng_uniform(&r)),
+                          (float)(3 * rng_uniform(&r) - 1.5)};
+            for (int k = 0; k < 3; ++k)
+                p[k] -= (float)s->origin[k];
+            float up[3] = {0, 1, 0}, e[3];
+            pb_sample_cpu(&sv, p, up, up, e);
+            for (int k = 0; k < 3; ++k)
+                worst = fmaxf(worst, fabsf(e[k] / (3.14159265f * d.sky[k]) - 1.f));
+        }
+        fprintf(stderr, "  E / (pi L) - 1 for upward normals: at most %.2e over 2000 points\n", worst);
+        CHECK(worst < 2e-3f);
+        pb_sample_volume_free(&sv);
+        pb_volume_free(&v);
+    }
+    pb_scene_destroy(s);
+}
+
+/* A 2 cm thick wall at x = 0 (20 x 20 m), a point light at x = -2, direct
+ * light only; probes at x = -0.75, -0.25, 0.25, 0.75. A point 0.1 m behind the
+ * wall, facing away from it, sits in a cage with lit probes at x = -0.25:
+ * they must not light it (their depth towards it is the wall); a point 0.1 m
+ * in front, facing the light, is lit. */
+static void thin_wall_visibility(void)
+{
+    double p[12 * 9];
+    uint32_t t = 0;
+    /* a box [-0.01, 0.01] x [-10, 10] x [-10, 10], outward faces */
+    double lo[3] = {-0.01, -10, -10}, hi[3] = {0.01, 10, 10};
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side) {
+            int u = (axis + 1) % 3, w = (axis + 2) % 3;
+            double c[4][3];
+            for (int q = 0; q < 4; ++q) {
+                c[q][axis] = side ? hi[axis] : lo[axis];
+                c[q][u] = (q == 1 || q == 2) ? hi[u] : lo[u];
+                c[q][w] = (q >= 2) ? hi[w] : lo[w];
+            }
+            int order[2][3] = {{0, 1, 2}, {0, 2, 3}};
+            for (int tri = 0; tri < 2; ++tri, ++t)
+                for (int vtx = 0; vtx < 3; ++vtx) {
+                    int q = order[tri][side ? vtx : 2 - vtx];
+                    for (int k = 0; k < 3; ++k)
+                        p[9 * t + 3 * vtx + k] = c[q][k];
+                }
+        }
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(p, 12, NULL, NULL, 0, &s, &err) == PB_OK, "%s", err.message);
+    s->lights = calloc(1, sizeof(pb_light));
+    s->light_count = 1;
+    pb_light *l = &s->lights[0];
+    l->type = PB_LIGHT_POINT;
+    l->color[0] = l->color[1] = l->color[2] = 1.f;
+    l->intensity = 10.f;
+    l->position[0] = (float)(-2.0 - s->origin[0]);
+    l->position[1] = (float)-s->origin[1];
+    l->position[2] = (float)-s->origin[2];
+    pb_bake_desc d = {0};
+    d.grid.counts[0] = 4, d.grid.counts[1] = 2, d.grid.counts[2] = 2;
+    d.grid.spacing[0] = d.grid.spacing[1] = d.grid.spacing[2] = 0.5f;
+    d.grid.origin[0] = -0.75f - (float)s->origin[0];
+    d.grid.origin[1] = -0.25f - (float)s->origin[1];
+    d.grid.origin[2] = -0.25f - (float)s->origin[2];
+    d.rays_per_probe = 1024;
+    d.passes = 1;
+    d.bounces = 0;
+    d.octmap_res = 16;
+    d.skip_relocation = 1;
+    pb_volume v;
+    if (bake(s, &d, &v)) {
+        pb_sample_volume sv;
+        CHECK(pb_sample_volume_build(&v, s->origin, 0.f, 0.f, &sv, &err) == PB_OK);
+        float behind[3] = {0.1f, 0.f, 0.f}, front[3] = {-0.1f, 0.f, 0.f};
+        for (int k = 0; k < 3; ++k)
+            behind[k] -= (float)s->origin[k], front[k] -= (float)s->origin[k];
+        float px[3] = {1, 0, 0}, nx[3] = {-1, 0, 0}, eb[3], ef[3];
+        pb_sample_cpu(&sv, behind, px, px, eb);
+        pb_sample_cpu(&sv, front, nx, nx, ef);
+        /* the lit probes' own irradiance towards -x, for scale */
+        float lit[3];
+        pb_sh_eval(v.sh + 27 * 1, nx, lit);
+        fprintf(stderr, "  behind the wall %.4g, in front %.4g (a lit probe: %.4g)\n", eb[0], ef[0], lit[0]);
+        CHECK(lit[0] > 0.1f);
+        CHECK(ef[0] > 0.5f * lit[0]);
+        CHECK(eb[0] < 0.01f * lit[0]);
+        pb_sample_volume_free(&sv);
+        pb_volume_free(&v);
+    }
+    pb_scene_destroy(s);
+}
+
+static void point_sets_refused(void)
+{
+    pb_volume v;
+    memset(&v, 0, sizeof v);
+    v.probe_count = 1;
+    v.octmap_res = 4;
+    pb_sample_volume sv;
+    pb_error err;
+    double o[3] = {0, 0, 0};
+    CHECK(pb_sample_volume_build(&v, o, 0.f, 0.f, &sv, &err) == PB_ERROR_INVALID_ARGUMENT &&
+          strstr(err.message, "point set"));
+}
+
+static void validation_layer_stayed_silent(void)
+{
+    uint32_t n = pb_context_validation_messages(ctx);
+    CHECKF(n == 0, "%u validation messages", n);
+}
+
+int main(void)
+{
+    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {log_line, NULL}};
+    pb_error err;
+    if (pb_context_create(&d, &ctx, &err) != PB_OK) {
+        fprintf(stderr, "no Vulkan device with validation: %s\n", err.message);
+        printf("0 passed, 1 failed, 0 skipped\n");
+        return 1;
+    }
+    RUN(shader_matches_c_reference);
+    RUN(constant_sky_constant_irradiance);
+    RUN(thin_wall_visibility);
+    RUN(point_sets_refused);
+    RUN(validation_layer_stayed_silent);
+    pb_context_destroy(ctx);
+    return test_summary();
+}
