@@ -6,6 +6,7 @@
  * bounce-0 rays one by one and multi-bounce results statistically. */
 #include "bake/alias.h"
 #include "bake/bake_data.h"
+#include "bake/path_cpu.h"
 #include "bvh/alpha.h"
 #include "common/common.h"
 #include "probebake/bake.h"
@@ -142,15 +143,13 @@ static void cosine_direction(const float n[3], float u1, float u2, float out[3])
 }
 
 typedef struct trace_ctx {
-    const pb_bake_pass *p;
-    gpu_light *lights;
-    gpu_shade_material *materials;
+    pb_path_ctx path;
     float *rays;
     _Atomic uint64_t traversals;
 } trace_ctx;
 
 /* Next-event estimation of one emissive triangle (bake_trace.comp). */
-static void emitter_nee(const trace_ctx *c, const pb_bake_emitters *em, const float x[3], const float ng[3],
+static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const float x[3], const float ng[3],
                         const float albedo[3], const float thr[3], uint32_t *state, float L[3])
 {
     const pb_bake_pass *p = c->p;
@@ -208,135 +207,184 @@ static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], 
         L[k] += thr[k] * albedo[k] * (Le[k] * (cos_x / (PI_F * pe) * wl));
 }
 
+pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], const float dir_in[3], uint32_t bounces,
+                                    int see_direct, uint32_t *state)
+{
+    const pb_bake_pass *p = c->p;
+    const pb_scene *s = p->scene;
+    pb_path_result res;
+    memset(&res, 0, sizeof res);
+    res.first_t = INFINITY;
+    res.ng[1] = 1.f;
+    memcpy(res.x, o_in, sizeof res.x);
+    float thr[3] = {1, 1, 1}, bsdf_pdf = 0.f;
+    const pb_bake_emitters *em = p->emitters && p->emitters->count ? p->emitters : NULL;
+    int env_sampled = p->env && p->env->count;
+    float o[3] = {o_in[0], o_in[1], o_in[2]}, dir[3] = {dir_in[0], dir_in[1], dir_in[2]};
+    for (uint32_t bounce = 0;; ++bounce) {
+        hit h = trace(p, o, dir, INFINITY, PB_TRACE_CLOSEST);
+        if (h.tri == PB_NO_HIT) {
+            if ((bounce > 0 || see_direct) && p->env && p->env->width) {
+                float w = 1.f;
+                if (bsdf_pdf > 0.f && p->env->count) {
+                    float pe = pb_env_pdf(p->env, dir);
+                    w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pe * pe);
+                }
+                const float *Le = p->env->texels[pb_env_texel_of(p->env, dir)].rgb;
+                for (int k = 0; k < 3; ++k) {
+                    float cc = thr[k] * Le[k] * w;
+                    res.L[k] += cc;
+                    if (bounce <= 1)
+                        res.L_direct[k] += cc;
+                }
+            }
+            break;
+        }
+        const float *v0 = s->positions + 9 * (size_t)h.tri, *v1 = v0 + 3, *v2 = v0 + 6;
+        float e1[3], e2[3], ng[3];
+        for (int k = 0; k < 3; ++k)
+            e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
+        ng[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        ng[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        ng[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        float nl = sqrtf(ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2]);
+        for (int k = 0; k < 3; ++k)
+            ng[k] /= nl;
+        int back = ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2] > 0.f;
+        if (bounce == 0)
+            res.first_t = back ? -h.t : h.t;
+        const gpu_shade_material *m = &c->materials[s->material[h.tri]];
+        if (back) {
+            if (m->tex[2] == 0)
+                break;
+            for (int k = 0; k < 3; ++k)
+                ng[k] = -ng[k];
+        }
+        const float *uv = s->texcoords + 6 * (size_t)h.tri;
+        float w0 = 1.f - h.u - h.v;
+        float tu = w0 * uv[0] + h.u * uv[2] + h.v * uv[4], tv = w0 * uv[1] + h.u * uv[3] + h.v * uv[5];
+        float base[3];
+        if ((bounce > 0 || see_direct) &&
+            (m->emissive_metallic[0] != 0.f || m->emissive_metallic[1] != 0.f || m->emissive_metallic[2] != 0.f)) {
+            float w = 1.f, pa = em ? em->pdf_area[h.tri] : 0.f;
+            if (bsdf_pdf > 0.f && pa > 0.f) {
+                float pl = pa * h.t * h.t / fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]);
+                w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pl * pl);
+            }
+            float et[3];
+            texture_rgb(s, m->tex[1], tu, tv, et);
+            for (int k = 0; k < 3; ++k) {
+                float cc = thr[k] * m->emissive_metallic[k] * et[k] * w;
+                res.L[k] += cc;
+                if (bounce <= 1)
+                    res.L_direct[k] += cc;
+            }
+        }
+        if (bounce > bounces)
+            break; /* the terminal ray only gathers emission */
+        texture_rgb(s, m->tex[0], tu, tv, base);
+        float albedo[3], xp[3], x[3], E[3] = {0, 0, 0};
+        for (int k = 0; k < 3; ++k) {
+            albedo[k] = m->base_color[k] * base[k] * (1.f - m->emissive_metallic[3]);
+            xp[k] = v0[k] + h.u * e1[k] + h.v * e2[k];
+        }
+        pb_offset_ray_origin(xp, ng, x);
+        if (bounce == 0) {
+            res.shade = 1;
+            memcpy(res.x, x, sizeof x);
+            memcpy(res.ng, ng, sizeof ng);
+            memcpy(res.albedo, albedo, sizeof albedo);
+        }
+        for (uint32_t l = 0; l < s->light_count; ++l) {
+            float El[3];
+            light_irradiance(p, &c->lights[l], x, ng, 1, El);
+            for (int k = 0; k < 3; ++k)
+                E[k] += El[k];
+        }
+        float cc[3];
+        for (int k = 0; k < 3; ++k)
+            cc[k] = thr[k] * albedo[k] * (E[k] / PI_F);
+        if (em && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
+            emitter_nee(c, em, x, ng, albedo, thr, state, cc);
+        if (env_sampled && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
+            env_nee(p, x, ng, albedo, thr, state, cc);
+        for (int k = 0; k < 3; ++k) {
+            res.L[k] += cc[k];
+            if (bounce == 0)
+                res.L_direct[k] += cc[k];
+        }
+        if (bounce >= bounces && !em && !env_sampled)
+            break; /* no terminal ray needed: nothing to MIS against */
+        if (bounce >= 1) {
+            float q = fminf(0.95f, fmaxf(albedo[0], fmaxf(albedo[1], albedo[2])));
+            if (rng_next(state) >= q)
+                break;
+            for (int k = 0; k < 3; ++k)
+                thr[k] /= q;
+        }
+        for (int k = 0; k < 3; ++k)
+            thr[k] *= albedo[k];
+        if (fmaxf(thr[0], fmaxf(thr[1], thr[2])) <= 0.f)
+            break;
+        float u1 = rng_next(state), u2 = rng_next(state);
+        cosine_direction(ng, u1, u2, dir);
+        bsdf_pdf = fmaxf(0.f, ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]) / PI_F;
+        memcpy(o, x, sizeof x);
+    }
+    return res;
+}
+
 static void trace_range(void *user, uint64_t begin, uint64_t end)
 {
     trace_ctx *c = user;
-    const pb_bake_pass *p = c->p;
-    const pb_scene *s = p->scene;
+    const pb_bake_pass *p = c->path.p;
     traversals = 0;
     for (uint64_t i = begin; i < end; ++i) {
         uint32_t probe = slot_of(p, (uint32_t)(i / p->rays_per_probe)), ray = (uint32_t)(i % p->rays_per_probe);
         float d[3];
         probe_ray_direction(p, probe, ray, d);
         uint32_t state = rng_seed(p->seed, pb_probe_record_id(p->probes + 4 * (size_t)probe), p->pass_index, ray);
-        float L[3] = {0, 0, 0}, thr[3] = {1, 1, 1}, first = p->max_distance;
-        float bsdf_pdf = 0.f;
-        const pb_bake_emitters *em = p->emitters && p->emitters->count ? p->emitters : NULL;
-        float o[3] = {p->probes[4 * (size_t)probe], p->probes[4 * (size_t)probe + 1], p->probes[4 * (size_t)probe + 2]};
-        float dir[3] = {d[0], d[1], d[2]};
-        for (uint32_t bounce = 0;; ++bounce) {
-            hit h = trace(p, o, dir, INFINITY, PB_TRACE_CLOSEST);
-            if (h.tri == PB_NO_HIT) {
-                if ((bounce > 0 || p->direct) && p->env && p->env->width) {
-                    float w = 1.f;
-                    if (bsdf_pdf > 0.f && p->env->count) {
-                        float pe = pb_env_pdf(p->env, dir);
-                        w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pe * pe);
-                    }
-                    const float *Le = p->env->texels[pb_env_texel_of(p->env, dir)].rgb;
-                    for (int k = 0; k < 3; ++k)
-                        L[k] += thr[k] * Le[k] * w;
-                }
-                break;
-            }
-            const float *v0 = s->positions + 9 * (size_t)h.tri, *v1 = v0 + 3, *v2 = v0 + 6;
-            float e1[3], e2[3], ng[3];
-            for (int k = 0; k < 3; ++k)
-                e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
-            ng[0] = e1[1] * e2[2] - e1[2] * e2[1];
-            ng[1] = e1[2] * e2[0] - e1[0] * e2[2];
-            ng[2] = e1[0] * e2[1] - e1[1] * e2[0];
-            float nl = sqrtf(ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2]);
-            for (int k = 0; k < 3; ++k)
-                ng[k] /= nl;
-            int back = ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2] > 0.f;
-            if (bounce == 0) {
-                float t = fminf(h.t, p->max_distance);
-                first = back ? -t : t;
-            }
-            const gpu_shade_material *m = &c->materials[s->material[h.tri]];
-            if (back) {
-                if (m->tex[2] == 0)
-                    break;
-                for (int k = 0; k < 3; ++k)
-                    ng[k] = -ng[k];
-            }
-            const float *uv = s->texcoords + 6 * (size_t)h.tri;
-            float w0 = 1.f - h.u - h.v;
-            float tu = w0 * uv[0] + h.u * uv[2] + h.v * uv[4], tv = w0 * uv[1] + h.u * uv[3] + h.v * uv[5];
-            float base[3];
-            if ((bounce > 0 || p->direct) &&
-                (m->emissive_metallic[0] != 0.f || m->emissive_metallic[1] != 0.f || m->emissive_metallic[2] != 0.f)) {
-                float w = 1.f, pa = em ? em->pdf_area[h.tri] : 0.f;
-                if (bsdf_pdf > 0.f && pa > 0.f) {
-                    float pl = pa * h.t * h.t / fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]);
-                    w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pl * pl);
-                }
-                float et[3];
-                texture_rgb(s, m->tex[1], tu, tv, et);
-                for (int k = 0; k < 3; ++k)
-                    L[k] += thr[k] * m->emissive_metallic[k] * et[k] * w;
-            }
-            if (bounce > p->bounces)
-                break; /* the terminal ray only gathers emission */
-            texture_rgb(s, m->tex[0], tu, tv, base);
-            float albedo[3], xp[3], x[3], E[3] = {0, 0, 0};
-            for (int k = 0; k < 3; ++k) {
-                albedo[k] = m->base_color[k] * base[k] * (1.f - m->emissive_metallic[3]);
-                xp[k] = v0[k] + h.u * e1[k] + h.v * e2[k];
-            }
-            pb_offset_ray_origin(xp, ng, x);
-            for (uint32_t l = 0; l < s->light_count; ++l) {
-                float El[3];
-                light_irradiance(p, &c->lights[l], x, ng, 1, El);
-                for (int k = 0; k < 3; ++k)
-                    E[k] += El[k];
-            }
-            for (int k = 0; k < 3; ++k)
-                L[k] += thr[k] * albedo[k] * (E[k] / PI_F);
-            int env_sampled = p->env && p->env->count;
-            if (em && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-                emitter_nee(c, em, x, ng, albedo, thr, &state, L);
-            if (env_sampled && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-                env_nee(p, x, ng, albedo, thr, &state, L);
-            if (bounce >= p->bounces && !em && !env_sampled)
-                break; /* no terminal ray needed: nothing to MIS against */
-            if (bounce >= 1) {
-                float q = fminf(0.95f, fmaxf(albedo[0], fmaxf(albedo[1], albedo[2])));
-                if (rng_next(&state) >= q)
-                    break;
-                for (int k = 0; k < 3; ++k)
-                    thr[k] /= q;
-            }
-            for (int k = 0; k < 3; ++k)
-                thr[k] *= albedo[k];
-            if (fmaxf(thr[0], fmaxf(thr[1], thr[2])) <= 0.f)
-                break;
-            float u1 = rng_next(&state), u2 = rng_next(&state);
-            cosine_direction(ng, u1, u2, dir);
-            bsdf_pdf = fmaxf(0.f, ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]) / PI_F;
-            memcpy(o, x, sizeof x);
-        }
+        const float *o = p->probes + 4 * (size_t)probe;
+        pb_path_result r = pb_path_radiance_cpu(&c->path, o, d, p->bounces, (int)p->direct, &state);
+        float first = isinf(r.first_t) ? p->max_distance
+                                        : (r.first_t < 0.f ? -fminf(-r.first_t, p->max_distance)
+                                                           : fminf(r.first_t, p->max_distance));
         float *out = c->rays + 4 * i;
-        out[0] = L[0], out[1] = L[1], out[2] = L[2], out[3] = first;
+        out[0] = r.L[0], out[1] = r.L[1], out[2] = r.L[2], out[3] = first;
     }
     atomic_fetch_add(&c->traversals, traversals);
 }
 
-uint64_t pb_bake_trace_cpu(const pb_bake_pass *p, float *rays)
+int pb_path_ctx_init(pb_path_ctx *c, const pb_bake_pass *p)
 {
     const pb_scene *s = p->scene;
-    trace_ctx c = {p, malloc((s->light_count ? s->light_count : 1) * sizeof(gpu_light)),
-                   malloc((s->material_count ? s->material_count : 1) * sizeof(gpu_shade_material)), rays, 0};
-    if (!c.lights || !c.materials) {
-        free(c.lights), free(c.materials);
+    c->p = p;
+    c->lights = malloc((s->light_count ? s->light_count : 1) * sizeof(gpu_light));
+    c->materials = malloc((s->material_count ? s->material_count : 1) * sizeof(gpu_shade_material));
+    if (!c->lights || !c->materials) {
+        pb_path_ctx_free(c);
         return 0;
     }
-    pb_bake_lights(s, c.lights);
-    pb_bake_materials(s, c.materials);
+    pb_bake_lights(s, c->lights);
+    pb_bake_materials(s, c->materials);
+    return 1;
+}
+
+void pb_path_ctx_free(pb_path_ctx *c)
+{
+    free(c->lights), free(c->materials);
+    c->lights = NULL, c->materials = NULL;
+}
+
+uint64_t pb_bake_trace_cpu(const pb_bake_pass *p, float *rays)
+{
+    trace_ctx c;
+    memset(&c, 0, sizeof c);
+    c.rays = rays;
+    if (!pb_path_ctx_init(&c.path, p))
+        return 0;
     pb_parallel_for((uint64_t)p->probe_count * p->rays_per_probe, 64, 0, trace_range, &c);
-    free(c.lights);
-    free(c.materials);
+    pb_path_ctx_free(&c.path);
     return atomic_load(&c.traversals);
 }
 

@@ -1,0 +1,209 @@
+// Path tracing shared by the bake (bake_trace.comp) and the renderer
+// (render.comp): the radiance arriving along a ray. Emission, punctual lights
+// with shadow rays, emissive triangles and the environment sampled at every
+// hit and MIS-combined with bounce rays, Lambertian bounces with Russian
+// roulette from the second reflection on, and a terminal bounce ray after
+// the last reflection (docs/bake.md). CPU reference: path_radiance in
+// src/bake/bake_cpu.c.
+#ifndef PB_PATH_GLSL
+#define PB_PATH_GLSL
+
+#include "traverse.glsl"
+#include "bake.glsl"
+
+vec3 cosine_direction(vec3 n, float u1, float u2)
+{
+    // orthonormal basis (Duff et al. 2017) and Malley's method
+    float sgn = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (sgn + n.z);
+    float b = n.x * n.y * a;
+    vec3 t = vec3(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
+    vec3 bt = vec3(b, sgn + n.y * n.y * a, -n.y);
+    float r = sqrt(u1), phi = 2.0 * PB_PI * u2;
+    return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u1)));
+}
+
+// Next-event estimation of one emissive triangle, picked by power (alias
+// table), a uniform point on it, a shadow ray, and the MIS weight against
+// cosine-weighted bounce sampling (power heuristic). Returns emitted radiance
+// x cos / (pi pdf) x weight: the caller multiplies by throughput x albedo.
+// (A function of its own also keeps glslang's `precise` analysis of main()
+// small: inlined here, it ran out of memory.)
+vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
+{
+    SceneRefs s = P.scene;
+    float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
+    EmitterBuf table = EmitterBuf(P.emitters);
+    float xe = u0 * float(P.emitter_count);
+    uint ei = min(uint(xe), P.emitter_count - 1u);
+    Emitter e = table.e[ei];
+    uint etri = xe - float(ei) < e.prob ? e.tri : table.e[e.alias].tri;
+    Tri et = load_tri(s.tris, etri);
+    float su = sqrt(u1);
+    float b1 = su * (1.0 - u2), b2 = su * u2;
+    vec3 ee1 = et.v1 - et.v0, ee2 = et.v2 - et.v0;
+    vec3 y = et.v0 + b1 * ee1 + b2 * ee2;
+    vec3 to = y - x;
+    float d2 = dot(to, to);
+    float dist = sqrt(d2);
+    vec3 w = to / dist;
+    float cos_x = dot(ng, w);
+    ShadeMaterial em = ShadeMaterialBuf(P.materials).m[et.flags & ~PB_FLAG_ALPHA_MASK];
+    float cos_e = -dot(normalize(cross(ee1, ee2)), w);
+    if (em.tex.z != 0)
+        cos_e = abs(cos_e);
+    if (!(cos_x > 0.0 && cos_e > 0.0 && d2 > 0.0))
+        return vec3(0.0);
+    TraceResult shadow = trace_ray(s, x, w, 0.0, dist * 0.9999, true);
+    if (shadow.tri != PB_NO_HIT)
+        return vec3(0.0);
+    float pl = FloatBuf(P.emit_pdf).v[etri] * d2 / cos_e;
+    float pb = cos_x / PB_PI;
+    float wl = pl * pl / (pl * pl + pb * pb);
+    FloatBuf euv = FloatBuf(s.tri_uv);
+    uint eb = 6u * etri;
+    float ew0 = 1.0 - b1 - b2;
+    vec2 yuv = ew0 * vec2(euv.v[eb], euv.v[eb + 1u]) + b1 * vec2(euv.v[eb + 2u], euv.v[eb + 3u]) +
+               b2 * vec2(euv.v[eb + 4u], euv.v[eb + 5u]);
+    vec3 Le = em.emissive_metallic.rgb * texture_rgb(s, em.tex.y, yuv);
+    return Le * (cos_x / (PB_PI * pl) * wl);
+}
+
+// Next-event estimation of the environment: a direction by texel power, a
+// shadow ray, MIS against cosine-weighted bounce sampling (power heuristic).
+// Returns radiance x cos / (pi pdf) x weight, like emitter_nee.
+vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, inout uint state)
+{
+    float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
+    vec3 w = env_sample(env, u0, u1, u2).xyz;
+    float cos_x = dot(ng, w);
+    float pe = env_pdf(env, w);
+    if (!(cos_x > 0.0 && pe > 0.0))
+        return vec3(0.0);
+    TraceResult shadow = trace_ray(s, x, w, 0.0, PB_INF, true);
+    if (shadow.tri != PB_NO_HIT)
+        return vec3(0.0);
+    float pb = cos_x / PB_PI;
+    float wl = pe * pe / (pe * pe + pb * pb);
+    return env_radiance(env, w) * (cos_x / (PB_PI * pe) * wl);
+}
+
+struct PathResult {
+    vec3 L;          // radiance along the ray
+    vec3 L_direct;   // the part that reflected at most once (emission seen, direct light at the first hit)
+    float first_t;   // distance to the first hit, negative on a back face, PB_INF on a miss
+    bool shade;      // the first hit is a surface that reflects (front face or double-sided)
+    vec3 x;          // first hit, offset off the surface along ng
+    vec3 ng;         // its geometric normal, facing the ray's origin
+    vec3 albedo;     // its diffuse albedo
+};
+
+// `bounces`: reflections after the first hit; `see_direct`: count light that
+// reaches the origin unreflected (emission or sky seen along the ray itself).
+PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_direct, inout uint state)
+{
+    SceneRefs s = P.scene;
+    Env env = bake_env(P);
+    ShadeMaterialBuf mats = ShadeMaterialBuf(P.materials);
+    LightBuf lights = LightBuf(P.lights);
+    PathResult res;
+    res.L = vec3(0.0);
+    res.L_direct = vec3(0.0);
+    res.first_t = PB_INF;
+    res.shade = false;
+    res.x = o;
+    res.ng = vec3(0.0, 1.0, 0.0);
+    res.albedo = vec3(0.0);
+    vec3 throughput = vec3(1.0);
+    float bsdf_pdf = 0.0; // of the direction that led to the current hit (0: the first ray, not MIS-weighted)
+    FloatBuf emit_pdf = FloatBuf(P.emit_pdf);
+    for (uint bounce = 0u;; ++bounce) {
+        TraceResult tr = trace_ray(s, o, dir, 0.0, PB_INF, false);
+        if (tr.tri == PB_NO_HIT) {
+            if (bounce > 0u || see_direct) {
+                float w = 1.0;
+                if (bsdf_pdf > 0.0 && env.count > 0u) { // the environment could also have been sampled: MIS
+                    float pe = env_pdf(env, dir);
+                    w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pe * pe);
+                }
+                vec3 c = throughput * env_radiance(env, dir) * w;
+                res.L += c;
+                if (bounce <= 1u)
+                    res.L_direct += c;
+            }
+            break;
+        }
+        Tri t = load_tri(s.tris, tr.tri);
+        vec3 e1 = t.v1 - t.v0, e2 = t.v2 - t.v0;
+        vec3 ng = normalize(cross(e1, e2));
+        bool back = dot(ng, dir) > 0.0;
+        if (bounce == 0u)
+            res.first_t = back ? -tr.t : tr.t;
+        ShadeMaterial m = mats.m[t.flags & ~PB_FLAG_ALPHA_MASK];
+        if (back) {
+            if (m.tex.z == 0)
+                break; // inside a single-sided surface: no light
+            ng = -ng;
+        }
+        FloatBuf uvs = FloatBuf(s.tri_uv);
+        uint b = 6u * tr.tri;
+        float w0 = 1.0 - tr.u - tr.v;
+        vec2 uv = w0 * vec2(uvs.v[b], uvs.v[b + 1u]) + tr.u * vec2(uvs.v[b + 2u], uvs.v[b + 3u]) +
+                  tr.v * vec2(uvs.v[b + 4u], uvs.v[b + 5u]);
+        if ((bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
+            float w = 1.0;
+            float pa = P.emitter_count > 0u ? emit_pdf.v[tr.tri] : 0.0;
+            if (bsdf_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
+                float pl = pa * tr.t * tr.t / abs(dot(ng, dir));
+                w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pl * pl);
+            }
+            vec3 c = throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w;
+            res.L += c;
+            if (bounce <= 1u)
+                res.L_direct += c;
+        }
+        if (bounce > bounces)
+            break; // the terminal ray: it only gathers emission (see below)
+        vec3 albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * (1.0 - m.emissive_metallic.w);
+        vec3 x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);
+        if (bounce == 0u) {
+            res.shade = true;
+            res.x = x;
+            res.ng = ng;
+            res.albedo = albedo;
+        }
+        vec3 E = vec3(0.0);
+        for (uint k = 0u; k < P.light_count; ++k)
+            E += light_irradiance(s, lights.l[k], x, ng, true);
+        vec3 c = throughput * albedo * (E / PB_PI);
+        if (P.emitter_count > 0u && albedo != vec3(0.0))
+            c += throughput * albedo * emitter_nee(P, x, ng, state);
+        if (env.count > 0u && albedo != vec3(0.0))
+            c += throughput * albedo * env_nee(env, s, x, ng, state);
+        res.L += c;
+        if (bounce == 0u)
+            res.L_direct += c;
+        // After the last reflection one more (terminal) bounce ray gathers the
+        // emission and environment the light samples above are MIS-weighted
+        // against; without it their weights would miss the bounce share (a
+        // bias), and weight 1 instead gives fireflies near emitters.
+        if (bounce >= bounces && P.emitter_count == 0u && env.count == 0u)
+            break;
+        if (bounce >= 1u) { // Russian roulette from the second reflection on
+            float q = min(0.95, max(albedo.r, max(albedo.g, albedo.b)));
+            if (rng_next(state) >= q)
+                break;
+            throughput /= q;
+        }
+        throughput *= albedo;
+        if (max(throughput.r, max(throughput.g, throughput.b)) <= 0.0)
+            break;
+        float u1 = rng_next(state), u2 = rng_next(state);
+        dir = cosine_direction(ng, u1, u2);
+        bsdf_pdf = max(0.0, dot(ng, dir)) / PB_PI;
+        o = x;
+    }
+    return res;
+}
+
+#endif

@@ -1,0 +1,30 @@
+/* The path tracer's C reference (shaders/include/path.glsl), shared by the
+ * bake's and the renderer's CPU references. */
+#ifndef PB_PATH_CPU_H
+#define PB_PATH_CPU_H
+
+#include "bake/bake_data.h"
+#include "probebake/bake.h"
+
+typedef struct pb_path_ctx {
+    const pb_bake_pass *p;         /* scene, BVH, environment, emitters (other fields unused here) */
+    gpu_light *lights;
+    gpu_shade_material *materials;
+} pb_path_ctx;
+
+/* PathResult of path.glsl */
+typedef struct pb_path_result {
+    float L[3], L_direct[3];
+    float first_t;                 /* negative on a back face, INFINITY on a miss */
+    int shade;
+    float x[3], ng[3], albedo[3];
+} pb_path_result;
+
+int pb_path_ctx_init(pb_path_ctx *c, const pb_bake_pass *p);
+void pb_path_ctx_free(pb_path_ctx *c);
+
+/* Thread-safe; traversals are counted per thread for pb_bake_trace_cpu. */
+pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o[3], const float dir[3], uint32_t bounces,
+                                    int see_direct, uint32_t *state);
+
+#endif
