@@ -91,6 +91,7 @@ vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, inout uint state)
 struct PathResult {
     vec3 L;          // radiance along the ray
     vec3 L_direct;   // the part that reflected at most once (emission seen, direct light at the first hit)
+    vec3 L_seen;     // the part that did not reflect: emission or environment seen along the ray
     float first_t;   // distance to the first hit, negative on a back face, PB_INF on a miss
     bool shade;      // the first hit is a surface that reflects (front face or double-sided)
     vec3 x;          // first hit, offset off the surface along ng
@@ -109,6 +110,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
     PathResult res;
     res.L = vec3(0.0);
     res.L_direct = vec3(0.0);
+    res.L_seen = vec3(0.0);
     res.first_t = PB_INF;
     res.shade = false;
     res.x = o;
@@ -130,6 +132,8 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                 res.L += c;
                 if (bounce <= 1u)
                     res.L_direct += c;
+                if (bounce == 0u)
+                    res.L_seen += c;
             }
             break;
         }
@@ -161,6 +165,8 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
             res.L += c;
             if (bounce <= 1u)
                 res.L_direct += c;
+            if (bounce == 0u)
+                res.L_seen += c;
         }
         if (bounce > bounces)
             break; // the terminal ray: it only gathers emission (see below)

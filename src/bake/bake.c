@@ -11,6 +11,7 @@
  * adding passes never loses precision however many there are. */
 #include "bake/bake_data.h"
 #include "bake/gpu_scene.h"
+#include "bake/shading.h"
 #include "common/common.h"
 #include "probebake/bake.h"
 #include "probebake/octahedral.h"
@@ -26,17 +27,18 @@
 #include <string.h>
 
 typedef struct bake_buffers {
-    pb_buffer params, materials, lights, probes, rotations, directions, rays, reduced, list, emitters, emit_pdf, env,
-        counters;
+    pb_buffer params, probes, rotations, directions, rays, reduced, list, counters;
+    pb_shading shading;
     pb_pipeline trace, sh, depth;
 } bake_buffers;
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[13] = {&b->params, &b->materials, &b->lights, &b->probes, &b->rotations, &b->directions,
-                           &b->rays, &b->reduced, &b->list, &b->emitters, &b->emit_pdf, &b->env, &b->counters};
-    for (int i = 0; i < 13; ++i)
+    pb_buffer *bufs[8] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced, &b->list,
+                          &b->counters};
+    for (int i = 0; i < 8; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
+    pb_shading_destroy(ctx, &b->shading);
     pb_pipeline_destroy(ctx, &b->trace);
     pb_pipeline_destroy(ctx, &b->sh);
     pb_pipeline_destroy(ctx, &b->depth);
@@ -120,8 +122,6 @@ typedef struct bake_run {
     double *sh_sum, *depth_sum, *backfaces, *hits;
     double t_trace, t_sh, t_depth; /* GPU timestamps, ms */
     float *near;                   /* 8 per probe: nearest back t + dir, nearest front t + dir */
-    uint32_t emitter_count;
-    const pb_env_table *env;
     uint64_t traversals;           /* BVH traversals of relocation and bake passes (counted by bake_trace) */
     uint32_t *passes_done;         /* per probe */
     double *dc_sum, *dc_sq;        /* per probe: luminance of each pass's DC coefficient, for the standard error */
@@ -146,21 +146,15 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         gpu_bake_params prm;
         memset(&prm, 0, sizeof prm);
         prm.scene = run->gs->refs;
-        prm.materials = B->materials.address, prm.lights = B->lights.address, prm.probes = B->probes.address;
+        pb_shading_params(&B->shading, &prm);
+        prm.probes = B->probes.address;
         prm.rotations = B->rotations.address, prm.directions = B->directions.address, prm.rays = B->rays.address;
         prm.reduced = B->reduced.address;
         prm.probe_list = list ? B->list.address : 0;
-        prm.emitters = B->emitters.address, prm.emit_pdf = B->emit_pdf.address;
-        prm.emitter_count = run->emitter_count;
-        if (run->env->width) {
-            prm.env = B->env.address;
-            prm.env_width = run->env->width, prm.env_height = run->env->height, prm.env_count = run->env->count;
-            prm.env_rotation[0] = run->env->cos_rot, prm.env_rotation[1] = run->env->sin_rot;
-        }
         prm.counters = B->counters.address;
         memset(B->counters.mapped, 0, 4);
         prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
-        prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces, prm.light_count = run->scene->light_count;
+        prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces;
         prm.octmap_res = n, prm.max_distance = d->max_distance, prm.lobe_power = d->lobe_power;
         prm.direct = !d->exclude_direct, prm.lobe_cutoff = pb_depth_lobe_cutoff(d->lobe_power);
         memcpy(B->params.mapped, &prm, sizeof prm);
@@ -367,8 +361,6 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     float *probes = calloc((size_t)P * 4, sizeof(float));
     float *rotations = malloc((size_t)P * 12 * sizeof(float));
     float *directions = malloc((size_t)rpp * 4 * sizeof(float));
-    gpu_light *lights = malloc((scene->light_count ? scene->light_count : 1) * sizeof(gpu_light));
-    gpu_shade_material *mats = malloc(scene->material_count * sizeof(gpu_shade_material));
     double *sh_sum = calloc((size_t)P * 27, sizeof(double));
     double *depth_sum = calloc((size_t)P * texels * 2, sizeof(double));
     double *backfaces = calloc(P, sizeof(double)), *hits = calloc(P, sizeof(double));
@@ -376,15 +368,9 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     bake_buffers B;
     memset(&B, 0, sizeof B);
     float *offsets = NULL, *near = NULL;
-    pb_bake_emitters emitters;
-    memset(&emitters, 0, sizeof emitters);
-    pb_environment sky_env;
-    memset(&sky_env, 0, sizeof sky_env);
-    pb_env_table env;
-    memset(&env, 0, sizeof env);
     uint32_t *passes_done = NULL, *active = NULL, *converged_at = calloc(P, sizeof(uint32_t));
     double *dc_sum = NULL, *dc_sq = NULL;
-    if (!probes || !rotations || !directions || !lights || !mats || !sh_sum || !depth_sum || !backfaces || !hits ||
+    if (!probes || !rotations || !directions || !sh_sum || !depth_sum || !backfaces || !hits ||
         !reduced || !converged_at || pb_sf_directions(rpp, directions) != PB_OK) {
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
         goto done;
@@ -394,16 +380,10 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
         pb_bake_probe_position(scene, &d, p, probes + 4 * (size_t)p, &id);
         memcpy(&probes[4 * p + 3], &id, 4); /* probe id: keys its random numbers */
     }
-    pb_bake_lights(scene, lights);
-    pb_bake_materials(scene, mats);
 
     r = make_buffer(ctx, &B.params, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "bake parameters", NULL, err);
     if (r == PB_OK)
-        r = make_buffer(ctx, &B.materials, scene->material_count * sizeof *mats, PB_MEMORY_DEVICE, "bake materials",
-                        mats, err);
-    if (r == PB_OK)
-        r = make_buffer(ctx, &B.lights, (scene->light_count ? scene->light_count : 1) * sizeof *lights,
-                        PB_MEMORY_DEVICE, "lights", lights, err);
+        r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, &B.shading, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.probes, (uint64_t)P * 16, PB_MEMORY_DEVICE, "probe positions", probes, err);
     if (r == PB_OK)
@@ -432,45 +412,10 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     active = malloc(P * sizeof *active);
     if (r == PB_OK && (!passes_done || !dc_sum || !dc_sq || !active))
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
-    /* emissive triangles for next-event estimation, in the kernels' leaf order */
-    if (r == PB_OK)
-        r = pb_bake_emitters_build(scene, &emitters, err);
-    if (r == PB_OK) {
-        uint32_t T = scene->triangle_count ? scene->triangle_count : 1;
-        uint32_t *leaf_of = malloc(T * sizeof *leaf_of);
-        float *pdf_leaf = calloc(T, sizeof *pdf_leaf);
-        gpu_emitter *ge = malloc((emitters.count ? emitters.count : 1) * sizeof *ge);
-        if (!leaf_of || !pdf_leaf || !ge) {
-            r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for emitters");
-        } else {
-            for (uint32_t k = 0; k < scene->triangle_count; ++k)
-                leaf_of[gs->tri_order[k]] = k;
-            for (uint32_t t = 0; t < scene->triangle_count; ++t)
-                pdf_leaf[leaf_of[t]] = emitters.pdf_area[t];
-            for (uint32_t i = 0; i < emitters.count; ++i)
-                ge[i] = (gpu_emitter){leaf_of[emitters.tri[i]], emitters.prob[i], emitters.alias[i], 0.f};
-            r = make_buffer(ctx, &B.emitters, (emitters.count ? emitters.count : 1) * sizeof *ge, PB_MEMORY_DEVICE,
-                            "emitter table", ge, err);
-            if (r == PB_OK)
-                r = make_buffer(ctx, &B.emit_pdf, (uint64_t)T * 4, PB_MEMORY_DEVICE, "emitter densities", pdf_leaf,
-                                err);
-        }
-        free(leaf_of), free(pdf_leaf), free(ge);
-    }
-    /* the environment: a map, or the uniform sky as one; black is none */
-    if (r == PB_OK && !d.environment && (d.sky[0] > 0.f || d.sky[1] > 0.f || d.sky[2] > 0.f))
-        r = pb_environment_uniform(d.sky, &sky_env, err);
-    if (r == PB_OK)
-        r = pb_env_table_build(d.environment ? d.environment : &sky_env, &env, err);
-    if (r == PB_OK && env.count == 0)
-        pb_env_table_free(&env); /* black: nothing to look up or sample */
-    if (r == PB_OK)
-        r = make_buffer(ctx, &B.env, (env.count ? env.count : 1) * sizeof(pb_env_texel), PB_MEMORY_DEVICE,
-                        "environment map", env.count ? (const void *)env.texels : NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
     bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
-                    hits, 0, 0, 0, NULL, emitters.count, &env, 0, passes_done, dc_sum, dc_sq};
+                    hits, 0, 0, 0, NULL, 0, passes_done, dc_sum, dc_sq};
     /* relocation: probes in geometry move out, probes against a wall move
      * away; iterations use their own pass numbers (RNG streams), so the bake
      * passes that follow are the same whatever relocation did */
@@ -588,12 +533,9 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     out->timings.total = pb_now_ms() - t_start;
 done:
     release(ctx, &B);
-    free(probes), free(rotations), free(directions), free(lights), free(mats), free(sh_sum), free(depth_sum);
+    free(probes), free(rotations), free(directions), free(sh_sum), free(depth_sum);
     free(backfaces), free(hits), free(reduced), free(offsets), free(near);
     free(passes_done), free(active), free(converged_at), free(dc_sum), free(dc_sq);
-    pb_bake_emitters_free(&emitters);
-    pb_env_table_free(&env);
-    pb_environment_free(&sky_env);
     if (r != PB_OK)
         pb_volume_free(out);
     return r;

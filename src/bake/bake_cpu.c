@@ -236,6 +236,8 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
                     res.L[k] += cc;
                     if (bounce <= 1)
                         res.L_direct[k] += cc;
+                    if (bounce == 0)
+                        res.L_seen[k] += cc;
                 }
             }
             break;
@@ -278,6 +280,8 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
                 res.L[k] += cc;
                 if (bounce <= 1)
                     res.L_direct[k] += cc;
+                if (bounce == 0)
+                    res.L_seen[k] += cc;
             }
         }
         if (bounce > bounces)

@@ -14,7 +14,7 @@ typedef struct pb_path_ctx {
 
 /* PathResult of path.glsl */
 typedef struct pb_path_result {
-    float L[3], L_direct[3];
+    float L[3], L_direct[3], L_seen[3];
     float first_t;                 /* negative on a back face, INFINITY on a miss */
     int shade;
     float x[3], ng[3], albedo[3];

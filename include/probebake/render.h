@@ -1,0 +1,85 @@
+/*
+ * probebake render: pictures of a scene lit by a baked volume, and the
+ * path-traced truth to judge them by (issue 4). A compute kernel
+ * (shaders/comp/render.comp) traces one camera path per pixel and sample:
+ * primary hit, direct light with the bake's light code, and indirect light
+ * from the volume through the run-time sampler or path traced.
+ */
+#ifndef PROBEBAKE_RENDER_H
+#define PROBEBAKE_RENDER_H
+
+#include "probebake/bake.h"
+#include "probebake/sample.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum pb_render_mode {
+    PB_RENDER_DIRECT = 0,     /* emission seen + light reflected once */
+    PB_RENDER_REFERENCE = 1,  /* path traced, `bounces` reflections after the first hit */
+    PB_RENDER_PROBES = 2,     /* direct (unless the volume has it) + albedo / pi x volume irradiance */
+    PB_RENDER_INDIRECT = 3    /* albedo / pi x volume irradiance only */
+} pb_render_mode;
+
+typedef struct pb_camera_view {
+    float eye[3];             /* scene-local frame */
+    float forward[3], up[3];  /* need not be unit or orthogonal; up must not be parallel to forward */
+    float yfov;               /* radians, in (0, pi) */
+} pb_camera_view;
+
+typedef struct pb_render_desc {
+    pb_camera_view camera;
+    uint32_t width, height;   /* 1..16384 each */
+    pb_render_mode mode;
+    uint32_t spp;             /* default 1 (probes, direct), 64 (reference) */
+    uint32_t bounces;         /* reference: default 8 (Russian roulette beyond the second) */
+    uint32_t seed;
+    const pb_sample_volume *volume; /* probes / indirect modes */
+    uint32_t volume_direct;   /* the volume's irradiance includes direct light (PB_VOLUME_DIRECT) */
+    float sky[3];             /* as pb_bake_desc */
+    const pb_environment *environment;
+} pb_render_desc;
+
+/* Linear radiance image, 4 floats per pixel, row 0 at the top: rgb and the
+ * fraction of samples whose first hit reflects (a surface mask); `direct`
+ * (may be NULL) the part of each pixel that reflected at most once. */
+pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_render_desc *desc, float *rgba,
+                    float *direct, double *gpu_ms, pb_error *err);
+
+/* CPU reference of the kernel (tests). */
+pb_result pb_render_cpu(const pb_scene *scene, const pb_bvh *bvh, const pb_render_desc *desc, float *rgba,
+                        float *direct, pb_error *err);
+
+/* Camera from a glTF camera of the scene (yfov 0.8 rad for orthographic). */
+void pb_camera_from_scene(const pb_camera *c, pb_camera_view *out);
+
+/* --- images --- */
+
+/* Tone mapping for display: linear x 2^exposure, the ACES filmic fit
+ * (Narkowicz 2015), sRGB encoding, 8 bits. Monotonic in every channel. */
+float pb_tonemap_aces(float x);
+float pb_srgb_encode(float linear);
+/* Exposure (EV) that maps the log-average luminance of the surface pixels
+ * (alpha > 0; all pixels if none) to middle grey 0.18. */
+float pb_auto_exposure(const float *rgba, uint32_t width, uint32_t height);
+void pb_tonemap_image(const float *rgba, uint32_t width, uint32_t height, float exposure_ev, unsigned char *rgb8);
+
+/* Relative error heat map of a against reference b (luminance): black 0,
+ * blue, green, yellow, red at >= max_error. */
+void pb_error_heatmap(const float *a, const float *b, uint32_t width, uint32_t height, float max_error,
+                      unsigned char *rgb8);
+
+/* Relative RMSE of luminance over surface pixels (alpha > 0 in b):
+ * sqrt(mean (a - b)^2) / mean b. */
+double pb_image_relative_rmse(const float *a, const float *b, uint32_t width, uint32_t height);
+
+/* Writes 8-bit RGB PNG (stb_image_write) or linear PFM (little-endian,
+ * bottom row first as PFM says), atomically. PB_ERROR_IO naming the path. */
+pb_result pb_write_png(const char *path, const unsigned char *rgb8, uint32_t width, uint32_t height, pb_error *err);
+pb_result pb_write_pfm(const char *path, const float *rgba, uint32_t width, uint32_t height, pb_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,82 @@
+#version 460
+// render: one invocation per pixel of a row band; spp camera paths per
+// pixel, averaged. Modes (include/probebake/render.h):
+//   direct     emission seen + light reflected once (shadow rays, NEE, MIS)
+//   reference  path traced to `bounces` reflections (the ground truth)
+//   probes     direct light (unless the volume holds it) + albedo / pi x the
+//              volume's irradiance through the run-time sampler
+//   indirect   albedo / pi x the volume's irradiance only
+// Writes per pixel the radiance (rgb, a = 1 where the first hit reflects)
+// and the part of it that reflected at most once. CPU reference:
+// pb_render_cpu (src/render/render_cpu.c).
+#extension GL_GOOGLE_include_directive : require
+
+#include "path.glsl"
+#include "probe_sample.glsl"
+
+layout(local_size_x = 64) in;
+
+struct RenderParams {
+    vec4 eye;
+    vec4 forward;       // unit
+    vec4 right;         // scaled: tan(fov / 2) x aspect
+    vec4 up;            // scaled: tan(fov / 2)
+    PbVolumeRefs volume;
+    uint64_t image;     // vec4 per pixel
+    uint64_t image_direct;
+    uint width, height, spp, mode;
+    uint seed, bounces, first_row, rows;
+    uint volume_direct; // the volume's irradiance includes direct light
+    uint pad0, pad1, pad2;
+};
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer RenderParamsBuf { RenderParams r; };
+
+layout(push_constant) uniform Push {
+    uint64_t bake_params;
+    uint64_t render_params;
+} pc;
+
+#define MODE_DIRECT 0u
+#define MODE_REFERENCE 1u
+#define MODE_PROBES 2u
+#define MODE_INDIRECT 3u
+
+void main()
+{
+    BakeParams P = BakeParamsBuf(pc.bake_params).p;
+    RenderParams R = RenderParamsBuf(pc.render_params).r;
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= R.width * R.rows)
+        return;
+    uint px = i % R.width, py = R.first_row + i / R.width;
+    pb_volume = R.volume;
+    vec3 sum = vec3(0.0), sum_direct = vec3(0.0);
+    float surface = 0.0;
+    for (uint k = 0u; k < R.spp; ++k) {
+        uint state = rng_seed(R.seed, py * R.width + px, k, 0x52454e44u);
+        float jx = R.spp == 1u ? 0.5 : rng_next(state), jy = R.spp == 1u ? 0.5 : rng_next(state);
+        float sx = (float(px) + jx) / float(R.width) * 2.0 - 1.0;
+        float sy = 1.0 - (float(py) + jy) / float(R.height) * 2.0;
+        vec3 dir = normalize(R.forward.xyz + sx * R.right.xyz + sy * R.up.xyz);
+        uint bounces = R.mode == MODE_REFERENCE ? R.bounces : 0u;
+        PathResult pr = path_radiance(P, R.eye.xyz, dir, bounces, true, state);
+        vec3 L = pr.L, Ld = pr.L_direct;
+        if (R.mode == MODE_PROBES || R.mode == MODE_INDIRECT) {
+            vec3 V = vec3(0.0);
+            if (pr.shade)
+                V = pr.albedo / PB_PI * pb_sample_irradiance(pb_volume_grid(pb_volume), pr.x, pr.ng, -dir);
+            if (R.mode == MODE_INDIRECT)
+                L = V;
+            else
+                L = (R.volume_direct != 0u ? pr.L_seen : pr.L) + V;
+        }
+        sum += L;
+        sum_direct += Ld;
+        surface += pr.shade ? 1.0 : 0.0;
+    }
+    float inv = 1.0 / float(R.spp);
+    uint pixel = py * R.width + px;
+    Vec4RW(R.image).v[pixel] = vec4(sum * inv, surface * inv);
+    Vec4RW(R.image_direct).v[pixel] = vec4(sum_direct * inv, 0.0);
+}
