@@ -52,5 +52,6 @@
 #include "probebake/bake.h"
 #include "probebake/environment.h"
 #include "probebake/sample.h"
+#include "probebake/render.h"
 
 #endif /* PROBEBAKE_H */

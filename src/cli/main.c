@@ -1,7 +1,7 @@
 #define _POSIX_C_SOURCE 200809L
 /* probebake command line: devices, info, trace. Every failure prints one
  * line "probebake: error: FILE: problem" to stderr and exits non-zero. */
-#include "probebake/probebake.h"
+#include "cli/cli.h"
 
 #include <math.h>
 #include <signal.h>
@@ -11,12 +11,9 @@
 #include <time.h>
 #include <unistd.h>
 
-typedef struct cli_log {
-    int verbose;
-    int quiet;
-} cli_log;
 
-static void log_to_stderr(pb_log_level level, const char *msg, void *user)
+
+void cli_log_to_stderr(pb_log_level level, const char *msg, void *user)
 {
     const cli_log *l = user;
     if (level == PB_LOG_DEBUG && !l->verbose)
@@ -27,20 +24,39 @@ static void log_to_stderr(pb_log_level level, const char *msg, void *user)
     fprintf(stderr, "probebake: %s: %s\n", names[level], msg);
 }
 
-static double pb_now_ms_cli(void)
+double cli_now_ms(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
-static int fail(const pb_error *err)
+int cli_fail(const pb_error *err)
 {
     fprintf(stderr, "probebake: error: %s\n", err->message[0] ? err->message : pb_result_name(err->code));
     return err->code == PB_ERROR_CANCELLED ? 130 : 1; /* 128 + SIGINT, as shells report it */
 }
 
-static int usage_error(const char *fmt, const char *arg)
+int cli_parse_floats(const char *s, int n, float *out)
+{
+    for (int k = 0; k < n; ++k) {
+        char *end = NULL;
+        double v = strtod(s, &end);
+        if (end == s || !isfinite(v))
+            return 0;
+        out[k] = (float)v;
+        if (k + 1 < n) {
+            if (*end != ',')
+                return 0;
+            s = end + 1;
+        } else if (*end) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+int cli_usage_error(const char *fmt, const char *arg)
 {
     fprintf(stderr, "probebake: error: ");
     fprintf(stderr, fmt, arg);
@@ -62,6 +78,8 @@ static void print_help(void)
            "  probebake inspect VOLUME [--json] [--probe I]\n"
            "                                          summary of a probe volume file; --json adds every\n"
            "                                          probe (position, flags, 27 irradiance SH coefficients)\n"
+           "  probebake render SCENE -o IMG.png [--volume V.probes] [render options]\n"
+           "                                          render the scene lit by a volume, or path traced\n"
            "  probebake --help | --version\n\n"
            "options:\n"
            "  --device INDEX|NAME     pick a device (default: discrete > integrated > virtual > CPU)\n"
@@ -86,26 +104,17 @@ static void print_help(void)
            "  --env-intensity K              scale of the map (default 1)\n"
            "  --env-rotation DEG             turn the map about +Y, counter-clockwise from above (default 0)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
-           "  --indirect path                path-traced indirect light (default; 'volume' is not there yet)\n",
+           "  --indirect path                path-traced indirect light (default; 'volume' is not there yet)\n"
+           "render options:\n"
+           "  --mode probes|reference|direct|indirect|diff   (default probes with --volume, else reference)\n"
+           "  --camera I | --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]   (default: glTF camera 0)\n"
+           "  --size WxH (default 640x480)  --spp N  --bounces N (reference, default 8)  --seed S\n"
+           "  --exposure EV|auto (default auto)  --pfm (linear image beside the PNG)  --json (metrics)\n"
+           "  --sky R,G,B | --env FILE.hdr [...]   the environment, as for bake\n",
            PB_VERSION_STRING);
 }
 
-typedef struct options {
-    const char *command;
-    const char *scene;
-    const char *device;
-    const char *output;
-    const char *direct;
-    const char *points;
-    const char *env;
-    float spacing, sky[3], bounds[6], target_error, env_intensity, env_rotation;
-    int has_sky;
-    uint32_t counts[3], passes, bounces, octmap_res;
-    int has_spacing, has_counts, has_bounds, has_rays, has_seed, has_bounces;
-    int json, validation, verify, has_probe;
-    uint32_t probes, rays, seed, probe;
-    cli_log log;
-} options;
+
 
 static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
 {
@@ -145,25 +154,76 @@ static int parse(int argc, char **argv, options *o)
             o->log.quiet = 1;
         } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
             if (!next)
-                return usage_error("%s needs a file name", a);
+                return cli_usage_error("%s needs a file name", a);
             o->output = argv[++i];
         } else if (!strcmp(a, "--points")) {
             if (!next)
-                return usage_error("%s needs a points file (JSON)", a);
+                return cli_usage_error("%s needs a points file (JSON)", a);
             o->points = argv[++i];
         } else if (!strcmp(a, "--direct")) {
             if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
-                return usage_error("%s takes include or exclude", a);
+                return cli_usage_error("%s takes include or exclude", a);
             o->direct = argv[++i];
+        } else if (!strcmp(a, "--volume") || !strcmp(a, "--mode")) {
+            if (!next)
+                return cli_usage_error("%s needs a value", a);
+            *(!strcmp(a, "--volume") ? &o->volume : &o->mode) = argv[++i];
+        } else if (!strcmp(a, "--eye") || !strcmp(a, "--target") || !strcmp(a, "--up")) {
+            float *dst = !strcmp(a, "--eye") ? o->eye : !strcmp(a, "--target") ? o->target : o->up;
+            if (!next || !cli_parse_floats(next, 3, dst)) {
+                fprintf(stderr, "probebake: error: %s '%s' is not three comma-separated finite numbers\n", a,
+                        next ? next : "");
+                return 2;
+            }
+            *(dst == o->eye ? &o->has_eye : dst == o->target ? &o->has_target : &o->has_up) = 1;
+            ++i;
+        } else if (!strcmp(a, "--fov") || !strcmp(a, "--exposure")) {
+            int fov = !strcmp(a, "--fov");
+            char *end = NULL;
+            float v = next ? strtof(next, &end) : NAN;
+            if (!fov && next && !strcmp(next, "auto")) {
+                ++i;
+                continue;
+            }
+            if (!next || *end || !isfinite(v) || (fov && !(v > 0.f && v < 180.f)) || (!fov && fabsf(v) > 64.f)) {
+                fprintf(stderr, "probebake: error: %s '%s' is not %s\n", a, next ? next : "",
+                        fov ? "a vertical field of view in degrees in (0, 180)" : "'auto' or an exposure in EV (-64..64)");
+                return 2;
+            }
+            if (fov)
+                o->fov_deg = v;
+            else
+                o->exposure = v, o->has_exposure = 1;
+            ++i;
+        } else if (!strcmp(a, "--size")) {
+            unsigned w = 0, h = 0;
+            char c = 0;
+            if (!next || sscanf(next, "%ux%u%c", &w, &h, &c) != 2 || w < 1 || h < 1 || w > 16384 || h > 16384) {
+                fprintf(stderr, "probebake: error: --size '%s' is not WxH with each side 1..16384\n", next ? next : "");
+                return 2;
+            }
+            o->width = w, o->height = h;
+            ++i;
+        } else if (!strcmp(a, "--camera") || !strcmp(a, "--spp")) {
+            int cam = !strcmp(a, "--camera");
+            if (!next || !parse_u32(next, cam ? 0 : 1, cam ? 1000000 : 65536, cam ? &o->camera : &o->spp)) {
+                fprintf(stderr, "probebake: error: %s '%s' is not %s\n", a, next ? next : "",
+                        cam ? "a camera index" : "an integer in [1, 65536]");
+                return 2;
+            }
+            *(cam ? &o->has_camera : &o->has_spp) = 1;
+            ++i;
+        } else if (!strcmp(a, "--pfm")) {
+            o->pfm = 1;
         } else if (!strcmp(a, "--env")) {
             if (!next)
-                return usage_error("%s needs a .hdr file", a);
+                return cli_usage_error("%s needs a .hdr file", a);
             o->env = argv[++i];
         } else if (!strcmp(a, "--indirect")) {
             if (!next || (strcmp(next, "path") && strcmp(next, "volume")))
-                return usage_error("%s takes path or volume", a);
+                return cli_usage_error("%s takes path or volume", a);
             if (!strcmp(next, "volume"))
-                return usage_error("%s volume needs the run-time sampler, which is not in this version; "
+                return cli_usage_error("%s volume needs the run-time sampler, which is not in this version; "
                                    "use --indirect path", a);
             ++i;
         } else if (!strcmp(a, "--env-intensity") || !strcmp(a, "--env-rotation")) {
@@ -256,7 +316,7 @@ static int parse(int argc, char **argv, options *o)
             ++i;
         } else if (!strcmp(a, "--device")) {
             if (!next)
-                return usage_error("%s needs a value", a);
+                return cli_usage_error("%s needs a value", a);
             o->device = argv[++i];
         } else if (!strcmp(a, "--probe")) {
             if (!next || !parse_u32(next, 0, UINT32_MAX - 1, &o->probe)) {
@@ -267,7 +327,7 @@ static int parse(int argc, char **argv, options *o)
             ++i;
         } else if (!strcmp(a, "--probes") || !strcmp(a, "--rays") || !strcmp(a, "--seed")) {
             if (!next)
-                return usage_error("%s needs a value", a);
+                return cli_usage_error("%s needs a value", a);
             uint32_t *dst = !strcmp(a, "--probes") ? &o->probes : !strcmp(a, "--rays") ? &o->rays : &o->seed;
             uint32_t lo = dst == &o->seed ? 0 : 1, hi = dst == &o->rays ? 65536 : (dst == &o->probes ? 1u << 24 : UINT32_MAX);
             if (!parse_u32(next, lo, hi, dst)) {
@@ -278,13 +338,13 @@ static int parse(int argc, char **argv, options *o)
             o->has_seed |= dst == &o->seed;
             ++i;
         } else if (a[0] == '-') {
-            return usage_error("unknown option '%s'", a);
+            return cli_usage_error("unknown option '%s'", a);
         } else if (!o->command) {
             o->command = a;
         } else if (!o->scene) {
             o->scene = a;
         } else {
-            return usage_error("unexpected argument '%s'", a);
+            return cli_usage_error("unexpected argument '%s'", a);
         }
     }
     if (!o->command) {
@@ -315,7 +375,7 @@ static int cmd_devices(const options *o)
     uint32_t n = 0;
     pb_error err;
     if (pb_enumerate_devices(infos, 16, &n, &err) != PB_OK)
-        return fail(&err);
+        return cli_fail(&err);
     if (n > 16)
         n = 16;
     if (o->json) {
@@ -358,12 +418,12 @@ static const char *light_type(uint32_t t)
 static int cmd_info(const options *o)
 {
     if (!o->scene)
-        return usage_error("%s needs a SCENE file", "info");
-    pb_scene_desc sd = {{log_to_stderr, (void *)&o->log}, 0};
+        return cli_usage_error("%s needs a SCENE file", "info");
+    pb_scene_desc sd = {{cli_log_to_stderr, (void *)&o->log}, 0};
     pb_scene *s;
     pb_error err;
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
-        return fail(&err);
+        return cli_fail(&err);
     const pb_scene_stats *st = &s->stats;
     double lo[3], hi[3];
     for (int k = 0; k < 3; ++k) {
@@ -434,8 +494,8 @@ static int cmd_info(const options *o)
 static int cmd_trace(const options *o)
 {
     if (!o->scene)
-        return usage_error("%s needs a SCENE file", "trace");
-    pb_log log = {log_to_stderr, (void *)&o->log};
+        return cli_usage_error("%s needs a SCENE file", "trace");
+    pb_log log = {cli_log_to_stderr, (void *)&o->log};
     pb_scene_desc sd = {log, 0};
     pb_scene *s = NULL;
     pb_bvh *bvh = NULL;
@@ -526,7 +586,7 @@ out:
     pb_context_destroy(ctx);
     pb_bvh_destroy(bvh);
     pb_scene_destroy(s);
-    return rc ? fail(&err) : 0;
+    return rc ? cli_fail(&err) : 0;
 }
 
 static void print_flags(uint32_t f)
@@ -558,11 +618,11 @@ static void print_probe_json(const pb_volume *v, uint32_t i, int last)
 static int cmd_inspect(const options *o)
 {
     if (!o->scene)
-        return usage_error("%s needs a VOLUME file", "inspect");
+        return cli_usage_error("%s needs a VOLUME file", "inspect");
     pb_volume v;
     pb_error err;
     if (pb_volume_read(o->scene, &v, &err) != PB_OK)
-        return fail(&err);
+        return cli_fail(&err);
     if (o->has_probe && o->probe >= v.probe_count) {
         fprintf(stderr, "probebake: error: %s: probe %u does not exist (%u probes)\n", o->scene, o->probe,
                 v.probe_count);
@@ -646,7 +706,7 @@ static int on_progress(float fraction, const char *label, void *user)
 {
     progress_state *ps = user;
     if (ps->show) {
-        double el = (pb_now_ms_cli() - ps->start) / 1000.0;
+        double el = (cli_now_ms() - ps->start) / 1000.0;
         double eta = fraction > 0 ? el * (1 - fraction) / fraction : 0;
         fprintf(stderr, "\r%-14s %5.1f%%  %6.2f Mrays/s  ETA %5.0f s ", label, 100.0 * fraction,
                 el > 0 ? fraction * (double)ps->rays_total / el / 1e6 : 0.0, eta);
@@ -658,14 +718,14 @@ static int on_progress(float fraction, const char *label, void *user)
 static int cmd_bake(const options *o)
 {
     if (!o->scene)
-        return usage_error("%s needs a SCENE file", "bake");
+        return cli_usage_error("%s needs a SCENE file", "bake");
     if (!o->output)
-        return usage_error("%s needs -o OUT.probes", "bake");
+        return cli_usage_error("%s needs -o OUT.probes", "bake");
     if (o->has_spacing && o->has_counts)
-        return usage_error("%s: give --spacing or --counts, not both", "bake");
+        return cli_usage_error("%s: give --spacing or --counts, not both", "bake");
     if (o->points && (o->has_spacing || o->has_counts || o->has_bounds))
-        return usage_error("%s: --points replaces the grid; drop --spacing, --counts and --bounds", "bake");
-    pb_log log = {log_to_stderr, (void *)&o->log};
+        return cli_usage_error("%s: --points replaces the grid; drop --spacing, --counts and --bounds", "bake");
+    pb_log log = {cli_log_to_stderr, (void *)&o->log};
     pb_scene_desc sd = {log, 0};
     pb_scene *s = NULL;
     pb_bvh *bvh = NULL;
@@ -679,7 +739,7 @@ static int cmd_bake(const options *o)
     memset(&env, 0, sizeof env);
     pb_error err;
     int rc = 1;
-    double t0 = pb_now_ms_cli();
+    double t0 = cli_now_ms();
     if (o->env && o->has_sky) {
         snprintf(err.message, sizeof err.message, "--sky and --env both give the environment: choose one");
         goto out;
@@ -760,7 +820,7 @@ static int cmd_bake(const options *o)
     pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
     if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
-    progress_state ps = {isatty(2) && !o->log.quiet, pb_now_ms_cli(), probes * d.rays_per_probe * d.passes};
+    progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};
     d.progress = on_progress;
     d.progress_user = &ps;
     signal(SIGINT, on_sigint);
@@ -772,7 +832,7 @@ static int cmd_bake(const options *o)
         goto out;
     vol.timings.load = 0;
     vol.timings.bvh = bvh->stats.build_ms;
-    vol.timings.total = pb_now_ms_cli() - t0;
+    vol.timings.total = cli_now_ms() - t0;
     if (pb_volume_write(o->output, &vol, &err) != PB_OK)
         goto out;
     if (o->validation && pb_context_validation_messages(ctx)) {
@@ -808,7 +868,7 @@ out:
     pb_context_destroy(ctx);
     pb_bvh_destroy(bvh);
     pb_scene_destroy(s);
-    return rc ? fail(&err) : 0;
+    return rc ? cli_fail(&err) : 0;
 }
 
 int main(int argc, char **argv)
@@ -827,5 +887,7 @@ int main(int argc, char **argv)
         return cmd_inspect(&o);
     if (!strcmp(o.command, "bake"))
         return cmd_bake(&o);
-    return usage_error("unknown command '%s'", o.command);
+    if (!strcmp(o.command, "render"))
+        return cmd_render(&o);
+    return cli_usage_error("unknown command '%s'", o.command);
 }

@@ -1,0 +1,48 @@
+/* The probebake command line: options shared by the commands, and the
+ * helpers every command uses (one-line errors, logging, time). */
+#ifndef PB_CLI_H
+#define PB_CLI_H
+
+#include "probebake/probebake.h"
+
+typedef struct cli_log {
+    int verbose;
+    int quiet;
+} cli_log;
+
+typedef struct options {
+    const char *command;
+    const char *scene;
+    const char *device;
+    const char *output;
+    const char *direct;
+    const char *points;
+    const char *env;
+    float spacing, sky[3], bounds[6], target_error, env_intensity, env_rotation;
+    int has_sky;
+    uint32_t counts[3], passes, bounces, octmap_res;
+    int has_spacing, has_counts, has_bounds, has_rays, has_seed, has_bounces;
+    int json, validation, verify, has_probe;
+    uint32_t probes, rays, seed, probe;
+    cli_log log;
+    /* render */
+    const char *volume, *mode;
+    float eye[3], target[3], up[3], fov_deg, exposure;
+    int has_eye, has_target, has_up, has_camera, has_exposure, pfm;
+    uint32_t camera, width, height, spp;
+    int has_spp;
+} options;
+
+/* "probebake: error: MESSAGE" on stderr; returns the exit code (1, or 130
+ * for a cancelled run). */
+int cli_fail(const pb_error *err);
+/* A usage error: exit code 2. */
+int cli_usage_error(const char *fmt, const char *arg);
+void cli_log_to_stderr(pb_log_level level, const char *msg, void *user);
+double cli_now_ms(void);
+/* Parses "a,b,c" into n floats; 1 on success. */
+int cli_parse_floats(const char *s, int n, float *out);
+
+int cmd_render(const options *o);
+
+#endif

@@ -1,0 +1,233 @@
+#define _POSIX_C_SOURCE 200809L
+/* probebake render: pictures of the scene lit by a volume (probes,
+ * indirect), its direct light alone, the path-traced reference, or the
+ * relative-error heat map of probes against reference (diff), with the
+ * error metrics. */
+#include "cli/cli.h"
+#include "common/common.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int mode_of(const char *m, pb_render_mode *out, int *diff)
+{
+    *diff = 0;
+    if (!strcmp(m, "probes"))
+        *out = PB_RENDER_PROBES;
+    else if (!strcmp(m, "reference"))
+        *out = PB_RENDER_REFERENCE;
+    else if (!strcmp(m, "direct"))
+        *out = PB_RENDER_DIRECT;
+    else if (!strcmp(m, "indirect"))
+        *out = PB_RENDER_INDIRECT;
+    else if (!strcmp(m, "diff"))
+        *out = PB_RENDER_PROBES, *diff = 1;
+    else
+        return 0;
+    return 1;
+}
+
+/* "x.png" -> "x.pfm" (or appended when there is no .png) */
+static void sibling(const char *path, const char *ext, char *out, size_t n)
+{
+    snprintf(out, n, "%s", path);
+    char *dot = strrchr(out, '.');
+    if (dot && !strcmp(dot, ".png"))
+        *dot = 0;
+    size_t l = strlen(out);
+    snprintf(out + l, n - l, "%s", ext);
+}
+
+int cmd_render(const options *o)
+{
+    if (!o->scene)
+        return cli_usage_error("%s needs a SCENE", "render");
+    if (!o->output)
+        return cli_usage_error("%s needs -o IMG.png", "render");
+    pb_render_mode mode;
+    int diff;
+    const char *mode_name = o->mode ? o->mode : (o->volume ? "probes" : "reference");
+    if (!mode_of(mode_name, &mode, &diff))
+        return cli_usage_error("--mode '%s': use probes, reference, direct, indirect or diff", mode_name);
+    if ((mode == PB_RENDER_PROBES || mode == PB_RENDER_INDIRECT) && !o->volume)
+        return cli_usage_error("--mode %s needs --volume V.probes", mode_name);
+    if (o->has_camera && (o->has_eye || o->has_target))
+        return cli_usage_error("%s: give --camera or --eye/--target, not both", "render");
+    if (o->has_eye != o->has_target)
+        return cli_usage_error("%s: --eye and --target go together", "render");
+    pb_log log = {cli_log_to_stderr, (void *)&o->log};
+    pb_scene_desc sd = {log, 0};
+    pb_scene *s = NULL;
+    pb_bvh *bvh = NULL;
+    pb_context *ctx = NULL;
+    pb_gpu_scene *gs = NULL;
+    pb_volume vol;
+    memset(&vol, 0, sizeof vol);
+    pb_sample_volume sv;
+    memset(&sv, 0, sizeof sv);
+    pb_environment env;
+    memset(&env, 0, sizeof env);
+    pb_error err;
+    memset(&err, 0, sizeof err);
+    float *img = NULL, *img_direct = NULL, *ref = NULL, *ref_direct = NULL;
+    unsigned char *rgb8 = NULL;
+    int rc = 1;
+    if (o->env && o->has_sky) {
+        snprintf(err.message, sizeof err.message, "--sky and --env both give the environment: choose one");
+        goto out;
+    }
+    if (o->volume && pb_volume_read(o->volume, &vol, &err) != PB_OK)
+        goto out;
+    if (o->env && pb_environment_load(o->env, o->env_intensity, o->env_rotation, &env, &err) != PB_OK)
+        goto out;
+    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
+        goto out;
+    if (o->volume) {
+        uint64_t h = pb_hash64(s->positions, (size_t)s->triangle_count * 36,
+                               pb_hash64(s->materials, s->material_count * sizeof(pb_material), 0));
+        if (h != vol.settings.scene_hash && !o->log.quiet)
+            fprintf(stderr, "probebake: warning: %s was baked from a different scene than %s\n", o->volume, o->scene);
+        if (pb_sample_volume_build(&vol, s->origin, 0.f, 0.f, &sv, &err) != PB_OK) {
+            char m[sizeof err.message];
+            memcpy(m, err.message, sizeof m);
+            snprintf(err.message, sizeof err.message, "%.200s: %.300s", o->volume, m);
+            goto out;
+        }
+    }
+    pb_render_desc d;
+    memset(&d, 0, sizeof d);
+    d.width = o->width ? o->width : 640;
+    d.height = o->height ? o->height : 480;
+    d.mode = mode;
+    d.spp = o->has_spp ? o->spp : 0;
+    d.bounces = o->has_bounces ? o->bounces : 8;
+    d.seed = o->has_seed ? o->seed : 1;
+    d.volume = o->volume ? &sv : NULL;
+    d.volume_direct = (vol.flags & PB_VOLUME_DIRECT) != 0;
+    memcpy(d.sky, o->sky, sizeof d.sky);
+    d.environment = o->env ? &env : NULL;
+    if (o->has_eye) {
+        for (int k = 0; k < 3; ++k) {
+            d.camera.eye[k] = (float)(o->eye[k] - s->origin[k]);
+            d.camera.forward[k] = o->target[k] - o->eye[k];
+            d.camera.up[k] = o->has_up ? o->up[k] : (k == 1 ? 1.f : 0.f);
+        }
+        d.camera.yfov = (o->fov_deg > 0.f ? o->fov_deg : 50.f) * 0.017453293f;
+    } else if (s->camera_count > 0) {
+        if (o->camera >= s->camera_count) {
+            snprintf(err.message, sizeof err.message, "%s: camera %u does not exist (%u cameras)", o->scene, o->camera,
+                     s->camera_count);
+            goto out;
+        }
+        pb_camera_from_scene(&s->cameras[o->camera], &d.camera);
+        if (o->fov_deg > 0.f)
+            d.camera.yfov = o->fov_deg * 0.017453293f;
+    } else if (o->has_camera) {
+        snprintf(err.message, sizeof err.message, "%s: the scene has no cameras", o->scene);
+        goto out;
+    } else {
+        /* no camera: look at the bounds' centre from the front, above */
+        float c[3], ext = 0.f;
+        for (int k = 0; k < 3; ++k) {
+            c[k] = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
+            ext = fmaxf(ext, s->bounds_max[k] - s->bounds_min[k]);
+        }
+        float eye[3] = {c[0], c[1] + 0.3f * ext, c[2] + 1.2f * ext};
+        for (int k = 0; k < 3; ++k) {
+            d.camera.eye[k] = eye[k];
+            d.camera.forward[k] = c[k] - eye[k];
+            d.camera.up[k] = k == 1 ? 1.f : 0.f;
+        }
+        d.camera.yfov = (o->fov_deg > 0.f ? o->fov_deg : 50.f) * 0.017453293f;
+    }
+    if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
+        goto out;
+    pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
+    if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+        goto out;
+    uint64_t pixels = (uint64_t)d.width * d.height;
+    img = malloc(pixels * 16), img_direct = malloc(pixels * 16), rgb8 = malloc(pixels * 3);
+    if (diff)
+        ref = malloc(pixels * 16), ref_direct = malloc(pixels * 16);
+    if (!img || !img_direct || !rgb8 || (diff && (!ref || !ref_direct))) {
+        snprintf(err.message, sizeof err.message, "out of host memory for a %ux%u image", d.width, d.height);
+        goto out;
+    }
+    double ms = 0, ms_ref = 0;
+    if (pb_render(ctx, s, gs, &d, img, img_direct, &ms, &err) != PB_OK)
+        goto out;
+    double rmse = 0, rmse_indirect = 0;
+    if (diff) {
+        /* the reference (path traced), and the direct image the probe image's indirect part is measured against */
+        pb_render_desc dr = d;
+        dr.mode = PB_RENDER_REFERENCE;
+        dr.spp = o->has_spp ? o->spp * 16 : 256;
+        if (pb_render(ctx, s, gs, &dr, ref, ref_direct, &ms_ref, &err) != PB_OK)
+            goto out;
+        pb_render_desc dd = d;
+        dd.mode = PB_RENDER_DIRECT;
+        float *direct_img = malloc(pixels * 16);
+        if (!direct_img || pb_render(ctx, s, gs, &dd, direct_img, NULL, NULL, &err) != PB_OK) {
+            free(direct_img);
+            goto out;
+        }
+        rmse = pb_image_relative_rmse(img, ref, d.width, d.height);
+        for (uint64_t i = 0; i < pixels; ++i)
+            for (int c = 0; c < 3; ++c) {
+                img_direct[4 * i + c] = img[4 * i + c] - direct_img[4 * i + c]; /* probes: indirect part */
+                ref_direct[4 * i + c] = ref[4 * i + c] - ref_direct[4 * i + c]; /* reference: indirect part */
+            }
+        for (uint64_t i = 0; i < pixels; ++i)
+            img_direct[4 * i + 3] = img[4 * i + 3], ref_direct[4 * i + 3] = ref[4 * i + 3];
+        rmse_indirect = pb_image_relative_rmse(img_direct, ref_direct, d.width, d.height);
+        free(direct_img);
+        pb_error_heatmap(img, ref, d.width, d.height, 0.5f, rgb8);
+    } else {
+        float ev = o->has_exposure ? o->exposure : pb_auto_exposure(img, d.width, d.height);
+        pb_tonemap_image(img, d.width, d.height, ev, rgb8);
+    }
+    if (pb_write_png(o->output, rgb8, d.width, d.height, &err) != PB_OK)
+        goto out;
+    if (o->pfm) {
+        char pfm[1100];
+        sibling(o->output, ".pfm", pfm, sizeof pfm);
+        if (pb_write_pfm(pfm, img, d.width, d.height, &err) != PB_OK) {
+            remove(o->output);
+            goto out;
+        }
+    }
+    if (o->validation && pb_context_validation_messages(ctx)) {
+        snprintf(err.message, sizeof err.message, "%u Vulkan validation messages", pb_context_validation_messages(ctx));
+        remove(o->output);
+        goto out;
+    }
+    uint32_t spp = d.spp ? d.spp : (mode == PB_RENDER_REFERENCE ? 64 : 1);
+    if (o->json) {
+        printf("{\"image\": \"%s\", \"mode\": \"%s\", \"width\": %u, \"height\": %u, \"spp\": %u, \"gpu_ms\": %.3f",
+               o->output, mode_name, d.width, d.height, spp, ms);
+        if (diff)
+            printf(", \"reference_spp\": %u, \"reference_gpu_ms\": %.3f, \"relative_rmse\": %.6f, "
+                   "\"relative_rmse_indirect\": %.6f",
+                   o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect);
+        printf("}\n");
+    } else {
+        printf("wrote %s: %ux%u, %s, %u spp, GPU %.0f ms\n", o->output, d.width, d.height, mode_name, spp, ms);
+        if (diff)
+            printf("probes vs reference (%u spp, GPU %.0f ms): relative RMSE %.4f of the image, %.4f of the indirect "
+                   "light (surface pixels); heat map: black 0, red >= 50 %%\n",
+                   o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect);
+    }
+    rc = 0;
+out:
+    free(img), free(img_direct), free(ref), free(ref_direct), free(rgb8);
+    pb_sample_volume_free(&sv);
+    pb_volume_free(&vol);
+    pb_environment_free(&env);
+    pb_gpu_scene_destroy(gs);
+    pb_context_destroy(ctx);
+    pb_bvh_destroy(bvh);
+    pb_scene_destroy(s);
+    return rc ? cli_fail(&err) : 0;
+}

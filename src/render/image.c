@@ -1,0 +1,126 @@
+/* Display and comparison of rendered images: exposure, ACES tone curve,
+ * sRGB, error heat maps and metrics, PNG (stb_image_write) and PFM files. */
+#include "common/common.h"
+#include "probebake/render.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <stb_image_write.h>
+
+static float luminance(const float *c)
+{
+    return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+}
+
+float pb_tonemap_aces(float x)
+{
+    /* Narkowicz's fit of the ACES reference rendering transform */
+    x = x > 0.f ? x : 0.f;
+    float y = (x * (2.51f * x + 0.03f)) / (x * (2.43f * x + 0.59f) + 0.14f);
+    return y < 1.f ? y : 1.f;
+}
+
+float pb_srgb_encode(float l)
+{
+    l = l < 0.f ? 0.f : (l > 1.f ? 1.f : l);
+    return l <= 0.0031308f ? 12.92f * l : 1.055f * powf(l, 1.f / 2.4f) - 0.055f;
+}
+
+float pb_auto_exposure(const float *rgba, uint32_t width, uint32_t height)
+{
+    double sum = 0;
+    uint64_t n = 0, pixels = (uint64_t)width * height;
+    for (int pass = 0; pass < 2 && n == 0; ++pass)
+        for (uint64_t i = 0; i < pixels; ++i)
+            if (pass == 1 || rgba[4 * i + 3] > 0.f) {
+                sum += log(1e-4 + luminance(rgba + 4 * i));
+                ++n;
+            }
+    double avg = n ? exp(sum / n) : 0.18;
+    return (float)log2(0.18 / avg);
+}
+
+void pb_tonemap_image(const float *rgba, uint32_t width, uint32_t height, float exposure_ev, unsigned char *rgb8)
+{
+    float scale = exp2f(exposure_ev);
+    for (uint64_t i = 0; i < (uint64_t)width * height; ++i)
+        for (int c = 0; c < 3; ++c) {
+            float v = pb_srgb_encode(pb_tonemap_aces(rgba[4 * i + c] * scale));
+            rgb8[3 * i + c] = (unsigned char)(v * 255.f + 0.5f);
+        }
+}
+
+void pb_error_heatmap(const float *a, const float *b, uint32_t width, uint32_t height, float max_error,
+                      unsigned char *rgb8)
+{
+    /* black -> blue -> green -> yellow -> red */
+    static const float ramp[5][3] = {{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}};
+    for (uint64_t i = 0; i < (uint64_t)width * height; ++i) {
+        float la = luminance(a + 4 * i), lb = luminance(b + 4 * i);
+        float e = fabsf(la - lb) / fmaxf(lb, 1e-3f) / max_error;
+        e = e < 0.f ? 0.f : (e > 1.f ? 1.f : e);
+        float x = e * 4.f;
+        int k = (int)x < 4 ? (int)x : 3;
+        float t = x - (float)k;
+        for (int c = 0; c < 3; ++c)
+            rgb8[3 * i + c] = (unsigned char)(255.f * (ramp[k][c] * (1.f - t) + ramp[k + 1][c] * t) + 0.5f);
+    }
+}
+
+double pb_image_relative_rmse(const float *a, const float *b, uint32_t width, uint32_t height)
+{
+    double se = 0, sum = 0;
+    uint64_t n = 0;
+    for (uint64_t i = 0; i < (uint64_t)width * height; ++i) {
+        if (!(b[4 * i + 3] > 0.f))
+            continue;
+        double d = (double)luminance(a + 4 * i) - luminance(b + 4 * i);
+        se += d * d;
+        sum += luminance(b + 4 * i);
+        ++n;
+    }
+    return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;
+}
+
+/* temporary file beside the target, renamed over it when complete */
+static pb_result finish(const char *tmp, const char *path, int ok, pb_error *err)
+{
+    if (!ok || rename(tmp, path) != 0) {
+        remove(tmp);
+        return pb_fail(err, PB_ERROR_IO, "%s: cannot write the image", path);
+    }
+    return PB_OK;
+}
+
+pb_result pb_write_png(const char *path, const unsigned char *rgb8, uint32_t width, uint32_t height, pb_error *err)
+{
+    char tmp[1100];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    int ok = stbi_write_png(tmp, (int)width, (int)height, 3, rgb8, (int)width * 3) != 0;
+    return finish(tmp, path, ok, err);
+}
+
+pb_result pb_write_pfm(const char *path, const float *rgba, uint32_t width, uint32_t height, pb_error *err)
+{
+    char tmp[1100];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *f = fopen(tmp, "wb");
+    int ok = f != NULL;
+    if (f) {
+        ok = fprintf(f, "PF\n%u %u\n-1.0\n", width, height) > 0;
+        float *row = malloc((size_t)width * 3 * sizeof(float));
+        ok = ok && row;
+        for (uint32_t y = 0; ok && y < height; ++y) { /* PFM rows go bottom to top */
+            const float *src = rgba + 4 * (size_t)width * (height - 1 - y);
+            for (uint32_t x = 0; x < width; ++x)
+                memcpy(row + 3 * x, src + 4 * x, 12);
+            ok = fwrite(row, 12, width, f) == width;
+        }
+        free(row);
+        ok = (fclose(f) == 0) && ok;
+    }
+    return finish(tmp, path, ok, err);
+}

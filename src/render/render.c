@@ -1,0 +1,159 @@
+/* pb_render: the render kernel over the image in bands of rows (each
+ * submission bounded by rays_per_submit camera paths). */
+#include "bake/shading.h"
+#include "common/common.h"
+#include "probebake/render.h"
+#include "render/render_types.h"
+
+#include "render.spv.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void normalize3(float v[3])
+{
+    float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int k = 0; k < 3; ++k)
+        v[k] = l > 0.f ? v[k] / l : 0.f;
+}
+
+static void cross3(const float a[3], const float b[3], float o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+void pb_render_camera_basis(const pb_camera_view *c, uint32_t width, uint32_t height, float fwd[3], float right[3],
+                            float up[3])
+{
+    memcpy(fwd, c->forward, 12);
+    normalize3(fwd);
+    cross3(fwd, c->up, right);
+    normalize3(right);
+    cross3(right, fwd, up);
+    float t = tanf(0.5f * c->yfov), aspect = (float)width / (float)height;
+    for (int k = 0; k < 3; ++k)
+        right[k] *= t * aspect, up[k] *= t;
+}
+
+void pb_camera_from_scene(const pb_camera *c, pb_camera_view *out)
+{
+    memcpy(out->eye, c->position, 12);
+    memcpy(out->forward, c->forward, 12);
+    memcpy(out->up, c->up, 12);
+    out->yfov = c->perspective && c->yfov > 0.f ? c->yfov : 0.8f;
+}
+
+pb_result pb_render_check(const pb_render_desc *d, pb_error *err)
+{
+    if (d->width < 1 || d->height < 1 || d->width > 16384 || d->height > 16384)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "image size %ux%u: each side must be 1..16384", d->width,
+                       d->height);
+    if (!(d->camera.yfov > 1e-4f && d->camera.yfov < 3.1415f))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "field of view %g degrees: must be in (0, 180)",
+                       d->camera.yfov * 57.29578f);
+    float c[3];
+    cross3(d->camera.forward, d->camera.up, c);
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(d->camera.eye[k]) || !isfinite(d->camera.forward[k]) || !isfinite(d->camera.up[k]))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "camera position and directions must be finite");
+    if (!(c[0] * c[0] + c[1] * c[1] + c[2] * c[2] > 1e-12f))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "camera: the up vector is parallel to the view direction (or zero)");
+    if ((d->mode == PB_RENDER_PROBES || d->mode == PB_RENDER_INDIRECT) && !d->volume)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probes and indirect modes need a volume");
+    if (d->mode > PB_RENDER_INDIRECT)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "unknown render mode %u", (unsigned)d->mode);
+    if (d->spp > 65536 || d->bounces > 64)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "spp at most 65536, bounces at most 64");
+    return PB_OK;
+}
+
+pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_render_desc *desc, float *rgba,
+                    float *direct, double *gpu_ms, pb_error *err)
+{
+    pb_error_clear(err);
+    pb_result r = pb_render_check(desc, err);
+    if (r != PB_OK)
+        return r;
+    pb_render_desc d = *desc;
+    if (!d.spp)
+        d.spp = d.mode == PB_RENDER_REFERENCE ? 64 : 1;
+    if (!d.bounces)
+        d.bounces = 8;
+    uint64_t pixels = (uint64_t)d.width * d.height;
+    uint32_t rows_per = (uint32_t)(ctx->desc.rays_per_submit / ((uint64_t)d.width * d.spp));
+    rows_per = rows_per < 1 ? 1 : (rows_per > d.height ? d.height : rows_per);
+    pb_shading sh;
+    memset(&sh, 0, sizeof sh);
+    pb_sample_buffers vb;
+    memset(&vb, 0, sizeof vb);
+    pb_buffer params = {0}, rparams = {0}, img = {0}, imgd = {0};
+    pb_pipeline pipe = {0};
+    r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, &sh, err);
+    if (r == PB_OK && d.volume && (d.mode == PB_RENDER_PROBES || d.mode == PB_RENDER_INDIRECT))
+        r = pb_sample_upload(ctx, d.volume, &vb, err);
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "render scene parameters", &params, err);
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, sizeof(gpu_render_params), PB_MEMORY_UPLOAD, "render parameters", &rparams, err);
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, pixels * 16, PB_MEMORY_DOWNLOAD, "image", &img, err);
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, pixels * 16, PB_MEMORY_DOWNLOAD, "direct image", &imgd, err);
+    uint32_t spec[1] = {gs->bvh_depth + 1};
+    if (r == PB_OK)
+        r = pb_pipeline_create(ctx, pb_spv_render, sizeof pb_spv_render, 16, spec, 1, 64, "render", &pipe, err);
+    if (r == PB_OK) {
+        gpu_bake_params prm;
+        memset(&prm, 0, sizeof prm);
+        prm.scene = gs->refs;
+        pb_shading_params(&sh, &prm);
+        memcpy(params.mapped, &prm, sizeof prm);
+    }
+    gpu_render_params rp;
+    memset(&rp, 0, sizeof rp);
+    float fwd[3], right[3], up[3];
+    pb_render_camera_basis(&d.camera, d.width, d.height, fwd, right, up);
+    memcpy(rp.eye, d.camera.eye, 12), memcpy(rp.forward, fwd, 12), memcpy(rp.right, right, 12), memcpy(rp.up, up, 12);
+    rp.volume = vb.refs;
+    rp.image = img.address, rp.image_direct = imgd.address;
+    rp.width = d.width, rp.height = d.height, rp.spp = d.spp, rp.mode = (uint32_t)d.mode;
+    rp.seed = d.seed, rp.bounces = d.bounces, rp.volume_direct = d.volume_direct;
+    double ms = 0;
+    for (uint32_t row = 0; r == PB_OK && row < d.height; row += rows_per) {
+        rp.first_row = row;
+        rp.rows = d.height - row < rows_per ? d.height - row : rows_per;
+        memcpy(rparams.mapped, &rp, sizeof rp);
+        if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
+            break;
+        uint64_t push[2] = {params.address, rparams.address};
+        pb_cmd_timestamp(ctx);
+        pb_cmd_dispatch(ctx, &pipe, push, (rp.rows * d.width + 63) / 64);
+        pb_cmd_timestamp(ctx);
+        pb_cmd_barrier_to_host(ctx);
+        r = pb_cmd_submit_wait(ctx, NULL, err);
+        if (r == PB_OK && ctx->interval_count >= 1)
+            ms += ctx->intervals_ms[0];
+    }
+    if (r == PB_OK) {
+        memcpy(rgba, img.mapped, (size_t)pixels * 16);
+        if (direct)
+            memcpy(direct, imgd.mapped, (size_t)pixels * 16);
+        for (uint64_t i = 0; i < 4 * pixels; ++i)
+            if (!isfinite(rgba[i]) || (direct && !isfinite(direct[i]))) {
+                r = pb_fail(err, PB_ERROR_VULKAN, "render produced a non-finite pixel (%llu)",
+                            (unsigned long long)(i / 4));
+                break;
+            }
+    }
+    if (gpu_ms)
+        *gpu_ms = ms;
+    pb_pipeline_destroy(ctx, &pipe);
+    pb_buffer_destroy(ctx, &params), pb_buffer_destroy(ctx, &rparams);
+    pb_buffer_destroy(ctx, &img), pb_buffer_destroy(ctx, &imgd);
+    pb_sample_release(ctx, &vb);
+    pb_shading_destroy(ctx, &sh);
+    return r;
+}

@@ -1,0 +1,112 @@
+/* CPU reference of render.comp, step for step (pb_path_radiance_cpu and
+ * pb_sample_cpu are the C references of the code it includes). */
+#include "bake/path_cpu.h"
+#include "bake/shading.h"
+#include "common/common.h"
+#include "probebake/render.h"
+#include "render/render_types.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static uint32_t rng_seed(uint32_t seed, uint32_t a, uint32_t b, uint32_t c)
+{
+    return pb_hash32(seed ^ pb_hash32(a ^ pb_hash32(b ^ pb_hash32(c))));
+}
+
+static float rng_next(uint32_t *state)
+{
+    *state = pb_hash32(*state);
+    return (float)(*state >> 8) * (1.0f / 16777216.0f);
+}
+
+typedef struct render_job {
+    const pb_render_desc *d;
+    pb_path_ctx path;
+    float fwd[3], right[3], up[3];
+    float *rgba, *direct;
+} render_job;
+
+static void render_rows(void *user, uint64_t begin, uint64_t end)
+{
+    const render_job *j = user;
+    const pb_render_desc *d = j->d;
+    for (uint64_t i = begin; i < end; ++i) {
+        uint32_t px = (uint32_t)(i % d->width), py = (uint32_t)(i / d->width);
+        float sum[3] = {0, 0, 0}, sum_d[3] = {0, 0, 0}, surface = 0.f;
+        for (uint32_t k = 0; k < d->spp; ++k) {
+            uint32_t state = rng_seed(d->seed, py * d->width + px, k, 0x52454e44u);
+            float jx = d->spp == 1 ? 0.5f : rng_next(&state);
+            float jy = d->spp == 1 ? 0.5f : rng_next(&state);
+            float sx = ((float)px + jx) / (float)d->width * 2.f - 1.f;
+            float sy = 1.f - ((float)py + jy) / (float)d->height * 2.f;
+            float dir[3];
+            for (int c = 0; c < 3; ++c)
+                dir[c] = j->fwd[c] + sx * j->right[c] + sy * j->up[c];
+            float l = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+            for (int c = 0; c < 3; ++c)
+                dir[c] /= l;
+            uint32_t bounces = d->mode == PB_RENDER_REFERENCE ? d->bounces : 0;
+            pb_path_result pr = pb_path_radiance_cpu(&j->path, d->camera.eye, dir, bounces, 1, &state);
+            float L[3] = {pr.L[0], pr.L[1], pr.L[2]};
+            if (d->mode == PB_RENDER_PROBES || d->mode == PB_RENDER_INDIRECT) {
+                float V[3] = {0, 0, 0};
+                if (pr.shade) {
+                    float view[3] = {-dir[0], -dir[1], -dir[2]}, e[3];
+                    pb_sample_cpu(d->volume, pr.x, pr.ng, view, e);
+                    for (int c = 0; c < 3; ++c)
+                        V[c] = pr.albedo[c] / 3.14159265358979324f * e[c];
+                }
+                for (int c = 0; c < 3; ++c)
+                    L[c] = d->mode == PB_RENDER_INDIRECT ? V[c] : (d->volume_direct ? pr.L_seen[c] : pr.L[c]) + V[c];
+            }
+            for (int c = 0; c < 3; ++c)
+                sum[c] += L[c], sum_d[c] += pr.L_direct[c];
+            surface += pr.shade ? 1.f : 0.f;
+        }
+        float inv = 1.f / (float)d->spp;
+        for (int c = 0; c < 3; ++c) {
+            j->rgba[4 * i + c] = sum[c] * inv;
+            if (j->direct)
+                j->direct[4 * i + c] = sum_d[c] * inv;
+        }
+        j->rgba[4 * i + 3] = surface * inv;
+        if (j->direct)
+            j->direct[4 * i + 3] = 0.f;
+    }
+}
+
+pb_result pb_render_cpu(const pb_scene *scene, const pb_bvh *bvh, const pb_render_desc *desc, float *rgba,
+                        float *direct, pb_error *err)
+{
+    pb_error_clear(err);
+    pb_result r = pb_render_check(desc, err);
+    if (r != PB_OK)
+        return r;
+    pb_render_desc d = *desc;
+    if (!d.spp)
+        d.spp = d.mode == PB_RENDER_REFERENCE ? 64 : 1;
+    if (!d.bounces)
+        d.bounces = 8;
+    pb_bake_emitters emit;
+    pb_env_table env;
+    if ((r = pb_shading_host(scene, d.sky, d.environment, &emit, &env, err)) != PB_OK)
+        return r;
+    pb_bake_pass pass;
+    memset(&pass, 0, sizeof pass);
+    pass.scene = scene, pass.bvh = bvh, pass.env = env.width ? &env : NULL, pass.emitters = &emit;
+    render_job j;
+    memset(&j, 0, sizeof j);
+    j.d = &d, j.rgba = rgba, j.direct = direct;
+    pb_render_camera_basis(&d.camera, d.width, d.height, j.fwd, j.right, j.up);
+    if (!pb_path_ctx_init(&j.path, &pass)) {
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
+    } else {
+        pb_parallel_for((uint64_t)d.width * d.height, 16, 0, render_rows, &j);
+        pb_path_ctx_free(&j.path);
+    }
+    pb_bake_emitters_free(&emit);
+    pb_env_table_free(&env);
+    return r;
+}
