@@ -30,6 +30,11 @@ void main()
     PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, state);
     float first_distance = isinf(pr.first_t) ? P.max_distance : sign(pr.first_t) * min(abs(pr.first_t), P.max_distance);
     Vec4RW(P.rays).v[i] = vec4(pr.L, first_distance);
-    if (P.counters != 0ul)
+    if (P.counters != 0ul) {
         atomicAdd(UintRW(P.counters).v[0], pb_traversals);
+        // near llvmpipe's per-invocation loop cap (65535 iterations, triangle
+        // loops included), where it silently cuts paths short: the host warns
+        if (pb_loop_steps > 32768u)
+            atomicAdd(UintRW(P.counters).v[1], 1u);
+    }
 }

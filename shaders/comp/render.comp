@@ -6,9 +6,12 @@
 //   probes     direct light (unless the volume holds it) + albedo / pi x the
 //              volume's irradiance through the run-time sampler
 //   indirect   albedo / pi x the volume's irradiance only
-// Writes per pixel the radiance (rgb, a = 1 where the first hit reflects)
-// and the part of it that reflected at most once. CPU reference:
-// pb_render_cpu (src/render/render_cpu.c).
+// Adds per pixel the radiance sums (rgb, a = samples whose first hit
+// reflects) and the part that reflected at most once; the host divides by
+// spp. A dispatch traces a few samples per pixel, not all: llvmpipe caps
+// the loop iterations one invocation may run (65535, counted across the
+// traversal loops of all its rays) and silently ends loops past it.
+// CPU reference: pb_render_cpu (src/render/render_cpu.c).
 #extension GL_GOOGLE_include_directive : require
 
 #include "path.glsl"
@@ -27,7 +30,9 @@ struct RenderParams {
     uint width, height, spp, mode;
     uint seed, bounces, first_row, rows;
     uint volume_direct; // the volume's irradiance includes direct light
-    uint pad0, pad1, pad2;
+    uint first_sample;  // this dispatch traces samples first_sample .. first_sample + sample_count - 1
+    uint sample_count;
+    uint pad0;
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer RenderParamsBuf { RenderParams r; };
@@ -53,7 +58,7 @@ void main()
     pb_volume = R.volume;
     vec3 sum = vec3(0.0), sum_direct = vec3(0.0);
     float surface = 0.0;
-    for (uint k = 0u; k < R.spp; ++k) {
+    for (uint k = R.first_sample; k < R.first_sample + R.sample_count; ++k) {
         uint state = rng_seed(R.seed, py * R.width + px, k, 0x52454e44u);
         float jx = R.spp == 1u ? 0.5 : rng_next(state), jy = R.spp == 1u ? 0.5 : rng_next(state);
         float sx = (float(px) + jx) / float(R.width) * 2.0 - 1.0;
@@ -75,8 +80,12 @@ void main()
         sum_direct += Ld;
         surface += pr.shade ? 1.0 : 0.0;
     }
-    float inv = 1.0 / float(R.spp);
     uint pixel = py * R.width + px;
-    Vec4RW(R.image).v[pixel] = vec4(sum * inv, surface * inv);
-    Vec4RW(R.image_direct).v[pixel] = vec4(sum_direct * inv, 0.0);
+    vec4 acc = vec4(sum, surface), acc_direct = vec4(sum_direct, 0.0);
+    if (R.first_sample > 0u) {
+        acc += Vec4RW(R.image).v[pixel];
+        acc_direct += Vec4RW(R.image_direct).v[pixel];
+    }
+    Vec4RW(R.image).v[pixel] = acc;
+    Vec4RW(R.image_direct).v[pixel] = acc_direct;
 }

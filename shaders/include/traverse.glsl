@@ -21,6 +21,7 @@ struct TraceResult {
 
 #ifdef PB_COUNT_TRAVERSALS
 uint pb_traversals = 0u; // this invocation's traversals (bake throughput accounting)
+uint pb_loop_steps = 0u; // its traversal loop iterations: llvmpipe ends loops past 65535 per invocation
 #endif
 
 TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, bool any_hit)
@@ -40,6 +41,9 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
     uint sp = 0u;
     uint node = 0u;
     for (;;) {
+#ifdef PB_COUNT_TRAVERSALS
+        ++pb_loop_steps;
+#endif
         Node nd = load_node(s.nodes, node);
         float d[2];
         d[0] = nd.c.x == -1 ? PB_INF : ray_box(r, vec3(nd.x.x, nd.y.x, nd.z.x), vec3(nd.x.y, nd.y.y, nd.z.y), tmin, tmax);

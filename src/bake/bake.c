@@ -123,6 +123,7 @@ typedef struct bake_run {
     double t_trace, t_sh, t_depth; /* GPU timestamps, ms */
     float *near;                   /* 8 per probe: nearest back t + dir, nearest front t + dir */
     uint64_t traversals;           /* BVH traversals of relocation and bake passes (counted by bake_trace) */
+    uint64_t long_paths;           /* paths whose traversal loops ran past 32768 iterations */
     uint32_t *passes_done;         /* per probe */
     double *dc_sum, *dc_sq;        /* per probe: luminance of each pass's DC coefficient, for the standard error */
 } bake_run;
@@ -152,7 +153,7 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         prm.reduced = B->reduced.address;
         prm.probe_list = list ? B->list.address : 0;
         prm.counters = B->counters.address;
-        memset(B->counters.mapped, 0, 4);
+        memset(B->counters.mapped, 0, 8);
         prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
         prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces;
         prm.octmap_res = n, prm.max_distance = d->max_distance, prm.lobe_power = d->lobe_power;
@@ -181,9 +182,10 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
             run->t_sh += ctx->intervals_ms[1];
             run->t_depth += ctx->interval_count >= 3 ? ctx->intervals_ms[2] : 0.0;
         }
-        uint32_t n_trav;
-        memcpy(&n_trav, B->counters.mapped, 4);
-        run->traversals += n_trav;
+        uint32_t n_trav[2];
+        memcpy(n_trav, B->counters.mapped, 8);
+        run->traversals += n_trav[0];
+        run->long_paths += n_trav[1];
         memcpy(run->reduced, B->reduced.mapped, (size_t)count * (PB_REDUCED_SH_STRIDE + (relocating ? 0 : 2u * texels)) * 4);
         for (uint32_t l = 0; l < count; ++l) {
             const float *o = run->reduced + PB_REDUCED_SH_STRIDE * (size_t)l;
@@ -415,7 +417,7 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if (r == PB_OK)
         r = make_buffer(ctx, &B.counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
     bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
-                    hits, 0, 0, 0, NULL, 0, passes_done, dc_sum, dc_sq};
+                    hits, 0, 0, 0, NULL, 0, 0, passes_done, dc_sum, dc_sq};
     /* relocation: probes in geometry move out, probes against a wall move
      * away; iterations use their own pass numbers (RNG streams), so the bake
      * passes that follow are the same whatever relocation did */
@@ -527,6 +529,11 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if (!d.points)
         dilate(out, 8); /* points have no grid neighbourhood: invalid ones stay flagged */
     out->traversals = run.traversals;
+    if (run.long_paths)
+        pb_logf(&ctx->desc.log, PB_LOG_WARN,
+                   "%llu paths ran over 32768 traversal steps in one invocation; llvmpipe (lavapipe) silently cuts "
+                   "loops past 65535, so on lavapipe such paths may be cut short (fewer lights or bounces help)",
+                   (unsigned long long)run.long_paths);
     out->timings.trace = run.t_trace;
     out->timings.sh = run.t_sh;
     out->timings.octmap = run.t_depth;

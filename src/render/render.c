@@ -7,6 +7,8 @@
 
 #include "render.spv.h"
 
+#define PB_RENDER_SAMPLES_PER_DISPATCH 4u
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -97,7 +99,9 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     if (r == PB_OK)
         r = pb_buffer_create(ctx, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "render scene parameters", &params, err);
     if (r == PB_OK)
-        r = pb_buffer_create(ctx, sizeof(gpu_render_params), PB_MEMORY_UPLOAD, "render parameters", &rparams, err);
+        r = pb_buffer_create(ctx, sizeof(gpu_render_params) * ((d.spp + PB_RENDER_SAMPLES_PER_DISPATCH - 1) /
+                                                               PB_RENDER_SAMPLES_PER_DISPATCH),
+                             PB_MEMORY_UPLOAD, "render parameters", &rparams, err);
     if (r == PB_OK)
         r = pb_buffer_create(ctx, pixels * 16, PB_MEMORY_DOWNLOAD, "image", &img, err);
     if (r == PB_OK)
@@ -125,18 +129,33 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     for (uint32_t row = 0; r == PB_OK && row < d.height; row += rows_per) {
         rp.first_row = row;
         rp.rows = d.height - row < rows_per ? d.height - row : rows_per;
-        memcpy(rparams.mapped, &rp, sizeof rp);
         if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
             break;
-        uint64_t push[2] = {params.address, rparams.address};
         pb_cmd_timestamp(ctx);
-        pb_cmd_dispatch(ctx, &pipe, push, (rp.rows * d.width + 63) / 64);
+        uint64_t push[2] = {params.address, rparams.address};
+        /* a few samples per dispatch: render.comp says why */
+        for (uint32_t k = 0; k < d.spp; k += PB_RENDER_SAMPLES_PER_DISPATCH) {
+            gpu_render_params *mp = (gpu_render_params *)rparams.mapped + k / PB_RENDER_SAMPLES_PER_DISPATCH;
+            *mp = rp;
+            mp->first_sample = k;
+            mp->sample_count = d.spp - k < PB_RENDER_SAMPLES_PER_DISPATCH ? d.spp - k : PB_RENDER_SAMPLES_PER_DISPATCH;
+            uint64_t pk[2] = {push[0], rparams.address + (uint64_t)(k / PB_RENDER_SAMPLES_PER_DISPATCH) * sizeof rp};
+            if (k)
+                pb_cmd_barrier(ctx);
+            pb_cmd_dispatch(ctx, &pipe, pk, (rp.rows * d.width + 63) / 64);
+        }
         pb_cmd_timestamp(ctx);
         pb_cmd_barrier_to_host(ctx);
         r = pb_cmd_submit_wait(ctx, NULL, err);
         if (r == PB_OK && ctx->interval_count >= 1)
             ms += ctx->intervals_ms[0];
     }
+    /* sums to means */
+    if (r == PB_OK)
+        for (uint64_t i = 0; i < 4 * pixels; ++i) {
+            ((float *)img.mapped)[i] /= (float)d.spp;
+            ((float *)imgd.mapped)[i] /= (float)d.spp;
+        }
     if (r == PB_OK) {
         memcpy(rgba, img.mapped, (size_t)pixels * 16);
         if (direct)

@@ -34,8 +34,14 @@ static void render_rows(void *user, uint64_t begin, uint64_t end)
     const pb_render_desc *d = j->d;
     for (uint64_t i = begin; i < end; ++i) {
         uint32_t px = (uint32_t)(i % d->width), py = (uint32_t)(i / d->width);
+        /* sums per dispatch of 4 samples, then added, as render.comp and pb_render do */
+        float acc[4] = {0, 0, 0, 0}, acc_d[3] = {0, 0, 0};
         float sum[3] = {0, 0, 0}, sum_d[3] = {0, 0, 0}, surface = 0.f;
         for (uint32_t k = 0; k < d->spp; ++k) {
+            if (k % 4 == 0) {
+                memset(sum, 0, sizeof sum), memset(sum_d, 0, sizeof sum_d);
+                surface = 0.f;
+            }
             uint32_t state = rng_seed(d->seed, py * d->width + px, k, 0x52454e44u);
             float jx = d->spp == 1 ? 0.5f : rng_next(&state);
             float jy = d->spp == 1 ? 0.5f : rng_next(&state);
@@ -64,14 +70,18 @@ static void render_rows(void *user, uint64_t begin, uint64_t end)
             for (int c = 0; c < 3; ++c)
                 sum[c] += L[c], sum_d[c] += pr.L_direct[c];
             surface += pr.shade ? 1.f : 0.f;
+            if (k % 4 == 3 || k + 1 == d->spp) {
+                for (int c = 0; c < 3; ++c)
+                    acc[c] = k < 4 ? sum[c] : acc[c] + sum[c], acc_d[c] = k < 4 ? sum_d[c] : acc_d[c] + sum_d[c];
+                acc[3] = k < 4 ? surface : acc[3] + surface;
+            }
         }
-        float inv = 1.f / (float)d->spp;
         for (int c = 0; c < 3; ++c) {
-            j->rgba[4 * i + c] = sum[c] * inv;
+            j->rgba[4 * i + c] = acc[c] / (float)d->spp;
             if (j->direct)
-                j->direct[4 * i + c] = sum_d[c] * inv;
+                j->direct[4 * i + c] = acc_d[c] / (float)d->spp;
         }
-        j->rgba[4 * i + 3] = surface * inv;
+        j->rgba[4 * i + 3] = acc[3] / (float)d->spp;
         if (j->direct)
             j->direct[4 * i + 3] = 0.f;
     }

@@ -1,0 +1,289 @@
+/* The renderer: render.comp against pb_render_cpu in every mode, a constant
+ * sky volume lighting a floor evenly, the reference converging like
+ * 1/sqrt(spp), and the display pipeline (tone curve, exposure, heat map). */
+#include "scenes_gen.h"
+
+static pb_context *ctx;
+
+static void log_line(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    if (level >= PB_LOG_WARN)
+        fprintf(stderr, "  [%s] %s\n", level == PB_LOG_WARN ? "warn" : "error", msg);
+}
+
+typedef struct prepared {
+    pb_scene *s;
+    pb_bvh *bvh;
+    pb_gpu_scene *gs;
+    pb_volume vol;
+    pb_sample_volume sv;
+} prepared;
+
+static int prepare(pb_scene *s, const pb_bake_desc *bd, prepared *p)
+{
+    memset(p, 0, sizeof *p);
+    p->s = s;
+    pb_error err;
+    if (pb_bvh_build(s, NULL, &p->bvh, &err) != PB_OK || pb_gpu_scene_create(ctx, s, p->bvh, &p->gs, &err) != PB_OK ||
+        (bd && (pb_bake(ctx, s, p->gs, bd, &p->vol, &err) != PB_OK ||
+                pb_sample_volume_build(&p->vol, s->origin, 0.f, 0.f, &p->sv, &err) != PB_OK))) {
+        fprintf(stderr, "  prepare: %s\n", err.message);
+        t_failures++;
+        return 0;
+    }
+    return 1;
+}
+
+static void release(prepared *p)
+{
+    pb_sample_volume_free(&p->sv);
+    pb_volume_free(&p->vol);
+    pb_gpu_scene_destroy(p->gs);
+    pb_bvh_destroy(p->bvh);
+    pb_scene_destroy(p->s);
+}
+
+static float lum(const float *c)
+{
+    return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+}
+
+/* Every mode on the demo scene, GPU against CPU: pixel by pixel for the
+ * modes whose randomness stops at the first hit (rounding of sin/cos can
+ * still flip a rare shadow ray), image means for the reference. */
+static void kernel_matches_cpu_reference(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    if (!s)
+        return;
+    pb_bake_desc bd = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 60, &bd.grid);
+    bd.rays_per_probe = 64;
+    bd.passes = 1;
+    bd.bounces = 1;
+    bd.octmap_res = 8;
+    prepared p;
+    if (!prepare(s, &bd, &p)) {
+        release(&p);
+        return;
+    }
+    uint32_t W = 40, H = 30, n = W * H;
+    float *g = malloc(n * 16), *c = malloc(n * 16), *gd = malloc(n * 16), *cd = malloc(n * 16);
+    const char *names[4] = {"direct", "reference", "probes", "indirect"};
+    for (int mode = 0; mode < 4; ++mode) {
+        pb_render_desc d;
+        memset(&d, 0, sizeof d);
+        pb_camera_from_scene(&s->cameras[0], &d.camera);
+        d.width = W, d.height = H;
+        d.mode = (pb_render_mode)mode;
+        d.spp = mode == PB_RENDER_REFERENCE ? 64 : 1; /* more than one dispatch's worth of samples */
+        d.bounces = 3;
+        d.volume = &p.sv;
+        d.volume_direct = (p.vol.flags & PB_VOLUME_DIRECT) != 0;
+        CHECKF(pb_render(ctx, s, p.gs, &d, g, gd, NULL, &err) == PB_OK, "%s", err.message);
+        CHECKF(pb_render_cpu(s, p.bvh, &d, c, cd, &err) == PB_OK, "%s", err.message);
+        uint32_t differ = 0, nonfinite = 0;
+        double mg = 0, mc = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            float a = lum(g + 4 * i), b = lum(c + 4 * i);
+            differ += fabsf(a - b) > 1e-3f * fmaxf(1.f, b) || g[4 * i + 3] != c[4 * i + 3];
+            nonfinite += !isfinite(a) || !isfinite(lum(gd + 4 * i));
+            mg += a, mc += b;
+        }
+        double rel = fabs(mg - mc) / mc;
+
+        fprintf(stderr, "  %-9s: %u of %u pixels differ, image means differ by %.3f%%\n", names[mode], differ, n,
+                100 * rel);
+        CHECK(nonfinite == 0 && mc > 0);
+        if (mode == PB_RENDER_REFERENCE)
+            CHECK(rel < 0.02);
+        else
+            CHECK(differ <= n / 200);
+    }
+    free(g), free(c), free(gd), free(cd);
+    release(&p);
+}
+
+/* A floor of albedo 0.5 under a constant sky L, its volume baked with the
+ * floor: in indirect mode every floor pixel is albedo / pi x pi L = 0.5 L
+ * (an upward normal's irradiance from a sky hemisphere and a uniform floor
+ * is exact at SH L1). */
+static void constant_sky_lights_floor_evenly(void)
+{
+    double floor[18] = {-5e3, 0, -5e3, -5e3, 0, 5e3, 5e3, 0, 5e3, -5e3, 0, -5e3, 5e3, 0, 5e3, 5e3, 0, -5e3};
+    pb_material m = pb_material_default();
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = 0.5f;
+    m.metallic = 0.f;
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(floor, 2, NULL, &m, 1, &s, &err) == PB_OK, "%s", err.message);
+    pb_bake_desc bd = {0};
+    bd.grid.counts[0] = 4, bd.grid.counts[1] = 2, bd.grid.counts[2] = 4;
+    for (int k = 0; k < 3; ++k) {
+        bd.grid.spacing[k] = 1.f;
+        bd.grid.origin[k] = (k == 1 ? 0.5f : -1.5f) - (float)s->origin[k];
+    }
+    bd.rays_per_probe = 1024;
+    bd.passes = 1;
+    bd.bounces = 1;
+    bd.octmap_res = 8;
+    bd.sky[0] = bd.sky[1] = bd.sky[2] = 2.f;
+    prepared p;
+    if (prepare(s, &bd, &p)) {
+        uint32_t W = 32, H = 24, n = W * H;
+        float *g = malloc(n * 16);
+        pb_render_desc d;
+        memset(&d, 0, sizeof d);
+        float eye[3] = {0.f, 1.2f, 2.f}, target[3] = {0.f, 0.f, 0.f};
+        for (int k = 0; k < 3; ++k) {
+            d.camera.eye[k] = eye[k] - (float)s->origin[k];
+            d.camera.forward[k] = target[k] - eye[k];
+        }
+        d.camera.up[1] = 1.f;
+        d.camera.yfov = 0.6f;
+        d.width = W, d.height = H;
+        d.mode = PB_RENDER_INDIRECT;
+        d.volume = &p.sv;
+        d.sky[0] = d.sky[1] = d.sky[2] = 2.f;
+        CHECKF(pb_render(ctx, s, p.gs, &d, g, NULL, NULL, &err) == PB_OK, "%s", err.message);
+        float worst = 0;
+        uint32_t floor_px = 0;
+        for (uint32_t i = 0; i < n; ++i)
+            if (g[4 * i + 3] > 0.f) {
+                ++floor_px;
+                for (int k = 0; k < 3; ++k)
+                    worst = fmaxf(worst, fabsf(g[4 * i + k] / 1.f - 1.f));
+            }
+        fprintf(stderr, "  %u floor pixels: radiance / (albedo L) - 1 at most %.2e\n", floor_px, worst);
+        CHECK(floor_px > n / 2);
+        CHECK(worst < 3e-3f);
+        free(g);
+    }
+    release(&p);
+}
+
+/* The reference's error against a 1024-spp render falls like 1/sqrt(spp):
+ * the fitted log-log slope over 4, 16 and 64 spp is near -1/2. */
+static void reference_converges(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    prepared p;
+    if (!s || !prepare(s, NULL, &p)) {
+        if (s)
+            release(&p);
+        return;
+    }
+    uint32_t W = 24, H = 18, n = W * H;
+    float *truth = malloc(n * 16), *img = malloc(n * 16);
+    pb_render_desc d;
+    memset(&d, 0, sizeof d);
+    pb_camera_from_scene(&s->cameras[0], &d.camera);
+    d.width = W, d.height = H;
+    d.mode = PB_RENDER_REFERENCE;
+    d.bounces = 3;
+    d.spp = 1024;
+    d.seed = 99;
+    CHECKF(pb_render(ctx, s, p.gs, &d, truth, NULL, NULL, &err) == PB_OK, "%s", err.message);
+    double lx[3], ly[3];
+    uint32_t spps[3] = {4, 16, 64};
+    for (int i = 0; i < 3; ++i) {
+        d.spp = spps[i];
+        d.seed = (uint32_t)i + 1;
+        CHECKF(pb_render(ctx, s, p.gs, &d, img, NULL, NULL, &err) == PB_OK, "%s", err.message);
+        double e = pb_image_relative_rmse(img, truth, W, H);
+
+        lx[i] = log((double)spps[i]), ly[i] = log(e);
+        fprintf(stderr, "  %3u spp: relative RMSE %.4f against %u spp\n", spps[i], e, 1024);
+    }
+    double mx = (lx[0] + lx[1] + lx[2]) / 3, my = (ly[0] + ly[1] + ly[2]) / 3, sxy = 0, sxx = 0;
+    for (int i = 0; i < 3; ++i)
+        sxy += (lx[i] - mx) * (ly[i] - my), sxx += (lx[i] - mx) * (lx[i] - mx);
+    double slope = sxy / sxx;
+    fprintf(stderr, "  log-log slope %.3f (Monte Carlo: -0.5)\n", slope);
+    CHECK(slope < -0.35 && slope > -0.65);
+    free(truth), free(img);
+    release(&p);
+}
+
+static void bad_parameters_refused(void)
+{
+    pb_render_desc d;
+    memset(&d, 0, sizeof d);
+    d.camera.forward[2] = -1.f, d.camera.up[1] = 1.f, d.camera.yfov = 1.f;
+    d.width = 8, d.height = 8;
+    d.mode = PB_RENDER_DIRECT;
+    pb_error err;
+    pb_render_desc b = d;
+    b.width = 0;
+    CHECK(pb_render_cpu(NULL, NULL, &b, NULL, NULL, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "size"));
+    b = d, b.camera.yfov = 3.2f;
+    CHECK(pb_render_cpu(NULL, NULL, &b, NULL, NULL, &err) == PB_ERROR_INVALID_ARGUMENT &&
+          strstr(err.message, "field of view"));
+    b = d, b.camera.up[1] = 0.f, b.camera.up[2] = 1.f;
+    CHECK(pb_render_cpu(NULL, NULL, &b, NULL, NULL, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "parallel"));
+    b = d, b.mode = PB_RENDER_PROBES;
+    CHECK(pb_render_cpu(NULL, NULL, &b, NULL, NULL, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "volume"));
+    b = d, b.camera.eye[0] = NAN;
+    CHECK(pb_render_cpu(NULL, NULL, &b, NULL, NULL, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "finite"));
+}
+
+/* The tone curve and sRGB are monotonic and bounded, exposure scales, auto
+ * exposure maps the log-average to middle grey, the heat map is black at 0. */
+static void display_pipeline(void)
+{
+    float prev = -1.f;
+    int mono = 1;
+    for (int i = 0; i <= 4000; ++i) {
+        float x = powf(10.f, -4.f + i * 0.002f);
+        float y = pb_srgb_encode(pb_tonemap_aces(x));
+        mono &= y >= prev && y >= 0.f && y <= 1.f;
+        prev = y;
+    }
+    CHECK(mono);
+    float img[4 * 4] = {0.5f, 0.5f, 0.5f, 1, 2, 2, 2, 1, 0.5f, 0.5f, 0.5f, 1, 2, 2, 2, 1};
+    float ev = pb_auto_exposure(img, 2, 2);
+    CHECKF(fabsf(ev - log2f(0.18f / 1.f)) < 1e-3f, "auto exposure %g", ev);
+    unsigned char a[12], b[12];
+    pb_tonemap_image(img, 2, 2, 0.f, a);
+    pb_tonemap_image(img, 2, 2, 1.f, b);
+    CHECK(b[0] > a[0] && b[3] >= a[3] && a[3] > a[0]);
+    pb_error_heatmap(img, img, 2, 2, 0.5f, a);
+    CHECK(a[0] == 0 && a[1] == 0 && a[2] == 0);
+    float twice[16];
+    for (int i = 0; i < 16; ++i)
+        twice[i] = img[i] * ((i % 4) == 3 ? 1.f : 2.f);
+    pb_error_heatmap(twice, img, 2, 2, 0.5f, a);
+    CHECK(a[0] == 255 && a[1] == 0 && a[2] == 0);
+    /* a = 2b: sqrt(mean b^2) / mean b = sqrt((0.25 + 4) / 2) / 1.25 */
+    CHECK(fabs(pb_image_relative_rmse(twice, img, 2, 2) - sqrt(2.125) / 1.25) < 1e-6);
+}
+
+static void validation_layer_stayed_silent(void)
+{
+    uint32_t n = pb_context_validation_messages(ctx);
+    CHECKF(n == 0, "%u validation messages", n);
+}
+
+int main(void)
+{
+    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {log_line, NULL}};
+    pb_error err;
+    if (pb_context_create(&d, &ctx, &err) != PB_OK) {
+        fprintf(stderr, "no Vulkan device with validation: %s\n", err.message);
+        printf("0 passed, 1 failed, 0 skipped\n");
+        return 1;
+    }
+    RUN(display_pipeline);
+    RUN(bad_parameters_refused);
+    RUN(kernel_matches_cpu_reference);
+    RUN(constant_sky_lights_floor_evenly);
+    RUN(reference_converges);
+    RUN(validation_layer_stayed_silent);
+    pb_context_destroy(ctx);
+    return test_summary();
+}
