@@ -109,6 +109,21 @@ expect indirect-volume-not-yet 2 '--indirect volume needs the run-time sampler' 
     "$pb" bake "$demo" --indirect volume -o "$tmp/x.probes"
 expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
 
+# render: parameters checked before any device work
+expect render-no-output 2 'render needs -o IMG.png' -- "$pb" render "$demo"
+expect render-bad-size 2 "--size '0x10' is not WxH" -- "$pb" render "$demo" --size 0x10 -o "$tmp/r.png"
+expect render-bad-fov 2 "--fov '200' is not a vertical field of view" -- "$pb" render "$demo" --fov 200 -o "$tmp/r.png"
+expect render-bad-mode 2 "--mode 'pretty': use probes, reference" -- "$pb" render "$demo" --mode pretty -o "$tmp/r.png"
+expect render-probes-needs-volume 2 '--mode probes needs --volume' -- "$pb" render "$demo" --mode probes -o "$tmp/r.png"
+expect render-missing-volume 1 "error: $tmp/none.probes: cannot open" -- \
+    "$pb" render "$demo" --volume "$tmp/none.probes" -o "$tmp/r.png"
+expect render-no-such-camera 1 "camera 5 does not exist \(1 cameras\)" -- "$pb" render "$demo" --camera 5 -o "$tmp/r.png"
+expect render-eye-without-target 2 '--eye and --target go together' -- "$pb" render "$demo" --eye 0,1,2 -o "$tmp/r.png"
+expect render-up-parallel 1 'up vector is parallel' -- \
+    "$pb" render "$demo" --eye 0,1,0 --target 0,2,0 -o "$tmp/r.png"
+expect render-bad-eye 2 "--eye '1,2' is not three" -- "$pb" render "$demo" --eye 1,2 --target 0,0,0 -o "$tmp/r.png"
+expect render-no-partial-file 0 '^absent$' -- bash -c "[ -e '$tmp/r.png' ] && echo present || echo absent"
+
 # no Vulkan driver at all: one clear line, exit 1, nothing else
 expect no-driver-devices 1 'error: no Vulkan 1.2 driver found .*mesa-vulkan-drivers' -- \
     env VK_DRIVER_FILES=/nonexistent.json VK_ICD_FILENAMES=/nonexistent.json "$pb" devices
@@ -160,6 +175,13 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     int_rc=$?
     expect bake-interrupted 0 "^130 absent .*bake cancelled" -- \
         bash -c "echo $int_rc \$([ -e '$tmp/int.probes' ] && echo present || echo absent) \$(tr '\n' ' ' <'$tmp/int.log')"
+    expect render-probes 0 "wrote $tmp/r.png: 32x24, probes, 1 spp" -- \
+        "$pb" render "$demo" --volume "$tmp/a.probes" --size 32x24 --pfm --validation -o "$tmp/r.png"
+    expect render-png-pfm 0 '^PNG PF$' -- bash -c "printf '%s %s\n' \$(head -c 4 '$tmp/r.png' | tail -c 3) \$(head -c 2 '$tmp/r.pfm')"
+    expect render-diff-json 0 '"relative_rmse": [0-9.]+, "relative_rmse_indirect": [0-9.]+' -- \
+        "$pb" render "$demo" --volume "$tmp/a.probes" --mode diff --size 16x12 --spp 1 --json -o "$tmp/d.png"
+    expect render-reference-eye 0 "wrote $tmp/ref.png: 16x12, reference, 4 spp" -- \
+        "$pb" render "$demo" --eye 0,1.5,2 --target 0,1,0 --fov 60 --size 16x12 --spp 4 --exposure 1 -o "$tmp/ref.png"
     expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
         "$pb" trace "$demo" --device no-such-gpu
 fi

@@ -5,6 +5,7 @@
  * error metrics. */
 #include "cli/cli.h"
 #include "common/common.h"
+#include "render/render_types.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -142,6 +143,8 @@ int cmd_render(const options *o)
         }
         d.camera.yfov = (o->fov_deg > 0.f ? o->fov_deg : 50.f) * 0.017453293f;
     }
+    if (pb_render_check(&d, &err) != PB_OK) /* before any device work */
+        goto out;
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
