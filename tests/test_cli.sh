@@ -105,8 +105,6 @@ expect env-bad-intensity 2 "--env-intensity '-1' is not a finite scale >= 0" -- 
     "$pb" bake "$demo" --env "$tmp/sky.hdr" --env-intensity -1 -o "$tmp/x.probes"
 expect env-bad-rotation 2 "--env-rotation 'nan' is not an angle in degrees" -- \
     "$pb" bake "$demo" --env "$tmp/sky.hdr" --env-rotation nan -o "$tmp/x.probes"
-expect indirect-volume-not-yet 2 '--indirect volume needs the run-time sampler' -- \
-    "$pb" bake "$demo" --indirect volume -o "$tmp/x.probes"
 expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
 
 # render: parameters checked before any device work
@@ -175,6 +173,10 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     int_rc=$?
     expect bake-interrupted 0 "^130 absent .*bake cancelled" -- \
         bash -c "echo $int_rc \$([ -e '$tmp/int.probes' ] && echo present || echo absent) \$(tr '\n' ' ' <'$tmp/int.log')"
+    expect bake-indirect-volume 0 "wrote $tmp/iv.probes: 8 probes" -- \
+        "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --indirect volume --validation -o "$tmp/iv.probes"
+    expect bake-indirect-volume-points 1 '--indirect volume .* needs a grid, not points' -- \
+        "$pb" bake "$demo" --points "$tmp/p.json" --indirect volume -o "$tmp/x.probes"
     expect render-probes 0 "wrote $tmp/r.png: 32x24, probes, 1 spp" -- \
         "$pb" render "$demo" --volume "$tmp/a.probes" --size 32x24 --pfm --validation -o "$tmp/r.png"
     expect render-png-pfm 0 '^PNG PF$' -- bash -c "printf '%s %s\n' \$(head -c 4 '$tmp/r.png' | tail -c 3) \$(head -c 2 '$tmp/r.pfm')"

@@ -28,6 +28,7 @@
 #include "probebake/trace.h"
 #include "probebake/volume.h"
 #include "probebake/environment.h"
+#include "probebake/sample.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -68,6 +69,8 @@ typedef struct pb_bake_desc {
     float lobe_power;             /* cosine power of the depth filter, default 50 */
     float invalid_backface_fraction; /* default 0.25: above it a probe is inside geometry (invalid) */
     uint32_t skip_relocation;     /* 1: probes stay on the grid (default: 3 relocation iterations) */
+    uint32_t indirect_volume;     /* 1: each bounce shades first hits from the previous bounce's volume through
+                                     the run-time sampler (bounces + 1 bakes, grid only; fast, biased); 0: path tracing */
     pb_progress_fn progress;
     void *progress_user;
 } pb_bake_desc;
@@ -119,6 +122,7 @@ typedef struct pb_bake_pass {
     const pb_env_table *env;      /* NULL: black */
     float max_distance, lobe_power;
     const pb_bake_emitters *emitters; /* NULL or count 0: no next-event estimation of emitters */
+    const pb_sample_volume *volume;   /* --indirect volume: the previous bounce's volume, or NULL */
 } pb_bake_pass;
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).

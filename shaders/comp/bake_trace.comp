@@ -28,6 +28,10 @@ void main()
     vec3 origin = Vec4Buf(P.probes).v[probe].xyz;
     uint state = rng_seed(P.seed, probe_id(P, probe), P.pass_index, ray);
     PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, state);
+    if (P.volume.probes != 0ul && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
+        pb_volume = P.volume;
+        pr.L += pr.albedo / PB_PI * pb_sample_irradiance(pb_volume_grid(pb_volume), pr.x, pr.ng, -d);
+    }
     float first_distance = isinf(pr.first_t) ? P.max_distance : sign(pr.first_t) * min(abs(pr.first_t), P.max_distance);
     Vec4RW(P.rays).v[i] = vec4(pr.L, first_distance);
     if (P.counters != 0ul) {

@@ -18,6 +18,7 @@
 #include "rng.glsl"
 #include "ray_offset.glsl"
 #include "environment.glsl"
+#include "probe_sample.glsl"
 
 #define PB_PI 3.14159265358979324
 #define PB_LIGHT_DIRECTIONAL 0u
@@ -75,6 +76,7 @@ struct BakeParams {
     uint emitter_count;
     uint env_width, env_height;
     uint env_count;         // texels to sample; 0: none (black environment)
+    PbVolumeRefs volume;    // --indirect volume: the previous bounce's volume (volume.probes 0: none)
 };
 
 Env bake_env(BakeParams P)

@@ -12,6 +12,7 @@
 #include "bake/bake_data.h"
 #include "bake/gpu_scene.h"
 #include "bake/shading.h"
+#include "sample/sample_gpu.h"
 #include "common/common.h"
 #include "probebake/bake.h"
 #include "probebake/octahedral.h"
@@ -29,6 +30,7 @@
 typedef struct bake_buffers {
     pb_buffer params, probes, rotations, directions, rays, reduced, list, counters;
     pb_shading shading;
+    pb_sample_buffers feedback;
     pb_pipeline trace, sh, depth;
 } bake_buffers;
 
@@ -39,6 +41,7 @@ static void release(pb_context *ctx, bake_buffers *b)
     for (int i = 0; i < 8; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_shading_destroy(ctx, &b->shading);
+    pb_sample_release(ctx, &b->feedback);
     pb_pipeline_destroy(ctx, &b->trace);
     pb_pipeline_destroy(ctx, &b->sh);
     pb_pipeline_destroy(ctx, &b->depth);
@@ -124,6 +127,7 @@ typedef struct bake_run {
     float *near;                   /* 8 per probe: nearest back t + dir, nearest front t + dir */
     uint64_t traversals;           /* BVH traversals of relocation and bake passes (counted by bake_trace) */
     uint64_t long_paths;           /* paths whose traversal loops ran past 32768 iterations */
+    gpu_volume_refs feedback;      /* --indirect volume: the previous bounce's volume (probes 0: none) */
     uint32_t *passes_done;         /* per probe */
     double *dc_sum, *dc_sq;        /* per probe: luminance of each pass's DC coefficient, for the standard error */
 } bake_run;
@@ -153,6 +157,8 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         prm.reduced = B->reduced.address;
         prm.probe_list = list ? B->list.address : 0;
         prm.counters = B->counters.address;
+        if (!relocating)
+            prm.volume = run->feedback;
         memset(B->counters.mapped, 0, 8);
         prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
         prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces;
@@ -337,8 +343,9 @@ void pb_bake_probe_position(const pb_scene *scene, const pb_bake_desc *d, uint32
         local[k] = (float)(world[k] - scene->origin[k]);
 }
 
-pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc_in,
-                  pb_volume *out, pb_error *err)
+/* One bake; feedback: the previous bounce's volume (--indirect volume) or NULL. */
+static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc_in,
+                           const pb_sample_volume *feedback, pb_volume *out, pb_error *err)
 {
     pb_error_clear(err);
     memset(out, 0, sizeof *out);
@@ -417,7 +424,11 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if (r == PB_OK)
         r = make_buffer(ctx, &B.counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
     bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
-                    hits, 0, 0, 0, NULL, 0, 0, passes_done, dc_sum, dc_sq};
+                    hits, 0, 0, 0, NULL, 0, 0, {0}, passes_done, dc_sum, dc_sq};
+    if (r == PB_OK && feedback) {
+        r = pb_sample_upload(ctx, feedback, &B.feedback, err);
+        run.feedback = B.feedback.refs;
+    }
     /* relocation: probes in geometry move out, probes against a wall move
      * away; iterations use their own pass numbers (RNG streams), so the bake
      * passes that follow are the same whatever relocation did */
@@ -546,4 +557,52 @@ done:
     if (r != PB_OK)
         pb_volume_free(out);
     return r;
+}
+
+pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
+                  pb_volume *out, pb_error *err)
+{
+    if (!desc->indirect_volume || desc->bounces == 0)
+        return bake_once(ctx, scene, gs, desc, NULL, out, err);
+    pb_error_clear(err);
+    memset(out, 0, sizeof *out);
+    if (desc->points)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "--indirect volume samples the previous bounce's grid: it needs a grid, not points");
+    /* bounce k shades the probe rays' first hits with the volume of bounce
+     * k - 1, baked without direct light (the hits' direct light is already
+     * sampled); the last bounce includes direct light if the caller asked */
+    pb_bake_desc d = *desc;
+    d.indirect_volume = 0;
+    d.bounces = 0;
+    pb_sample_volume fb;
+    memset(&fb, 0, sizeof fb);
+    pb_volume_timings t;
+    memset(&t, 0, sizeof t);
+    uint64_t rays = 0, traversals = 0;
+    pb_result r = PB_OK;
+    for (uint32_t k = 0; r == PB_OK && k <= desc->bounces; ++k) {
+        d.exclude_direct = k < desc->bounces ? 1 : desc->exclude_direct;
+        pb_volume v;
+        r = bake_once(ctx, scene, gs, &d, k ? &fb : NULL, &v, err);
+        if (r != PB_OK)
+            break;
+        t.trace += v.timings.trace, t.sh += v.timings.sh, t.octmap += v.timings.octmap, t.total += v.timings.total;
+        rays += v.rays_traced, traversals += v.traversals;
+        pb_sample_volume_free(&fb);
+        if (k < desc->bounces) {
+            r = pb_sample_volume_build(&v, scene->origin, 0.f, 0.f, &fb, err);
+            pb_volume_free(&v);
+        } else {
+            *out = v;
+        }
+    }
+    pb_sample_volume_free(&fb);
+    if (r != PB_OK)
+        return r;
+    out->timings = t;
+    out->rays_traced = rays, out->traversals = traversals;
+    out->settings.bounces = desc->bounces;
+    out->settings.indirect_mode = 1;
+    return PB_OK;
 }

@@ -350,6 +350,12 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
         uint32_t state = rng_seed(p->seed, pb_probe_record_id(p->probes + 4 * (size_t)probe), p->pass_index, ray);
         const float *o = p->probes + 4 * (size_t)probe;
         pb_path_result r = pb_path_radiance_cpu(&c->path, o, d, p->bounces, (int)p->direct, &state);
+        if (p->volume && r.shade) {
+            float view[3] = {-d[0], -d[1], -d[2]}, e[3];
+            pb_sample_cpu(p->volume, r.x, r.ng, view, e);
+            for (int k = 0; k < 3; ++k)
+                r.L[k] += r.albedo[k] / PI_F * e[k];
+        }
         float first = isinf(r.first_t) ? p->max_distance
                                         : (r.first_t < 0.f ? -fminf(-r.first_t, p->max_distance)
                                                            : fminf(r.first_t, p->max_distance));

@@ -4,6 +4,7 @@
 
 #include "bake/gpu_types.h"
 #include "probebake/environment.h"
+#include "sample/sample_gpu.h"
 
 typedef struct gpu_shade_material {
     float base_color[4];
@@ -30,9 +31,10 @@ typedef struct gpu_bake_params {
     uint32_t direct;
     float lobe_cutoff;
     uint32_t emitter_count, env_width, env_height, env_count;
+    gpu_volume_refs volume;
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 240, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 320, "BakeParams layout");
 _Static_assert(sizeof(pb_env_texel) == 32, "EnvTexel layout");
 
 typedef struct gpu_emitter {

@@ -104,7 +104,8 @@ static void print_help(void)
            "  --env-intensity K              scale of the map (default 1)\n"
            "  --env-rotation DEG             turn the map about +Y, counter-clockwise from above (default 0)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
-           "  --indirect path                path-traced indirect light (default; 'volume' is not there yet)\n"
+           "  --indirect path|volume         indirect light path traced (default, unbiased) or, per bounce, from\n"
+           "                                 the previous bounce's volume through the run-time sampler (fast, biased)\n"
            "render options:\n"
            "  --mode probes|reference|direct|indirect|diff   (default probes with --volume, else reference)\n"
            "  --camera I | --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]   (default: glTF camera 0)\n"
@@ -222,9 +223,7 @@ static int parse(int argc, char **argv, options *o)
         } else if (!strcmp(a, "--indirect")) {
             if (!next || (strcmp(next, "path") && strcmp(next, "volume")))
                 return cli_usage_error("%s takes path or volume", a);
-            if (!strcmp(next, "volume"))
-                return cli_usage_error("%s volume needs the run-time sampler, which is not in this version; "
-                                   "use --indirect path", a);
+            o->indirect_volume = !strcmp(next, "volume");
             ++i;
         } else if (!strcmp(a, "--env-intensity") || !strcmp(a, "--env-rotation")) {
             char *end = NULL;
@@ -796,6 +795,7 @@ static int cmd_bake(const options *o)
     d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");
     memcpy(d.sky, o->sky, sizeof d.sky);
     d.environment = o->env ? &env : NULL;
+    d.indirect_volume = (uint32_t)o->indirect_volume;
     char light[1200];
     if (o->env)
         snprintf(light, sizeof light, "environment %s (%ux%u, x%g, turned %g deg)", o->env, env.width, env.height,
@@ -812,9 +812,9 @@ static int cmd_bake(const options *o)
     if (!o->log.quiet)
         fprintf(stderr,
                 "probebake: baking %s: %s, %u rays x %s%u passes%s, %u bounces, "
-                "%s, octmap %u, direct %s, seed %u\n",
+                "%s, octmap %u, direct %s, indirect %s, seed %u\n",
                 o->scene, where, d.rays_per_probe, d.target_error > 0.f ? "up to " : "", d.passes,
-                d.target_error > 0.f ? " (until converged)" : "", d.bounces, light, d.octmap_res, d.exclude_direct ? "excluded" : "included", d.seed);
+                d.target_error > 0.f ? " (until converged)" : "", d.bounces, light, d.octmap_res, d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path", d.seed);
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
