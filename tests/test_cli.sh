@@ -73,6 +73,12 @@ expect inspect-json-probe 0 '"index": 1, "position": \[1000001, 2.25, -5\], "off
 expect inspect-json-last 0 '"index": 5, .*"sh": \[5, .*5.26000023\]\}$' -- "$pb" inspect "$tmp/v.probes" --json
 expect inspect-probe-text 0 'probe 4 at .*\["dilated"\]' -- "$pb" inspect "$tmp/v.probes" --probe 4
 expect inspect-probe-missing 1 "probe 6 does not exist \(6 probes\)" -- "$pb" inspect "$tmp/v.probes" --probe 6
+expect inspect-atlas 0 "wrote $tmp/atlas.png: 34x23, depth atlas of 6 probes" -- \
+    "$pb" inspect "$tmp/v.probes" --atlas "$tmp/atlas.png"
+expect inspect-sh-view 0 "wrote $tmp/sh.png: 52x35, SH irradiance view of 6 probes" -- \
+    "$pb" inspect "$tmp/v.probes" --sh-view "$tmp/sh.png"
+expect inspect-atlas-unwritable 1 "error: $tmp/no/such/dir/a.png: cannot write the image" -- \
+    "$pb" inspect "$tmp/v.probes" --atlas "$tmp/no/such/dir/a.png"
 head -c 700 "$tmp/v.probes" >"$tmp/cut.probes"
 expect inspect-truncated 1 "error: $tmp/cut.probes: file is 700 bytes" -- "$pb" inspect "$tmp/cut.probes"
 expect inspect-not-volume 1 "error: $demo: not a probebake volume" -- "$pb" inspect "$demo"

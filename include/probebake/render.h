@@ -79,6 +79,19 @@ double pb_image_relative_rmse(const float *a, const float *b, uint32_t width, ui
 pb_result pb_write_png(const char *path, const unsigned char *rgb8, uint32_t width, uint32_t height, pb_error *err);
 pb_result pb_write_pfm(const char *path, const float *rgba, uint32_t width, uint32_t height, pb_error *err);
 
+/* --- debug views of a volume (probebake inspect --atlas / --sh-view) --- */
+
+/* Tiles of `tile` pixels for `probes` probes, row by row with 1-pixel gaps. */
+void pb_atlas_layout(uint32_t probes, uint32_t tile, uint32_t *columns, uint32_t *width, uint32_t *height);
+/* The depth tiles with their borders: grey = sqrt(mean distance / max
+ * distance), red where the distance's spread is large (edges). */
+pb_result pb_volume_depth_atlas(const pb_volume *v, unsigned char **rgb8, uint32_t *width, uint32_t *height,
+                                pb_error *err);
+/* Each probe's SH irradiance / pi over the sphere, octahedral tiles of
+ * `tile` pixels, one automatic exposure for all. rgb8 is malloc'd. */
+pb_result pb_volume_sh_atlas(const pb_volume *v, uint32_t tile, unsigned char **rgb8, uint32_t *width,
+                             uint32_t *height, pb_error *err);
+
 #ifdef __cplusplus
 }
 #endif

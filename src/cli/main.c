@@ -75,7 +75,7 @@ static void print_help(void)
            "                                          throughput; --verify compares with the CPU reference\n"
            "  probebake bake SCENE -o OUT.probes [bake options]\n"
            "                                          bake a probe volume (irradiance SH L2 + depth octmaps)\n"
-           "  probebake inspect VOLUME [--json] [--probe I]\n"
+           "  probebake inspect VOLUME [--json] [--probe I] [--atlas A.png] [--sh-view S.png]\n"
            "                                          summary of a probe volume file; --json adds every\n"
            "                                          probe (position, flags, 27 irradiance SH coefficients)\n"
            "  probebake render SCENE -o IMG.png [--volume V.probes] [render options]\n"
@@ -214,6 +214,10 @@ static int parse(int argc, char **argv, options *o)
             }
             *(cam ? &o->has_camera : &o->has_spp) = 1;
             ++i;
+        } else if (!strcmp(a, "--atlas") || !strcmp(a, "--sh-view")) {
+            if (!next)
+                return cli_usage_error("%s needs a PNG path", a);
+            *(!strcmp(a, "--atlas") ? &o->atlas : &o->sh_view) = argv[++i];
         } else if (!strcmp(a, "--pfm")) {
             o->pfm = 1;
         } else if (!strcmp(a, "--env")) {
@@ -627,6 +631,24 @@ static int cmd_inspect(const options *o)
                 v.probe_count);
         pb_volume_free(&v);
         return 1;
+    }
+    const char *views[2] = {o->atlas, o->sh_view};
+    for (int k = 0; k < 2; ++k) {
+        if (!views[k])
+            continue;
+        unsigned char *img = NULL;
+        uint32_t w = 0, h = 0;
+        pb_result r = k == 0 ? pb_volume_depth_atlas(&v, &img, &w, &h, &err) : pb_volume_sh_atlas(&v, 16, &img, &w, &h, &err);
+        if (r == PB_OK)
+            r = pb_write_png(views[k], img, w, h, &err);
+        free(img);
+        if (r != PB_OK) {
+            pb_volume_free(&v);
+            return cli_fail(&err);
+        }
+        if (!o->json)
+            printf("wrote %s: %ux%u, %s of %u probes\n", views[k], w, h, k == 0 ? "depth atlas" : "SH irradiance view",
+                   v.probe_count);
     }
     uint32_t counts[5] = {0};
     for (uint32_t i = 0; i < v.probe_count; ++i)

@@ -36,7 +36,8 @@ float pb_auto_exposure(const float *rgba, uint32_t width, uint32_t height)
     for (int pass = 0; pass < 2 && n == 0; ++pass)
         for (uint64_t i = 0; i < pixels; ++i)
             if (pass == 1 || rgba[4 * i + 3] > 0.f) {
-                sum += log(1e-4 + luminance(rgba + 4 * i));
+                float l = luminance(rgba + 4 * i);
+                sum += log(1e-4 + (l > 0.f ? l : 0.f)); /* negative (SH ringing) or NaN counts as black */
                 ++n;
             }
     double avg = n ? exp(sum / n) : 0.18;

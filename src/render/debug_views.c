@@ -1,0 +1,88 @@
+/* Debug images of a volume: its depth octmap atlas and its per-probe SH
+ * irradiance, each probe a square tile (octahedral, +Z in the centre),
+ * tiles row by row in probe order, a 1-pixel dark gap between them. */
+#include "common/common.h"
+#include "probebake/octahedral.h"
+#include "probebake/render.h"
+#include "probebake/sh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void pb_atlas_layout(uint32_t probes, uint32_t tile, uint32_t *columns, uint32_t *width, uint32_t *height)
+{
+    uint32_t c = (uint32_t)ceil(sqrt((double)probes));
+    c = c < 1 ? 1 : c;
+    uint32_t r = (probes + c - 1) / c;
+    *columns = c;
+    *width = c * (tile + 1) + 1;
+    *height = r * (tile + 1) + 1;
+}
+
+static unsigned char *tile_px(unsigned char *rgb8, uint32_t width, uint32_t columns, uint32_t tile, uint32_t p,
+                              uint32_t x, uint32_t y)
+{
+    uint32_t tx = p % columns, ty = p / columns;
+    return rgb8 + 3 * ((size_t)(1 + ty * (tile + 1) + y) * width + 1 + tx * (tile + 1) + x);
+}
+
+pb_result pb_volume_depth_atlas(const pb_volume *v, unsigned char **rgb8, uint32_t *width, uint32_t *height,
+                                pb_error *err)
+{
+    uint32_t side = v->octmap_res + 2, columns;
+    pb_atlas_layout(v->probe_count, side, &columns, width, height);
+    *rgb8 = calloc((size_t)*width * *height, 3);
+    if (!*rgb8)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the atlas");
+    float maxd = v->settings.max_distance > 0.f ? v->settings.max_distance : 1.f;
+    for (uint32_t p = 0; p < v->probe_count; ++p)
+        for (uint32_t y = 0; y < side; ++y)
+            for (uint32_t x = 0; x < side; ++x) {
+                const uint16_t *t = v->depth + pb_volume_tile_halves(v->octmap_res) * p + 2 * (y * side + x);
+                float mean = pb_half_to_float(t[0]), sd = sqrtf(fabsf(pb_half_to_float(t[1]) - mean * mean));
+                /* grey: mean distance (near dark, far bright), red: its spread */
+                float g = sqrtf(fminf(1.f, fmaxf(0.f, mean / maxd)));
+                float r = fminf(1.f, sd / (0.1f * maxd));
+                unsigned char *px = tile_px(*rgb8, *width, columns, side, p, x, y);
+                px[0] = (unsigned char)(255.f * fmaxf(g, r) + 0.5f);
+                px[1] = px[2] = (unsigned char)(255.f * g + 0.5f);
+            }
+    return PB_OK;
+}
+
+pb_result pb_volume_sh_atlas(const pb_volume *v, uint32_t tile, unsigned char **rgb8, uint32_t *width,
+                             uint32_t *height, pb_error *err)
+{
+    uint32_t columns;
+    pb_atlas_layout(v->probe_count, tile, &columns, width, height);
+    *rgb8 = calloc((size_t)*width * *height, 3);
+    float *lin = malloc((size_t)v->probe_count * tile * tile * 4 * sizeof(float));
+    if (!*rgb8 || !lin) {
+        free(lin), free(*rgb8);
+        *rgb8 = NULL;
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the SH view");
+    }
+    for (uint32_t p = 0; p < v->probe_count; ++p)
+        for (uint32_t t = 0; t < tile * tile; ++t) {
+            float d[3], e[3];
+            pb_oct_texel_direction(t % tile, t / tile, tile, d);
+            pb_sh_eval(v->sh + 27 * (size_t)p, d, e);
+            float *o = lin + 4 * ((size_t)p * tile * tile + t);
+            o[0] = e[0] / 3.14159265f, o[1] = e[1] / 3.14159265f, o[2] = e[2] / 3.14159265f, o[3] = 1.f;
+        }
+    /* one exposure for all tiles, so probes compare */
+    float ev = pb_auto_exposure(lin, tile * tile, v->probe_count);
+    unsigned char *tmp = malloc((size_t)v->probe_count * tile * tile * 3);
+    if (!tmp) {
+        free(lin), free(*rgb8);
+        *rgb8 = NULL;
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the SH view");
+    }
+    pb_tonemap_image(lin, tile * tile, v->probe_count, ev, tmp);
+    for (uint32_t p = 0; p < v->probe_count; ++p)
+        for (uint32_t t = 0; t < tile * tile; ++t)
+            memcpy(tile_px(*rgb8, *width, columns, tile, p, t % tile, t / tile), tmp + 3 * ((size_t)p * tile * tile + t), 3);
+    free(tmp), free(lin);
+    return PB_OK;
+}
