@@ -72,10 +72,13 @@ static void kernel_matches_cpu_reference(void)
     }
     uint32_t W = 40, H = 30, n = W * H;
     float *g = malloc(n * 16), *c = malloc(n * 16), *gd = malloc(n * 16), *cd = malloc(n * 16);
-    const char *names[4] = {"direct", "reference", "probes", "indirect"};
-    for (int mode = 0; mode < 4; ++mode) {
+    const char *names[5] = {"direct", "reference", "probes", "indirect", "spheres"};
+    float *plain = malloc(n * 16);
+    for (int pass = 0; pass < 5; ++pass) {
+        int mode = pass == 4 ? PB_RENDER_PROBES : pass;
         pb_render_desc d;
         memset(&d, 0, sizeof d);
+        d.show_probes = pass == 4;
         pb_camera_from_scene(&s->cameras[0], &d.camera);
         d.width = W, d.height = H;
         d.mode = (pb_render_mode)mode;
@@ -95,15 +98,24 @@ static void kernel_matches_cpu_reference(void)
         }
         double rel = fabs(mg - mc) / mc;
 
-        fprintf(stderr, "  %-9s: %u of %u pixels differ, image means differ by %.3f%%\n", names[mode], differ, n,
+        fprintf(stderr, "  %-9s: %u of %u pixels differ, image means differ by %.3f%%\n", names[pass], differ, n,
                 100 * rel);
+        if (pass == PB_RENDER_PROBES)
+            memcpy(plain, g, n * 16);
+        if (pass == 4) { /* the spheres are there: some pixels changed, not most */
+            uint32_t changed = 0;
+            for (uint32_t i = 0; i < n; ++i)
+                changed += lum(g + 4 * i) != lum(plain + 4 * i);
+            fprintf(stderr, "  %u pixels show probe spheres\n", changed);
+            CHECK(changed > 0 && changed < n / 2);
+        }
         CHECK(nonfinite == 0 && mc > 0);
         if (mode == PB_RENDER_REFERENCE)
             CHECK(rel < 0.02);
         else
             CHECK(differ <= n / 200);
     }
-    free(g), free(c), free(gd), free(cd);
+    free(g), free(c), free(gd), free(cd), free(plain);
     release(&p);
 }
 

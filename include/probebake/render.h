@@ -39,6 +39,8 @@ typedef struct pb_render_desc {
     uint32_t volume_direct;   /* the volume's irradiance includes direct light (PB_VOLUME_DIRECT) */
     float sky[3];             /* as pb_bake_desc */
     const pb_environment *environment;
+    uint32_t show_probes;     /* debug view: probes as spheres lit by their SH (invalid red, grid homes of
+                                 relocated ones grey); needs volume */
 } pb_render_desc;
 
 /* Linear radiance image, 4 floats per pixel, row 0 at the top: rgb and the

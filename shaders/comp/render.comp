@@ -32,7 +32,7 @@ struct RenderParams {
     uint volume_direct; // the volume's irradiance includes direct light
     uint first_sample;  // this dispatch traces samples first_sample .. first_sample + sample_count - 1
     uint sample_count;
-    uint pad0;
+    uint show_probes;   // draw the volume's probes as spheres (debug view)
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer RenderParamsBuf { RenderParams r; };
@@ -46,6 +46,52 @@ layout(push_constant) uniform Push {
 #define MODE_REFERENCE 1u
 #define MODE_PROBES 2u
 #define MODE_INDIRECT 3u
+
+// Debug view: the nearest probe sphere along the ray, if nearer than t_scene.
+// Valid probes are white diffuse spheres lit by their own SH (radiance E/pi
+// at the sphere's normal), invalid ones red; a relocated probe's grid
+// position shows as a smaller grey sphere. Returns false when none is hit.
+bool probe_spheres(vec3 o, vec3 d, float t_scene, out vec3 color)
+{
+    PbVolumeGrid g = pb_volume_grid(pb_volume);
+    float smin = 1e30;
+    for (int k = 0; k < 3; ++k)
+        if (g.counts[k] > 1)
+            smin = min(smin, g.spacing[k]);
+    float r = smin < 1e30 ? 0.08 * smin : 0.05;
+    int count = g.counts.x * g.counts.y * g.counts.z;
+    float best = t_scene;
+    bool hit = false;
+    color = vec3(0.0);
+    for (int p = 0; p < count; ++p) {
+        ivec3 ijk = ivec3(p % g.counts.x, (p / g.counts.x) % g.counts.y, p / (g.counts.x * g.counts.y));
+        vec3 home = g.origin + vec3(ijk) * g.spacing;
+        vec3 c = pb_probe_position(p).xyz;
+        for (int s = 0; s < 2; ++s) {
+            vec3 cs = s == 0 ? c : home;
+            float rs = s == 0 ? r : 0.5 * r;
+            if (s == 1 && distance(c, home) <= r)
+                break; // not relocated (visibly)
+            vec3 oc = o - cs;
+            float b = dot(oc, d), c2 = dot(oc, oc) - rs * rs, disc = b * b - c2;
+            if (disc < 0.0)
+                continue;
+            float t = -b - sqrt(disc);
+            if (!(t > 0.0 && t < best))
+                continue;
+            best = t;
+            hit = true;
+            vec3 n = normalize(o + t * d - cs);
+            if (s == 1)
+                color = vec3(0.3);
+            else if ((pb_probe_flags(p) & PB_SAMPLE_PROBE_VALID) == 0u)
+                color = vec3(1.0, 0.05, 0.05);
+            else
+                color = max(pb_sh_irradiance(p, n), vec3(0.0)) / PB_PI;
+        }
+    }
+    return hit;
+}
 
 void main()
 {
@@ -75,6 +121,11 @@ void main()
                 L = V;
             else
                 L = (R.volume_direct != 0u ? pr.L_seen : pr.L) + V;
+        }
+        if (R.show_probes != 0u) {
+            vec3 c;
+            if (probe_spheres(R.eye.xyz, dir, isinf(pr.first_t) ? PB_INF : abs(pr.first_t), c))
+                L = c;
         }
         sum += L;
         sum_direct += Ld;

@@ -28,7 +28,7 @@ typedef struct options {
     /* render */
     const char *volume, *mode, *atlas, *sh_view;
     float eye[3], target[3], up[3], fov_deg, exposure;
-    int has_eye, has_target, has_up, has_camera, has_exposure, pfm;
+    int has_eye, has_target, has_up, has_camera, has_exposure, pfm, show_probes;
     uint32_t camera, width, height, spp;
     int has_spp;
 } options;

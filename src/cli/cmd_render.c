@@ -109,6 +109,11 @@ int cmd_render(const options *o)
     d.volume_direct = (vol.flags & PB_VOLUME_DIRECT) != 0;
     memcpy(d.sky, o->sky, sizeof d.sky);
     d.environment = o->env ? &env : NULL;
+    d.show_probes = (uint32_t)o->show_probes;
+    if (o->show_probes && !o->volume) {
+        snprintf(err.message, sizeof err.message, "--show-probes needs --volume V.probes");
+        goto out;
+    }
     if (o->has_eye) {
         for (int k = 0; k < 3; ++k) {
             d.camera.eye[k] = (float)(o->eye[k] - s->origin[k]);

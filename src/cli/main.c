@@ -111,6 +111,7 @@ static void print_help(void)
            "  --camera I | --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]   (default: glTF camera 0)\n"
            "  --size WxH (default 640x480)  --spp N  --bounces N (reference, default 8)  --seed S\n"
            "  --exposure EV|auto (default auto)  --pfm (linear image beside the PNG)  --json (metrics)\n"
+           "  --show-probes   draw the volume's probes: spheres lit by their SH, invalid red, grid homes grey\n"
            "  --sky R,G,B | --env FILE.hdr [...]   the environment, as for bake\n",
            PB_VERSION_STRING);
 }
@@ -220,6 +221,8 @@ static int parse(int argc, char **argv, options *o)
             *(!strcmp(a, "--atlas") ? &o->atlas : &o->sh_view) = argv[++i];
         } else if (!strcmp(a, "--pfm")) {
             o->pfm = 1;
+        } else if (!strcmp(a, "--show-probes")) {
+            o->show_probes = 1;
         } else if (!strcmp(a, "--env")) {
             if (!next)
                 return cli_usage_error("%s needs a .hdr file", a);

@@ -63,8 +63,8 @@ pb_result pb_render_check(const pb_render_desc *d, pb_error *err)
             return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "camera position and directions must be finite");
     if (!(c[0] * c[0] + c[1] * c[1] + c[2] * c[2] > 1e-12f))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "camera: the up vector is parallel to the view direction (or zero)");
-    if ((d->mode == PB_RENDER_PROBES || d->mode == PB_RENDER_INDIRECT) && !d->volume)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probes and indirect modes need a volume");
+    if ((d->mode == PB_RENDER_PROBES || d->mode == PB_RENDER_INDIRECT || d->show_probes) && !d->volume)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probes and indirect modes, and showing probes, need a volume");
     if (d->mode > PB_RENDER_INDIRECT)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "unknown render mode %u", (unsigned)d->mode);
     if (d->spp > 65536 || d->bounces > 64)
@@ -94,7 +94,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     pb_buffer params = {0}, rparams = {0}, img = {0}, imgd = {0};
     pb_pipeline pipe = {0};
     r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, &sh, err);
-    if (r == PB_OK && d.volume && (d.mode == PB_RENDER_PROBES || d.mode == PB_RENDER_INDIRECT))
+    if (r == PB_OK && d.volume && (d.mode == PB_RENDER_PROBES || d.mode == PB_RENDER_INDIRECT || d.show_probes))
         r = pb_sample_upload(ctx, d.volume, &vb, err);
     if (r == PB_OK)
         r = pb_buffer_create(ctx, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "render scene parameters", &params, err);
@@ -125,6 +125,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     rp.image = img.address, rp.image_direct = imgd.address;
     rp.width = d.width, rp.height = d.height, rp.spp = d.spp, rp.mode = (uint32_t)d.mode;
     rp.seed = d.seed, rp.bounces = d.bounces, rp.volume_direct = d.volume_direct;
+    rp.show_probes = d.show_probes && d.volume;
     double ms = 0;
     for (uint32_t row = 0; r == PB_OK && row < d.height; row += rows_per) {
         rp.first_row = row;

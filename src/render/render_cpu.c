@@ -3,6 +3,7 @@
 #include "bake/path_cpu.h"
 #include "bake/shading.h"
 #include "common/common.h"
+#include "probebake/sh.h"
 #include "probebake/render.h"
 #include "render/render_types.h"
 
@@ -19,6 +20,58 @@ static float rng_next(uint32_t *state)
 {
     *state = pb_hash32(*state);
     return (float)(*state >> 8) * (1.0f / 16777216.0f);
+}
+
+/* probe_spheres of render.comp */
+static int probe_spheres(const pb_sample_volume *v, const float o[3], const float d[3], float t_scene, float color[3])
+{
+    float smin = 1e30f;
+    for (int k = 0; k < 3; ++k)
+        if (v->counts[k] > 1)
+            smin = fminf(smin, v->spacing[k]);
+    float r = smin < 1e30f ? 0.08f * smin : 0.05f, best = t_scene;
+    int count = v->counts[0] * v->counts[1] * v->counts[2], hit = 0;
+    color[0] = color[1] = color[2] = 0.f;
+    for (int p = 0; p < count; ++p) {
+        int ijk[3] = {p % v->counts[0], (p / v->counts[0]) % v->counts[1], p / (v->counts[0] * v->counts[1])};
+        float home[3], c[3];
+        for (int k = 0; k < 3; ++k)
+            home[k] = v->origin[k] + (float)ijk[k] * v->spacing[k], c[k] = v->probes[4 * (size_t)p + k];
+        for (int s = 0; s < 2; ++s) {
+            const float *cs = s == 0 ? c : home;
+            float rs = s == 0 ? r : 0.5f * r;
+            float dh[3] = {c[0] - home[0], c[1] - home[1], c[2] - home[2]};
+            if (s == 1 && sqrtf(dh[0] * dh[0] + dh[1] * dh[1] + dh[2] * dh[2]) <= r)
+                break;
+            float oc[3] = {o[0] - cs[0], o[1] - cs[1], o[2] - cs[2]};
+            float b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
+            float c2 = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - rs * rs, disc = b * b - c2;
+            if (disc < 0.f)
+                continue;
+            float t = -b - sqrtf(disc);
+            if (!(t > 0.f && t < best))
+                continue;
+            best = t, hit = 1;
+            float n[3];
+            for (int k = 0; k < 3; ++k)
+                n[k] = o[k] + t * d[k] - cs[k];
+            float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            for (int k = 0; k < 3; ++k)
+                n[k] /= nl;
+            uint32_t flags;
+            memcpy(&flags, &v->probes[4 * (size_t)p + 3], 4);
+            if (s == 1) {
+                color[0] = color[1] = color[2] = 0.3f;
+            } else if (!(flags & PB_PROBE_VALID)) {
+                color[0] = 1.f, color[1] = color[2] = 0.05f;
+            } else {
+                pb_sh_eval(v->sh + 27 * (size_t)p, n, color);
+                for (int k = 0; k < 3; ++k)
+                    color[k] = fmaxf(color[k], 0.f) / 3.14159265358979324f;
+            }
+        }
+    }
+    return hit;
 }
 
 typedef struct render_job {
@@ -66,6 +119,11 @@ static void render_rows(void *user, uint64_t begin, uint64_t end)
                 }
                 for (int c = 0; c < 3; ++c)
                     L[c] = d->mode == PB_RENDER_INDIRECT ? V[c] : (d->volume_direct ? pr.L_seen[c] : pr.L[c]) + V[c];
+            }
+            if (d->show_probes && d->volume) {
+                float col[3];
+                if (probe_spheres(d->volume, d->camera.eye, dir, isinf(pr.first_t) ? INFINITY : fabsf(pr.first_t), col))
+                    memcpy(L, col, sizeof col);
             }
             for (int c = 0; c < 3; ++c)
                 sum[c] += L[c], sum_d[c] += pr.L_direct[c];

@@ -10,7 +10,7 @@ typedef struct gpu_render_params {
     uint64_t image, image_direct;
     uint32_t width, height, spp, mode;
     uint32_t seed, bounces, first_row, rows;
-    uint32_t volume_direct, first_sample, sample_count, pad0;
+    uint32_t volume_direct, first_sample, sample_count, show_probes;
 } gpu_render_params;
 _Static_assert(offsetof(gpu_render_params, volume) == 64, "RenderParams layout");
 _Static_assert(sizeof(gpu_render_params) == 208, "RenderParams layout");
