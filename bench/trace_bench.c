@@ -17,7 +17,7 @@
 #include "common/common.h"
 #include "probebake/probebake.h"
 
-#include <embree3/rtcore.h>
+#include "embree_peer.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -52,39 +52,6 @@ static double median(double *v, uint32_t n)
 {
     qsort(v, n, sizeof *v, cmp_double);
     return n ? v[n / 2] : 0.0;
-}
-
-typedef struct embree_job {
-    RTCScene scene;
-    const pb_ray *rays;
-    float *t;
-} embree_job;
-
-static void embree_range(void *user, uint64_t b, uint64_t e)
-{
-    embree_job *j = user;
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    for (uint64_t i = b; i < e; ++i) {
-        const pb_ray *r = &j->rays[i];
-        struct RTCRayHit rh;
-        rh.ray.org_x = r->origin[0];
-        rh.ray.org_y = r->origin[1];
-        rh.ray.org_z = r->origin[2];
-        rh.ray.dir_x = r->direction[0];
-        rh.ray.dir_y = r->direction[1];
-        rh.ray.dir_z = r->direction[2];
-        rh.ray.tnear = r->tmin;
-        rh.ray.tfar = r->tmax;
-        rh.ray.time = 0.f;
-        rh.ray.mask = 0xffffffffu;
-        rh.ray.id = 0;
-        rh.ray.flags = 0;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(j->scene, &ctx, &rh);
-        j->t[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? INFINITY : rh.ray.tfar;
-    }
 }
 
 /* Writes The Crypt's triangles once as a mesh and instances it k times in a
@@ -194,27 +161,19 @@ static int bench_scene(pb_context *ctx, RTCDevice edev, const char *path, const 
     res->gpu_wall_ms = median(wt, o->repeat);
 
     /* Embree on the same triangles (local frame) and rays */
-    double t0 = pb_now_ms();
-    RTCScene es = rtcNewScene(edev);
-    RTCGeometry g = rtcNewGeometry(edev, RTC_GEOMETRY_TYPE_TRIANGLE);
-    float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12,
-                                        (size_t)s->triangle_count * 3);
-    unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, s->triangle_count);
-    memcpy(vb, s->positions, (size_t)s->triangle_count * 36);
-    for (uint32_t i = 0; i < 3 * s->triangle_count; ++i)
-        ib[i] = i;
-    rtcCommitGeometry(g);
-    rtcAttachGeometry(es, g);
-    rtcReleaseGeometry(g);
-    rtcCommitScene(es);
-    res->embree_build_ms = pb_now_ms() - t0;
-    embree_job job = {es, rays, et};
-    pb_parallel_for(n, 1024, 0, embree_range, &job); /* warm-up */
-    for (uint32_t r = 0; r < o->repeat; ++r) {
-        double e0 = pb_now_ms();
-        pb_parallel_for(n, 1024, 0, embree_range, &job);
-        wt[r] = pb_now_ms() - e0;
+    embree_peer peer;
+    if (!embree_peer_build(edev, s, &peer)) {
+        fprintf(stderr, "trace_bench: Embree could not build %s\n", path);
+        free(rays), free(hits), free(et), free(kt), free(wt), free(times);
+        pb_gpu_scene_destroy(gs);
+        pb_bvh_destroy(bvh);
+        pb_scene_destroy(s);
+        return 0;
     }
+    res->embree_build_ms = peer.build_ms;
+    embree_peer_trace(&peer, rays, n, et); /* warm-up */
+    for (uint32_t r = 0; r < o->repeat; ++r)
+        wt[r] = embree_peer_trace(&peer, rays, n, et);
     res->embree_ms = median(wt, o->repeat);
     uint32_t agree = 0;
     for (uint32_t i = 0; i < n; ++i) {
@@ -222,7 +181,7 @@ static int bench_scene(pb_context *ctx, RTCDevice edev, const char *path, const 
         agree += gh == eh && (!gh || fabsf(hits[i].t - et[i]) <= 1e-4f * fmaxf(1.f, et[i]));
     }
     res->agree = (double)agree / n;
-    rtcReleaseScene(es);
+    embree_peer_release(&peer);
 
     free(rays), free(hits), free(et), free(kt), free(wt), free(times);
     pb_gpu_scene_destroy(gs);
