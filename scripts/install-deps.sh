@@ -10,6 +10,7 @@ pkgs=(
   libtinygltf-dev nlohmann-json3-dev libstb-dev
   libvulkan-volk-dev
   libembree-dev
+  gnuplot-nox
 )
 
 missing=()

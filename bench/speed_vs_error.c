@@ -1,0 +1,272 @@
+/* speed_vs_error: what each bake setting buys, in time and in error.
+ *
+ *   speed_vs_error [--probes N] [--rays A,B,...] [--bounces A,B,...] [--size WxH]
+ *                  [--ref-rays N] [--ref-passes N] [--ref-spp N] [--out DIR] [SCENE ...]
+ *
+ * Per scene: the trace kernel's and Embree's rays/s on the same probe rays
+ * (the device ratio); then per bounce count a converged reference (path
+ * traced, ref-rays x ref-passes) and a path-traced reference image; then for
+ * --indirect path and volume and each ray count, one bake pass: GPU time
+ * (trace + SH + depth timestamps) and wall time against
+ *   (a) probe error: relative RMSE of irradiance luminance over valid probes
+ *       and 64 directions, against the converged reference volume;
+ *   (b) image error: relative RMSE of a probe-lit image (4 spp) against the
+ *       path-traced image, over surface pixels.
+ * Writes DIR/speed_vs_error.csv, a gnuplot script and, when gnuplot is on
+ * PATH, DIR/speed_vs_error.png (log-log, error against GPU time). */
+#define _POSIX_C_SOURCE 200809L
+#include "common/common.h"
+#include "embree_peer.h"
+#include "probebake/probebake.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+static double luminance(const float c[3])
+{
+    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+}
+
+static double volume_rmse(const pb_volume *a, const pb_volume *ref)
+{
+    float dirs[64 * 4];
+    pb_sf_directions(64, dirs);
+    double se = 0, sum = 0;
+    uint64_t n = 0;
+    for (uint32_t p = 0; p < ref->probe_count; ++p) {
+        if (!(ref->probe_flags[p] & PB_PROBE_VALID))
+            continue;
+        for (int i = 0; i < 64; ++i) {
+            float e[3], r[3];
+            pb_sh_eval(a->sh + 27 * (size_t)p, dirs + 4 * i, e);
+            pb_sh_eval(ref->sh + 27 * (size_t)p, dirs + 4 * i, r);
+            double d = luminance(e) - luminance(r);
+            se += d * d, sum += luminance(r), ++n;
+        }
+    }
+    return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;
+}
+
+static int parse_list(const char *s, uint32_t *out, int max)
+{
+    int n = 0;
+    while (*s && n < max) {
+        char *end;
+        unsigned long v = strtoul(s, &end, 10);
+        if (end == s)
+            break;
+        out[n++] = (uint32_t)v;
+        s = *end == ',' ? end + 1 : end;
+    }
+    return n;
+}
+
+static const char *base_name(const char *p)
+{
+    const char *s = strrchr(p, '/');
+    return s ? s + 1 : p;
+}
+
+int main(int argc, char **argv)
+{
+    uint32_t probes = 128, rays[16] = {32, 128, 512, 2048}, bounces[8] = {1, 3}, W = 128, H = 96;
+    uint32_t ref_rays = 1024, ref_passes = 8, ref_spp = 256;
+    int nrays = 4, nbounces = 2, nscenes = 0;
+    const char *out_dir = "bench/out", *scenes[16];
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--probes") && v)
+            probes = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--rays") && v)
+            nrays = parse_list(argv[++i], rays, 16);
+        else if (!strcmp(a, "--bounces") && v)
+            nbounces = parse_list(argv[++i], bounces, 8);
+        else if (!strcmp(a, "--size") && v)
+            sscanf(argv[++i], "%ux%u", &W, &H);
+        else if (!strcmp(a, "--ref-rays") && v)
+            ref_rays = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--ref-passes") && v)
+            ref_passes = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--ref-spp") && v)
+            ref_spp = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(a, "--out") && v)
+            out_dir = argv[++i];
+        else if (a[0] == '-') {
+            fprintf(stderr, "speed_vs_error: unknown option %s\n", a);
+            return 2;
+        } else if (nscenes < 16)
+            scenes[nscenes++] = a;
+    }
+    if (!nscenes) {
+        static const char *def[] = {"tests/scenes/demo.gltf", "../shared/scenes/cornell/cornellBox.gltf",
+                                    "../shared/scenes/openarena/oacmpdm1.glb"};
+        for (int i = 0; i < 3; ++i) {
+            struct stat st;
+            if (stat(def[i], &st) == 0)
+                scenes[nscenes++] = def[i];
+            else
+                fprintf(stderr, "speed_vs_error: %s not present, skipped\n", def[i]);
+        }
+    }
+    mkdir(out_dir, 0755);
+    char csv_path[1024], gp_path[1024], png_path[1024];
+    snprintf(csv_path, sizeof csv_path, "%s/speed_vs_error.csv", out_dir);
+    snprintf(gp_path, sizeof gp_path, "%s/speed_vs_error.gp", out_dir);
+    snprintf(png_path, sizeof png_path, "%s/speed_vs_error.png", out_dir);
+    FILE *csv = fopen(csv_path, "w");
+    if (!csv) {
+        fprintf(stderr, "speed_vs_error: cannot write %s\n", csv_path);
+        return 1;
+    }
+    pb_context *ctx = NULL;
+    pb_error err;
+    if (pb_context_create(NULL, &ctx, &err) != PB_OK) {
+        fprintf(stderr, "speed_vs_error: %s\n", err.message);
+        return 1;
+    }
+    RTCDevice edev = rtcNewDevice(NULL);
+    fprintf(csv, "scene,device,indirect,bounces,rays_per_probe,probes,gpu_ms,wall_ms,probe_rel_rmse,image_rel_rmse,"
+                 "trace_mrays,embree_mrays\n");
+    printf("device: %s; %u probes, reference %u rays x %u passes, images %ux%u (reference %u spp)\n",
+           pb_context_device(ctx)->name, probes, ref_rays, ref_passes, W, H, ref_spp);
+    printf("%-16s %-6s %3s %6s %10s %10s %10s %10s\n", "scene", "mode", "bnc", "rays", "GPU ms", "wall ms", "probe err",
+           "image err");
+    for (int si = 0; si < nscenes; ++si) {
+        pb_scene *s = NULL;
+        pb_bvh *bvh = NULL;
+        pb_gpu_scene *gs = NULL;
+        pb_scene_desc sd = {{0}, 0};
+        if (pb_scene_load(scenes[si], &sd, &s, &err) != PB_OK || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK ||
+            pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK) {
+            fprintf(stderr, "speed_vs_error: %s\n", err.message);
+            pb_bvh_destroy(bvh);
+            pb_scene_destroy(s);
+            continue;
+        }
+        const char *name = base_name(scenes[si]);
+        pb_bake_desc d = {0};
+        pb_probe_grid_fit(s->bounds_min, s->bounds_max, probes, &d.grid);
+        d.octmap_res = 16;
+        /* device against Embree on the same probe rays */
+        double trace_mrays = 0, embree_mrays = 0;
+        {
+            uint32_t P = pb_probe_grid_count(&d.grid), n = P * 256;
+            pb_ray *pr = malloc((size_t)n * sizeof *pr);
+            pb_hit *hits = malloc((size_t)n * sizeof *hits);
+            float *et = malloc((size_t)n * sizeof *et);
+            pb_trace_stats st;
+            embree_peer peer;
+            if (pr && hits && et && pb_probe_rays(&d.grid, 0, P, 256, 1, pr) == PB_OK &&
+                pb_trace(ctx, gs, pr, n, PB_TRACE_CLOSEST, hits, NULL, &err) == PB_OK &&
+                pb_trace(ctx, gs, pr, n, PB_TRACE_CLOSEST, hits, &st, &err) == PB_OK && st.kernel_ms > 0)
+                trace_mrays = n / (st.kernel_ms * 1e3);
+            if (pr && et && embree_peer_build(edev, s, &peer)) {
+                embree_peer_trace(&peer, pr, n, et);
+                embree_mrays = n / (embree_peer_trace(&peer, pr, n, et) * 1e3);
+                embree_peer_release(&peer);
+            }
+            free(pr), free(hits), free(et);
+        }
+        printf("%-16.16s trace kernel %.3f Mrays/s, Embree %.3f Mrays/s: ratio %.3f\n", name, trace_mrays, embree_mrays,
+               embree_mrays > 0 ? trace_mrays / embree_mrays : 0.0);
+        /* a camera: the scene's first, else the bounds seen from the front */
+        pb_render_desc rd;
+        memset(&rd, 0, sizeof rd);
+        if (s->camera_count) {
+            pb_camera_from_scene(&s->cameras[0], &rd.camera);
+        } else {
+            float ext = 0.f;
+            for (int k = 0; k < 3; ++k)
+                ext = fmaxf(ext, s->bounds_max[k] - s->bounds_min[k]);
+            for (int k = 0; k < 3; ++k) {
+                float c = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
+                rd.camera.eye[k] = c + (k == 1 ? 0.3f * ext : k == 2 ? 1.2f * ext : 0.f);
+                rd.camera.forward[k] = c - rd.camera.eye[k];
+            }
+            rd.camera.up[1] = 1.f;
+            rd.camera.yfov = 0.9f;
+        }
+        rd.width = W, rd.height = H;
+        uint64_t pixels = (uint64_t)W * H;
+        float *truth = malloc(pixels * 16), *img = malloc(pixels * 16);
+        for (int bi = 0; bi < nbounces && truth && img; ++bi) {
+            pb_volume ref;
+            d.bounces = bounces[bi];
+            d.indirect_volume = 0;
+            d.rays_per_probe = ref_rays, d.passes = ref_passes, d.seed = 1000;
+            if (pb_bake(ctx, s, gs, &d, &ref, &err) != PB_OK) {
+                fprintf(stderr, "speed_vs_error: %s: %s\n", name, err.message);
+                continue;
+            }
+            rd.mode = PB_RENDER_REFERENCE, rd.spp = ref_spp, rd.bounces = bounces[bi], rd.seed = 1000;
+            rd.volume = NULL;
+            if (pb_render(ctx, s, gs, &rd, truth, NULL, NULL, &err) != PB_OK) {
+                fprintf(stderr, "speed_vs_error: %s: %s\n", name, err.message);
+                pb_volume_free(&ref);
+                continue;
+            }
+            for (int mode = 0; mode < 2; ++mode)
+                for (int ri = 0; ri < nrays; ++ri) {
+                    pb_volume v;
+                    d.indirect_volume = (uint32_t)mode;
+                    d.rays_per_probe = rays[ri], d.passes = 1, d.seed = 7;
+                    double t0 = pb_now_ms();
+                    if (pb_bake(ctx, s, gs, &d, &v, &err) != PB_OK) {
+                        fprintf(stderr, "speed_vs_error: %s: %s\n", name, err.message);
+                        continue;
+                    }
+                    double wall = pb_now_ms() - t0, gpu = v.timings.trace + v.timings.sh + v.timings.octmap;
+                    double perr = volume_rmse(&v, &ref), ierr = -1;
+                    pb_sample_volume sv;
+                    if (pb_sample_volume_build(&v, s->origin, 0.f, 0.f, &sv, &err) == PB_OK) {
+                        pb_render_desc pd = rd;
+                        pd.mode = PB_RENDER_PROBES, pd.spp = 4, pd.seed = 5, pd.volume = &sv;
+                        pd.volume_direct = (v.flags & PB_VOLUME_DIRECT) != 0;
+                        if (pb_render(ctx, s, gs, &pd, img, NULL, NULL, &err) == PB_OK)
+                            ierr = pb_image_relative_rmse(img, truth, W, H);
+                        pb_sample_volume_free(&sv);
+                    }
+                    const char *m = mode ? "volume" : "path";
+                    printf("%-16.16s %-6s %3u %6u %10.1f %10.1f %10.4f %10.4f\n", name, m, bounces[bi], rays[ri], gpu,
+                           wall, perr, ierr);
+                    fflush(stdout);
+                    fprintf(csv, "%s,%s,%s,%u,%u,%u,%.3f,%.3f,%.6f,%.6f,%.4f,%.4f\n", name,
+                            pb_context_device(ctx)->name, m, bounces[bi], rays[ri], v.probe_count, gpu, wall, perr, ierr,
+                            trace_mrays, embree_mrays);
+                    pb_volume_free(&v);
+                }
+            pb_volume_free(&ref);
+        }
+        free(truth), free(img);
+        pb_gpu_scene_destroy(gs);
+        pb_bvh_destroy(bvh);
+        pb_scene_destroy(s);
+    }
+    fclose(csv);
+    rtcReleaseDevice(edev);
+    pb_context_destroy(ctx);
+    /* the plot: probe error against GPU time, log-log, one line per scene / mode / bounces */
+    FILE *gp = fopen(gp_path, "w");
+    if (gp) {
+        fprintf(gp,
+                "set terminal pngcairo size 1000,640\nset output '%s'\nset datafile separator ','\n"
+                "set logscale xy\nset xlabel 'bake GPU time (ms)'\nset ylabel 'relative RMSE of probe irradiance'\n"
+                "set key outside right\nset grid\n"
+                "scenes = system(\"tail -n +2 '%s' | cut -d, -f1 | sort -u | tr '\\\\n' ' '\")\n"
+                "plot for [s in scenes] for [m in 'path volume'] '%s' using "
+                "((strcol(1) eq s && strcol(3) eq m) ? $7 : 1/0):9 with linespoints title s.' '.m\n",
+                png_path, csv_path, csv_path);
+        fclose(gp);
+        char cmd[2200];
+        snprintf(cmd, sizeof cmd, "command -v gnuplot >/dev/null && gnuplot '%s' 2>/dev/null", gp_path);
+        if (system(cmd) == 0)
+            printf("wrote %s\n", png_path);
+        else
+            printf("gnuplot not found or failed: %s not drawn (script %s)\n", png_path, gp_path);
+    }
+    printf("wrote %s\n", csv_path);
+    return 0;
+}
