@@ -201,7 +201,9 @@ int main(int argc, char **argv)
                 fprintf(stderr, "speed_vs_error: %s: %s\n", name, err.message);
                 continue;
             }
-            rd.mode = PB_RENDER_REFERENCE, rd.spp = ref_spp, rd.bounces = bounces[bi], rd.seed = 1000;
+            /* a volume of N bounces lights surfaces with light of N + 1 reflections at the probes, plus the
+             * reflection at the surface: the matching reference traces N + 1 bounces after the first hit */
+            rd.mode = PB_RENDER_REFERENCE, rd.spp = ref_spp, rd.bounces = bounces[bi] + 1, rd.seed = 1000;
             rd.volume = NULL;
             if (pb_render(ctx, s, gs, &rd, truth, NULL, NULL, &err) != PB_OK) {
                 fprintf(stderr, "speed_vs_error: %s: %s\n", name, err.message);

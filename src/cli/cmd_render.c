@@ -103,7 +103,9 @@ int cmd_render(const options *o)
     d.height = o->height ? o->height : 480;
     d.mode = mode;
     d.spp = o->has_spp ? o->spp : 0;
-    d.bounces = o->has_bounces ? o->bounces : 8;
+    /* with a volume of N bounces, the matching reference traces N + 1 after the first hit (the volume's
+     * light reflects once more at the surface); without one, 8 */
+    d.bounces = o->has_bounces ? o->bounces : (o->volume ? vol.settings.bounces + 1 : 8);
     d.seed = o->has_seed ? o->seed : 1;
     d.volume = o->volume ? &sv : NULL;
     d.volume_direct = (vol.flags & PB_VOLUME_DIRECT) != 0;
