@@ -128,6 +128,11 @@ int main(int argc, char **argv)
         return 1;
     }
     RTCDevice edev = rtcNewDevice(NULL);
+    char device[128]; /* CSV-safe: llvmpipe's name has a comma */
+    snprintf(device, sizeof device, "%s", pb_context_device(ctx)->name);
+    for (char *c = device; *c; ++c)
+        if (*c == ',')
+            *c = ';';
     fprintf(csv, "scene,device,indirect,bounces,rays_per_probe,probes,gpu_ms,wall_ms,probe_rel_rmse,image_rel_rmse,"
                  "trace_mrays,embree_mrays\n");
     printf("device: %s; %u probes, reference %u rays x %u passes, images %ux%u (reference %u spp)\n",
@@ -203,6 +208,29 @@ int main(int argc, char **argv)
             }
             /* a volume of N bounces lights surfaces with light of N + 1 reflections at the probes, plus the
              * reflection at the surface: the matching reference traces N + 1 bounces after the first hit */
+            if (!s->camera_count && bi == 0) {
+                /* no camera in the file: stand at the valid probe nearest the bounds' centre (open space by
+                 * construction) and look along +X, a little down */
+                double best = INFINITY;
+                for (uint32_t p = 0; p < ref.probe_count; ++p) {
+                    if (!(ref.probe_flags[p] & PB_PROBE_VALID) || (ref.probe_flags[p] & PB_PROBE_OUTSIDE))
+                        continue;
+                    double pos[3], dd = 0;
+                    pb_volume_probe_position(&ref, p, pos);
+                    for (int k = 0; k < 3; ++k) {
+                        double c = s->origin[k] + 0.5 * (s->bounds_min[k] + s->bounds_max[k]);
+                        dd += (pos[k] - c) * (pos[k] - c);
+                    }
+                    if (dd < best) {
+                        best = dd;
+                        for (int k = 0; k < 3; ++k)
+                            rd.camera.eye[k] = (float)(pos[k] - s->origin[k]);
+                    }
+                }
+                rd.camera.forward[0] = 1.f, rd.camera.forward[1] = -0.2f, rd.camera.forward[2] = 0.3f;
+                rd.camera.up[0] = 0.f, rd.camera.up[1] = 1.f, rd.camera.up[2] = 0.f;
+                rd.camera.yfov = 1.2f;
+            }
             rd.mode = PB_RENDER_REFERENCE, rd.spp = ref_spp, rd.bounces = bounces[bi] + 1, rd.seed = 1000;
             rd.volume = NULL;
             if (pb_render(ctx, s, gs, &rd, truth, NULL, NULL, &err) != PB_OK) {
@@ -227,17 +255,20 @@ int main(int argc, char **argv)
                         pb_render_desc pd = rd;
                         pd.mode = PB_RENDER_PROBES, pd.spp = 4, pd.seed = 5, pd.volume = &sv;
                         pd.volume_direct = (v.flags & PB_VOLUME_DIRECT) != 0;
-                        if (pb_render(ctx, s, gs, &pd, img, NULL, NULL, &err) == PB_OK)
-                            ierr = pb_image_relative_rmse(img, truth, W, H);
+                        uint64_t surface = 0;
+                        for (uint64_t q = 0; q < pixels; ++q)
+                            surface += truth[4 * q + 3] > 0.f;
+                        if (surface && pb_render(ctx, s, gs, &pd, img, NULL, NULL, &err) == PB_OK)
+                            ierr = pb_image_relative_rmse(img, truth, W, H); /* -1: no surface in view */
                         pb_sample_volume_free(&sv);
                     }
                     const char *m = mode ? "volume" : "path";
                     printf("%-16.16s %-6s %3u %6u %10.1f %10.1f %10.4f %10.4f\n", name, m, bounces[bi], rays[ri], gpu,
                            wall, perr, ierr);
                     fflush(stdout);
-                    fprintf(csv, "%s,%s,%s,%u,%u,%u,%.3f,%.3f,%.6f,%.6f,%.4f,%.4f\n", name,
-                            pb_context_device(ctx)->name, m, bounces[bi], rays[ri], v.probe_count, gpu, wall, perr, ierr,
+                    fprintf(csv, "%s,%s,%s,%u,%u,%u,%.3f,%.3f,%.6f,%.6f,%.4f,%.4f\n", name, device, m, bounces[bi], rays[ri], v.probe_count, gpu, wall, perr, ierr,
                             trace_mrays, embree_mrays);
+                    fflush(csv);
                     pb_volume_free(&v);
                 }
             pb_volume_free(&ref);
