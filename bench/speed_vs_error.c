@@ -128,7 +128,7 @@ int main(int argc, char **argv)
         return 1;
     }
     RTCDevice edev = rtcNewDevice(NULL);
-    char device[128]; /* CSV-safe: llvmpipe's name has a comma */
+    char device[256]; /* CSV-safe: llvmpipe's name has a comma */
     snprintf(device, sizeof device, "%s", pb_context_device(ctx)->name);
     for (char *c = device; *c; ++c)
         if (*c == ',')
