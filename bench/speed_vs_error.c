@@ -72,9 +72,9 @@ static const char *base_name(const char *p)
 
 int main(int argc, char **argv)
 {
-    uint32_t probes = 128, rays[16] = {32, 128, 512, 2048}, bounces[8] = {1, 3}, W = 128, H = 96;
+    uint32_t probes = 128, rays[16] = {32, 128, 512, 2048, 4096}, bounces[8] = {1, 3}, W = 128, H = 96;
     uint32_t ref_rays = 1024, ref_passes = 8, ref_spp = 256;
-    int nrays = 4, nbounces = 2, nscenes = 0;
+    int nrays = 5, nbounces = 2, nscenes = 0;
     const char *out_dir = "bench/out", *scenes[16];
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -285,12 +285,13 @@ int main(int argc, char **argv)
     FILE *gp = fopen(gp_path, "w");
     if (gp) {
         fprintf(gp,
-                "set terminal pngcairo size 1000,640\nset output '%s'\nset datafile separator ','\n"
+                "set terminal pngcairo size 1100,700\nset output '%s'\nset datafile separator ','\n"
                 "set logscale xy\nset xlabel 'bake GPU time (ms)'\nset ylabel 'relative RMSE of probe irradiance'\n"
                 "set key outside right\nset grid\n"
                 "scenes = system(\"tail -n +2 '%s' | cut -d, -f1 | sort -u | tr '\\\\n' ' '\")\n"
-                "plot for [s in scenes] for [m in 'path volume'] '%s' using "
-                "((strcol(1) eq s && strcol(3) eq m) ? $7 : 1/0):9 with linespoints title s.' '.m\n",
+                "plot for [s in scenes] for [m in 'path volume'] for [b in '1 3'] '%s' using "
+                "((strcol(1) eq s && strcol(3) eq m && strcol(4) eq b) ? $7 : 1/0):9 with linespoints "
+                "title s.' '.m.' '.b.' bnc'\n",
                 png_path, csv_path, csv_path);
         fclose(gp);
         char cmd[2200];
