@@ -16,6 +16,7 @@
  * cost at most 30 %. */
 #define _POSIX_C_SOURCE 200809L
 #include "common/common.h"
+#include "bench_util.h"
 #include "probebake/probebake.h"
 
 #include <math.h>
@@ -32,32 +33,6 @@ typedef struct row {
     double trace_kernel_mrays;    /* trace.comp on this scene's probe rays */
 } row;
 
-static double luminance(const float c[3])
-{
-    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
-}
-
-static double relative_rmse(const pb_volume *a, const pb_volume *ref)
-{
-    float dirs[64 * 4];
-    pb_sf_directions(64, dirs);
-    double se = 0, sum = 0;
-    uint64_t n = 0;
-    for (uint32_t p = 0; p < ref->probe_count; ++p) {
-        if (!(ref->probe_flags[p] & PB_PROBE_VALID))
-            continue;
-        for (int i = 0; i < 64; ++i) {
-            float e[3], r[3];
-            pb_sh_eval(a->sh + 27 * (size_t)p, dirs + 4 * i, e);
-            pb_sh_eval(ref->sh + 27 * (size_t)p, dirs + 4 * i, r);
-            double d = luminance(e) - luminance(r);
-            se += d * d;
-            sum += luminance(r);
-            ++n;
-        }
-    }
-    return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;
-}
 
 int main(int argc, char **argv)
 {
@@ -167,7 +142,7 @@ int main(int argc, char **argv)
                 r->passes = 1;
                 r->wall_ms = pb_now_ms() - t0;
                 r->trace_ms = v.timings.trace, r->sh_ms = v.timings.sh, r->depth_ms = v.timings.octmap;
-                r->rmse = relative_rmse(&v, &ref);
+                r->rmse = bench_volume_rmse(&v, &ref);
                 r->traversals = v.traversals;
                 r->trace_kernel_mrays = trace_mrays;
                 double rays = (double)v.probe_count * r->rays, gpu_ms = r->trace_ms + r->sh_ms + r->depth_ms;

@@ -17,6 +17,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "common/common.h"
 #include "embree_peer.h"
+#include "bench_util.h"
 #include "probebake/probebake.h"
 
 #include <math.h>
@@ -25,30 +26,6 @@
 #include <string.h>
 #include <sys/stat.h>
 
-static double luminance(const float c[3])
-{
-    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
-}
-
-static double volume_rmse(const pb_volume *a, const pb_volume *ref)
-{
-    float dirs[64 * 4];
-    pb_sf_directions(64, dirs);
-    double se = 0, sum = 0;
-    uint64_t n = 0;
-    for (uint32_t p = 0; p < ref->probe_count; ++p) {
-        if (!(ref->probe_flags[p] & PB_PROBE_VALID))
-            continue;
-        for (int i = 0; i < 64; ++i) {
-            float e[3], r[3];
-            pb_sh_eval(a->sh + 27 * (size_t)p, dirs + 4 * i, e);
-            pb_sh_eval(ref->sh + 27 * (size_t)p, dirs + 4 * i, r);
-            double d = luminance(e) - luminance(r);
-            se += d * d, sum += luminance(r), ++n;
-        }
-    }
-    return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;
-}
 
 static int parse_list(const char *s, uint32_t *out, int max)
 {
@@ -249,7 +226,7 @@ int main(int argc, char **argv)
                         continue;
                     }
                     double wall = pb_now_ms() - t0, gpu = v.timings.trace + v.timings.sh + v.timings.octmap;
-                    double perr = volume_rmse(&v, &ref), ierr = -1;
+                    double perr = bench_volume_rmse(&v, &ref), ierr = -1;
                     pb_sample_volume sv;
                     if (pb_sample_volume_build(&v, s->origin, 0.f, 0.f, &sv, &err) == PB_OK) {
                         pb_render_desc pd = rd;

@@ -5,13 +5,6 @@
 
 static pb_context *ctx;
 
-static void log_line(pb_log_level level, const char *msg, void *user)
-{
-    (void)user;
-    if (level >= PB_LOG_WARN)
-        fprintf(stderr, "  [%s] %s\n", level == PB_LOG_WARN ? "warn" : "error", msg);
-}
-
 typedef struct prepared {
     pb_scene *s;
     pb_bvh *bvh;
@@ -285,13 +278,8 @@ static void validation_layer_stayed_silent(void)
 
 int main(void)
 {
-    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {log_line, NULL}};
-    pb_error err;
-    if (pb_context_create(&d, &ctx, &err) != PB_OK) {
-        fprintf(stderr, "no Vulkan device with validation: %s\n", err.message);
-        printf("0 passed, 1 failed, 0 skipped\n");
+    if (!(ctx = test_gpu_context()))
         return 1;
-    }
     RUN(display_pipeline);
     RUN(bad_parameters_refused);
     RUN(kernel_matches_cpu_reference);

@@ -6,13 +6,6 @@
 
 static pb_context *ctx;
 
-static void log_line(pb_log_level level, const char *msg, void *user)
-{
-    (void)user;
-    if (level >= PB_LOG_WARN)
-        fprintf(stderr, "  [%s] %s\n", level == PB_LOG_WARN ? "warn" : "error", msg);
-}
-
 /* Bakes s with d; the volume is the caller's (pb_volume_free). */
 static int bake(const pb_scene *s, const pb_bake_desc *d, pb_volume *v)
 {
@@ -227,13 +220,8 @@ static void validation_layer_stayed_silent(void)
 
 int main(void)
 {
-    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {log_line, NULL}};
-    pb_error err;
-    if (pb_context_create(&d, &ctx, &err) != PB_OK) {
-        fprintf(stderr, "no Vulkan device with validation: %s\n", err.message);
-        printf("0 passed, 1 failed, 0 skipped\n");
+    if (!(ctx = test_gpu_context()))
         return 1;
-    }
     RUN(shader_matches_c_reference);
     RUN(constant_sky_constant_irradiance);
     RUN(thin_wall_visibility);

@@ -180,4 +180,28 @@ static inline void rng_direction(test_rng *r, float d[3])
     d[2] = (float)z;
 }
 
+/* Warnings and errors of the library on stderr, indented under the test. */
+static inline void test_log_line(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    if (level >= PB_LOG_WARN)
+        fprintf(stderr, "  [%s] %s\n", level == PB_LOG_WARN ? "warn" : "error", msg);
+}
+
+/* The GPU tests' context: PB_TEST_DEVICE (or the best device) with the
+ * validation layer on. NULL, after printing why and a failed summary line,
+ * when there is none: the caller returns 1. */
+static inline pb_context *test_gpu_context(void)
+{
+    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {test_log_line, NULL}};
+    pb_context *ctx = NULL;
+    pb_error err;
+    if (pb_context_create(&d, &ctx, &err) != PB_OK) {
+        fprintf(stderr, "no Vulkan device with validation: %s\n", err.message);
+        printf("0 passed, 1 failed, 0 skipped\n");
+        return NULL;
+    }
+    return ctx;
+}
+
 #endif

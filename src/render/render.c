@@ -48,6 +48,14 @@ void pb_camera_from_scene(const pb_camera *c, pb_camera_view *out)
     out->yfov = c->perspective && c->yfov > 0.f ? c->yfov : 0.8f;
 }
 
+void pb_render_defaults(pb_render_desc *d)
+{
+    if (!d->spp)
+        d->spp = d->mode == PB_RENDER_REFERENCE ? 64 : 1;
+    if (!d->bounces)
+        d->bounces = 8;
+}
+
 pb_result pb_render_check(const pb_render_desc *d, pb_error *err)
 {
     if (d->width < 1 || d->height < 1 || d->width > 16384 || d->height > 16384)
@@ -80,10 +88,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     if (r != PB_OK)
         return r;
     pb_render_desc d = *desc;
-    if (!d.spp)
-        d.spp = d.mode == PB_RENDER_REFERENCE ? 64 : 1;
-    if (!d.bounces)
-        d.bounces = 8;
+    pb_render_defaults(&d);
     uint64_t pixels = (uint64_t)d.width * d.height;
     uint32_t rows_per = (uint32_t)(ctx->desc.rays_per_submit / ((uint64_t)d.width * d.spp));
     rows_per = rows_per < 1 ? 1 : (rows_per > d.height ? d.height : rows_per);

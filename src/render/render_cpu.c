@@ -153,10 +153,7 @@ pb_result pb_render_cpu(const pb_scene *scene, const pb_bvh *bvh, const pb_rende
     if (r != PB_OK)
         return r;
     pb_render_desc d = *desc;
-    if (!d.spp)
-        d.spp = d.mode == PB_RENDER_REFERENCE ? 64 : 1;
-    if (!d.bounces)
-        d.bounces = 8;
+    pb_render_defaults(&d);
     pb_bake_emitters emit;
     pb_env_table env;
     if ((r = pb_shading_host(scene, d.sky, d.environment, &emit, &env, err)) != PB_OK)

@@ -20,6 +20,9 @@ _Static_assert(sizeof(gpu_render_params) == 208, "RenderParams layout");
 void pb_render_camera_basis(const pb_camera_view *c, uint32_t width, uint32_t height, float fwd[3], float right[3],
                             float up[3]);
 
+/* Fills the zero fields of d with their defaults (spp, bounces). */
+void pb_render_defaults(pb_render_desc *d);
+
 /* Checks a render desc; PB_ERROR_INVALID_ARGUMENT with the problem. */
 pb_result pb_render_check(const pb_render_desc *d, pb_error *err);
 

@@ -1,0 +1,33 @@
+/* Shared by the benches: the probe error metric. */
+#ifndef PB_BENCH_UTIL_H
+#define PB_BENCH_UTIL_H
+
+#include "probebake/probebake.h"
+
+#include <math.h>
+
+/* Relative RMSE of irradiance luminance of volume a against ref, over ref's
+ * valid probes and 64 spherical-Fibonacci directions:
+ * sqrt(mean (E - E_ref)^2) / mean(E_ref). */
+static inline double bench_volume_rmse(const pb_volume *a, const pb_volume *ref)
+{
+    float dirs[64 * 4];
+    pb_sf_directions(64, dirs);
+    double se = 0, sum = 0;
+    uint64_t n = 0;
+    for (uint32_t p = 0; p < ref->probe_count; ++p) {
+        if (!(ref->probe_flags[p] & PB_PROBE_VALID))
+            continue;
+        for (int i = 0; i < 64; ++i) {
+            float e[3], r[3];
+            pb_sh_eval(a->sh + 27 * (size_t)p, dirs + 4 * i, e);
+            pb_sh_eval(ref->sh + 27 * (size_t)p, dirs + 4 * i, r);
+            double le = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+            double lr = 0.2126 * r[0] + 0.7152 * r[1] + 0.0722 * r[2];
+            se += (le - lr) * (le - lr), sum += lr, ++n;
+        }
+    }
+    return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;
+}
+
+#endif
