@@ -663,6 +663,124 @@ static void environment_kernels_match_cpu(void)
     pb_scene_destroy(s);
 }
 
+/* The demo scene scaled by s and moved by an offset, as a file at that scale
+ * would load: local positions and bounds scaled, the origin moved; point
+ * lights' intensity x s^2 keeps their irradiance (W/sr over distance^2). */
+static void transform_scene(pb_scene *s, double scale, const double offset[3])
+{
+    for (uint64_t i = 0; i < 9ull * s->triangle_count; ++i)
+        s->positions[i] = (float)(s->positions[i] * scale);
+    for (int k = 0; k < 3; ++k) {
+        s->origin[k] = s->origin[k] * scale + offset[k];
+        s->bounds_min[k] = (float)(s->bounds_min[k] * scale);
+        s->bounds_max[k] = (float)(s->bounds_max[k] * scale);
+    }
+    for (uint32_t l = 0; l < s->light_count; ++l) {
+        for (int k = 0; k < 3; ++k)
+            s->lights[l].position[k] = (float)(s->lights[l].position[k] * scale);
+        if (s->lights[l].type != PB_LIGHT_DIRECTIONAL)
+            s->lights[l].intensity = (float)(s->lights[l].intensity * scale * scale);
+        s->lights[l].range = (float)(s->lights[l].range * scale);
+    }
+}
+
+/* The demo scene at 1e-3 and 1e4 scale, and moved 1e7 m away, bakes to the
+ * same irradiance as at home (same seed: the same rays up to rounding, so
+ * well within Monte Carlo error) and to depths scaled by the scale. */
+static void scale_and_position_invariance(void)
+{
+    pb_scene *ref_s = load_demo();
+    if (!ref_s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(ref_s->bounds_min, ref_s->bounds_max, 27, &d.grid);
+    d.rays_per_probe = 256;
+    d.passes = 2;
+    d.bounces = 2;
+    d.octmap_res = 8;
+    baked ref = bake(ref_s, &d);
+    struct {
+        double scale, offset[3];
+    } cases[3] = {{1e-3, {0, 0, 0}}, {1e4, {0, 0, 0}}, {1.0, {1e7, -1e7, 1e7}}};
+    for (int c = 0; c < 3 && ref.ok; ++c) {
+        pb_scene *s = load_demo();
+        transform_scene(s, cases[c].scale, cases[c].offset);
+        pb_bake_desc ds = d;
+        pb_probe_grid_fit(s->bounds_min, s->bounds_max, 27, &ds.grid);
+        baked b = bake(s, &ds);
+        if (b.ok) {
+            double mean_ref = 0, mean = 0, worst = 0, depth_worst = 0;
+            uint32_t flags_differ = 0;
+            for (uint32_t p = 0; p < b.vol.probe_count; ++p) {
+                float up[3] = {0, 1, 0}, e[3], r[3];
+                pb_sh_eval(b.vol.sh + 27 * p, up, e);
+                pb_sh_eval(ref.vol.sh + 27 * p, up, r);
+                mean += e[0], mean_ref += r[0];
+                worst = fmax(worst, fabs(e[0] - r[0]) / fmax(1e-3, fabs(r[0])));
+                flags_differ += b.vol.probe_flags[p] != ref.vol.probe_flags[p];
+                float dr = pb_half_to_float(ref.vol.depth[pb_volume_tile_halves(8) * p + 22]);
+                float db = pb_half_to_float(b.vol.depth[pb_volume_tile_halves(8) * p + 22]);
+                depth_worst = fmax(depth_worst, fabs(db / cases[c].scale - dr) / fmax(1e-3, dr));
+            }
+            double rel = fabs(mean / mean_ref - 1);
+            fprintf(stderr, "  scale %g, offset %g: mean irradiance %+.3f%%, worst probe %.2f%%, depth %.2f%%, %u flags "
+                    "differ\n", cases[c].scale, cases[c].offset[0], 100 * rel, 100 * worst, 100 * depth_worst,
+                    flags_differ);
+            CHECK(rel < 0.01 && worst < 0.05 && depth_worst < 0.01 && flags_differ == 0);
+        }
+        release(&b);
+        pb_scene_destroy(s);
+    }
+    release(&ref);
+    pb_scene_destroy(ref_s);
+}
+
+/* 1 pass of 4096 rays and 64 passes of 64 rays estimate the same irradiance:
+ * they differ per probe no more than two 64 x 64 bakes with different seeds
+ * differ from each other (the Monte Carlo error, measured). Sums: each
+ * pass's SH is a float sum of at most rays_per_probe terms on the device,
+ * passes are added in double on the host, so 1e8+ rays lose nothing to
+ * accumulation. */
+static void passes_and_rays_agree(void)
+{
+    pb_scene *s = load_demo();
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 27, &d.grid);
+    d.bounces = 1;
+    d.octmap_res = 4;
+    d.skip_relocation = 1;
+    d.rays_per_probe = 4096, d.passes = 1, d.seed = 1;
+    baked a = bake(s, &d);
+    d.rays_per_probe = 64, d.passes = 64, d.seed = 2;
+    baked b = bake(s, &d);
+    d.seed = 3;
+    baked c = bake(s, &d);
+    if (a.ok && b.ok && c.ok) {
+        double ab = 0, bc = 0, ma = 0, mb = 0;
+        uint32_t compared = 0;
+        for (uint32_t p = 0; p < a.vol.probe_count; ++p) {
+            if (!(a.vol.probe_flags[p] & PB_PROBE_VALID) || (a.vol.probe_flags[p] & PB_PROBE_DILATED))
+                continue;
+            float up[3] = {0, 1, 0}, ea[3], eb[3], ec[3];
+            pb_sh_eval(a.vol.sh + 27 * p, up, ea);
+            pb_sh_eval(b.vol.sh + 27 * p, up, eb);
+            pb_sh_eval(c.vol.sh + 27 * p, up, ec);
+            ab += (ea[0] - eb[0]) * (ea[0] - eb[0]), bc += (eb[0] - ec[0]) * (eb[0] - ec[0]);
+            ma += ea[0], mb += eb[0], ++compared;
+        }
+        double rab = sqrt(ab / compared), rbc = sqrt(bc / compared);
+        fprintf(stderr, "  %u probes: RMS difference 1x4096 vs 64x64 %.4f, two 64x64 seeds %.4f (ratio %.2f); means "
+                "differ by %.2f%%\n", compared, rab, rbc, rab / rbc, 100 * fabs(ma / mb - 1));
+        CHECK(compared >= 10 && rab < 2.0 * rbc && fabs(ma / mb - 1) < 0.01);
+    }
+    release(&a);
+    release(&b);
+    release(&c);
+    pb_scene_destroy(s);
+}
+
 /* With a target error, probes stop once their estimate has converged: under
  * a uniform sky every pass gives the same value (zero variance), so the bake
  * stops after the minimum 4 passes; in the noisy closed box the probes run
@@ -882,6 +1000,8 @@ int main(void)
     RUN(environment_kernels_match_cpu);
     RUN(indirect_volume_matches_cpu_reference);
     RUN(relocation_and_dilation);
+    RUN(scale_and_position_invariance);
+    RUN(passes_and_rays_agree);
     RUN(target_error_stops_converged_probes);
     RUN(points_subset_bakes_like_the_grid);
     RUN(bad_parameters_refused_before_gpu_work);
