@@ -894,6 +894,83 @@ static void relocation_and_dilation(void)
     pb_scene_destroy(s);
 }
 
+/* Degenerate scenes bake without trouble: one triangle, a coplanar soup,
+ * and a scene with nothing that emits light (black volume, and a warning). */
+static uint32_t warnings;
+
+static void count_warnings(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    if (level == PB_LOG_WARN && strstr(msg, "the volume will be black"))
+        ++warnings;
+}
+
+static void degenerate_scenes(void)
+{
+    double one[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    double flat[4 * 9];
+    for (int t = 0; t < 4; ++t) {
+        double x = t * 1.5;
+        double tri[9] = {x, 0, 0, x + 1, 0, 0, x, 0, -1};
+        memcpy(flat + 9 * t, tri, sizeof tri);
+    }
+    const double *soups[2] = {one, flat};
+    uint32_t counts[2] = {1, 4};
+    for (int k = 0; k < 2; ++k) {
+        pb_scene *s = NULL;
+        pb_error err;
+        CHECKF(pb_scene_from_triangles(soups[k], counts[k], NULL, NULL, 0, &s, &err) == PB_OK, "%s", err.message);
+        pb_bake_desc d = {0};
+        float lo[3] = {-1, -1, -1}, hi[3] = {7, 1, 1};
+        pb_probe_grid_fit(lo, hi, 16, &d.grid);
+        d.rays_per_probe = 64, d.passes = 1, d.bounces = 2, d.octmap_res = 4;
+        d.sky[0] = d.sky[1] = d.sky[2] = 1.f;
+        baked b = bake(s, &d);
+        if (b.ok) {
+            uint32_t finite = 1;
+            for (uint32_t i = 0; i < 27 * b.vol.probe_count; ++i)
+                finite &= isfinite(b.vol.sh[i]) != 0;
+            CHECK(finite && b.vol.sh[0] > 0.f);
+        }
+        release(&b);
+        pb_scene_destroy(s);
+    }
+    /* nothing emits: a black volume and one warning */
+    pb_scene *s = load_demo();
+    if (!s)
+        return;
+    s->light_count = 0;
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        s->materials[m].emissive[0] = s->materials[m].emissive[1] = s->materials[m].emissive[2] = 0.f;
+    pb_context *quiet = NULL;
+    pb_context_desc cd = {getenv("PB_TEST_DEVICE"), 0, 0, 0, {count_warnings, NULL}};
+    pb_error err;
+    warnings = 0;
+    if (pb_context_create(&cd, &quiet, &err) == PB_OK) {
+        pb_bvh *bvh = NULL;
+        pb_gpu_scene *gs = NULL;
+        pb_volume v;
+        pb_bake_desc d = {0};
+        pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
+        d.rays_per_probe = 32, d.passes = 1, d.bounces = 1, d.octmap_res = 4;
+        if (pb_bvh_build(s, NULL, &bvh, &err) == PB_OK && pb_gpu_scene_create(quiet, s, bvh, &gs, &err) == PB_OK &&
+            pb_bake(quiet, s, gs, &d, &v, &err) == PB_OK) {
+            float m = 0.f;
+            for (uint32_t i = 0; i < 27 * v.probe_count; ++i)
+                m = fmaxf(m, fabsf(v.sh[i]));
+            fprintf(stderr, "  nothing emits: largest SH coefficient %g, %u warning(s)\n", m, warnings);
+            CHECK(m == 0.f && warnings == 1);
+            pb_volume_free(&v);
+        } else {
+            CHECKF(0, "%s", err.message);
+        }
+        pb_gpu_scene_destroy(gs);
+        pb_bvh_destroy(bvh);
+        pb_context_destroy(quiet);
+    }
+    pb_scene_destroy(s);
+}
+
 /* Probes given as points (world positions and ids of some grid probes, as a
  * points file with 17-digit numbers would carry them) bake to exactly the
  * values those probes get in the whole grid: same position, same random
@@ -1002,6 +1079,7 @@ int main(void)
     RUN(relocation_and_dilation);
     RUN(scale_and_position_invariance);
     RUN(passes_and_rays_agree);
+    RUN(degenerate_scenes);
     RUN(target_error_stops_converged_probes);
     RUN(points_subset_bakes_like_the_grid);
     RUN(bad_parameters_refused_before_gpu_work);

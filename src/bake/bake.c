@@ -343,6 +343,23 @@ void pb_bake_probe_position(const pb_scene *scene, const pb_bake_desc *d, uint32
         local[k] = (float)(world[k] - scene->origin[k]);
 }
 
+/* Whether anything in the scene or its environment emits light. */
+static int scene_emits_light(const pb_scene *s, const pb_bake_desc *d)
+{
+    if (s->light_count)
+        return 1;
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        if (s->materials[m].emissive[0] > 0.f || s->materials[m].emissive[1] > 0.f || s->materials[m].emissive[2] > 0.f)
+            return 1;
+    if (d->environment) {
+        for (uint64_t i = 0; i < 3ull * d->environment->width * d->environment->height; ++i)
+            if (d->environment->rgb[i] > 0.f)
+                return 1;
+        return 0;
+    }
+    return d->sky[0] > 0.f || d->sky[1] > 0.f || d->sky[2] > 0.f;
+}
+
 /* One bake; feedback: the previous bounce's volume (--indirect volume) or NULL. */
 static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc_in,
                            const pb_sample_volume *feedback, pb_volume *out, pb_error *err)
@@ -356,6 +373,10 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         return r;
     uint32_t P = d.points ? d.points->count : d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
     uint32_t rpp = d.rays_per_probe, n = d.octmap_res, texels = n * n;
+    if (!scene_emits_light(scene, &d))
+        pb_logf(&ctx->desc.log, PB_LOG_WARN,
+                "%s: no lights, no emissive surfaces and a black sky: the volume will be black (give --sky or --env)",
+                scene->path[0] ? scene->path : "scene");
     uint32_t chunk = ctx->desc.rays_per_submit / rpp;
     chunk = chunk < 1 ? 1 : (chunk > P ? P : chunk);
     if (chunk > ctx->limits.maxComputeWorkGroupCount[1]) /* bake_depth dispatches one row per probe */
