@@ -38,6 +38,7 @@ int main(int argc, char **argv)
 {
     uint32_t probes = 256, ref_passes = 32, bounces = 2;
     const char *json = "bench/out/bake_bench.json";
+    int validation = 0; /* --validation: fail on any Vulkan validation message */
     const char *scenes[16];
     int nscenes = 0;
     for (int i = 1; i < argc; ++i) {
@@ -49,6 +50,8 @@ int main(int argc, char **argv)
             bounces = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(argv[i], "--json") && i + 1 < argc)
             json = argv[++i];
+        else if (!strcmp(argv[i], "--validation"))
+            validation = 1;
         else if (argv[i][0] == '-') {
             fprintf(stderr, "bake_bench: unknown option %s\n", argv[i]);
             return 2;
@@ -68,7 +71,8 @@ int main(int argc, char **argv)
     }
     pb_context *ctx = NULL;
     pb_error err;
-    if (pb_context_create(NULL, &ctx, &err) != PB_OK) {
+    pb_context_desc cd = {NULL, (uint32_t)validation, 0, 0, {0}};
+    if (pb_context_create(&cd, &ctx, &err) != PB_OK) {
         fprintf(stderr, "bake_bench: %s\n", err.message);
         return 1;
     }
@@ -177,6 +181,9 @@ int main(int argc, char **argv)
         fclose(f);
         printf("wrote %s\n", json);
     }
+    uint32_t vmsgs = pb_context_validation_messages(ctx);
+    if (vmsgs)
+        fprintf(stderr, "%s: %u Vulkan validation messages\n", argv[0], vmsgs);
     pb_context_destroy(ctx);
-    return 0;
+    return vmsgs ? 1 : 0;
 }

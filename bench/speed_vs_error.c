@@ -53,6 +53,7 @@ int main(int argc, char **argv)
     uint32_t ref_rays = 1024, ref_passes = 8, ref_spp = 256;
     int nrays = 5, nbounces = 2, nscenes = 0;
     const char *out_dir = "bench/out", *scenes[16];
+    int validation = 0; /* --validation: fail on any Vulkan validation message */
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--probes") && v)
@@ -71,6 +72,8 @@ int main(int argc, char **argv)
             ref_spp = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(a, "--out") && v)
             out_dir = argv[++i];
+        else if (!strcmp(a, "--validation"))
+            validation = 1;
         else if (a[0] == '-') {
             fprintf(stderr, "speed_vs_error: unknown option %s\n", a);
             return 2;
@@ -100,7 +103,8 @@ int main(int argc, char **argv)
     }
     pb_context *ctx = NULL;
     pb_error err;
-    if (pb_context_create(NULL, &ctx, &err) != PB_OK) {
+    pb_context_desc cd = {NULL, (uint32_t)validation, 0, 0, {0}};
+    if (pb_context_create(&cd, &ctx, &err) != PB_OK) {
         fprintf(stderr, "speed_vs_error: %s\n", err.message);
         return 1;
     }
@@ -257,6 +261,9 @@ int main(int argc, char **argv)
     }
     fclose(csv);
     rtcReleaseDevice(edev);
+    uint32_t vmsgs = pb_context_validation_messages(ctx);
+    if (vmsgs)
+        fprintf(stderr, "%s: %u Vulkan validation messages\n", argv[0], vmsgs);
     pb_context_destroy(ctx);
     /* the plot: probe error against GPU time, log-log, one line per scene / mode / bounces */
     FILE *gp = fopen(gp_path, "w");
@@ -279,5 +286,5 @@ int main(int argc, char **argv)
             printf("gnuplot not found or failed: %s not drawn (script %s)\n", png_path, gp_path);
     }
     printf("wrote %s\n", csv_path);
-    return 0;
+    return vmsgs ? 1 : 0;
 }

@@ -31,6 +31,7 @@ typedef struct options {
     const char *device, *json;
     const char *scenes[16];
     int scene_count;
+    int validation;           /* --validation: fail on any Vulkan validation message */
 } options;
 
 typedef struct result {
@@ -215,6 +216,8 @@ int main(int argc, char **argv)
             o.bvh.traversal_cost = (float)atof(argv[++i]);
         else if (!strcmp(a, "--device") && v)
             o.device = argv[++i];
+        else if (!strcmp(a, "--validation"))
+            o.validation = 1;
         else if (!strcmp(a, "--json") && v)
             o.json = argv[++i];
         else if (a[0] == '-') {
@@ -252,7 +255,7 @@ int main(int argc, char **argv)
         }
     }
 
-    pb_context_desc cd = {o.device, 0, 0, 0, {0}};
+    pb_context_desc cd = {o.device, (uint32_t)o.validation, 0, 0, {0}};
     pb_context *ctx = NULL;
     pb_error err;
     if (pb_context_create(&cd, &ctx, &err) != PB_OK) {
@@ -304,6 +307,9 @@ int main(int argc, char **argv)
         printf("wrote %s\n", o.json);
     }
     rtcReleaseDevice(edev);
+    uint32_t vmsgs = pb_context_validation_messages(ctx);
+    if (vmsgs)
+        fprintf(stderr, "%s: %u Vulkan validation messages\n", argv[0], vmsgs);
     pb_context_destroy(ctx);
-    return nres == o.scene_count ? 0 : 1;
+    return nres == o.scene_count && !vmsgs ? 0 : 1;
 }

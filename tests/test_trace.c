@@ -393,6 +393,34 @@ static void alpha_blend_stochastic(void)
     pb_scene_destroy(s);
 }
 
+/* Synchronisation validation is on and works: two copies through one
+ * buffer with no barrier between them (a read-after-write hazard) are
+ * reported. A context of its own, so the suite's context stays silent. */
+static void sync_validation_catches_a_missing_barrier(void)
+{
+    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {NULL, NULL}};
+    pb_context *c = NULL;
+    pb_error err;
+    CHECKF(pb_context_create(&d, &c, &err) == PB_OK, "%s", err.message);
+    if (!c)
+        return;
+    pb_buffer a = {0}, b = {0}, x = {0};
+    CHECK(pb_buffer_create(c, 4096, PB_MEMORY_DEVICE, "a", &a, &err) == PB_OK);
+    CHECK(pb_buffer_create(c, 4096, PB_MEMORY_DEVICE, "b", &b, &err) == PB_OK);
+    CHECK(pb_buffer_create(c, 4096, PB_MEMORY_DEVICE, "x", &x, &err) == PB_OK);
+    uint32_t before = pb_context_validation_messages(c);
+    if (pb_cmd_begin(c, &err) == PB_OK) {
+        pb_cmd_copy(c, &a, 0, &b, 0, 4096);
+        pb_cmd_copy(c, &b, 0, &x, 0, 4096); /* reads what the first copy writes: no barrier */
+        CHECK(pb_cmd_submit_wait(c, NULL, &err) == PB_OK);
+    }
+    uint32_t after = pb_context_validation_messages(c);
+    fprintf(stderr, "  %u validation message(s) for the missing barrier\n", after - before);
+    CHECK(after > before);
+    pb_buffer_destroy(c, &a), pb_buffer_destroy(c, &b), pb_buffer_destroy(c, &x);
+    pb_context_destroy(c);
+}
+
 /* Splitting the work into many submissions, and copying through staging
  * buffers (the discrete-GPU path) instead of mapped memory, changes no result. */
 static void bounded_submissions_same_bytes(void)
@@ -507,6 +535,7 @@ int main(void)
     RUN(far_from_origin_same_hits);
     RUN(alpha_mask_cuts_out);
     RUN(alpha_blend_stochastic);
+    RUN(sync_validation_catches_a_missing_barrier);
     RUN(bounded_submissions_same_bytes);
     RUN(ray_offset_gpu_matches_cpu);
     RUN(device_choice_and_refusals);

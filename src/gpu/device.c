@@ -89,7 +89,7 @@ static pb_result load_loader(pb_error *err)
 static pb_result create_instance(pb_context *ctx, int validation, pb_error *err)
 {
     const char *layers[1] = {VALIDATION_LAYER};
-    const char *exts[1] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME};
+    const char *exts[2] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME, VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME};
     if (validation && !has_layer(VALIDATION_LAYER))
         return pb_fail(err, PB_ERROR_UNSUPPORTED,
                        "validation requested but %s is not installed (Debian: vulkan-validationlayers)",
@@ -105,14 +105,21 @@ static pb_result create_instance(pb_context *ctx, int validation, pb_error *err)
                      VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
     mi.pfnUserCallback = on_validation;
     mi.pUserData = ctx;
+    /* synchronisation validation too: a missing barrier between kernels is
+     * a bug no single-threaded CPU device would show */
+    VkValidationFeatureEnableEXT enables[1] = {VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT};
+    VkValidationFeaturesEXT vf = {VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
+    vf.enabledValidationFeatureCount = 1;
+    vf.pEnabledValidationFeatures = enables;
+    vf.pNext = &mi; /* the messenger also catches messages from instance creation itself */
     VkInstanceCreateInfo ci = {VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
     ci.pApplicationInfo = &app;
     if (validation) {
         ci.enabledLayerCount = 1;
         ci.ppEnabledLayerNames = layers;
-        ci.enabledExtensionCount = 1;
+        ci.enabledExtensionCount = 2;
         ci.ppEnabledExtensionNames = exts;
-        ci.pNext = &mi; /* also catches messages from instance creation itself */
+        ci.pNext = &vf;
     }
     VkResult vr = vkCreateInstance(&ci, NULL, &ctx->instance);
     if (vr == VK_ERROR_INCOMPATIBLE_DRIVER)
