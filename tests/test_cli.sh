@@ -191,6 +191,17 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
         "$pb" render "$demo" --volume "$tmp/a.probes" --mode diff --size 16x12 --spp 1 --json -o "$tmp/d.png"
     expect render-reference-eye 0 "wrote $tmp/ref.png: 16x12, reference, 4 spp" -- \
         "$pb" render "$demo" --eye 0,1.5,2 --target 0,1,0 --fov 60 --size 16x12 --spp 4 --exposure 1 -o "$tmp/ref.png"
+    # faults mid-bake (injected as drivers report them): a clear error, and the
+    # previous output file untouched
+    printf 'previous' >"$tmp/keep.probes"
+    expect bake-device-lost 1 'device lost during vkQueueSubmit' -- \
+        env PB_INJECT_FAULT=submission:3 "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 2 -o "$tmp/keep.probes"
+    expect bake-out-of-device-memory 1 'out of device memory during allocation of .* MiB for' -- \
+        env PB_INJECT_FAULT=allocation:6 "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 2 -o "$tmp/keep.probes"
+    expect render-device-lost 1 'device lost' -- \
+        env PB_INJECT_FAULT=submission:1 "$pb" render "$demo" --size 16x12 --spp 2 -o "$tmp/keep.png"
+    expect faults-left-files-alone 0 '^previous absent$' -- \
+        bash -c "echo \$(cat '$tmp/keep.probes') \$([ -e '$tmp/keep.png' ] && echo present || echo absent)"
     expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
         "$pb" trace "$demo" --device no-such-gpu
 fi

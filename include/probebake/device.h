@@ -55,6 +55,11 @@ typedef struct pb_context_desc {
     uint32_t force_staging;       /* 1: never map device buffers, copy through staging buffers as on a
                                      discrete GPU (tests that path on UMA devices such as lavapipe) */
     pb_log log;
+    /* Fault injection, for tests of the error paths (0: off): the Nth device
+     * memory allocation fails with VK_ERROR_OUT_OF_DEVICE_MEMORY, the Nth
+     * submission with VK_ERROR_DEVICE_LOST, as real drivers report them. */
+    uint32_t fail_allocation;
+    uint32_t fail_submission;
 } pb_context_desc;
 
 /* Lists the Vulkan devices. Writes up to `capacity` entries to `out` (may be

@@ -45,4 +45,9 @@ int cli_parse_floats(const char *s, int n, float *out);
 
 int cmd_render(const options *o);
 
+/* PB_INJECT_FAULT=allocation:N or submission:N (tests of the error paths):
+ * the Nth device allocation or submission fails as out of memory / device
+ * lost. Unset: nothing. */
+void cli_fault_injection(pb_context_desc *cd);
+
 #endif

@@ -56,6 +56,18 @@ int cli_parse_floats(const char *s, int n, float *out)
     return 1;
 }
 
+void cli_fault_injection(pb_context_desc *cd)
+{
+    const char *f = getenv("PB_INJECT_FAULT");
+    unsigned n = 0;
+    if (!f)
+        return;
+    if (sscanf(f, "allocation:%u", &n) == 1)
+        cd->fail_allocation = n;
+    else if (sscanf(f, "submission:%u", &n) == 1)
+        cd->fail_submission = n;
+}
+
 int cli_usage_error(const char *fmt, const char *arg)
 {
     fprintf(stderr, "probebake: error: ");
@@ -843,6 +855,7 @@ static int cmd_bake(const options *o)
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
+    cli_fault_injection(&cd);
     if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
     progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};

@@ -67,7 +67,8 @@ pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind ki
     VkMemoryAllocateInfo mai = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, &flags};
     mai.allocationSize = req.size;
     mai.memoryTypeIndex = (uint32_t)type;
-    vr = ctx->vk.vkAllocateMemory(ctx->device, &mai, NULL, &out->memory);
+    vr = ++ctx->allocations == ctx->desc.fail_allocation ? VK_ERROR_OUT_OF_DEVICE_MEMORY
+                                                         : ctx->vk.vkAllocateMemory(ctx->device, &mai, NULL, &out->memory);
     if (vr != VK_SUCCESS) {
         pb_buffer_destroy(ctx, out);
         char w[160];

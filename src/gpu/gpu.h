@@ -46,6 +46,7 @@ typedef struct pb_context {
     double intervals_ms[32];     /* timestamp pairs of the last submission, in order */
     uint32_t interval_count;
     uint32_t validation_messages;
+    uint32_t allocations, submissions; /* counted for desc.fail_allocation / fail_submission */
     int recording;
 } pb_context;
 

@@ -68,6 +68,10 @@ pb_result pb_cmd_submit_wait(pb_context *ctx, double *gpu_ms, pb_error *err)
     VkSubmitInfo si = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
     si.pCommandBuffers = &ctx->cmd;
+    if (++ctx->submissions == ctx->desc.fail_submission) {
+        ctx->vk.vkResetCommandBuffer(ctx->cmd, 0);
+        return pb_vk_fail(ctx, err, VK_ERROR_DEVICE_LOST, "vkQueueSubmit (injected fault)");
+    }
     if ((vr = ctx->vk.vkQueueSubmit(ctx->queue, 1, &si, ctx->fence)) != VK_SUCCESS)
         return pb_vk_fail(ctx, err, vr, "vkQueueSubmit");
     /* wait in slices so a hung device is reported rather than waited on forever */
