@@ -199,6 +199,107 @@ static void thin_wall_visibility(void)
     pb_scene_destroy(s);
 }
 
+/* Quads of an axis-aligned box [lo, hi] as 12 triangles, facing out (or in). */
+static uint32_t box_tris(double *p, const double lo[3], const double hi[3], int inward)
+{
+    uint32_t t = 0;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side) {
+            int u = (axis + 1) % 3, w = (axis + 2) % 3;
+            double c[4][3];
+            for (int q = 0; q < 4; ++q) {
+                c[q][axis] = side ? hi[axis] : lo[axis];
+                c[q][u] = (q == 1 || q == 2) ? hi[u] : lo[u];
+                c[q][w] = (q >= 2) ? hi[w] : lo[w];
+            }
+            int order[2][3] = {{0, 1, 2}, {0, 2, 3}};
+            int out = side ^ inward;
+            for (int tri = 0; tri < 2; ++tri, ++t)
+                for (int vtx = 0; vtx < 3; ++vtx) {
+                    int q = order[tri][out ? vtx : 2 - vtx];
+                    for (int k = 0; k < 3; ++k)
+                        p[9 * t + 3 * vtx + k] = c[q][k];
+                }
+        }
+    return t;
+}
+
+/* Two closed rooms (x < 0 and x > 0, 2 x 2 x 2 m each) split by a wall 5 mm
+ * thick, 1 % of the 0.5 m probe spacing; a point light in the left room.
+ * No light reaches the right room, but every cage around the wall holds
+ * probes from both sides: through the sampler, points in the dark room
+ * (on its floor, walls and the wall's dark face) must get under 2 % of what
+ * the mirrored points in the lit room get. */
+static void thin_wall_between_rooms(void)
+{
+    double p[24 * 9];
+    double lo[3] = {-2, 0, -1}, hi[3] = {2, 2, 1}, wlo[3] = {-0.0025, 0, -1}, whi[3] = {0.0025, 2, 1};
+    uint32_t n = box_tris(p, lo, hi, 1);
+    n += box_tris(p + 9 * n, wlo, whi, 0);
+    pb_material m = pb_material_default();
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = 0.7f;
+    m.metallic = 0.f;
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(p, n, NULL, &m, 1, &s, &err) == PB_OK, "%s", err.message);
+    if (!s)
+        return;
+    s->lights = calloc(1, sizeof(pb_light));
+    s->light_count = 1;
+    s->lights[0].type = PB_LIGHT_POINT;
+    s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
+    s->lights[0].intensity = 20.f;
+    double lp[3] = {-1, 1.2, 0.3};
+    for (int k = 0; k < 3; ++k)
+        s->lights[0].position[k] = (float)(lp[k] - s->origin[k]);
+    pb_bake_desc d = {0};
+    d.grid.counts[0] = 8, d.grid.counts[1] = 4, d.grid.counts[2] = 4;
+    for (int k = 0; k < 3; ++k) {
+        d.grid.spacing[k] = 0.5f;
+        d.grid.origin[k] = (float)((k == 0 ? -1.75 : k == 1 ? 0.25 : -0.75) - s->origin[k]);
+    }
+    d.rays_per_probe = 512, d.passes = 2, d.bounces = 2, d.octmap_res = 16;
+    pb_volume v;
+    if (bake(s, &d, &v)) {
+        pb_sample_volume sv;
+        CHECK(pb_sample_volume_build(&v, s->origin, 0.f, 0.f, &sv, &err) == PB_OK);
+        /* points on the floor, the far walls and the wall's faces, mirrored across x = 0 */
+        test_rng r = {21};
+        double dark = 0, lit = 0, worst = 0;
+        for (int i = 0; i < 400; ++i) {
+            float q[3], nrm[3] = {0, 0, 0};
+            int kind = i % 4;
+            float a = (float)rng_uniform(&r), b = (float)rng_uniform(&r);
+            if (kind == 0) { /* floor */
+                q[0] = 0.02f + 1.9f * a, q[1] = 0.001f, q[2] = -0.95f + 1.9f * b, nrm[1] = 1.f;
+            } else if (kind == 1) { /* the dividing wall's face */
+                q[0] = 0.0026f, q[1] = 0.05f + 1.9f * a, q[2] = -0.95f + 1.9f * b, nrm[0] = 1.f;
+            } else if (kind == 2) { /* the far end wall */
+                q[0] = 1.999f, q[1] = 0.05f + 1.9f * a, q[2] = -0.95f + 1.9f * b, nrm[0] = -1.f;
+            } else { /* the ceiling */
+                q[0] = 0.02f + 1.9f * a, q[1] = 1.999f, q[2] = -0.95f + 1.9f * b, nrm[1] = -1.f;
+            }
+            float qd[3], ql[3], nd[3], nl[3], ed[3], el[3];
+            for (int k = 0; k < 3; ++k) {
+                qd[k] = (float)(q[k] - s->origin[k]);
+                ql[k] = (float)((k == 0 ? -q[k] : q[k]) - s->origin[k]);
+                nd[k] = nrm[k], nl[k] = k == 0 ? -nrm[k] : nrm[k];
+            }
+            pb_sample_cpu(&sv, qd, nd, nd, ed);
+            pb_sample_cpu(&sv, ql, nl, nl, el);
+            dark += ed[0], lit += el[0];
+            if (kind == 1)
+                worst = fmax(worst, ed[0] / fmax(1e-6, el[0]));
+        }
+        fprintf(stderr, "  dark room / lit room irradiance: %.4f on average, %.4f worst on the wall's dark face "
+                "(wall 1%% of the spacing)\n", dark / lit, worst);
+        CHECK(lit > 0 && dark / lit < 0.02);
+        pb_sample_volume_free(&sv);
+        pb_volume_free(&v);
+    }
+    pb_scene_destroy(s);
+}
+
 static void point_sets_refused(void)
 {
     pb_volume v;
@@ -225,6 +326,7 @@ int main(void)
     RUN(shader_matches_c_reference);
     RUN(constant_sky_constant_irradiance);
     RUN(thin_wall_visibility);
+    RUN(thin_wall_between_rooms);
     RUN(point_sets_refused);
     RUN(validation_layer_stayed_silent);
     pb_context_destroy(ctx);
