@@ -111,6 +111,8 @@ expect env-bad-intensity 2 "--env-intensity '-1' is not a finite scale >= 0" -- 
     "$pb" bake "$demo" --env "$tmp/sky.hdr" --env-intensity -1 -o "$tmp/x.probes"
 expect env-bad-rotation 2 "--env-rotation 'nan' is not an angle in degrees" -- \
     "$pb" bake "$demo" --env "$tmp/sky.hdr" --env-rotation nan -o "$tmp/x.probes"
+expect sh-window-bad 2 "--sh-window 'gauss': use none, hanning" -- "$pb" bake "$demo" --sh-window gauss -o "$tmp/x.probes"
+expect sh-window-bad-width 2 "--sh-window 'lanczos:0'" -- "$pb" bake "$demo" --sh-window lanczos:0 -o "$tmp/x.probes"
 expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
 
 # render: parameters checked before any device work
@@ -180,6 +182,8 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     int_rc=$?
     expect bake-interrupted 0 "^130 absent .*bake cancelled" -- \
         bash -c "echo $int_rc \$([ -e '$tmp/int.probes' ] && echo present || echo absent) \$(tr '\n' ' ' <'$tmp/int.log')"
+    expect bake-sh-window 0 "wrote $tmp/w.probes: 8 probes" -- \
+        "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --sh-window lanczos:3 -o "$tmp/w.probes"
     expect bake-indirect-volume 0 "wrote $tmp/iv.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --indirect volume --validation -o "$tmp/iv.probes"
     expect bake-indirect-volume-points 1 '--indirect volume .* needs a grid, not points' -- \

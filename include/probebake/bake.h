@@ -69,6 +69,8 @@ typedef struct pb_bake_desc {
     float lobe_power;             /* cosine power of the depth filter, default 50 */
     float invalid_backface_fraction; /* default 0.25: above it a probe is inside geometry (invalid) */
     uint32_t skip_relocation;     /* 1: probes stay on the grid (default: 3 relocation iterations) */
+    uint32_t sh_window;           /* pb_sh_window_kind applied to the stored irradiance SH (default none) */
+    float sh_window_width;        /* its W, default 3 */
     uint32_t indirect_volume;     /* 1: each bounce shades first hits from the previous bounce's volume through
                                      the run-time sampler (bounces + 1 bakes, grid only; fast, biased); 0: path tracing */
     pb_progress_fn progress;

@@ -46,6 +46,23 @@ void pb_sh_eval(const float c[3 * PB_SH_COUNT], const float d[3], float rgb[3]);
  * c_i += E Y_i(d). */
 void pb_sh_add_delta(float c[3 * PB_SH_COUNT], const float d[3], const float irradiance_rgb[3]);
 
+/* Windowing against ringing (Gibbs): a very bright, very small source (an
+ * HDR sun, a tiny emitter) projected onto L2 gives negative lobes and
+ * overshoot. Band l is scaled by a factor w_l that tapers with l:
+ *   hanning  w_l = (1 + cos(pi l / W)) / 2
+ *   lanczos  w_l = sinc(l / W) = sin(pi l / W) / (pi l / W)
+ * W = width (default 3 = L + 1: hanning 1, 0.75, 0.25; lanczos 1, 0.83,
+ * 0.41). Windowing blurs: it trades ringing for lost directionality
+ * (test_sh measures both against the exact irradiance). */
+typedef enum pb_sh_window_kind {
+    PB_SH_WINDOW_NONE = 0,
+    PB_SH_WINDOW_HANNING = 1,
+    PB_SH_WINDOW_LANCZOS = 2
+} pb_sh_window_kind;
+
+float pb_sh_window_factor(pb_sh_window_kind kind, float width, int band);
+void pb_sh_apply_window(float c[3 * PB_SH_COUNT], pb_sh_window_kind kind, float width);
+
 #ifdef __cplusplus
 }
 #endif

@@ -84,6 +84,9 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u rays per probe: at most 65536", d->rays_per_probe);
     if (d->passes > 1000000)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u passes: at most 1e6", d->passes);
+    if (d->sh_window > PB_SH_WINDOW_LANCZOS || !(d->sh_window_width >= 0.f) || d->sh_window_width > 1e3f)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "SH window %u (width %g): none, hanning or lanczos, width in "
+                       "(0, 1000]", d->sh_window, d->sh_window_width);
     if (d->bounces > 64)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u bounces: at most 64", d->bounces);
     if (d->octmap_res > 64)
@@ -536,6 +539,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         for (int k = 0; k < 27; ++k)
             c[k] = (float)(sh_sum[27 * (size_t)p + k] / done_p);
         pb_sh_radiance_to_irradiance(c);
+        pb_sh_apply_window(c, (pb_sh_window_kind)d.sh_window, d.sh_window_width);
         memcpy(out->sh + 27 * (size_t)p, c, sizeof c);
         double rays_total = (double)rpp * done_p;
         uint32_t f = 0;

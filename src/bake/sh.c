@@ -2,6 +2,8 @@
  * Constants and order: include/probebake/sh.h. */
 #include "probebake/sh.h"
 
+#include <math.h>
+
 #define SH_C0 0.28209479177387814f  /* 1 / (2 sqrt(pi)) */
 #define SH_C1 0.48860251190291992f  /* sqrt(3 / (4 pi)) */
 #define SH_C2 1.09254843059207907f  /* sqrt(15 / (4 pi)) */
@@ -57,5 +59,27 @@ void pb_sh_eval(const float c[3 * PB_SH_COUNT], const float d[3], float rgb[3])
         for (int i = 0; i < PB_SH_COUNT; ++i)
             s += c[3 * i + k] * y[i];
         rgb[k] = s;
+    }
+}
+
+float pb_sh_window_factor(pb_sh_window_kind kind, float width, int band)
+{
+    const float pi = 3.14159265358979324f;
+    float w = width > 0.f ? width : 3.f;
+    float x = pi * (float)band / w;
+    if (band == 0 || kind == PB_SH_WINDOW_NONE)
+        return 1.f;
+    if (kind == PB_SH_WINDOW_HANNING)
+        return x >= pi ? 0.f : 0.5f * (1.f + cosf(x));
+    return x >= pi ? 0.f : sinf(x) / x; /* lanczos */
+}
+
+void pb_sh_apply_window(float c[3 * PB_SH_COUNT], pb_sh_window_kind kind, float width)
+{
+    static const int band_of[PB_SH_COUNT] = {0, 1, 1, 1, 2, 2, 2, 2, 2};
+    for (int i = 0; i < PB_SH_COUNT; ++i) {
+        float f = pb_sh_window_factor(kind, width, band_of[i]);
+        for (int k = 0; k < 3; ++k)
+            c[3 * i + k] *= f;
     }
 }

@@ -116,6 +116,7 @@ static void print_help(void)
            "  --env-intensity K              scale of the map (default 1)\n"
            "  --env-rotation DEG             turn the map about +Y, counter-clockwise from above (default 0)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
+           "  --sh-window none|hanning[:W]|lanczos[:W]   taper SH bands against ringing (default none; W 3)\n"
            "  --indirect path|volume         indirect light path traced (default, unbiased) or, per bounce, from\n"
            "                                 the previous bounce's volume through the run-time sampler (fast, biased)\n"
            "render options:\n"
@@ -239,6 +240,18 @@ static int parse(int argc, char **argv, options *o)
             if (!next)
                 return cli_usage_error("%s needs a .hdr file", a);
             o->env = argv[++i];
+        } else if (!strcmp(a, "--sh-window")) {
+            char kind[16] = {0};
+            float w = 0.f;
+            int got = next ? sscanf(next, "%15[a-z]:%f", kind, &w) : 0;
+            o->sh_window = !strcmp(kind, "hanning") ? 1u : !strcmp(kind, "lanczos") ? 2u : 0u;
+            if (got < 1 || (strcmp(kind, "none") && !o->sh_window) || (got == 2 && !(w > 0.f && w <= 1000.f))) {
+                fprintf(stderr, "probebake: error: --sh-window '%s': use none, hanning[:W] or lanczos[:W] "
+                                "with W in (0, 1000]\n", next ? next : "");
+                return 2;
+            }
+            o->sh_window_width = got == 2 ? w : 0.f;
+            ++i;
         } else if (!strcmp(a, "--indirect")) {
             if (!next || (strcmp(next, "path") && strcmp(next, "volume")))
                 return cli_usage_error("%s takes path or volume", a);
@@ -833,6 +846,8 @@ static int cmd_bake(const options *o)
     memcpy(d.sky, o->sky, sizeof d.sky);
     d.environment = o->env ? &env : NULL;
     d.indirect_volume = (uint32_t)o->indirect_volume;
+    d.sh_window = o->sh_window;
+    d.sh_window_width = o->sh_window_width;
     char light[1200];
     if (o->env)
         snprintf(light, sizeof light, "environment %s (%ux%u, x%g, turned %g deg)", o->env, env.width, env.height,
