@@ -71,6 +71,8 @@ typedef struct pb_bake_desc {
     uint32_t skip_relocation;     /* 1: probes stay on the grid (default: 3 relocation iterations) */
     uint32_t sh_window;           /* pb_sh_window_kind applied to the stored irradiance SH (default none) */
     float sh_window_width;        /* its W, default 3 */
+    uint32_t max_lights_per_hit;  /* default 8: with more punctual lights, each hit draws one by power
+                                     (alias table) instead of tracing a shadow ray to every light */
     uint32_t indirect_volume;     /* 1: each bounce shades first hits from the previous bounce's volume through
                                      the run-time sampler (bounces + 1 bakes, grid only; fast, biased); 0: path tracing */
     pb_progress_fn progress;
@@ -110,6 +112,19 @@ typedef struct pb_bake_emitters {
 pb_result pb_bake_emitters_build(const pb_scene *scene, pb_bake_emitters *out, pb_error *err);
 void pb_bake_emitters_free(pb_bake_emitters *e);
 
+/* Punctual lights drawn one per hit in proportion to their power (luminance
+ * of colour x intensity), for scenes with many lights. */
+typedef struct pb_light_table {
+    uint32_t count;
+    float *keep;                  /* alias table */
+    uint32_t *alias;
+    float *p;                     /* probability of each light */
+} pb_light_table;
+
+/* count 0 (nothing allocated) when the scene has no light of positive power. */
+pb_result pb_light_table_build(const pb_scene *scene, pb_light_table *out, pb_error *err);
+void pb_light_table_free(pb_light_table *t);
+
 /* --- CPU references of the bake kernels (tests) --- */
 
 /* Everything a bake kernel reads for one pass, on the host. */
@@ -125,6 +140,7 @@ typedef struct pb_bake_pass {
     float max_distance, lobe_power;
     const pb_bake_emitters *emitters; /* NULL or count 0: no next-event estimation of emitters */
     const pb_sample_volume *volume;   /* --indirect volume: the previous bounce's volume, or NULL */
+    const pb_light_table *light_table; /* non-NULL: one light drawn per hit (as max_lights_per_hit decides) */
 } pb_bake_pass;
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).

@@ -77,6 +77,9 @@ struct BakeParams {
     uint env_width, env_height;
     uint env_count;         // texels to sample; 0: none (black environment)
     PbVolumeRefs volume;    // --indirect volume: the previous bounce's volume (volume.probes 0: none)
+    uint64_t light_table;   // Emitter[] over punctual lights (tri = light index, pad = probability)
+    uint light_select;      // 1: one punctual light drawn per hit by power; 0: every light
+    uint pad4;
 };
 
 Env bake_env(BakeParams P)

@@ -179,8 +179,19 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
             res.albedo = albedo;
         }
         vec3 E = vec3(0.0);
-        for (uint k = 0u; k < P.light_count; ++k)
-            E += light_irradiance(s, lights.l[k], x, ng, true);
+        if (P.light_select != 0u) {
+            // many lights: one, drawn in proportion to its power, over its probability
+            EmitterBuf table = EmitterBuf(P.light_table);
+            float xl = rng_next(state) * float(P.light_count);
+            uint li = min(uint(xl), P.light_count - 1u);
+            Emitter le = table.e[li];
+            uint pick = xl - float(li) < le.prob ? li : le.alias;
+            Emitter chosen = table.e[pick];
+            E = light_irradiance(s, lights.l[chosen.tri], x, ng, true) / chosen.pad;
+        } else {
+            for (uint k = 0u; k < P.light_count; ++k)
+                E += light_irradiance(s, lights.l[k], x, ng, true);
+        }
         vec3 c = throughput * albedo * (E / PB_PI);
         if (P.emitter_count > 0u && albedo != vec3(0.0))
             c += throughput * albedo * emitter_nee(P, x, ng, state);

@@ -416,7 +416,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
 
     r = make_buffer(ctx, &B.params, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "bake parameters", NULL, err);
     if (r == PB_OK)
-        r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, &B.shading, err);
+        r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, d.max_lights_per_hit, &B.shading, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.probes, (uint64_t)P * 16, PB_MEMORY_DEVICE, "probe positions", probes, err);
     if (r == PB_OK)

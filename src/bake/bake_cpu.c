@@ -299,11 +299,19 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             memcpy(res.ng, ng, sizeof ng);
             memcpy(res.albedo, albedo, sizeof albedo);
         }
-        for (uint32_t l = 0; l < s->light_count; ++l) {
-            float El[3];
-            light_irradiance(p, &c->lights[l], x, ng, 1, El);
+        if (p->light_table && p->light_table->count) { /* many lights: one drawn by power */
+            const pb_light_table *lt = p->light_table;
+            uint32_t pick = pb_alias_sample(lt->keep, lt->alias, lt->count, rng_next(state));
+            light_irradiance(p, &c->lights[pick], x, ng, 1, E);
             for (int k = 0; k < 3; ++k)
-                E[k] += El[k];
+                E[k] /= lt->p[pick];
+        } else {
+            for (uint32_t l = 0; l < s->light_count; ++l) {
+                float El[3];
+                light_irradiance(p, &c->lights[l], x, ng, 1, El);
+                for (int k = 0; k < 3; ++k)
+                    E[k] += El[k];
+            }
         }
         float cc[3];
         for (int k = 0; k < 3; ++k)

@@ -122,3 +122,42 @@ void pb_bake_emitters_free(pb_bake_emitters *e)
     free(e->tri), free(e->prob), free(e->alias), free(e->pdf_area);
     memset(e, 0, sizeof *e);
 }
+
+pb_result pb_light_table_build(const pb_scene *s, pb_light_table *out, pb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    uint32_t n = s->light_count;
+    if (!n)
+        return PB_OK;
+    double *w = malloc(n * sizeof *w), total = 0;
+    out->keep = malloc(n * sizeof *out->keep);
+    out->alias = malloc(n * sizeof *out->alias);
+    out->p = malloc(n * sizeof *out->p);
+    if (!w || !out->keep || !out->alias || !out->p) {
+        free(w);
+        pb_light_table_free(out);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u lights", n);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        const pb_light *l = &s->lights[i];
+        double lum = 0.2126 * l->color[0] + 0.7152 * l->color[1] + 0.0722 * l->color[2];
+        w[i] = lum * l->intensity > 0 ? lum * l->intensity : 0.0;
+        total += w[i];
+    }
+    if (!(total > 0) || !pb_alias_build(w, n, out->keep, out->alias)) {
+        free(w);
+        pb_light_table_free(out);
+        return PB_OK; /* nothing that shines: no table */
+    }
+    for (uint32_t i = 0; i < n; ++i)
+        out->p[i] = (float)(w[i] / total);
+    out->count = n;
+    free(w);
+    return PB_OK;
+}
+
+void pb_light_table_free(pb_light_table *t)
+{
+    free(t->keep), free(t->alias), free(t->p);
+    memset(t, 0, sizeof *t);
+}

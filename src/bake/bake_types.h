@@ -32,9 +32,11 @@ typedef struct gpu_bake_params {
     float lobe_cutoff;
     uint32_t emitter_count, env_width, env_height, env_count;
     gpu_volume_refs volume;
+    uint64_t light_table;
+    uint32_t light_select, pad4;
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 320, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 336, "BakeParams layout");
 _Static_assert(sizeof(pb_env_texel) == 32, "EnvTexel layout");
 
 typedef struct gpu_emitter {

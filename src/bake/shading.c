@@ -35,8 +35,14 @@ pb_result pb_shading_host(const pb_scene *scene, const float sky[3], const pb_en
     return r;
 }
 
+int pb_shading_draws_lights(const pb_scene *scene, uint32_t max_lights_per_hit)
+{
+    return scene->light_count > (max_lights_per_hit ? max_lights_per_hit : 8u);
+}
+
 pb_result pb_shading_create(pb_context *ctx, const pb_scene *scene, const pb_gpu_scene *gs, const float sky[3],
-                            const pb_environment *environment, pb_shading *out, pb_error *err)
+                            const pb_environment *environment, uint32_t max_lights_per_hit, pb_shading *out,
+                            pb_error *err)
 {
     memset(out, 0, sizeof *out);
     out->light_count = scene->light_count;
@@ -76,6 +82,22 @@ pb_result pb_shading_create(pb_context *ctx, const pb_scene *scene, const pb_gpu
         r = upload(ctx, &out->env, (out->env_table.count ? out->env_table.count : 1) * sizeof(pb_env_texel),
                    "environment map", out->env_table.count ? (const void *)out->env_table.texels : NULL, err);
     free(lights), free(mats), free(leaf_of), free(pdf_leaf), free(ge);
+    /* many lights: the table hits draw one light from */
+    if (r == PB_OK && pb_shading_draws_lights(scene, max_lights_per_hit))
+        r = pb_light_table_build(scene, &out->lights_drawn, err);
+    if (r == PB_OK && out->lights_drawn.count) {
+        uint32_t n = out->lights_drawn.count;
+        gpu_emitter *t = malloc(n * sizeof *t);
+        if (!t) {
+            r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u lights", n);
+        } else {
+            for (uint32_t i = 0; i < n; ++i)
+                t[i] = (gpu_emitter){i, out->lights_drawn.keep[i], out->lights_drawn.alias[i], out->lights_drawn.p[i]};
+            r = upload(ctx, &out->light_table, (uint64_t)n * sizeof *t, "light table", t, err);
+            out->light_select = 1;
+            free(t);
+        }
+    }
     if (r != PB_OK)
         pb_shading_destroy(ctx, out);
     return r;
@@ -89,6 +111,8 @@ void pb_shading_params(const pb_shading *s, gpu_bake_params *prm)
     prm->emitters = s->emitters.address;
     prm->emit_pdf = s->emit_pdf.address;
     prm->emitter_count = s->emit.count;
+    prm->light_select = s->light_select;
+    prm->light_table = s->light_select ? s->light_table.address : 0;
     if (s->env_table.width) {
         prm->env = s->env.address;
         prm->env_width = s->env_table.width, prm->env_height = s->env_table.height;
@@ -99,9 +123,10 @@ void pb_shading_params(const pb_shading *s, gpu_bake_params *prm)
 
 void pb_shading_destroy(pb_context *ctx, pb_shading *s)
 {
-    pb_buffer *b[5] = {&s->materials, &s->lights, &s->emitters, &s->emit_pdf, &s->env};
-    for (int i = 0; i < 5; ++i)
+    pb_buffer *b[6] = {&s->materials, &s->lights, &s->emitters, &s->emit_pdf, &s->env, &s->light_table};
+    for (int i = 0; i < 6; ++i)
         pb_buffer_destroy(ctx, b[i]);
+    pb_light_table_free(&s->lights_drawn);
     pb_bake_emitters_free(&s->emit);
     pb_env_table_free(&s->env_table);
     memset(s, 0, sizeof *s);

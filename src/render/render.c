@@ -98,7 +98,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     memset(&vb, 0, sizeof vb);
     pb_buffer params = {0}, rparams = {0}, img = {0}, imgd = {0};
     pb_pipeline pipe = {0};
-    r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, &sh, err);
+    r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, 0, &sh, err);
     if (r == PB_OK && d.volume && (d.mode == PB_RENDER_PROBES || d.mode == PB_RENDER_INDIRECT || d.show_probes))
         r = pb_sample_upload(ctx, d.volume, &vb, err);
     if (r == PB_OK)

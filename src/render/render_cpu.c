@@ -158,9 +158,17 @@ pb_result pb_render_cpu(const pb_scene *scene, const pb_bvh *bvh, const pb_rende
     pb_env_table env;
     if ((r = pb_shading_host(scene, d.sky, d.environment, &emit, &env, err)) != PB_OK)
         return r;
+    pb_light_table lights_drawn;
+    memset(&lights_drawn, 0, sizeof lights_drawn);
+    if (pb_shading_draws_lights(scene, 0) && (r = pb_light_table_build(scene, &lights_drawn, err)) != PB_OK) {
+        pb_bake_emitters_free(&emit);
+        pb_env_table_free(&env);
+        return r;
+    }
     pb_bake_pass pass;
     memset(&pass, 0, sizeof pass);
     pass.scene = scene, pass.bvh = bvh, pass.env = env.width ? &env : NULL, pass.emitters = &emit;
+    pass.light_table = lights_drawn.count ? &lights_drawn : NULL;
     render_job j;
     memset(&j, 0, sizeof j);
     j.d = &d, j.rgba = rgba, j.direct = direct;
@@ -173,5 +181,6 @@ pb_result pb_render_cpu(const pb_scene *scene, const pb_bvh *bvh, const pb_rende
     }
     pb_bake_emitters_free(&emit);
     pb_env_table_free(&env);
+    pb_light_table_free(&lights_drawn);
     return r;
 }
