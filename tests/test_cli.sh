@@ -113,6 +113,7 @@ expect env-bad-rotation 2 "--env-rotation 'nan' is not an angle in degrees" -- \
     "$pb" bake "$demo" --env "$tmp/sky.hdr" --env-rotation nan -o "$tmp/x.probes"
 expect sh-window-bad 2 "--sh-window 'gauss': use none, hanning" -- "$pb" bake "$demo" --sh-window gauss -o "$tmp/x.probes"
 expect sh-window-bad-width 2 "--sh-window 'lanczos:0'" -- "$pb" bake "$demo" --sh-window lanczos:0 -o "$tmp/x.probes"
+expect clamp-bad 2 "--clamp-indirect '-3' is not a positive radiance" -- "$pb" bake "$demo" --clamp-indirect -3 -o "$tmp/x.probes"
 expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
 
 # render: parameters checked before any device work
@@ -182,8 +183,9 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     int_rc=$?
     expect bake-interrupted 0 "^130 absent .*bake cancelled" -- \
         bash -c "echo $int_rc \$([ -e '$tmp/int.probes' ] && echo present || echo absent) \$(tr '\n' ' ' <'$tmp/int.log')"
-    expect bake-sh-window 0 "wrote $tmp/w.probes: 8 probes" -- \
-        "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --sh-window lanczos:3 -o "$tmp/w.probes"
+    expect bake-sh-window-clamp 0 "biased on request: reflected light clamped per path to radiance 5 SH Lanczos window" -- \
+        "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --sh-window lanczos:3 --clamp-indirect 5 \
+        -o "$tmp/w.probes"
     expect bake-indirect-volume 0 "wrote $tmp/iv.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --indirect volume --validation -o "$tmp/iv.probes"
     expect bake-indirect-volume-points 1 '--indirect volume .* needs a grid, not points' -- \

@@ -71,6 +71,9 @@ typedef struct pb_bake_desc {
     uint32_t skip_relocation;     /* 1: probes stay on the grid (default: 3 relocation iterations) */
     uint32_t sh_window;           /* pb_sh_window_kind applied to the stored irradiance SH (default none) */
     float sh_window_width;        /* its W, default 3 */
+    float indirect_clamp;         /* > 0: reflected light (all but what a probe ray sees directly) is clamped
+                                     per path contribution to this radiance (biased, against fireflies);
+                                     default 0, off */
     uint32_t max_lights_per_hit;  /* default 8: with more punctual lights, each hit draws one by power
                                      (alias table) instead of tracing a shadow ray to every light */
     uint32_t indirect_volume;     /* 1: each bounce shades first hits from the previous bounce's volume through
@@ -141,6 +144,7 @@ typedef struct pb_bake_pass {
     const pb_bake_emitters *emitters; /* NULL or count 0: no next-event estimation of emitters */
     const pb_sample_volume *volume;   /* --indirect volume: the previous bounce's volume, or NULL */
     const pb_light_table *light_table; /* non-NULL: one light drawn per hit (as max_lights_per_hit decides) */
+    float indirect_clamp;             /* as pb_bake_desc */
 } pb_bake_pass;
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).

@@ -79,7 +79,7 @@ struct BakeParams {
     PbVolumeRefs volume;    // --indirect volume: the previous bounce's volume (volume.probes 0: none)
     uint64_t light_table;   // Emitter[] over punctual lights (tri = light index, pad = probability)
     uint light_select;      // 1: one punctual light drawn per hit by power; 0: every light
-    uint pad4;
+    float indirect_clamp;   // > 0: reflected light is clamped per path contribution to this radiance
 };
 
 Env bake_env(BakeParams P)

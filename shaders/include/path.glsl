@@ -88,6 +88,15 @@ vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, inout uint state)
     return env_radiance(env, w) * (cos_x / (PB_PI * pe) * wl);
 }
 
+// --clamp-indirect: a contribution of reflected light (all but emission and
+// sky seen along the probe ray itself) is scaled down so its largest
+// channel is at most `limit` (biased; off at 0).
+vec3 clamp_indirect(vec3 c, float limit)
+{
+    float m = max(c.r, max(c.g, c.b));
+    return limit > 0.0 && m > limit ? c * (limit / m) : c;
+}
+
 struct PathResult {
     vec3 L;          // radiance along the ray
     vec3 L_direct;   // the part that reflected at most once (emission seen, direct light at the first hit)
@@ -129,6 +138,8 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                     w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pe * pe);
                 }
                 vec3 c = throughput * env_radiance(env, dir) * w;
+                if (bounce >= 1u)
+                    c = clamp_indirect(c, P.indirect_clamp);
                 res.L += c;
                 if (bounce <= 1u)
                     res.L_direct += c;
@@ -162,6 +173,8 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                 w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pl * pl);
             }
             vec3 c = throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w;
+            if (bounce >= 1u)
+                c = clamp_indirect(c, P.indirect_clamp);
             res.L += c;
             if (bounce <= 1u)
                 res.L_direct += c;
@@ -197,6 +210,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
             c += throughput * albedo * emitter_nee(P, x, ng, state);
         if (env.count > 0u && albedo != vec3(0.0))
             c += throughput * albedo * env_nee(env, s, x, ng, state);
+        c = clamp_indirect(c, P.indirect_clamp);
         res.L += c;
         if (bounce == 0u)
             res.L_direct += c;

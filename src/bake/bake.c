@@ -87,6 +87,9 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
     if (d->sh_window > PB_SH_WINDOW_LANCZOS || !(d->sh_window_width >= 0.f) || d->sh_window_width > 1e3f)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "SH window %u (width %g): none, hanning or lanczos, width in "
                        "(0, 1000]", d->sh_window, d->sh_window_width);
+    if (!(d->indirect_clamp >= 0.f) || !isfinite(d->indirect_clamp))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "indirect clamp %g: must be finite and >= 0 (0: off)",
+                       d->indirect_clamp);
     if (d->bounces > 64)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u bounces: at most 64", d->bounces);
     if (d->octmap_res > 64)
@@ -160,6 +163,7 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         prm.reduced = B->reduced.address;
         prm.probe_list = list ? B->list.address : 0;
         prm.counters = B->counters.address;
+        prm.indirect_clamp = d->indirect_clamp;
         if (!relocating)
             prm.volume = run->feedback;
         memset(B->counters.mapped, 0, 8);

@@ -207,6 +207,15 @@ static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], 
         L[k] += thr[k] * albedo[k] * (Le[k] * (cos_x / (PI_F * pe) * wl));
 }
 
+/* clamp_indirect of path.glsl */
+static void clamp_indirect(float c[3], float limit)
+{
+    float m = fmaxf(c[0], fmaxf(c[1], c[2]));
+    if (limit > 0.f && m > limit)
+        for (int k = 0; k < 3; ++k)
+            c[k] *= limit / m;
+}
+
 pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], const float dir_in[3], uint32_t bounces,
                                     int see_direct, uint32_t *state)
 {
@@ -231,8 +240,11 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
                     w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pe * pe);
                 }
                 const float *Le = p->env->texels[pb_env_texel_of(p->env, dir)].rgb;
+                float cv[3] = {thr[0] * Le[0] * w, thr[1] * Le[1] * w, thr[2] * Le[2] * w};
+                if (bounce >= 1)
+                    clamp_indirect(cv, p->indirect_clamp);
                 for (int k = 0; k < 3; ++k) {
-                    float cc = thr[k] * Le[k] * w;
+                    float cc = cv[k];
                     res.L[k] += cc;
                     if (bounce <= 1)
                         res.L_direct[k] += cc;
@@ -275,8 +287,13 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             }
             float et[3];
             texture_rgb(s, m->tex[1], tu, tv, et);
+            float cv[3];
+            for (int k = 0; k < 3; ++k)
+                cv[k] = thr[k] * m->emissive_metallic[k] * et[k] * w;
+            if (bounce >= 1)
+                clamp_indirect(cv, p->indirect_clamp);
             for (int k = 0; k < 3; ++k) {
-                float cc = thr[k] * m->emissive_metallic[k] * et[k] * w;
+                float cc = cv[k];
                 res.L[k] += cc;
                 if (bounce <= 1)
                     res.L_direct[k] += cc;
@@ -320,6 +337,7 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             emitter_nee(c, em, x, ng, albedo, thr, state, cc);
         if (env_sampled && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
             env_nee(p, x, ng, albedo, thr, state, cc);
+        clamp_indirect(cc, p->indirect_clamp);
         for (int k = 0; k < 3; ++k) {
             res.L[k] += cc[k];
             if (bounce == 0)

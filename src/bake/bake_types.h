@@ -33,7 +33,8 @@ typedef struct gpu_bake_params {
     uint32_t emitter_count, env_width, env_height, env_count;
     gpu_volume_refs volume;
     uint64_t light_table;
-    uint32_t light_select, pad4;
+    uint32_t light_select;
+    float indirect_clamp;
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
 _Static_assert(sizeof(gpu_bake_params) == 336, "BakeParams layout");

@@ -21,7 +21,7 @@ typedef struct options {
     float spacing, sky[3], bounds[6], target_error, env_intensity, env_rotation;
     int has_sky, indirect_volume;
     uint32_t sh_window;
-    float sh_window_width;
+    float sh_window_width, indirect_clamp;
     uint32_t counts[3], passes, bounces, octmap_res;
     int has_spacing, has_counts, has_bounds, has_rays, has_seed, has_bounces;
     int json, validation, verify, has_probe;

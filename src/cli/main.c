@@ -117,6 +117,8 @@ static void print_help(void)
            "  --env-rotation DEG             turn the map about +Y, counter-clockwise from above (default 0)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
            "  --sh-window none|hanning[:W]|lanczos[:W]   taper SH bands against ringing (default none; W 3)\n"
+           "  --clamp-indirect X             clamp each reflected-light path contribution to radiance X\n"
+           "                                 (against fireflies; biased, off by default)\n"
            "  --indirect path|volume         indirect light path traced (default, unbiased) or, per bounce, from\n"
            "                                 the previous bounce's volume through the run-time sampler (fast, biased)\n"
            "render options:\n"
@@ -240,6 +242,15 @@ static int parse(int argc, char **argv, options *o)
             if (!next)
                 return cli_usage_error("%s needs a .hdr file", a);
             o->env = argv[++i];
+        } else if (!strcmp(a, "--clamp-indirect")) {
+            char *end = NULL;
+            float v = next ? strtof(next, &end) : NAN;
+            if (!next || *end || !(v > 0.f) || !isfinite(v)) {
+                fprintf(stderr, "probebake: error: --clamp-indirect '%s' is not a positive radiance\n", next ? next : "");
+                return 2;
+            }
+            o->indirect_clamp = v;
+            ++i;
         } else if (!strcmp(a, "--sh-window")) {
             char kind[16] = {0};
             float w = 0.f;
@@ -847,8 +858,9 @@ static int cmd_bake(const options *o)
     d.environment = o->env ? &env : NULL;
     d.indirect_volume = (uint32_t)o->indirect_volume;
     d.sh_window = o->sh_window;
+    d.indirect_clamp = o->indirect_clamp;
     d.sh_window_width = o->sh_window_width;
-    char light[1200];
+    char light[1200], clamp_text[32];
     if (o->env)
         snprintf(light, sizeof light, "environment %s (%ux%u, x%g, turned %g deg)", o->env, env.width, env.height,
                  o->env_intensity, o->env_rotation);
@@ -866,7 +878,13 @@ static int cmd_bake(const options *o)
                 "probebake: baking %s: %s, %u rays x %s%u passes%s, %u bounces, "
                 "%s, octmap %u, direct %s, indirect %s, seed %u\n",
                 o->scene, where, d.rays_per_probe, d.target_error > 0.f ? "up to " : "", d.passes,
-                d.target_error > 0.f ? " (until converged)" : "", d.bounces, light, d.octmap_res, d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path", d.seed);
+                d.target_error > 0.f ? " (until converged)" : "", d.bounces, light, d.octmap_res,
+                d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path", d.seed);
+    if (!o->log.quiet && (d.indirect_clamp > 0.f || d.sh_window))
+        fprintf(stderr, "probebake: biased on request:%s%s%s\n",
+                d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
+                d.indirect_clamp > 0.f ? (snprintf(clamp_text, sizeof clamp_text, "%g", d.indirect_clamp), clamp_text) : "",
+                d.sh_window == 1 ? " SH Hanning window" : d.sh_window == 2 ? " SH Lanczos window" : "");
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
