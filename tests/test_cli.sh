@@ -177,12 +177,17 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/int.probes" >"$tmp/int.log" 2>&1 &
     bake_pid=$!
     for _ in $(seq 1 100); do grep -q 'using device' "$tmp/int.log" && break; sleep 0.1; done
-    sleep 1
+    sleep 2
+    t_int=$(date +%s%N)
     kill -INT "$bake_pid"
     wait "$bake_pid"
     int_rc=$?
+    int_ms=$(( ($(date +%s%N) - t_int) / 1000000 ))
     expect bake-interrupted 0 "^130 absent .*bake cancelled" -- \
         bash -c "echo $int_rc \$([ -e '$tmp/int.probes' ] && echo present || echo absent) \$(tr '\n' ' ' <'$tmp/int.log')"
+    # submissions are kept near 0.25 s, so the cancel lands within a second
+    expect bake-interrupt-within-1s 0 "^stopped in [0-9]+ ms: yes" -- \
+        bash -c "echo stopped in $int_ms ms: \$([ $int_ms -lt 1000 ] && echo yes || echo no)"
     expect bake-sh-window-clamp 0 "biased on request: reflected light clamped per path to radiance 5 SH Lanczos window" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --sh-window lanczos:3 --clamp-indirect 5 \
         -o "$tmp/w.probes"

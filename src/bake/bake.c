@@ -127,6 +127,7 @@ typedef struct bake_run {
     const pb_bake_desc *d;
     const pb_scene *scene;
     uint32_t P, rpp, n, chunk;
+    uint32_t chunk_now;            /* probes per submission now: shrinks so one takes ~0.25 s (Ctrl-C, watchdogs) */
     float *probes, *rotations, *reduced;
     double *sh_sum, *depth_sum, *backfaces, *hits;
     double t_trace, t_sh, t_depth; /* GPU timestamps, ms */
@@ -152,8 +153,14 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
     pb_result r = pb_buffer_upload(ctx, &B->rotations, 0, run->rotations, (uint64_t)P * 48, err);
     if (r == PB_OK && list)
         r = pb_buffer_upload(ctx, &B->list, 0, list, (uint64_t)total * 4, err);
-    for (uint32_t first = 0; r == PB_OK && first < total; first += run->chunk) {
-        uint32_t count = total - first < run->chunk ? total - first : run->chunk;
+    if (!run->chunk_now) { /* start at about 64k rays, then adapt */
+        uint32_t start = 65536u / rpp;
+        run->chunk_now = start < 1 ? 1 : (start > run->chunk ? run->chunk : start);
+    }
+    uint32_t count = 0;
+    for (uint32_t first = 0; r == PB_OK && first < total; first += count) {
+        count = total - first < run->chunk_now ? total - first : run->chunk_now;
+        double t_submit = pb_now_ms();
         gpu_bake_params prm;
         memset(&prm, 0, sizeof prm);
         prm.scene = run->gs->refs;
@@ -190,6 +197,14 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         pb_cmd_barrier_to_host(ctx);
         if ((r = pb_cmd_submit_wait(ctx, NULL, err)) != PB_OK)
             break;
+        /* keep each submission near a quarter second: a cancel then takes
+         * effect promptly, and slow devices stay clear of watchdogs; the
+         * split never changes results (every random number is keyed by probe) */
+        double took = pb_now_ms() - t_submit;
+        if (took > 250.0 && run->chunk_now > 1)
+            run->chunk_now = run->chunk_now / 2 > 1 ? run->chunk_now / 2 : 1;
+        else if (took < 60.0 && run->chunk_now < run->chunk)
+            run->chunk_now = run->chunk_now * 2 < run->chunk ? run->chunk_now * 2 : run->chunk;
         if (ctx->interval_count >= 2) {
             run->t_trace += ctx->intervals_ms[0];
             run->t_sh += ctx->intervals_ms[1];
@@ -451,7 +466,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
-    bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
+    bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, 0, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
                     hits, 0, 0, 0, NULL, 0, 0, {0}, passes_done, dc_sum, dc_sq};
     if (r == PB_OK && feedback) {
         r = pb_sample_upload(ctx, feedback, &B.feedback, err);
