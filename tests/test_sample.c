@@ -300,6 +300,65 @@ static void thin_wall_between_rooms(void)
     pb_scene_destroy(s);
 }
 
+/* A probe lit by a single delta (an HDR sun) has negative L2 irradiance
+ * behind it (-0.04 of the peak); the sampler never returns a negative or
+ * NaN irradiance, on the device or in C. */
+static void ringing_never_negative(void)
+{
+    pb_volume v;
+    memset(&v, 0, sizeof v);
+    v.flags = PB_VOLUME_IRRADIANCE | PB_VOLUME_GRID;
+    v.probe_count = 2;
+    v.counts[0] = 2, v.counts[1] = v.counts[2] = 1;
+    v.spacing[0] = 1.0;
+    v.octmap_res = 4;
+    v.settings.max_distance = 10.f;
+    pb_error err;
+    CHECK(pb_volume_alloc(&v, &err) == PB_OK);
+    float sun[3] = {0.3f, 0.8f, -0.52f}, e0[3] = {1e5f, 1e5f, 1e5f};
+    float l = sqrtf(sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]);
+    for (int k = 0; k < 3; ++k)
+        sun[k] /= l;
+    for (uint32_t p = 0; p < 2; ++p) {
+        v.base[3 * p] = (float)p;
+        v.probe_flags[p] = PB_PROBE_VALID;
+        pb_sh_add_delta(v.sh + 27 * p, sun, e0);
+        pb_sh_radiance_to_irradiance(v.sh + 27 * p);
+        for (uint64_t t = 0; t < pb_volume_tile_halves(4) / 2; ++t) {
+            v.depth[pb_volume_tile_halves(4) * p + 2 * t] = pb_half_from_float(5.f);
+            v.depth[pb_volume_tile_halves(4) * p + 2 * t + 1] = pb_half_from_float(25.f);
+        }
+    }
+    double o[3] = {0, 0, 0};
+    pb_sample_volume sv;
+    CHECK(pb_sample_volume_build(&v, o, 0.f, 0.f, &sv, &err) == PB_OK);
+    uint32_t n = 4096, bad = 0;
+    float *pt = malloc(n * 16), *nn = malloc(n * 16), *g = malloc(n * 16);
+    test_rng r = {4};
+    float raw_min = 0.f;
+    for (uint32_t i = 0; i < n; ++i) {
+        pt[4 * i] = (float)rng_uniform(&r), pt[4 * i + 1] = pt[4 * i + 2] = 0.f, pt[4 * i + 3] = 0.f;
+        rng_direction(&r, nn + 4 * i);
+        nn[4 * i + 3] = 0.f;
+        float e[3];
+        pb_sh_eval(v.sh, nn + 4 * i, e);
+        raw_min = fminf(raw_min, e[0]);
+    }
+    CHECKF(pb_sample_gpu(ctx, &sv, pt, nn, nn, n, g, &err) == PB_OK, "%s", err.message);
+    for (uint32_t i = 0; i < n; ++i) {
+        float c[3];
+        pb_sample_cpu(&sv, pt + 4 * i, nn + 4 * i, nn + 4 * i, c);
+        for (int k = 0; k < 3; ++k)
+            bad += !(c[k] >= 0.f) || !(g[4 * i + k] >= 0.f) || !isfinite(g[4 * i + k]);
+    }
+    fprintf(stderr, "  raw SH down to %.3g of the peak; sampled: %u negative or NaN of %u\n", raw_min / 1.0625e5f, bad,
+            3 * n);
+    CHECK(raw_min < 0.f && bad == 0);
+    free(pt), free(nn), free(g);
+    pb_sample_volume_free(&sv);
+    pb_volume_free(&v);
+}
+
 static void point_sets_refused(void)
 {
     pb_volume v;
@@ -327,6 +386,7 @@ int main(void)
     RUN(constant_sky_constant_irradiance);
     RUN(thin_wall_visibility);
     RUN(thin_wall_between_rooms);
+    RUN(ringing_never_negative);
     RUN(point_sets_refused);
     RUN(validation_layer_stayed_silent);
     pb_context_destroy(ctx);
