@@ -406,8 +406,11 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     uint64_t reduced_floats = (uint64_t)chunk * (PB_REDUCED_SH_STRIDE + 2u * texels);
     uint64_t need = (uint64_t)P * (16 + 48) + (uint64_t)rpp * 16 + (uint64_t)chunk * rpp * 16 + reduced_floats * 4;
     if (ctx->info.device_local_bytes && need > ctx->info.device_local_bytes / 2)
-        return pb_fail(err, PB_ERROR_TOO_LARGE, "%u probes x %u rays need %.1f MiB of device memory; %s has %.1f MiB",
-                       P, rpp, need / 1048576.0, ctx->info.name, ctx->info.device_local_bytes / 1048576.0);
+        return pb_fail(err, PB_ERROR_TOO_LARGE,
+                       "%u probes x %u rays need %.1f MiB of device memory; the budget is half of %s's %.1f MiB "
+                       "(%.1f MiB): use fewer probes or rays",
+                       P, rpp, need / 1048576.0, ctx->info.name, ctx->info.device_local_bytes / 1048576.0,
+                       ctx->info.device_local_bytes / 2097152.0);
 
     /* host side: probe positions, direction set, shading data, accumulators */
     float *probes = calloc((size_t)P * 4, sizeof(float));
