@@ -83,17 +83,11 @@ int main(int argc, char **argv)
     row rows[64];
     int nrows = 0;
     for (int si = 0; si < nscenes; ++si) {
-        pb_scene *s = NULL;
-        pb_bvh *bvh = NULL;
-        pb_gpu_scene *gs = NULL;
-        pb_scene_desc sd = {{0}, 0};
-        if (pb_scene_load(scenes[si], &sd, &s, &err) != PB_OK || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK ||
-            pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK) {
-            fprintf(stderr, "bake_bench: %s\n", err.message);
-            pb_bvh_destroy(bvh);
-            pb_scene_destroy(s);
+        pb_scene *s;
+        pb_bvh *bvh;
+        pb_gpu_scene *gs;
+        if (!bench_open_scene(ctx, "bake_bench", scenes[si], &s, &bvh, &gs))
             continue;
-        }
         const char *name = strrchr(scenes[si], '/') ? strrchr(scenes[si], '/') + 1 : scenes[si];
         pb_bake_desc d = {0};
         pb_probe_grid_fit(s->bounds_min, s->bounds_max, probes, &d.grid);

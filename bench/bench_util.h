@@ -5,6 +5,7 @@
 #include "probebake/probebake.h"
 
 #include <math.h>
+#include <stdio.h>
 
 /* Relative RMSE of irradiance luminance of volume a against ref, over ref's
  * valid probes and 64 spherical-Fibonacci directions:
@@ -28,6 +29,24 @@ static inline double bench_volume_rmse(const pb_volume *a, const pb_volume *ref)
         }
     }
     return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;
+}
+
+/* Loads a scene, builds its BVH and uploads it; on failure prints
+ * "tool: message", frees what was made and returns 0. */
+static inline int bench_open_scene(pb_context *ctx, const char *tool, const char *path, pb_scene **s, pb_bvh **bvh,
+                                   pb_gpu_scene **gs)
+{
+    pb_scene_desc sd = {{0}, 0};
+    pb_error err;
+    *s = NULL, *bvh = NULL, *gs = NULL;
+    if (pb_scene_load(path, &sd, s, &err) != PB_OK || pb_bvh_build(*s, NULL, bvh, &err) != PB_OK ||
+        pb_gpu_scene_create(ctx, *s, *bvh, gs, &err) != PB_OK) {
+        fprintf(stderr, "%s: %s\n", tool, err.message);
+        pb_bvh_destroy(*bvh);
+        pb_scene_destroy(*s);
+        return 0;
+    }
+    return 1;
 }
 
 #endif

@@ -157,4 +157,30 @@ static inline uint32_t compare_hits(const char *what, const pb_ray *rays, const 
     return bad;
 }
 
+/* Quads of an axis-aligned box [lo, hi] as 12 triangles, facing out (or in). */
+static inline uint32_t box_tris(double *p, const double lo[3], const double hi[3], int inward)
+{
+    uint32_t t = 0;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side) {
+            int u = (axis + 1) % 3, w = (axis + 2) % 3;
+            double c[4][3];
+            for (int q = 0; q < 4; ++q) {
+                c[q][axis] = side ? hi[axis] : lo[axis];
+                c[q][u] = (q == 1 || q == 2) ? hi[u] : lo[u];
+                c[q][w] = (q >= 2) ? hi[w] : lo[w];
+            }
+            int order[2][3] = {{0, 1, 2}, {0, 2, 3}};
+            int out = side ^ inward;
+            for (int tri = 0; tri < 2; ++tri, ++t)
+                for (int vtx = 0; vtx < 3; ++vtx) {
+                    int q = order[tri][out ? vtx : 2 - vtx];
+                    for (int k = 0; k < 3; ++k)
+                        p[9 * t + 3 * vtx + k] = c[q][k];
+                }
+        }
+    return t;
+}
+
+
 #endif

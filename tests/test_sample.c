@@ -133,26 +133,9 @@ static void constant_sky_constant_irradiance(void)
 static void thin_wall_visibility(void)
 {
     double p[12 * 9];
-    uint32_t t = 0;
     /* a box [-0.01, 0.01] x [-10, 10] x [-10, 10], outward faces */
     double lo[3] = {-0.01, -10, -10}, hi[3] = {0.01, 10, 10};
-    for (int axis = 0; axis < 3; ++axis)
-        for (int side = 0; side < 2; ++side) {
-            int u = (axis + 1) % 3, w = (axis + 2) % 3;
-            double c[4][3];
-            for (int q = 0; q < 4; ++q) {
-                c[q][axis] = side ? hi[axis] : lo[axis];
-                c[q][u] = (q == 1 || q == 2) ? hi[u] : lo[u];
-                c[q][w] = (q >= 2) ? hi[w] : lo[w];
-            }
-            int order[2][3] = {{0, 1, 2}, {0, 2, 3}};
-            for (int tri = 0; tri < 2; ++tri, ++t)
-                for (int vtx = 0; vtx < 3; ++vtx) {
-                    int q = order[tri][side ? vtx : 2 - vtx];
-                    for (int k = 0; k < 3; ++k)
-                        p[9 * t + 3 * vtx + k] = c[q][k];
-                }
-        }
+    box_tris(p, lo, hi, 0);
     pb_scene *s = NULL;
     pb_error err;
     CHECKF(pb_scene_from_triangles(p, 12, NULL, NULL, 0, &s, &err) == PB_OK, "%s", err.message);
@@ -197,31 +180,6 @@ static void thin_wall_visibility(void)
         pb_volume_free(&v);
     }
     pb_scene_destroy(s);
-}
-
-/* Quads of an axis-aligned box [lo, hi] as 12 triangles, facing out (or in). */
-static uint32_t box_tris(double *p, const double lo[3], const double hi[3], int inward)
-{
-    uint32_t t = 0;
-    for (int axis = 0; axis < 3; ++axis)
-        for (int side = 0; side < 2; ++side) {
-            int u = (axis + 1) % 3, w = (axis + 2) % 3;
-            double c[4][3];
-            for (int q = 0; q < 4; ++q) {
-                c[q][axis] = side ? hi[axis] : lo[axis];
-                c[q][u] = (q == 1 || q == 2) ? hi[u] : lo[u];
-                c[q][w] = (q >= 2) ? hi[w] : lo[w];
-            }
-            int order[2][3] = {{0, 1, 2}, {0, 2, 3}};
-            int out = side ^ inward;
-            for (int tri = 0; tri < 2; ++tri, ++t)
-                for (int vtx = 0; vtx < 3; ++vtx) {
-                    int q = order[tri][out ? vtx : 2 - vtx];
-                    for (int k = 0; k < 3; ++k)
-                        p[9 * t + 3 * vtx + k] = c[q][k];
-                }
-        }
-    return t;
 }
 
 /* Two closed rooms (x < 0 and x > 0, 2 x 2 x 2 m each) split by a wall 5 mm
