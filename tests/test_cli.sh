@@ -188,6 +188,19 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     # submissions are kept near 0.25 s, so the cancel lands within a second
     expect bake-interrupt-within-1s 0 "^stopped in [0-9]+ ms: yes" -- \
         bash -c "echo stopped in $int_ms ms: \$([ $int_ms -lt 1000 ] && echo yes || echo no)"
+    # Ctrl-C during a long render: same promise
+    "$pb" render "$demo" --size 320x240 --spp 4096 -o "$tmp/int.png" >"$tmp/rint.log" 2>&1 &
+    render_pid=$!
+    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/rint.log" && break; sleep 0.1; done
+    sleep 2
+    t_int=$(date +%s%N)
+    kill -INT "$render_pid"
+    wait "$render_pid"
+    rint_rc=$?
+    rint_ms=$(( ($(date +%s%N) - t_int) / 1000000 ))
+    expect render-interrupted 0 "^130 absent [0-9]+ .*render cancelled" -- \
+        bash -c "echo $rint_rc \$([ -e '$tmp/int.png' ] && echo present || echo absent) $rint_ms \$(tr '\n' ' ' <'$tmp/rint.log')"
+    expect render-interrupt-within-1s 0 "^yes" -- bash -c "[ $rint_ms -lt 1000 ] && echo yes || echo no $rint_ms"
     expect bake-sh-window-clamp 0 "biased on request: reflected light clamped per path to radiance 5 SH Lanczos window" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --sh-window lanczos:3 --clamp-indirect 5 \
         -o "$tmp/w.probes"

@@ -41,6 +41,8 @@ typedef struct pb_render_desc {
     const pb_environment *environment;
     uint32_t show_probes;     /* debug view: probes as spheres lit by their SH (invalid red, grid homes of
                                  relocated ones grey); needs volume */
+    pb_progress_fn progress;  /* NULL, or called after each band of rows; nonzero cancels (PB_ERROR_CANCELLED) */
+    void *progress_user;
 } pb_render_desc;
 
 /* Linear radiance image, 4 floats per pixel, row 0 at the top: rgb and the

@@ -47,6 +47,16 @@ int cli_parse_floats(const char *s, int n, float *out);
 
 int cmd_render(const options *o);
 
+/* Progress line on stderr (when show) for pb_progress_fn; returns nonzero
+ * once Ctrl-C was pressed while cli_catch_sigint(1) was in force. */
+typedef struct cli_progress_state {
+    int show;
+    double start;
+    uint64_t rays_total;
+} cli_progress_state;
+int cli_progress(float fraction, const char *label, void *user);
+void cli_catch_sigint(int on);
+
 /* PB_INJECT_FAULT=allocation:N or submission:N (tests of the error paths):
  * the Nth device allocation or submission fails as out of memory / device
  * lost. Unset: nothing. */

@@ -8,6 +8,7 @@
 #include "render/render_types.h"
 
 #include <math.h>
+#include <unistd.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -167,8 +168,18 @@ int cmd_render(const options *o)
         goto out;
     }
     double ms = 0, ms_ref = 0;
-    if (pb_render(ctx, s, gs, &d, img, img_direct, &ms, &err) != PB_OK)
+    cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(),
+                             (uint64_t)d.width * d.height * (d.spp ? d.spp : (mode == PB_RENDER_REFERENCE ? 64 : 1))};
+    d.progress = cli_progress;
+    d.progress_user = &ps;
+    cli_catch_sigint(1);
+    pb_result rr = pb_render(ctx, s, gs, &d, img, img_direct, &ms, &err);
+    if (ps.show)
+        fprintf(stderr, "\n");
+    if (rr != PB_OK) {
+        cli_catch_sigint(0);
         goto out;
+    }
     double rmse = 0, rmse_indirect = 0;
     if (diff) {
         /* the reference (path traced), and the direct image the probe image's indirect part is measured against */
@@ -199,6 +210,7 @@ int cmd_render(const options *o)
         float ev = o->has_exposure ? o->exposure : pb_auto_exposure(img, d.width, d.height);
         pb_tonemap_image(img, d.width, d.height, ev, rgb8);
     }
+    cli_catch_sigint(0);
     if (pb_write_png(o->output, rgb8, d.width, d.height, &err) != PB_OK)
         goto out;
     if (o->pfm) {

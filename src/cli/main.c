@@ -748,6 +748,9 @@ static int cmd_inspect(const options *o)
 
 /* Ctrl-C: the bake's progress callback sees this and cancels; no output
  * file is written (the volume is only written, atomically, after success). */
+/* Ctrl-C: the progress callback sees this and cancels; no output file is
+ * written (volumes and images are written atomically, after success). The
+ * flag is the one piece of process state a signal handler may touch. */
 static volatile sig_atomic_t interrupted;
 
 static void on_sigint(int sig)
@@ -756,15 +759,14 @@ static void on_sigint(int sig)
     interrupted = 1;
 }
 
-typedef struct progress_state {
-    int show;
-    double start;
-    uint64_t rays_total;
-} progress_state;
-
-static int on_progress(float fraction, const char *label, void *user)
+void cli_catch_sigint(int on)
 {
-    progress_state *ps = user;
+    signal(SIGINT, on ? on_sigint : SIG_DFL);
+}
+
+int cli_progress(float fraction, const char *label, void *user)
+{
+    cli_progress_state *ps = user;
     if (ps->show) {
         double el = (cli_now_ms() - ps->start) / 1000.0;
         double eta = fraction > 0 ? el * (1 - fraction) / fraction : 0;
@@ -891,12 +893,12 @@ static int cmd_bake(const options *o)
     cli_fault_injection(&cd);
     if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
-    progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};
-    d.progress = on_progress;
+    cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};
+    d.progress = cli_progress;
     d.progress_user = &ps;
-    signal(SIGINT, on_sigint);
+    cli_catch_sigint(1);
     pb_result r = pb_bake(ctx, s, gs, &d, &vol, &err);
-    signal(SIGINT, SIG_DFL);
+    cli_catch_sigint(0);
     if (ps.show)
         fprintf(stderr, "\n");
     if (r != PB_OK)

@@ -10,6 +10,7 @@
 #define PB_RENDER_SAMPLES_PER_DISPATCH 4u
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -132,29 +133,53 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     rp.seed = d.seed, rp.bounces = d.bounces, rp.volume_direct = d.volume_direct;
     rp.show_probes = d.show_probes && d.volume;
     double ms = 0;
-    for (uint32_t row = 0; r == PB_OK && row < d.height; row += rows_per) {
+    /* Work is cut into submissions of about a quarter second (prompt
+     * cancel, GPU watchdogs): bands of rows of about 16k pixels, and within
+     * a band as many 4-sample dispatches as fit the time, adapted as it
+     * goes (halved when slow, doubled when fast). */
+    const uint32_t S = PB_RENDER_SAMPLES_PER_DISPATCH;
+    uint32_t band_rows = (uint32_t)(16384u / d.width);
+    band_rows = band_rows < 1 ? 1 : (band_rows > rows_per ? rows_per : band_rows);
+    uint32_t groups_per_submit = 1; /* of S samples */
+    uint64_t push0 = params.address;
+    uint64_t work_done = 0, work_total = (uint64_t)d.height * d.spp;
+    for (uint32_t row = 0; r == PB_OK && row < d.height; row += rp.rows) {
         rp.first_row = row;
-        rp.rows = d.height - row < rows_per ? d.height - row : rows_per;
-        if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
-            break;
-        pb_cmd_timestamp(ctx);
-        uint64_t push[2] = {params.address, rparams.address};
-        /* a few samples per dispatch: render.comp says why */
-        for (uint32_t k = 0; k < d.spp; k += PB_RENDER_SAMPLES_PER_DISPATCH) {
-            gpu_render_params *mp = (gpu_render_params *)rparams.mapped + k / PB_RENDER_SAMPLES_PER_DISPATCH;
+        rp.rows = d.height - row < band_rows ? d.height - row : band_rows;
+        for (uint32_t k = 0; k < d.spp; k += S) { /* one parameter record per dispatch of this band */
+            gpu_render_params *mp = (gpu_render_params *)rparams.mapped + k / S;
             *mp = rp;
             mp->first_sample = k;
-            mp->sample_count = d.spp - k < PB_RENDER_SAMPLES_PER_DISPATCH ? d.spp - k : PB_RENDER_SAMPLES_PER_DISPATCH;
-            uint64_t pk[2] = {push[0], rparams.address + (uint64_t)(k / PB_RENDER_SAMPLES_PER_DISPATCH) * sizeof rp};
-            if (k)
-                pb_cmd_barrier(ctx);
-            pb_cmd_dispatch(ctx, &pipe, pk, (rp.rows * d.width + 63) / 64);
+            mp->sample_count = d.spp - k < S ? d.spp - k : S;
         }
-        pb_cmd_timestamp(ctx);
-        pb_cmd_barrier_to_host(ctx);
-        r = pb_cmd_submit_wait(ctx, NULL, err);
-        if (r == PB_OK && ctx->interval_count >= 1)
-            ms += ctx->intervals_ms[0];
+        for (uint32_t k0 = 0; r == PB_OK && k0 < d.spp;) {
+            double t_submit = pb_now_ms();
+            uint32_t k1 = k0 + groups_per_submit * S;
+            k1 = k1 > d.spp ? d.spp : k1;
+            if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
+                break;
+            pb_cmd_timestamp(ctx);
+            for (uint32_t k = k0; k < k1; k += S) {
+                uint64_t pk[2] = {push0, rparams.address + (uint64_t)(k / S) * sizeof rp};
+                if (k > k0)
+                    pb_cmd_barrier(ctx);
+                pb_cmd_dispatch(ctx, &pipe, pk, (rp.rows * d.width + 63) / 64);
+            }
+            pb_cmd_timestamp(ctx);
+            pb_cmd_barrier_to_host(ctx);
+            r = pb_cmd_submit_wait(ctx, NULL, err);
+            if (r == PB_OK && ctx->interval_count >= 1)
+                ms += ctx->intervals_ms[0];
+            double took = pb_now_ms() - t_submit;
+            if (took > 250.0 && groups_per_submit > 1)
+                groups_per_submit /= 2;
+            else if (took < 60.0 && groups_per_submit < 1024)
+                groups_per_submit *= 2;
+            work_done += (uint64_t)rp.rows * (k1 - k0);
+            k0 = k1;
+            if (r == PB_OK && d.progress && d.progress((float)work_done / (float)work_total, "rendering", d.progress_user))
+                r = pb_fail(err, PB_ERROR_CANCELLED, "render cancelled");
+        }
     }
     /* sums to means */
     if (r == PB_OK)
