@@ -113,6 +113,8 @@ expect env-bad-rotation 2 "--env-rotation 'nan' is not an angle in degrees" -- \
     "$pb" bake "$demo" --env "$tmp/sky.hdr" --env-rotation nan -o "$tmp/x.probes"
 expect sh-window-bad 2 "--sh-window 'gauss': use none, hanning" -- "$pb" bake "$demo" --sh-window gauss -o "$tmp/x.probes"
 expect sh-window-bad-width 2 "--sh-window 'lanczos:0'" -- "$pb" bake "$demo" --sh-window lanczos:0 -o "$tmp/x.probes"
+expect max-lights-bad 2 "--max-lights-per-hit '0' is not an integer in \[1, 1048576\]" -- \
+    "$pb" bake "$demo" --max-lights-per-hit 0 -o "$tmp/x.probes"
 expect clamp-bad 2 "--clamp-indirect '-3' is not a positive radiance" -- "$pb" bake "$demo" --clamp-indirect -3 -o "$tmp/x.probes"
 expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
 

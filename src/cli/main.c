@@ -117,6 +117,7 @@ static void print_help(void)
            "  --env-rotation DEG             turn the map about +Y, counter-clockwise from above (default 0)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
            "  --sh-window none|hanning[:W]|lanczos[:W]   taper SH bands against ringing (default none; W 3)\n"
+           "  --max-lights-per-hit N         above N punctual lights, each hit draws one by power (default 8)\n"
            "  --clamp-indirect X             clamp each reflected-light path contribution to radiance X\n"
            "                                 (against fireflies; biased, off by default)\n"
            "  --indirect path|volume         indirect light path traced (default, unbiased) or, per bounce, from\n"
@@ -242,6 +243,13 @@ static int parse(int argc, char **argv, options *o)
             if (!next)
                 return cli_usage_error("%s needs a .hdr file", a);
             o->env = argv[++i];
+        } else if (!strcmp(a, "--max-lights-per-hit")) {
+            if (!next || !parse_u32(next, 1, 1u << 20, &o->max_lights_per_hit)) {
+                fprintf(stderr, "probebake: error: --max-lights-per-hit '%s' is not an integer in [1, 1048576]\n",
+                        next ? next : "");
+                return 2;
+            }
+            ++i;
         } else if (!strcmp(a, "--clamp-indirect")) {
             char *end = NULL;
             float v = next ? strtof(next, &end) : NAN;
@@ -861,6 +869,7 @@ static int cmd_bake(const options *o)
     d.indirect_volume = (uint32_t)o->indirect_volume;
     d.sh_window = o->sh_window;
     d.indirect_clamp = o->indirect_clamp;
+    d.max_lights_per_hit = o->max_lights_per_hit;
     d.sh_window_width = o->sh_window_width;
     char light[1200], clamp_text[32];
     if (o->env)
