@@ -206,8 +206,11 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-sh-window-clamp 0 "biased on request: reflected light clamped per path to radiance 5 SH Lanczos window" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --sh-window lanczos:3 --clamp-indirect 5 \
         -o "$tmp/w.probes"
+    expect bake-window-recorded 0 'biased +SH window lanczos \(W 3\), indirect clamp 5' -- "$pb" inspect "$tmp/w.probes"
+    expect bake-window-json 0 '"sh_window": "lanczos",' -- "$pb" inspect "$tmp/w.probes" --json
     expect bake-indirect-volume 0 "wrote $tmp/iv.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --indirect volume --validation -o "$tmp/iv.probes"
+    expect bake-indirect-volume-recorded 0 'indirect volume' -- "$pb" inspect "$tmp/iv.probes"
     expect bake-indirect-volume-points 1 '--indirect volume .* needs a grid, not points' -- \
         "$pb" bake "$demo" --points "$tmp/p.json" --indirect volume -o "$tmp/x.probes"
     expect render-probes 0 "wrote $tmp/r.png: 32x24, probes, 1 spp" -- \

@@ -79,7 +79,7 @@ static void fill(pb_volume *v, uint32_t nx, uint32_t ny, uint32_t nz, uint32_t n
     v->octmap_res = n;
     v->origin[0] = 1e7 + 0.25, v->origin[1] = -3.5, v->origin[2] = 42.0;
     v->spacing[0] = v->spacing[1] = v->spacing[2] = 0.5;
-    v->settings = (pb_volume_settings){0xdeadbeefcafeull, 0x1234567890abcdefull, 256, 8, 3, 0, 0.01f, 64.f};
+    v->settings = (pb_volume_settings){0xdeadbeefcafeull, 0x1234567890abcdefull, 256, 8, 3, 1, 0.01f, 64.f, 2, 2.5f, 7.f};
     v->timings = (pb_volume_timings){1, 2, 3, 4, 5, 6, 7, 28};
     snprintf(v->device, sizeof v->device, "test device");
     CHECK(pb_volume_alloc(v, NULL) == PB_OK);

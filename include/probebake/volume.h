@@ -46,6 +46,9 @@ typedef struct pb_volume_settings {
     uint32_t indirect_mode;             /* 0 path tracing, 1 previous volume */
     float target_error;                 /* 0: fixed pass count */
     float max_distance;                 /* depth of rays that miss, metres */
+    uint32_t sh_window;                 /* pb_sh_window_kind applied to the SH (0 none) */
+    float sh_window_width;              /* its W (0: the default, 3) */
+    float indirect_clamp;               /* reflected light clamped per path to this radiance (0: off) */
 } pb_volume_settings;
 
 /* Stage timings in milliseconds (0 for stages that did not run). */

@@ -541,7 +541,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         passes_max = passes_done[p] > passes_max ? passes_done[p] : passes_max;
         out->rays_traced += (uint64_t)passes_done[p] * rpp;
     }
-    out->settings = (pb_volume_settings){d.seed, 0, rpp, passes_max, d.bounces, 0, d.target_error, d.max_distance};
+    out->settings = (pb_volume_settings){d.seed,           0, rpp, passes_max, d.bounces, 0, d.target_error,
+                                        d.max_distance,   d.sh_window, d.sh_window_width, d.indirect_clamp};
     out->settings.scene_hash = pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
                                          pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
     snprintf(out->device, sizeof out->device, "%.127s", ctx->info.name);

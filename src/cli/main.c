@@ -665,6 +665,11 @@ static void print_probe_json(const pb_volume *v, uint32_t i, int last)
     printf("]}%s\n", last ? "" : ",");
 }
 
+static const char *window_name(uint32_t w)
+{
+    return w == 1 ? "hanning" : w == 2 ? "lanczos" : "none";
+}
+
 static int cmd_inspect(const options *o)
 {
     if (!o->scene)
@@ -710,12 +715,14 @@ static int cmd_inspect(const options *o)
                "  \"origin\": [%.17g, %.17g, %.17g],\n  \"spacing\": [%g, %g, %g],\n  \"sh\": \"%s\",\n"
                "  \"direct\": %s,\n  \"octmap_res\": %u,\n  \"max_distance\": %g,\n  \"seed\": %llu,\n"
                "  \"scene_hash\": \"%016llx\",\n  \"rays_per_probe\": %u,\n  \"passes\": %u,\n  \"bounces\": %u,\n"
+               "  \"indirect\": \"%s\",\n  \"sh_window\": \"%s\",\n  \"sh_window_width\": %g,\n  \"indirect_clamp\": %g,\n"
                "  \"device\": ",
                PB_VOLUME_VERSION, v.probe_count, v.flags & PB_VOLUME_GRID ? "true" : "false", v.counts[0], v.counts[1],
                v.counts[2], v.origin[0], v.origin[1], v.origin[2], v.spacing[0], v.spacing[1], v.spacing[2], kind,
                v.flags & PB_VOLUME_DIRECT ? "true" : "false", v.octmap_res, s->max_distance,
                (unsigned long long)s->seed, (unsigned long long)s->scene_hash, s->rays_per_probe, s->passes,
-               s->bounces);
+               s->bounces, s->indirect_mode ? "volume" : "path", window_name(s->sh_window), s->sh_window_width,
+               s->indirect_clamp);
         json_string(v.device);
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
@@ -746,16 +753,18 @@ static int cmd_inspect(const options *o)
                counts[2], counts[3], counts[4]);
         printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
                v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
-        printf("bake        %u rays x %u passes, %u bounces, seed %llu, device %s\n", s->rays_per_probe, s->passes,
-               s->bounces, (unsigned long long)s->seed, v.device[0] ? v.device : "?");
+        printf("bake        %u rays x %u passes, %u bounces (indirect %s), seed %llu, device %s\n", s->rays_per_probe,
+               s->passes, s->bounces, s->indirect_mode ? "volume" : "path", (unsigned long long)s->seed,
+               v.device[0] ? v.device : "?");
+        if (s->sh_window || s->indirect_clamp > 0.f)
+            printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),
+                   s->sh_window_width > 0.f ? s->sh_window_width : 3.f, s->indirect_clamp);
         printf("time        %.1f ms total\n", v.timings.total);
     }
     pb_volume_free(&v);
     return 0;
 }
 
-/* Ctrl-C: the bake's progress callback sees this and cancels; no output
- * file is written (the volume is only written, atomically, after success). */
 /* Ctrl-C: the progress callback sees this and cancels; no output file is
  * written (volumes and images are written atomically, after success). The
  * flag is the one piece of process state a signal handler may touch. */

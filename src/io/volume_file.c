@@ -189,6 +189,9 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     for (int i = 0; i < 8; ++i)
         put_f64(b + 184 + 8 * i, t[i]);
     memcpy(b + 248, v->device, strnlen(v->device, sizeof v->device - 1));
+    put_u32(b + 376, s->sh_window);
+    put_f32(b + 380, s->sh_window_width);
+    put_f32(b + 384, s->indirect_clamp);
     size_t n = v->probe_count;
     for (size_t i = 0; i < 3 * n; ++i) {
         put_f32(b + l.base + 4 * i, v->base[i]);
@@ -295,6 +298,10 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         t[i] = get_f64(h + 184 + 8 * i);
     memcpy(v->device, h + 248, sizeof v->device - 1);
     v->device[sizeof v->device - 1] = '\0';
+    /* zero in files written before these fields: none, default, off */
+    v->settings.sh_window = get_u32(h + 376);
+    v->settings.sh_window_width = get_f32(h + 380);
+    v->settings.indirect_clamp = get_f32(h + 384);
 
     const char *bad = NULL;
     if (get_u32(h + 12) != HEADER_BYTES)
