@@ -11,6 +11,13 @@
 #include "traverse.glsl"
 #include "bake.glsl"
 
+// Multiple importance sampling, power heuristic: the weight of a sample
+// drawn with density a when density b could also have drawn it.
+float power_heuristic(float a, float b)
+{
+    return a * a / (a * a + b * b);
+}
+
 vec3 cosine_direction(vec3 n, float u1, float u2)
 {
     // orthonormal basis (Duff et al. 2017) and Malley's method
@@ -59,7 +66,7 @@ vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
         return vec3(0.0);
     float pl = FloatBuf(P.emit_pdf).v[etri] * d2 / cos_e;
     float pb = cos_x / PB_PI;
-    float wl = pl * pl / (pl * pl + pb * pb);
+    float wl = power_heuristic(pl, pb);
     FloatBuf euv = FloatBuf(s.tri_uv);
     uint eb = 6u * etri;
     float ew0 = 1.0 - b1 - b2;
@@ -84,7 +91,7 @@ vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, inout uint state)
     if (shadow.tri != PB_NO_HIT)
         return vec3(0.0);
     float pb = cos_x / PB_PI;
-    float wl = pe * pe / (pe * pe + pb * pb);
+    float wl = power_heuristic(pe, pb);
     return env_radiance(env, w) * (cos_x / (PB_PI * pe) * wl);
 }
 
@@ -107,6 +114,19 @@ struct PathResult {
     vec3 ng;         // its geometric normal, facing the ray's origin
     vec3 albedo;     // its diffuse albedo
 };
+
+// Light a ray finds (emission, the environment) at vertex `bounce`: it has
+// reflected `bounce` times; reflected light is clamped on request.
+void add_found(inout PathResult res, vec3 c, uint bounce, float clamp_limit)
+{
+    if (bounce >= 1u)
+        c = clamp_indirect(c, clamp_limit);
+    res.L += c;
+    if (bounce <= 1u)
+        res.L_direct += c;
+    if (bounce == 0u)
+        res.L_seen += c;
+}
 
 // `bounces`: reflections after the first hit; `see_direct`: count light that
 // reaches the origin unreflected (emission or sky seen along the ray itself).
@@ -135,16 +155,9 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                 float w = 1.0;
                 if (bsdf_pdf > 0.0 && env.count > 0u) { // the environment could also have been sampled: MIS
                     float pe = env_pdf(env, dir);
-                    w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pe * pe);
+                    w = power_heuristic(bsdf_pdf, pe);
                 }
-                vec3 c = throughput * env_radiance(env, dir) * w;
-                if (bounce >= 1u)
-                    c = clamp_indirect(c, P.indirect_clamp);
-                res.L += c;
-                if (bounce <= 1u)
-                    res.L_direct += c;
-                if (bounce == 0u)
-                    res.L_seen += c;
+                add_found(res, throughput * env_radiance(env, dir) * w, bounce, P.indirect_clamp);
             }
             break;
         }
@@ -170,16 +183,10 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
             float pa = P.emitter_count > 0u ? emit_pdf.v[tr.tri] : 0.0;
             if (bsdf_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
                 float pl = pa * tr.t * tr.t / abs(dot(ng, dir));
-                w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pl * pl);
+                w = power_heuristic(bsdf_pdf, pl);
             }
-            vec3 c = throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w;
-            if (bounce >= 1u)
-                c = clamp_indirect(c, P.indirect_clamp);
-            res.L += c;
-            if (bounce <= 1u)
-                res.L_direct += c;
-            if (bounce == 0u)
-                res.L_seen += c;
+            add_found(res, throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w, bounce,
+                      P.indirect_clamp);
         }
         if (bounce > bounces)
             break; // the terminal ray: it only gathers emission (see below)

@@ -31,6 +31,12 @@ static float rng_next(uint32_t *state)
     return (float)(*state >> 8) * (1.0f / 16777216.0f);
 }
 
+/* power_heuristic of path.glsl */
+static float power_heuristic(float a, float b)
+{
+    return a * a / (a * a + b * b);
+}
+
 static uint32_t slot_of(const pb_bake_pass *p, uint32_t local)
 {
     return p->probe_list ? p->probe_list[p->first_probe + local] : p->first_probe + local;
@@ -178,7 +184,7 @@ static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const 
     if (trace(p, x, w, dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
     float pl = em->pdf_area[etri] * d2 / cos_e, pb = cos_x / PI_F;
-    float wl = pl * pl / (pl * pl + pb * pb);
+    float wl = power_heuristic(pl, pb);
     const float *uv = s->texcoords + 6 * (size_t)etri;
     float w0 = 1.f - b1 - b2, tu = w0 * uv[0] + b1 * uv[2] + b2 * uv[4], tv = w0 * uv[1] + b1 * uv[3] + b2 * uv[5];
     float et[3];
@@ -201,7 +207,7 @@ static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], 
         return;
     if (trace(p, x, w, INFINITY, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
-    float pb = cos_x / PI_F, wl = pe * pe / (pe * pe + pb * pb);
+    float pb = cos_x / PI_F, wl = power_heuristic(pe, pb);
     const float *Le = env->texels[pb_env_texel_of(env, w)].rgb;
     for (int k = 0; k < 3; ++k)
         L[k] += thr[k] * albedo[k] * (Le[k] * (cos_x / (PI_F * pe) * wl));
@@ -214,6 +220,20 @@ static void clamp_indirect(float c[3], float limit)
     if (limit > 0.f && m > limit)
         for (int k = 0; k < 3; ++k)
             c[k] *= limit / m;
+}
+
+/* add_found of path.glsl */
+static void add_found(pb_path_result *res, float c[3], uint32_t bounce, float clamp_limit)
+{
+    if (bounce >= 1)
+        clamp_indirect(c, clamp_limit);
+    for (int k = 0; k < 3; ++k) {
+        res->L[k] += c[k];
+        if (bounce <= 1)
+            res->L_direct[k] += c[k];
+        if (bounce == 0)
+            res->L_seen[k] += c[k];
+    }
 }
 
 pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], const float dir_in[3], uint32_t bounces,
@@ -237,20 +257,11 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
                 float w = 1.f;
                 if (bsdf_pdf > 0.f && p->env->count) {
                     float pe = pb_env_pdf(p->env, dir);
-                    w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pe * pe);
+                    w = power_heuristic(bsdf_pdf, pe);
                 }
                 const float *Le = p->env->texels[pb_env_texel_of(p->env, dir)].rgb;
                 float cv[3] = {thr[0] * Le[0] * w, thr[1] * Le[1] * w, thr[2] * Le[2] * w};
-                if (bounce >= 1)
-                    clamp_indirect(cv, p->indirect_clamp);
-                for (int k = 0; k < 3; ++k) {
-                    float cc = cv[k];
-                    res.L[k] += cc;
-                    if (bounce <= 1)
-                        res.L_direct[k] += cc;
-                    if (bounce == 0)
-                        res.L_seen[k] += cc;
-                }
+                add_found(&res, cv, bounce, p->indirect_clamp);
             }
             break;
         }
@@ -283,23 +294,14 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             float w = 1.f, pa = em ? em->pdf_area[h.tri] : 0.f;
             if (bsdf_pdf > 0.f && pa > 0.f) {
                 float pl = pa * h.t * h.t / fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]);
-                w = bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + pl * pl);
+                w = power_heuristic(bsdf_pdf, pl);
             }
             float et[3];
             texture_rgb(s, m->tex[1], tu, tv, et);
             float cv[3];
             for (int k = 0; k < 3; ++k)
                 cv[k] = thr[k] * m->emissive_metallic[k] * et[k] * w;
-            if (bounce >= 1)
-                clamp_indirect(cv, p->indirect_clamp);
-            for (int k = 0; k < 3; ++k) {
-                float cc = cv[k];
-                res.L[k] += cc;
-                if (bounce <= 1)
-                    res.L_direct[k] += cc;
-                if (bounce == 0)
-                    res.L_seen[k] += cc;
-            }
+            add_found(&res, cv, bounce, p->indirect_clamp);
         }
         if (bounce > bounces)
             break; /* the terminal ray only gathers emission */
