@@ -58,17 +58,8 @@ int main(int argc, char **argv)
         } else if (nscenes < 16)
             scenes[nscenes++] = argv[i];
     }
-    if (!nscenes) {
-        static const char *def[] = {"tests/scenes/demo.gltf", "../shared/scenes/cornell/cornellBox.gltf",
-                                    "../shared/scenes/openarena/oacmpdm1.glb"};
-        for (int i = 0; i < 3; ++i) {
-            struct stat st;
-            if (stat(def[i], &st) == 0)
-                scenes[nscenes++] = def[i];
-            else
-                fprintf(stderr, "bake_bench: %s not present, skipped\n", def[i]);
-        }
-    }
+    if (!nscenes)
+        nscenes = bench_default_scenes("bake_bench", scenes, 16);
     pb_context *ctx = NULL;
     pb_error err;
     pb_context_desc cd = {NULL, (uint32_t)validation, 0, 0, {0}};

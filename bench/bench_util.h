@@ -49,4 +49,23 @@ static inline int bench_open_scene(pb_context *ctx, const char *tool, const char
     return 1;
 }
 
+/* The benches' scenes when none are named: the demo scene, and the shared
+ * Cornell box and The Crypt when ../shared is beside the checkout. */
+static inline int bench_default_scenes(const char *tool, const char **scenes, int max)
+{
+    static const char *def[] = {"tests/scenes/demo.gltf", "../shared/scenes/cornell/cornellBox.gltf",
+                                "../shared/scenes/openarena/oacmpdm1.glb"};
+    int n = 0;
+    for (int i = 0; i < 3 && n < max; ++i) {
+        FILE *f = fopen(def[i], "rb");
+        if (f) {
+            fclose(f);
+            scenes[n++] = def[i];
+        } else {
+            fprintf(stderr, "%s: %s not present, skipped\n", tool, def[i]);
+        }
+    }
+    return n;
+}
+
 #endif

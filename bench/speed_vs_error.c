@@ -80,17 +80,8 @@ int main(int argc, char **argv)
         } else if (nscenes < 16)
             scenes[nscenes++] = a;
     }
-    if (!nscenes) {
-        static const char *def[] = {"tests/scenes/demo.gltf", "../shared/scenes/cornell/cornellBox.gltf",
-                                    "../shared/scenes/openarena/oacmpdm1.glb"};
-        for (int i = 0; i < 3; ++i) {
-            struct stat st;
-            if (stat(def[i], &st) == 0)
-                scenes[nscenes++] = def[i];
-            else
-                fprintf(stderr, "speed_vs_error: %s not present, skipped\n", def[i]);
-        }
-    }
+    if (!nscenes)
+        nscenes = bench_default_scenes("speed_vs_error", scenes, 16);
     mkdir(out_dir, 0755);
     char csv_path[1024], gp_path[1024], png_path[1024];
     snprintf(csv_path, sizeof csv_path, "%s/speed_vs_error.csv", out_dir);

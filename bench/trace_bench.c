@@ -17,6 +17,7 @@
 #include "common/common.h"
 #include "probebake/probebake.h"
 
+#include "bench_util.h"
 #include "embree_peer.h"
 
 #include <math.h>
@@ -230,16 +231,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "trace_bench: --probes, --rays and --repeat must be positive, probes*rays <= 2^28\n");
         return 2;
     }
-    static const char *defaults[] = {"tests/scenes/demo.gltf", "../shared/scenes/cornell/cornellBox.gltf",
-                                     "../shared/scenes/openarena/oacmpdm1.glb"};
     if (!o.scene_count)
-        for (int i = 0; i < 3; ++i) {
-            struct stat st;
-            if (stat(defaults[i], &st) == 0)
-                o.scenes[o.scene_count++] = defaults[i];
-            else
-                fprintf(stderr, "trace_bench: %s not present, skipped\n", defaults[i]);
-        }
+        o.scene_count = bench_default_scenes("trace_bench", o.scenes, 15); /* room for --instanced */
     const char *crypt = "../shared/scenes/openarena/oacmpdm1.glb";
     if (o.instanced) {
         pb_scene_desc sd = {{0}, 1};

@@ -448,6 +448,53 @@ static void reference_inputs(const pb_scene *s, const pb_bake_desc *d, uint32_t 
     pb_sf_directions(rpp, dirs);
 }
 
+/* The CPU reference of a bake's passes 0 .. passes-1: `tmpl` gives the
+ * shading inputs (environment, emitters, volume, light table, bounces,
+ * direct, max distance); probes, rotations and directions are built as
+ * pb_bake builds them. Writes the mean irradiance SH (27 per probe) to sh
+ * and returns the traversals the reference counted. */
+static uint64_t reference_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P,
+                               uint32_t passes, float *sh)
+{
+    uint32_t rpp = d->rays_per_probe, n = d->octmap_res;
+    float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
+    float *dirs = malloc((size_t)rpp * 16), *rays = malloc((size_t)P * rpp * 16);
+    float *red = calloc((size_t)P * (40 + 2 * n * n), sizeof(float));
+    double *sum = calloc((size_t)P * 27, sizeof(double));
+    uint64_t traversals = 0;
+    for (uint32_t pass = 0; pass < passes; ++pass) {
+        reference_inputs(s, d, P, rpp, pass, probes, rot, dirs);
+        pb_bake_pass pp = tmpl;
+        pp.scene = s, pp.probes = probes, pp.probe_list = NULL, pp.rotations = rot, pp.directions = dirs;
+        pp.first_probe = 0, pp.probe_count = P, pp.rays_per_probe = rpp, pp.pass_index = pass;
+        pp.seed = d->seed, pp.octmap_res = n;
+        traversals += pb_bake_trace_cpu(&pp, rays);
+        pb_bake_sh_cpu(&pp, rays, red);
+        for (uint32_t p = 0; p < P; ++p)
+            for (int k = 0; k < 27; ++k)
+                sum[27 * p + k] += red[40 * p + k] / (double)passes;
+    }
+    for (uint32_t p = 0; p < P; ++p) {
+        for (int k = 0; k < 27; ++k)
+            sh[27 * p + k] = (float)sum[27 * p + k];
+        pb_sh_radiance_to_irradiance(sh + 27 * p);
+    }
+    free(probes), free(rot), free(dirs), free(rays), free(red), free(sum);
+    return traversals;
+}
+
+/* Largest |a - b| over n coefficients, and the largest |a| (the scale). */
+static float max_difference(const float *a, const float *b, uint32_t n, float *scale)
+{
+    float worst = 0.f;
+    *scale = 0.f;
+    for (uint32_t i = 0; i < n; ++i) {
+        worst = fmaxf(worst, fabsf(a[i] - b[i]));
+        *scale = fmaxf(*scale, fabsf(a[i]));
+    }
+    return worst;
+}
+
 /* The kernels against bake_cpu.c on the demo scene, direct light only
  * (bounces 0: no random directions, so ray by ray equality to rounding). */
 static void kernels_match_cpu_reference(void)
@@ -532,24 +579,13 @@ static void multi_bounce_matches_cpu_reference(void)
     baked b = bake(s, &d);
     if (b.ok) {
         uint32_t P = b.vol.probe_count;
-        float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
-        float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
-        float *red = calloc((size_t)P * (40 + 32), sizeof(float));
-        double *sum = calloc((size_t)P * 27, sizeof(double));
-        float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
-              dz = s->bounds_max[2] - s->bounds_min[2];
+        float *sh = malloc((size_t)P * 27 * sizeof(float));
         pb_bake_emitters em;
         CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
-        for (uint32_t pass = 0; pass < 8; ++pass) {
-            reference_inputs(s, &d, P, 128, pass, probes, rot, dirs);
-            pb_bake_pass pp = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, pass, 0, 3, 4, 1,
-                               NULL, sqrtf(dx * dx + dy * dy + dz * dz), 50.f, &em};
-            pb_bake_trace_cpu(&pp, rays);
-            pb_bake_sh_cpu(&pp, rays, red);
-            for (uint32_t p = 0; p < P; ++p)
-                for (int k = 0; k < 27; ++k)
-                    sum[27 * p + k] += red[40 * p + k] / 8.0;
-        }
+        pb_bake_pass tmpl = {0};
+        tmpl.bvh = b.bvh, tmpl.bounces = 3, tmpl.direct = 1, tmpl.max_distance = b.vol.settings.max_distance;
+        tmpl.lobe_power = 50.f, tmpl.emitters = &em;
+        reference_bake(s, &d, tmpl, P, 8, sh);
         pb_bake_emitters_free(&em);
         double worst = 0;
         uint32_t compared = 0;
@@ -557,10 +593,7 @@ static void multi_bounce_matches_cpu_reference(void)
             if (b.vol.probe_flags[p] & PB_PROBE_DILATED)
                 continue; /* inside a box: its value comes from its neighbours by design */
             ++compared;
-            float c[27];
-            for (int k = 0; k < 27; ++k)
-                c[k] = (float)sum[27 * p + k];
-            pb_sh_radiance_to_irradiance(c);
+            const float *c = sh + 27 * p;
             double rel = fabs(c[0] - b.vol.sh[27 * p]) / fmax(1e-6, fabs(c[0]));
             if (rel > 0.01)
                 fprintf(stderr, "  probe %u: CPU %g GPU %g (flags %#x)\n", p, c[0], b.vol.sh[27 * p], b.vol.probe_flags[p]);
@@ -570,7 +603,7 @@ static void multi_bounce_matches_cpu_reference(void)
                 compared, 100 * worst);
         CHECK(compared >= P / 2);
         CHECK(worst < 0.01);
-        free(probes), free(rot), free(dirs), free(rays), free(red), free(sum);
+        free(sh);
     }
     release(&b);
     pb_scene_destroy(s);
@@ -597,47 +630,29 @@ static void indirect_volume_matches_cpu_reference(void)
     d.indirect_volume = 1;
     baked b1 = bake(s, &d);
     if (b0.ok && b1.ok) {
-        uint32_t P = b1.vol.probe_count, n = 8;
+        uint32_t P = b1.vol.probe_count;
         pb_sample_volume sv;
         pb_error err;
         CHECK(pb_sample_volume_build(&b0.vol, s->origin, 0.f, 0.f, &sv, &err) == PB_OK);
-        float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
-        float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
-        float *red = calloc((size_t)P * (40 + 2 * n * n), sizeof(float));
-        reference_inputs(s, &d, P, 128, 0, probes, rot, dirs);
+        float *sh = malloc((size_t)P * 27 * sizeof(float)), scale, unused;
         pb_bake_emitters em;
         CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
-        pb_bake_pass pass = {s, b1.bvh, probes, NULL, rot, dirs, 0, P, 128, 0, 0, 0, n, 1, NULL,
-                             b1.vol.settings.max_distance, 50.f, &em, &sv};
-        pb_bake_trace_cpu(&pass, rays);
-        pb_bake_sh_cpu(&pass, rays, red);
-        float worst = 0, scale = 0, without = 0;
-        for (uint32_t p = 0; p < P; ++p) {
-            float c[27];
-            memcpy(c, red + 40 * p, sizeof c);
-            pb_sh_radiance_to_irradiance(c);
-            for (int k = 0; k < 27; ++k) {
-                worst = fmaxf(worst, fabsf(c[k] - b1.vol.sh[27 * p + k]));
-                scale = fmaxf(scale, fabsf(c[k]));
-            }
-        }
+        pb_bake_pass tmpl = {0};
+        tmpl.bvh = b1.bvh, tmpl.direct = 1, tmpl.max_distance = b1.vol.settings.max_distance, tmpl.lobe_power = 50.f;
+        tmpl.emitters = &em, tmpl.volume = &sv;
+        reference_bake(s, &d, tmpl, P, 1, sh);
+        float worst = max_difference(sh, b1.vol.sh, 27 * P, &scale);
         /* the volume's part is large: the same bake without it differs a lot */
-        pass.volume = NULL;
-        pb_bake_trace_cpu(&pass, rays);
-        pb_bake_sh_cpu(&pass, rays, red);
-        for (uint32_t p = 0; p < P; ++p) {
-            float c[27];
-            memcpy(c, red + 40 * p, sizeof c);
-            pb_sh_radiance_to_irradiance(c);
-            without = fmaxf(without, fabsf(c[0] - b1.vol.sh[27 * p]));
-        }
+        tmpl.volume = NULL;
+        reference_bake(s, &d, tmpl, P, 1, sh);
+        float without = max_difference(sh, b1.vol.sh, 27 * P, &unused);
         fprintf(stderr, "  %u probes: SH max difference %.2e (of %.2e); without the volume %.2e\n", P, worst, scale,
                 without);
         CHECK(scale > 0.f && worst <= 1e-4f * scale);
         CHECK(without > 100.f * worst);
         pb_bake_emitters_free(&em);
         pb_sample_volume_free(&sv);
-        free(probes), free(rot), free(dirs), free(rays), free(red);
+        free(sh);
     }
     release(&b0);
     release(&b1);
@@ -682,31 +697,18 @@ static void environment_kernels_match_cpu(void)
     baked b = bake(s, &d);
     if (b.ok) {
         uint32_t P = b.vol.probe_count;
-        float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
-        float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
-        float *red = calloc((size_t)P * (40 + 32), sizeof(float));
-        double *sum = calloc((size_t)P * 27, sizeof(double));
-        uint64_t traversals = 0;
-        for (uint32_t pass = 0; pass < 8; ++pass) {
-            reference_inputs(s, &d, P, 128, pass, probes, rot, dirs);
-            pb_bake_pass pp = {s, b.bvh, probes, NULL, rot, dirs, 0, P, 128, pass, 0, 2, 4, 1,
-                               &env, b.vol.settings.max_distance, 50.f, NULL};
-            traversals += pb_bake_trace_cpu(&pp, rays);
-            pb_bake_sh_cpu(&pp, rays, red);
-            for (uint32_t p = 0; p < P; ++p)
-                for (int k = 0; k < 27; ++k)
-                    sum[27 * p + k] += red[40 * p + k] / 8.0;
-        }
+        float *sh = malloc((size_t)P * 27 * sizeof(float));
+        pb_bake_pass tmpl = {0};
+        tmpl.bvh = b.bvh, tmpl.bounces = 2, tmpl.direct = 1, tmpl.env = &env;
+        tmpl.max_distance = b.vol.settings.max_distance, tmpl.lobe_power = 50.f;
+        uint64_t traversals = reference_bake(s, &d, tmpl, P, 8, sh);
         double worst = 0;
         uint32_t compared = 0;
         for (uint32_t p = 0; p < P; ++p) {
             if (b.vol.probe_flags[p] & PB_PROBE_DILATED)
                 continue;
             ++compared;
-            float c[27];
-            for (int k = 0; k < 27; ++k)
-                c[k] = (float)sum[27 * p + k];
-            pb_sh_radiance_to_irradiance(c);
+            const float *c = sh + 27 * p;
             worst = fmax(worst, fabs(c[0] - b.vol.sh[27 * p]) / fmax(1e-6, fabs(c[0])));
         }
         double trav_diff = fabs((double)traversals - (double)b.vol.traversals) / (double)traversals;
@@ -716,7 +718,7 @@ static void environment_kernels_match_cpu(void)
         CHECK(compared >= P / 2);
         CHECK(worst < 0.01);
         CHECK(b.vol.traversals > b.vol.rays_traced && trav_diff < 0.005);
-        free(probes), free(rot), free(dirs), free(rays), free(red), free(sum);
+        free(sh);
     }
     release(&b);
     pb_env_table_free(&env);
@@ -958,8 +960,8 @@ static void relocation_and_dilation(void)
 /* Many punctual lights: above max_lights_per_hit each hit draws one light
  * by power. A floor under 100 point lights: drawn (default) against every
  * light (max 1000) agree within Monte Carlo error; the kernel matches the
- * CPU reference drawing the same lights; and 10,000 lights bake in about
- * the time of a few (measured and printed, not asserted). */
+ * CPU reference drawing the same lights; and 10,000 lights cost about the
+ * traversals per probe ray of a few. */
 static pb_scene *floor_under_lights(uint32_t n_lights)
 {
     double floor[18] = {-20, 0, -20, -20, 0, 20, 20, 0, 20, -20, 0, -20, 20, 0, 20, 20, 0, -20};
@@ -1009,8 +1011,11 @@ static void many_lights_drawn_by_power(void)
             worst = fmax(worst, fabs(ed[0] / ea[0] - 1));
         }
         fprintf(stderr, "  100 lights: drawn vs every light, floor irradiance means %+.2f%%, worst probe %.2f%%; "
-                "GPU trace %.0f vs %.0f ms\n", 100 * (md / ma - 1), 100 * worst, drawn.vol.timings.trace,
-                all.vol.timings.trace);
+                "%.2f vs %.2f traversals per probe ray\n", 100 * (md / ma - 1), 100 * worst,
+                (double)drawn.vol.traversals / (double)drawn.vol.rays_traced,
+                (double)all.vol.traversals / (double)all.vol.rays_traced);
+        /* drawing one light per hit traces far fewer shadow rays */
+        CHECK(drawn.vol.traversals * 10 < all.vol.traversals);
         CHECK(fabs(md / ma - 1) < 0.02 && worst < 0.08);
     }
     /* the kernel against the CPU reference, drawing the same lights (1 pass, bounce 0) */
@@ -1018,39 +1023,34 @@ static void many_lights_drawn_by_power(void)
     baked one = bake(s, &d);
     if (one.ok) {
         uint32_t P = one.vol.probe_count;
-        float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
-        float *dirs = malloc(1024 * 16), *rays = malloc((size_t)P * 1024 * 16), *red = calloc((size_t)P * 72, 4);
-        reference_inputs(s, &d, P, 1024, 0, probes, rot, dirs);
+        float *sh = malloc((size_t)P * 27 * sizeof(float)), scale;
         pb_light_table lt;
         CHECK(pb_light_table_build(s, &lt, NULL) == PB_OK && lt.count == 100);
-        pb_bake_pass pass = {s, one.bvh, probes, NULL, rot, dirs, 0, P, 1024, 0, 0, 0, 4, 1, NULL,
-                             one.vol.settings.max_distance, 50.f, NULL, NULL, &lt};
-        pb_bake_trace_cpu(&pass, rays);
-        pb_bake_sh_cpu(&pass, rays, red);
-        float worst = 0, scale = 0;
-        for (uint32_t p = 0; p < P; ++p) {
-            float c[27];
-            memcpy(c, red + 40 * p, sizeof c);
-            pb_sh_radiance_to_irradiance(c);
-            for (int k = 0; k < 27; ++k) {
-                worst = fmaxf(worst, fabsf(c[k] - one.vol.sh[27 * p + k]));
-                scale = fmaxf(scale, fabsf(c[k]));
-            }
-        }
+        pb_bake_pass tmpl = {0};
+        tmpl.bvh = one.bvh, tmpl.direct = 1, tmpl.max_distance = one.vol.settings.max_distance;
+        tmpl.lobe_power = 50.f, tmpl.light_table = &lt;
+        reference_bake(s, &d, tmpl, P, 1, sh);
+        float worst = max_difference(sh, one.vol.sh, 27 * P, &scale);
         fprintf(stderr, "  drawn lights, kernel vs CPU: SH max difference %.2e of %.2e\n", worst, scale);
         CHECK(scale > 0 && worst <= 1e-4f * scale);
         pb_light_table_free(&lt);
-        free(probes), free(rot), free(dirs), free(rays), free(red);
+        free(sh);
     }
     release(&all), release(&drawn), release(&one);
     pb_scene_destroy(s);
-    /* 10,000 lights: time, drawn */
+    /* 10,000 lights, drawn: the traversals per probe ray stay those of a few lights (the time is in
+     * bench/RESULTS.md, not here) */
     pb_scene *big = floor_under_lights(10000);
     if (big) {
         baked b = bake(big, &d);
-        if (b.ok)
-            fprintf(stderr, "  10000 lights, drawn: %u probes x 1024 rays, GPU trace %.0f ms, total %.0f ms\n",
-                    b.vol.probe_count, b.vol.timings.trace, b.vol.timings.total);
+        if (b.ok) {
+            int finite = 1;
+            for (uint32_t i = 0; i < 27 * b.vol.probe_count; ++i)
+                finite &= isfinite(b.vol.sh[i]) != 0;
+            double per_ray = (double)b.vol.traversals / (double)b.vol.rays_traced;
+            fprintf(stderr, "  10000 lights, drawn: %.2f traversals per probe ray\n", per_ray);
+            CHECK(finite && per_ray < 3.0);
+        }
         release(&b);
         pb_scene_destroy(big);
     }
@@ -1295,12 +1295,6 @@ static void bad_parameters_refused_before_gpu_work(void)
     pb_scene_destroy(s);
 }
 
-static void validation_layer_stayed_silent(void)
-{
-    uint32_t n = pb_context_validation_messages(ctx);
-    CHECKF(n == 0, "%u validation messages", n);
-}
-
 int main(void)
 {
     if (!(ctx = test_gpu_context()))
@@ -1324,7 +1318,5 @@ int main(void)
     RUN(target_error_stops_converged_probes);
     RUN(points_subset_bakes_like_the_grid);
     RUN(bad_parameters_refused_before_gpu_work);
-    RUN(validation_layer_stayed_silent);
-    pb_context_destroy(ctx);
-    return test_summary();
+    return test_gpu_finish(ctx);
 }

@@ -10,14 +10,7 @@
 
 static pb_context *ctx;
 
-static void log_line(pb_log_level level, const char *msg, void *user)
-{
-    (void)user;
-    if (level >= PB_LOG_WARN)
-        fprintf(stderr, "  [%s] %s\n", level == PB_LOG_WARN ? "warn" : "error", msg);
-}
-
-static const pb_log test_log = {log_line, NULL};
+static const pb_log test_log = {test_log_line, NULL};
 
 typedef struct traced {
     pb_bvh *bvh;
@@ -512,21 +505,10 @@ static void device_choice_and_refusals(void)
     CHECK(strstr(err.message, "test array") != NULL && ctx->allocated == before);
 }
 
-static void validation_layer_stayed_silent(void)
-{
-    uint32_t n = pb_context_validation_messages(ctx);
-    CHECKF(n == 0, "%u validation messages", n);
-}
-
 int main(void)
 {
-    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, test_log};
-    pb_error err;
-    if (pb_context_create(&d, &ctx, &err) != PB_OK) {
-        fprintf(stderr, "no Vulkan device with validation: %s\n", err.message);
-        printf("0 passed, 1 failed, 0 skipped\n");
+    if (!(ctx = test_gpu_context()))
         return 1;
-    }
     fprintf(stderr, "device: %s (%s)\n", pb_context_device(ctx)->name, pb_context_device(ctx)->driver);
     RUN(random_soups_gpu_cpu_brute);
     RUN(demo_scene_gpu_cpu_brute);
@@ -539,7 +521,5 @@ int main(void)
     RUN(bounded_submissions_same_bytes);
     RUN(ray_offset_gpu_matches_cpu);
     RUN(device_choice_and_refusals);
-    RUN(validation_layer_stayed_silent);
-    pb_context_destroy(ctx);
-    return test_summary();
+    return test_gpu_finish(ctx);
 }

@@ -204,4 +204,22 @@ static inline pb_context *test_gpu_context(void)
     return ctx;
 }
 
+/* Ends a GPU test program: the validation layer (synchronisation
+ * validation included) must have stayed silent through every test, which is
+ * reported as a test of its own; frees the context; returns the exit code. */
+static inline int test_gpu_finish(pb_context *ctx)
+{
+    uint32_t n = pb_context_validation_messages(ctx);
+    fprintf(stderr, "[ RUN  ] validation_layer_stayed_silent\n");
+    if (n) {
+        fprintf(stderr, "  %u validation messages\n[ FAIL ] validation_layer_stayed_silent\n", n);
+        t_failed++;
+    } else {
+        fprintf(stderr, "[  OK  ] validation_layer_stayed_silent\n");
+        t_passed++;
+    }
+    pb_context_destroy(ctx);
+    return test_summary();
+}
+
 #endif

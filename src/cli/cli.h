@@ -63,4 +63,8 @@ void cli_catch_sigint(int on);
  * lost. Unset: nothing. */
 void cli_fault_injection(pb_context_desc *cd);
 
+/* --sky / --env: refuses both at once; loads the map when --env is given
+ * (env zeroed otherwise). */
+pb_result cli_environment(const options *o, pb_environment *env, pb_error *err);
+
 #endif

@@ -76,13 +76,9 @@ int cmd_render(const options *o)
     float *img = NULL, *img_direct = NULL, *ref = NULL, *ref_direct = NULL;
     unsigned char *rgb8 = NULL;
     int rc = 1;
-    if (o->env && o->has_sky) {
-        snprintf(err.message, sizeof err.message, "--sky and --env both give the environment: choose one");
-        goto out;
-    }
     if (o->volume && pb_volume_read(o->volume, &vol, &err) != PB_OK)
         goto out;
-    if (o->env && pb_environment_load(o->env, o->env_intensity, o->env_rotation, &env, &err) != PB_OK)
+    if (cli_environment(o, &env, &err) != PB_OK)
         goto out;
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
         goto out;

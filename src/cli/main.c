@@ -68,6 +68,16 @@ void cli_fault_injection(pb_context_desc *cd)
         cd->fail_submission = n;
 }
 
+pb_result cli_environment(const options *o, pb_environment *env, pb_error *err)
+{
+    memset(env, 0, sizeof *env);
+    if (o->env && o->has_sky) {
+        snprintf(err->message, sizeof err->message, "--sky and --env both give the environment: choose one");
+        return err->code = PB_ERROR_INVALID_ARGUMENT;
+    }
+    return o->env ? pb_environment_load(o->env, o->env_intensity, o->env_rotation, env, err) : PB_OK;
+}
+
 int cli_usage_error(const char *fmt, const char *arg)
 {
     fprintf(stderr, "probebake: error: ");
@@ -819,13 +829,9 @@ static int cmd_bake(const options *o)
     pb_error err;
     int rc = 1;
     double t0 = cli_now_ms();
-    if (o->env && o->has_sky) {
-        snprintf(err.message, sizeof err.message, "--sky and --env both give the environment: choose one");
-        goto out;
-    }
     if (o->points && pb_points_read(o->points, &pts, &err) != PB_OK)
         goto out;
-    if (o->env && pb_environment_load(o->env, o->env_intensity, o->env_rotation, &env, &err) != PB_OK)
+    if (cli_environment(o, &env, &err) != PB_OK)
         goto out;
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
         goto out;
