@@ -183,4 +183,13 @@ static inline uint32_t box_tris(double *p, const double lo[3], const double hi[3
 }
 
 
+/* The bundled demo scene; NULL (and a failed check) if it does not load. */
+static inline pb_scene *load_demo(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    return s;
+}
+
 #endif

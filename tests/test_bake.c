@@ -34,14 +34,6 @@ static void release(baked *b)
     pb_bvh_destroy(b->bvh);
 }
 
-static pb_scene *load_demo(void)
-{
-    pb_scene *s = NULL;
-    pb_error err;
-    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
-    return s;
-}
-
 static pb_probe_grid small_grid(float lo, float hi, uint32_t n)
 {
     pb_probe_grid g;

@@ -47,9 +47,8 @@ static float lum(const float *c)
  * still flip a rare shadow ray), image means for the reference. */
 static void kernel_matches_cpu_reference(void)
 {
-    pb_scene *s = NULL;
+    pb_scene *s = load_demo();
     pb_error err;
-    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
     if (!s)
         return;
     pb_bake_desc bd = {0};
@@ -174,9 +173,8 @@ static void constant_sky_lights_floor_evenly(void)
  * the fitted log-log slope over 4, 16 and 64 spp is near -1/2. */
 static void reference_converges(void)
 {
-    pb_scene *s = NULL;
+    pb_scene *s = load_demo();
     pb_error err;
-    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
     prepared p;
     if (!s || !prepare(s, NULL, &p)) {
         if (s)

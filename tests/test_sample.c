@@ -27,9 +27,8 @@ static int bake(const pb_scene *s, const pb_bake_desc *d, pb_volume *v)
  * margin outside, where the cage clamps), random normals and views. */
 static void shader_matches_c_reference(void)
 {
-    pb_scene *s = NULL;
+    pb_scene *s = load_demo();
     pb_error err;
-    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
     if (!s)
         return;
     pb_bake_desc d = {0};

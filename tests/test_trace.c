@@ -111,9 +111,7 @@ static pb_ray *scene_rays(const pb_scene *s, uint32_t n, uint32_t seed)
 
 static void demo_scene_gpu_cpu_brute(void)
 {
-    pb_scene *s = NULL;
-    pb_error err;
-    CHECKF(pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    pb_scene *s = load_demo();
     if (!s)
         return;
     pb_ray *rays = scene_rays(s, 100000, 3);
