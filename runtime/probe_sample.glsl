@@ -9,7 +9,8 @@
 //   pb_sh      RGBA32F: 7 texels per probe: the 27 irradiance SH floats
 //              (coefficient major, RGB) and one zero
 //   pb_depth   RG16F:   depth tiles of (n+2)^2 texels, pb_depth_tiles_per_row
-//              tiles per row; texel = (mean, mean squared) distance
+//              tiles per row; texel = (mean, mean squared) distance in
+//              units of pb_depth_unit metres (the file's depth unit)
 // Texel i of pb_probes and pb_sh is at (i % pb_tex_width, i / pb_tex_width).
 precision highp float;
 precision highp int;
@@ -25,6 +26,7 @@ uniform ivec3 pb_grid_counts;
 uniform int pb_octmap_res;
 uniform float pb_normal_bias; // default 0.1 (of the smallest spacing)
 uniform float pb_view_bias;   // default 0.1
+uniform float pb_depth_unit;  // metres per depth unit: the volume file's (header offset 180)
 
 ivec2 pb_texel_2d(int i)
 {
@@ -72,7 +74,8 @@ vec2 pb_probe_depth(int probe, ivec2 texel)
 //   vec4 pb_probe_position(int probe)            relocated position (xyz), same frame as p
 //   uint pb_probe_flags(int probe)               PB_PROBE_* of docs/format.md
 //   vec3 pb_probe_sh(int probe, int k)           irradiance SH coefficient k (RGB)
-//   vec2 pb_probe_depth(int probe, ivec2 texel)  (mean, mean squared) distance, bordered tile texel
+//   vec2 pb_probe_depth(int probe, ivec2 texel)  (mean, mean squared) distance in depth units
+//                                                (PbVolumeGrid.depth_unit metres), bordered tile texel
 #ifndef PB_PROBE_SAMPLE_CORE_GLSL
 #define PB_PROBE_SAMPLE_CORE_GLSL
 
@@ -85,6 +88,7 @@ struct PbVolumeGrid {
     int octmap_res;     // n: interior texels per side of a depth tile
     float normal_bias;  // shading point moved along the normal by this x the smallest spacing
     float view_bias;    // and towards the viewer by this x the smallest spacing
+    float depth_unit;   // metres per depth unit of pb_probe_depth (a power of two; docs/format.md)
 };
 
 // Octahedral encoding (Cigolle et al. 2014), +Z hemisphere in the centre.
@@ -181,7 +185,7 @@ vec3 pb_sample_irradiance(PbVolumeGrid g, vec3 p, vec3 n, vec3 v)
         vec3 from_probe = biased - pp;
         float r = length(from_probe);
         vec2 m = pb_depth_moments(probe, g.octmap_res, r > 0.0 ? from_probe / r : n);
-        w *= pb_chebyshev(m, r);
+        w *= pb_chebyshev(m, r / g.depth_unit); // the moments are in depth units
         w = max(w, 1e-6);
         // crush tiny weights: a probe that barely counts should not count at all
         if (w < 0.2)
@@ -201,5 +205,5 @@ vec3 pb_sample_irradiance(PbVolumeGrid g, vec3 p, vec3 n, vec3 v)
 vec3 pb_volume_irradiance(vec3 p, vec3 n, vec3 v)
 {
     return pb_sample_irradiance(PbVolumeGrid(pb_grid_origin, pb_grid_spacing, pb_grid_counts, pb_octmap_res,
-                                             pb_normal_bias, pb_view_bias), p, n, v);
+                                             pb_normal_bias, pb_view_bias, pb_depth_unit), p, n, v);
 }

@@ -19,7 +19,7 @@ out=${1:-$root/runtime/probe_sample.glsl}
 vec3 pb_volume_irradiance(vec3 p, vec3 n, vec3 v)
 {
     return pb_sample_irradiance(PbVolumeGrid(pb_grid_origin, pb_grid_spacing, pb_grid_counts, pb_octmap_res,
-                                             pb_normal_bias, pb_view_bias), p, n, v);
+                                             pb_normal_bias, pb_view_bias, pb_depth_unit), p, n, v);
 }
 GLSL
 } >"$out"

@@ -536,7 +536,8 @@ static void kernels_match_cpu_reference(void)
             for (uint32_t t = 0; t < n * n; ++t) {
                 float cpu = red[40 * P + 2 * (n * n * p + t)];
                 uint32_t x = t % n, y = t / n;
-                float gpu = pb_half_to_float(b.vol.depth[pb_volume_tile_halves(n) * p + 2 * ((y + 1) * (n + 2) + x + 1)]);
+                float gpu = pb_half_to_float(b.vol.depth[pb_volume_tile_halves(n) * p + 2 * ((y + 1) * (n + 2) + x + 1)]) *
+                            b.vol.depth_unit; /* the file's units back to metres */
                 depth_bad += fabsf(cpu - gpu) > 2e-3f * fmaxf(1.f, cpu); /* half precision */
             }
         }
@@ -773,9 +774,14 @@ static void scale_and_position_invariance(void)
                 mean += e[0], mean_ref += r[0];
                 worst = fmax(worst, fabs(e[0] - r[0]) / fmax(1e-3, fabs(r[0])));
                 flags_differ += b.vol.probe_flags[p] != ref.vol.probe_flags[p];
-                float dr = pb_half_to_float(ref.vol.depth[pb_volume_tile_halves(8) * p + 22]);
-                float db = pb_half_to_float(b.vol.depth[pb_volume_tile_halves(8) * p + 22]);
-                depth_worst = fmax(depth_worst, fabs(db / cases[c].scale - dr) / fmax(1e-3, dr));
+                for (int moment = 0; moment < 2; ++moment) { /* both: version 1's squares overflowed at 1e4 */
+                    double ur = moment ? (double)ref.vol.depth_unit * ref.vol.depth_unit : ref.vol.depth_unit;
+                    double ub = moment ? (double)b.vol.depth_unit * b.vol.depth_unit : b.vol.depth_unit;
+                    double sc = moment ? cases[c].scale * cases[c].scale : cases[c].scale;
+                    double dr = pb_half_to_float(ref.vol.depth[pb_volume_tile_halves(8) * p + 22 + moment]) * ur;
+                    double db = pb_half_to_float(b.vol.depth[pb_volume_tile_halves(8) * p + 22 + moment]) * ub;
+                    depth_worst = fmax(depth_worst, fabs(db / sc - dr) / fmax(1e-3, dr));
+                }
             }
             double rel = fabs(mean / mean_ref - 1);
             fprintf(stderr, "  scale %g, offset %g: mean irradiance %+.3f%%, worst probe %.2f%%, depth %.2f%%, %u flags "
@@ -788,6 +794,158 @@ static void scale_and_position_invariance(void)
     }
     release(&ref);
     pb_scene_destroy(ref_s);
+}
+
+/* A city block 1 km across (ground and three buildings under a sky), built
+ * with every coordinate multiplied by `scale` (1000: the same block in
+ * millimetres, as CAD exports give it). */
+static pb_scene *city_block(double scale)
+{
+    double tris[12 * 4 * 9];
+    const double boxes[4][6] = {{-500, -1, -500, 500, 0, 500},  /* ground slab */
+                                {-300, 0, -200, -200, 200, 0},   /* tower */
+                                {100, 0, 100, 150, 50, 150},     /* low block */
+                                {250, 0, -350, 280, 300, -320}}; /* needle */
+    uint32_t t = 0;
+    for (int b = 0; b < 4; ++b) {
+        double lo[3], hi[3];
+        for (int k = 0; k < 3; ++k)
+            lo[k] = boxes[b][k] * scale, hi[k] = boxes[b][3 + k] * scale;
+        t += box_tris(tris + 9 * t, lo, hi, 0);
+    }
+    pb_material m = pb_material_default();
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = 0.5f;
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(tris, t, NULL, &m, 1, &s, &err) == PB_OK, "%s", err.message);
+    return s;
+}
+
+/* The city block in metres and in millimetres: every depth texel is finite
+ * (version-1 files stored metres, whose squares overflowed float16 past
+ * 256 m: here they reach ~1.5 km, and 1.5e6 units in millimetres), the
+ * visibility weights at corresponding points agree to float16 precision,
+ * and the irradiance is the same. The 1e4-scale demo test above missed the
+ * overflow because it compared the first moment of one texel only, and the
+ * demo scene is closed (no ray travels farther than ~6e4 m there). */
+static void depth_finite_and_scale_free_at_km_and_mm(void)
+{
+    pb_scene *s[2] = {city_block(1.0), city_block(1000.0)};
+    baked b[2];
+    memset(b, 0, sizeof b);
+    pb_sample_volume sv[2];
+    memset(sv, 0, sizeof sv);
+    for (int i = 0; i < 2 && s[0] && s[1]; ++i) {
+        pb_bake_desc d = {0};
+        pb_probe_grid_fit(s[i]->bounds_min, s[i]->bounds_max, 48, &d.grid);
+        d.rays_per_probe = 128;
+        d.passes = 1;
+        d.bounces = 1;
+        d.octmap_res = 8;
+        d.sky[0] = d.sky[1] = d.sky[2] = 1.f;
+        b[i] = bake(s[i], &d);
+        if (!b[i].ok)
+            break;
+        CHECK(pb_sample_volume_build(&b[i].vol, s[i]->origin, 0.f, 0.f, &sv[i], NULL) == PB_OK);
+    }
+    if (b[0].ok && b[1].ok) {
+        const pb_volume *v = &b[0].vol, *w = &b[1].vol;
+        uint64_t halves = (uint64_t)v->probe_count * pb_volume_tile_halves(v->octmap_res);
+        uint32_t nonfinite = 0;
+        double largest_square_m2 = 0;
+        for (uint64_t i = 0; i < halves; ++i) {
+            nonfinite += (v->depth[i] & 0x7c00u) == 0x7c00u || (w->depth[i] & 0x7c00u) == 0x7c00u;
+            if (i & 1)
+                largest_square_m2 = fmax(largest_square_m2, pb_half_to_float(v->depth[i]) * (double)v->depth_unit *
+                                                                v->depth_unit);
+        }
+        fprintf(stderr, "  depth units %g m and %g mm; largest mean square %.3g m^2 (float16 max 65504); %u non-finite\n",
+                v->depth_unit, w->depth_unit, largest_square_m2, nonfinite);
+        CHECK(nonfinite == 0);
+        CHECK(largest_square_m2 > 65504.0); /* the case that overflowed in version 1 */
+        /* visibility weights at the same points (scaled), against every probe
+         * the two bakes put at the same place: a probe relocated out of a
+         * building may land elsewhere when back faces tie (it has other
+         * surroundings then, so other depths); those are counted, and few */
+        uint8_t *same_place = calloc(v->probe_count, 1);
+        uint32_t moved = 0;
+        for (uint32_t pr = 0; pr < v->probe_count; ++pr) {
+            double a[3], c[3];
+            pb_volume_probe_position(v, pr, a);
+            pb_volume_probe_position(w, pr, c);
+            same_place[pr] = fabs(c[0] / 1000 - a[0]) + fabs(c[1] / 1000 - a[1]) + fabs(c[2] / 1000 - a[2]) < 1e-2 &&
+                             v->probe_flags[pr] == w->probe_flags[pr];
+            moved += !same_place[pr];
+        }
+        CHECKF(moved <= v->probe_count / 16, "%u of %u probes relocated differently", moved, v->probe_count);
+        test_rng r = {31};
+        uint32_t n = 0, excess = 0, at_step = 0;
+        double sum_diff = 0, worst = 0;
+        for (uint32_t q = 0; q < 2000; ++q) {
+            float p[3], pm[3], nrm[3] = {0, 1, 0};
+            for (int k = 0; k < 3; ++k) {
+                float lo = s[0]->bounds_min[k], hi = s[0]->bounds_max[k];
+                p[k] = lo + (float)rng_uniform(&r) * (hi - lo);
+                pm[k] = p[k] * 1000.f;
+            }
+            int probe = (int)(rng_uniform(&r) * v->probe_count);
+            if (!same_place[probe])
+                continue;
+            float dk[3], dm[3];
+            float wk = pb_sample_visibility_cpu(&sv[0], probe, p, nrm, dk);
+            float wm = pb_sample_visibility_cpu(&sv[1], probe, pm, nrm, dm);
+            double diff = fabs((double)wk - wm);
+            /* What float16 precision allows: each moment is rounded to 2^-11
+             * in each volume, so mean and mean square may differ by 2^-10 of
+             * themselves. To first order the weight c^3, c = var / (var + g^2),
+             * g = r - mean, var = mean square - mean^2, moves by
+             * 3 c^2 (|dc/dvar| dvar + |dc/dg| dg). At g within dg of 0 the
+             * weight steps from 1 (r <= mean) to c^3: a rounding can cross it. */
+            double mean = dk[0], var = fabs(dk[1] - (double)dk[0] * dk[0]), g = dk[2] - mean;
+            double dvar = ldexp(1, -10) * (dk[1] + 2 * mean * mean), dg = ldexp(1, -10) * (mean + dk[2]);
+            ++n;
+            if (fabs(g) <= dg) {
+                ++at_step;
+                continue;
+            }
+            double bound = 1e-4;
+            if (g > 0) {
+                double den = var + g * g, c = var / den;
+                bound += 3 * c * c * (g * g / (den * den) * dvar + 2 * var * g / (den * den) * dg);
+            }
+            excess += diff > bound;
+            if (diff > bound && excess <= 3)
+                fprintf(stderr, "  probe %d: weights %.4f vs %.4f, bound %.2e (mean %g, mean square %g, r %g units)\n",
+                        probe, wk, wm, bound, dk[0], dk[1], dk[2]);
+            sum_diff += diff, worst = fmax(worst, diff);
+        }
+        fprintf(stderr, "  visibility weights km vs mm: mean |difference| %.2e, worst %.2e; %u of %u beyond the "
+                "float16 bound, %u within rounding of the step at r = mean\n", sum_diff / n, worst, excess, n, at_step);
+        fprintf(stderr, "  (%u of %u probes relocated to different places, left out)\n", moved, v->probe_count);
+        CHECK(excess == 0 && at_step <= n / 100 && n > 1500);
+        free(same_place);
+        /* irradiance: same rays up to rounding */
+        double mean_k = 0, mean_m = 0, worst_e = 0;
+        for (uint32_t p = 0; p < v->probe_count; ++p) {
+            float up[3] = {0, 1, 0}, ek[3], em[3];
+            pb_sh_eval(v->sh + 27 * p, up, ek);
+            pb_sh_eval(w->sh + 27 * p, up, em);
+            mean_k += ek[0], mean_m += em[0];
+            worst_e = fmax(worst_e, fabs(em[0] - ek[0]) / fmax(1e-3, fabs(ek[0])));
+        }
+        fprintf(stderr, "  irradiance mm vs km: mean %+.3f%%, worst probe %.2f%%\n", 100 * (mean_m / mean_k - 1),
+                100 * worst_e);
+        CHECK(fabs(mean_m / mean_k - 1) < 0.01 && worst_e < 0.05);
+        char path[512];
+        snprintf(path, sizeof path, "%s/city-mm.probes", temp_dir());
+        pb_error err;
+        CHECKF(pb_volume_write(path, w, &err) == PB_OK, "%s", err.message);
+    }
+    for (int i = 0; i < 2; ++i) {
+        pb_sample_volume_free(&sv[i]);
+        release(&b[i]);
+        pb_scene_destroy(s[i]);
+    }
 }
 
 /* 1 pass of 4096 rays and 64 passes of 64 rays estimate the same irradiance:
@@ -1303,6 +1461,7 @@ int main(void)
     RUN(indirect_volume_matches_cpu_reference);
     RUN(relocation_and_dilation);
     RUN(scale_and_position_invariance);
+    RUN(depth_finite_and_scale_free_at_km_and_mm);
     RUN(passes_and_rays_agree);
     RUN(degenerate_scenes);
     RUN(many_lights_drawn_by_power);

@@ -118,6 +118,30 @@ expect max-lights-bad 2 "--max-lights-per-hit '0' is not an integer in \[1, 1048
 expect clamp-bad 2 "--clamp-indirect '-3' is not a positive radiance" -- "$pb" bake "$demo" --clamp-indirect -3 -o "$tmp/x.probes"
 expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
 
+# non-finite or overflowing light and positions: refused before any device work (issue 9)
+sed 's/"intensity": 15.0/"intensity": 1e38/' "$demo" >"$tmp/hot-light.gltf"
+expect light-overflow 1 "error: $tmp/hot-light.gltf: light 0 'lamp' has intensity 1e\+38 .*at most 1e\+20" -- \
+    "$pb" bake "$tmp/hot-light.gltf" -o "$tmp/x.probes"
+expect light-overflow-render 1 "light 0 'lamp' has intensity 1e\+38" -- "$pb" render "$tmp/hot-light.gltf" -o "$tmp/x.png"
+sed 's/"emissiveStrength": 8.0/"emissiveStrength": 1e38/' "$demo" >"$tmp/hot-panel.gltf"
+expect emission-overflow 1 "error: $tmp/hot-panel.gltf: material [0-9]+ '[^']*' emits 1e\+38 \(emissive factor x strength\)" -- \
+    "$pb" bake "$tmp/hot-panel.gltf" -o "$tmp/x.probes"
+sed 's/"emissiveStrength": 8.0/"emissiveStrength": 1e39/' "$demo" >"$tmp/inf-panel.gltf"
+expect emission-infinite 1 "emits inf" -- "$pb" bake "$tmp/inf-panel.gltf" -o "$tmp/x.probes"
+expect sky-overflow 1 'error: sky radiance \(1e\+38, 1e\+38, 1e\+38\): each must be finite, >= 0 and at most 1e\+20' -- \
+    "$pb" bake "$demo" --sky 1e38,1e38,1e38 -o "$tmp/x.probes"
+printf '{"points": [[0, 1, 0], [1e39, 0, 0]]}' >"$tmp/far.json"
+expect points-overflow 1 "error: $tmp/far.json: point 1 at \(1e\+39, 0, 0\): coordinates must be within \+-1e\+15 m" -- \
+    "$pb" bake "$demo" --points "$tmp/far.json" -o "$tmp/x.probes"
+expect refusals-left-no-file 0 '^absent$' -- bash -c "[ -e '$tmp/x.probes' ] && echo present || echo absent"
+# a file holding NaN (written by hand: the writer refuses them) prints JSON null, never nan
+cp "$tmp/v.probes" "$tmp/nan.probes"
+printf '\x00\x00\xc0\x7f' | dd of="$tmp/nan.probes" bs=1 seek=704 conv=notrunc status=none # SH[0] of probe 0
+expect inspect-json-nan-null 0 '"index": 0, .*"sh": \[null, 0.00999999978' -- "$pb" inspect "$tmp/nan.probes" --json
+expect inspect-json-no-nan 0 '^clean$' -- \
+    bash -c "'$pb' inspect '$tmp/nan.probes' --json | grep -Eqi '(: |\\[|, )-?(nan|inf)' && echo dirty || echo clean"
+expect inspect-json-depth-unit 0 '"depth_unit": 0.25,' -- "$pb" inspect "$tmp/v.probes" --json
+
 # render: parameters checked before any device work
 expect render-no-output 2 'render needs -o IMG.png' -- "$pb" render "$demo"
 expect render-bad-size 2 "--size '0x10' is not WxH" -- "$pb" render "$demo" --size 0x10 -o "$tmp/r.png"
@@ -233,6 +257,11 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
         env PB_INJECT_FAULT=submission:1 "$pb" render "$demo" --size 16x12 --spp 2 -o "$tmp/keep.png"
     expect faults-left-files-alone 0 '^previous absent$' -- \
         bash -c "echo \$(cat '$tmp/keep.probes') \$([ -e '$tmp/keep.png' ] && echo present || echo absent)"
+    # the demo room in millimetres (5 km of numbers): every value finite, or the write would refuse
+    sed 's/"name": "room",/"name": "room", "scale": [1000, 1000, 1000],/' "$demo" >"$tmp/demo-mm.gltf"
+    expect bake-millimetres 0 "wrote $tmp/mm.probes: 27 probes" -- \
+        "$pb" bake "$tmp/demo-mm.gltf" --counts 3,3,3 --rays 64 --passes 1 --octmap-res 4 -o "$tmp/mm.probes"
+    expect bake-millimetres-unit 0 '"depth_unit": 64,' -- "$pb" inspect "$tmp/mm.probes" --json
     expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
         "$pb" trace "$demo" --device no-such-gpu
 fi

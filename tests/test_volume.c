@@ -111,6 +111,7 @@ static void file_round_trip(void)
     CHECK(memcmp(&w.settings, &v.settings, sizeof v.settings) == 0);
     CHECK(memcmp(&w.timings, &v.timings, sizeof v.timings) == 0);
     CHECK(strcmp(w.device, "test device") == 0);
+    CHECK(v.depth_unit == 0.5f && w.depth_unit == v.depth_unit); /* max distance 64 -> 64 / 128 */
     CHECK(memcmp(w.base, v.base, 24 * 12) == 0 && memcmp(w.offset, v.offset, 24 * 12) == 0);
     CHECK(memcmp(w.probe_flags, v.probe_flags, 24 * 4) == 0 && memcmp(w.sh, v.sh, 24 * 27 * 4) == 0);
     CHECK(memcmp(w.depth, v.depth, 24 * pb_volume_tile_halves(16) * 2) == 0);
@@ -190,6 +191,9 @@ static void malformed_files_get_clear_errors(void)
         {"grid.probes", 24, 7, 0, PB_ERROR_PARSE, "grid counts"},
         {"octmap.probes", 36, 1000, 0, PB_ERROR_PARSE, "octahedral"},
         {"section.probes", 160, 12345, 0, PB_ERROR_PARSE, "section offsets"},
+        {"unit.probes", 180, 0, 0, PB_ERROR_PARSE, "depth unit"},
+        {"unit-nan.probes", 180, 0x7fc00000u, 0, PB_ERROR_PARSE, "depth unit"},
+        {"depth-format.probes", 128, 1, 0, PB_ERROR_PARSE, "depth format"},
         {"truncated.probes", 0, 0, 1000, PB_ERROR_PARSE, "truncated"},
         {"header.probes", 0, 0, 100, PB_ERROR_PARSE, "truncated header"},
     };
@@ -213,6 +217,113 @@ static void malformed_files_get_clear_errors(void)
     pb_volume_free(&v);
 }
 
+/* The depth unit: a power of two u with max distance / u in (64, 128], so
+ * mean squares stay <= 16384 in float16 at any scale from 1e-6 m to 1e30 m. */
+static void depth_unit_bounds_the_reach(void)
+{
+    test_rng r = {23};
+    uint32_t bad = 0;
+    for (int i = 0; i < 20000; ++i) {
+        float d = i < 64 ? ldexpf(1.f, i - 20) : (float)ldexp(rng_uniform(&r) + 0.5, (int)(rng_uniform(&r) * 120) - 20);
+        float u = pb_volume_depth_unit(d);
+        int e;
+        float m = frexpf(u, &e);
+        float q = d / u;
+        uint16_t h2 = pb_half_from_float(q * q);
+        if (m != 0.5f || !(q > 64.f && q <= 128.f) || (h2 & 0x7c00u) == 0x7c00u) {
+            if (bad++ < 5)
+                fprintf(stderr, "  max distance %g: unit %g, reach %g units\n", d, u, q);
+        }
+    }
+    CHECKF(bad == 0, "%u of 20000 units wrong", bad);
+    CHECK(pb_volume_depth_unit(0.f) == 1.f && pb_volume_depth_unit(NAN) == 1.f && pb_volume_depth_unit(INFINITY) == 1.f);
+    CHECK(pb_volume_depth_unit(128.f) == 1.f && pb_volume_depth_unit(128.5f) == 2.f);
+}
+
+/* No file holds NaN or Inf: the writer refuses, naming the probe, and leaves
+ * no file (nor a temporary) behind. */
+static void writer_refuses_nonfinite_values(void)
+{
+    char dir[512], path[600];
+    snprintf(dir, sizeof dir, "%s/nonfinite", temp_dir());
+    mkdir(dir, 0755);
+    snprintf(path, sizeof path, "%s/out.probes", dir);
+    const char *what[] = {"position", "offset", "SH", "depth", "depth2", "origin", "unit"};
+    for (int c = 0; c < 7; ++c) {
+        pb_volume v;
+        fill(&v, 3, 2, 2, 4);
+        uint64_t tile = pb_volume_tile_halves(4);
+        switch (c) {
+        case 0: v.base[3 * 5 + 1] = NAN; break;
+        case 1: v.offset[3 * 5 + 2] = INFINITY; break;
+        case 2: v.sh[27 * 5 + 13] = -INFINITY; break;
+        case 3: v.depth[tile * 5 + 7] = 0x7c00u; break;          /* +Inf half */
+        case 4: v.depth[tile * 5 + tile - 1] = 0x7e00u; break;   /* NaN half */
+        case 5: v.origin[1] = NAN; break;
+        default: v.depth_unit = INFINITY; break;
+        }
+        pb_error err;
+        pb_result r = pb_volume_write(path, &v, &err);
+        int names_probe = c >= 5 || strstr(err.message, "probe 5 ") != NULL;
+        CHECKF(r == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, path) && names_probe, "%s: %s: %s", what[c],
+               pb_result_name(r), err.message);
+        CHECKF(count_files(dir) == 0, "%s: a file was left", what[c]);
+        pb_volume_free(&v);
+    }
+}
+
+/* A version-1 file (depth in metres, its squares +Inf past 256 m) reads as a
+ * version-2 volume: finite texels in the depth unit, overflowed ones at the
+ * max distance. */
+static void version1_files_convert(void)
+{
+    pb_volume v, w;
+    fill(&v, 2, 2, 1, 4); /* max distance 64 m */
+    char path[512];
+    snprintf(path, sizeof path, "%s/v1.probes", temp_dir());
+    pb_error err;
+    CHECK(pb_volume_write(path, &v, &err) == PB_OK);
+    size_t size = (size_t)pb_volume_file_bytes(&v);
+    unsigned char *b = malloc(size);
+    FILE *f = fopen(path, "rb");
+    CHECK(f && fread(b, 1, size, f) == size);
+    fclose(f);
+    uint32_t one = 1, zero = 0;
+    memcpy(b + 8, &one, 4);   /* version 1 */
+    memcpy(b + 128, &one, 4); /* depth format 1: metres */
+    memcpy(b + 180, &zero, 4);
+    uint64_t depth_at;
+    memcpy(&depth_at, b + 168, 8);
+    uint64_t texels = 4 * pb_volume_tile_halves(4) / 2;
+    for (uint64_t t = 0; t < texels; ++t) {
+        /* texel 0: 10 m (100 m^2); 1: 300 m whose square overflowed; 2: NaN; others 40 m */
+        uint16_t m1 = pb_half_from_float(t == 0 ? 10.f : t == 1 ? 300.f : 40.f);
+        uint16_t m2 = t == 0 ? pb_half_from_float(100.f) : t == 1 ? 0x7c00u : pb_half_from_float(1600.f);
+        if (t == 2)
+            m1 = m2 = 0x7e00u;
+        memcpy(b + depth_at + 4 * t, &m1, 2);
+        memcpy(b + depth_at + 4 * t + 2, &m2, 2);
+    }
+    const char *p1 = write_file("version1.probes", b, size);
+    CHECKF(pb_volume_read(p1, &w, &err) == PB_OK, "%s", err.message);
+    CHECK(w.depth_unit == 0.5f);
+    uint32_t nonfinite = 0;
+    for (uint64_t i = 0; i < 2 * texels; ++i)
+        nonfinite += (w.depth[i] & 0x7c00u) == 0x7c00u;
+    CHECKF(nonfinite == 0, "%u non-finite halves after conversion", nonfinite);
+    CHECK(pb_half_to_float(w.depth[0]) == 20.f && pb_half_to_float(w.depth[1]) == 400.f);
+    CHECK(pb_half_to_float(w.depth[2]) == 128.f && pb_half_to_float(w.depth[3]) == 16384.f); /* clamped to 64 m */
+    CHECK(pb_half_to_float(w.depth[4]) == 128.f && pb_half_to_float(w.depth[5]) == 16384.f); /* NaN: likewise */
+    CHECK(pb_half_to_float(w.depth[6]) == 80.f && pb_half_to_float(w.depth[7]) == 6400.f);
+    CHECK(memcmp(w.sh, v.sh, 4 * 27 * 4) == 0);
+    /* and writes back as version 2 with finite depth */
+    snprintf(path, sizeof path, "%s/v1-rewritten.probes", temp_dir());
+    CHECK(pb_volume_write(path, &w, &err) == PB_OK);
+    free(b);
+    pb_volume_free(&w);
+    pb_volume_free(&v);
+}
+
 int main(void)
 {
     RUN(half_round_trip_exhaustive);
@@ -220,5 +331,8 @@ int main(void)
     RUN(file_round_trip);
     RUN(failed_write_leaves_nothing);
     RUN(malformed_files_get_clear_errors);
+    RUN(depth_unit_bounds_the_reach);
+    RUN(writer_refuses_nonfinite_values);
+    RUN(version1_files_convert);
     return test_summary();
 }

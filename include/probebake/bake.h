@@ -35,6 +35,11 @@ extern "C" {
 #endif
 
 /* Probes at given positions (docs/bake.md, --points). */
+/* Probe points (and grids) must lie within this many metres of the world
+ * origin and of the scene: squared distances in the bake's float
+ * arithmetic then stay below 1e30, far from float's 3.4e38. */
+#define PB_MAX_COORDINATE 1e15
+
 typedef struct pb_points {
     uint32_t count;
     double *positions;            /* 3 per point, scene (glTF world) coordinates */
@@ -92,6 +97,16 @@ typedef struct pb_gpu_scene pb_gpu_scene;
  * keys its probes exactly as the grid does. */
 void pb_bake_probe_position(const pb_scene *scene, const pb_bake_desc *desc, uint32_t probe, float local[3],
                             uint32_t *id);
+
+/* The light a bake or render would compute with: every material's emission
+ * (emissive factor x strength), every punctual light's colour x intensity,
+ * the sky and every environment texel (NULL: none) must be finite, >= 0 and
+ * at most PB_MAX_RADIOMETRIC (scene.h), and light ranges finite and >= 0.
+ * Returns PB_ERROR_INVALID_ARGUMENT naming the file and the material,
+ * light or texel. Host only: pb_bake and pb_render call it before any
+ * device work; a front end may call it right after loading. */
+pb_result pb_bake_check_light(const pb_scene *scene, const float sky[3], const pb_environment *environment,
+                              pb_error *err);
 
 /* Bakes into *out (arrays allocated; pb_volume_free releases them).
  * Returns PB_ERROR_INVALID_ARGUMENT before any GPU work for bad descs,

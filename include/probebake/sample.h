@@ -30,10 +30,11 @@ typedef struct pb_sample_volume {
     int32_t counts[3];
     int32_t octmap_res;
     float normal_bias, view_bias;
+    float depth_unit;           /* metres per stored depth unit (the volume's) */
     uint32_t probe_count;
     float *probes;              /* 4 per probe: relocated position in the frame, w = PB_PROBE_* flags (uint bits) */
     float *sh;                  /* 27 per probe: irradiance SH, coefficient major, RGB */
-    uint32_t *depth;            /* (n+2)^2 per probe: halves (mean, mean squared), as in the file */
+    uint32_t *depth;            /* (n+2)^2 per probe: halves (mean, mean squared) in depth units, as in the file */
 } pb_sample_volume;
 
 /* Lays out volume v for sampling in the frame whose origin is frame_origin
@@ -47,6 +48,14 @@ void pb_sample_volume_free(pb_sample_volume *s);
 /* Irradiance at p (frame coordinates) with unit normal n, seen from unit
  * direction view (from p towards the viewer). */
 void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3]);
+
+/* The Chebyshev visibility weight pb_sample_cpu gives probe `probe` for the
+ * (already biased) point q, in [0, 1]: the part of the weight that the depth
+ * moments decide. Scale-invariant: a scene and its copy scaled by s give the
+ * same weight at corresponding points, to float16 rounding.
+ *  detail: NULL, or receives (mean, mean square, distance of q) in depth units. */
+float pb_sample_visibility_cpu(const pb_sample_volume *s, int probe, const float q[3], const float n[3],
+                               float detail[3]);
 
 typedef struct pb_context pb_context;
 

@@ -123,6 +123,13 @@ typedef struct pb_scene {
     char path[1024];          /* file it was loaded from, "" if built in memory */
 } pb_scene;
 
+/* The largest radiometric value (radiance, radiant intensity, irradiance) a
+ * bake or render accepts from a scene, sky or environment map. The bake's
+ * float arithmetic multiplies such values by geometry and sampling factors
+ * (1/d² over a ray offset, 1/pdf of a small emitter: up to about 1e12) and
+ * sums up to 65536 rays: 1e20 leaves that product below float's 3.4e38. */
+#define PB_MAX_RADIOMETRIC 1e20f
+
 /* Zero fields mean the defaults listed on each line. */
 typedef struct pb_scene_desc {
     pb_log log;

@@ -21,7 +21,9 @@
 extern "C" {
 #endif
 
-#define PB_VOLUME_VERSION 1
+/* Version 2: depth texels in units of depth_unit (version 1 stored metres,
+ * whose squares overflow float16 past 256 m; the reader converts). */
+#define PB_VOLUME_VERSION 2
 
 enum {
     PB_VOLUME_IRRADIANCE = 1u << 0,     /* SH holds irradiance (else radiance) */
@@ -66,6 +68,7 @@ typedef struct pb_volume {
     pb_volume_settings settings;
     pb_volume_timings timings;
     char device[128];
+    float depth_unit;                   /* metres per depth unit: texels hold (d / unit, d^2 / unit^2); a power of two */
     uint64_t rays_traced;               /* probe rays of the bake passes (set by pb_bake; not stored in files) */
     uint64_t traversals;                /* BVH traversals of relocation and bake passes: probe, bounce, shadow rays (ditto) */
     /* per probe, caller- or reader-owned arrays (pb_volume_free frees them) */
@@ -73,8 +76,15 @@ typedef struct pb_volume {
     float *offset;                      /* 3 per probe: relocation, metres */
     uint32_t *probe_flags;              /* PB_PROBE_* */
     float *sh;                          /* 27 per probe */
-    uint16_t *depth;                    /* (n+2)^2 texels x 2 halves per probe, tile after tile */
+    uint16_t *depth;                    /* (n+2)^2 texels x 2 halves per probe, tile after tile, in depth_unit */
 } pb_volume;
+
+/* The depth unit for a volume whose rays see at most max_distance metres:
+ * the smallest power of two u with max_distance / u <= 128, so the stored
+ * mean square, at most 128^2 = 16384, can never overflow float16 (65504)
+ * at any scene scale, and scaling by u is exact. Non-positive or
+ * non-finite max_distance: 1. */
+float pb_volume_depth_unit(float max_distance);
 
 /* Bytes of one depth tile and of the whole file for a volume's sizes. */
 uint64_t pb_volume_tile_halves(uint32_t octmap_res);
@@ -88,10 +98,15 @@ pb_result pb_volume_alloc(pb_volume *v, pb_error *err);
 /* Frees the per-probe arrays (the struct itself is the caller's). */
 void pb_volume_free(pb_volume *v);
 
-/* Writes v to `path` atomically. Returns PB_ERROR_IO naming the path. */
+/* Writes v to `path` atomically. Returns PB_ERROR_IO naming the path, or
+ * PB_ERROR_INVALID_ARGUMENT naming the probe when any value (position,
+ * offset, SH, depth texel, origin, spacing, depth unit) is NaN or infinite:
+ * no file ever holds one. */
 pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err);
 
 /* Reads and validates a volume file into *v (arrays owned by v afterwards).
+ * Version-1 files (depth in metres) are converted to depth units on read;
+ * their overflowed (infinite) texels become max_distance and its square.
  * Returns PB_ERROR_IO (cannot read), PB_ERROR_PARSE (not a volume, truncated,
  * inconsistent sizes), PB_ERROR_UNSUPPORTED (newer version). */
 pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err);

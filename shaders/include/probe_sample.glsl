@@ -4,7 +4,7 @@
 // Layout (src/bake/probe_sample.c, pb_sample_volume): per probe a vec4
 // (position, flags as uint bits), 27 floats of irradiance SH (coefficient
 // major, RGB), and (n+2)^2 uints per depth tile, each two halves
-// (mean, mean squared) as in the volume file.
+// (mean, mean squared) in depth units as in the volume file.
 #ifndef PB_PROBE_SAMPLE_GLSL
 #define PB_PROBE_SAMPLE_GLSL
 
@@ -19,7 +19,8 @@ struct PbVolumeRefs {
     uint64_t probes;    // vec4 per probe
     uint64_t sh;        // 27 floats per probe
     uint64_t depth;     // (n+2)^2 uints per probe
-    uint64_t pad;
+    float depth_unit;   // metres per depth unit of the tiles
+    float pad;
     vec4 origin_nbias;  // grid origin, normal bias
     vec4 spacing_vbias; // grid spacing, view bias
     ivec4 counts_res;   // probes per axis, octmap_res
@@ -55,7 +56,7 @@ vec2 pb_probe_depth(int probe, ivec2 texel)
 PbVolumeGrid pb_volume_grid(PbVolumeRefs r)
 {
     return PbVolumeGrid(r.origin_nbias.xyz, r.spacing_vbias.xyz, r.counts_res.xyz, r.counts_res.w, r.origin_nbias.w,
-                        r.spacing_vbias.w);
+                        r.spacing_vbias.w, r.depth_unit);
 }
 
 #endif

@@ -8,7 +8,8 @@
 //   vec4 pb_probe_position(int probe)            relocated position (xyz), same frame as p
 //   uint pb_probe_flags(int probe)               PB_PROBE_* of docs/format.md
 //   vec3 pb_probe_sh(int probe, int k)           irradiance SH coefficient k (RGB)
-//   vec2 pb_probe_depth(int probe, ivec2 texel)  (mean, mean squared) distance, bordered tile texel
+//   vec2 pb_probe_depth(int probe, ivec2 texel)  (mean, mean squared) distance in depth units
+//                                                (PbVolumeGrid.depth_unit metres), bordered tile texel
 #ifndef PB_PROBE_SAMPLE_CORE_GLSL
 #define PB_PROBE_SAMPLE_CORE_GLSL
 
@@ -21,6 +22,7 @@ struct PbVolumeGrid {
     int octmap_res;     // n: interior texels per side of a depth tile
     float normal_bias;  // shading point moved along the normal by this x the smallest spacing
     float view_bias;    // and towards the viewer by this x the smallest spacing
+    float depth_unit;   // metres per depth unit of pb_probe_depth (a power of two; docs/format.md)
 };
 
 // Octahedral encoding (Cigolle et al. 2014), +Z hemisphere in the centre.
@@ -117,7 +119,7 @@ vec3 pb_sample_irradiance(PbVolumeGrid g, vec3 p, vec3 n, vec3 v)
         vec3 from_probe = biased - pp;
         float r = length(from_probe);
         vec2 m = pb_depth_moments(probe, g.octmap_res, r > 0.0 ? from_probe / r : n);
-        w *= pb_chebyshev(m, r);
+        w *= pb_chebyshev(m, r / g.depth_unit); // the moments are in depth units
         w = max(w, 1e-6);
         // crush tiny weights: a probe that barely counts should not count at all
         if (w < 0.2)

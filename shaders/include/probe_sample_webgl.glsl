@@ -6,7 +6,8 @@
 //   pb_sh      RGBA32F: 7 texels per probe: the 27 irradiance SH floats
 //              (coefficient major, RGB) and one zero
 //   pb_depth   RG16F:   depth tiles of (n+2)^2 texels, pb_depth_tiles_per_row
-//              tiles per row; texel = (mean, mean squared) distance
+//              tiles per row; texel = (mean, mean squared) distance in
+//              units of pb_depth_unit metres (the file's depth unit)
 // Texel i of pb_probes and pb_sh is at (i % pb_tex_width, i / pb_tex_width).
 precision highp float;
 precision highp int;
@@ -22,6 +23,7 @@ uniform ivec3 pb_grid_counts;
 uniform int pb_octmap_res;
 uniform float pb_normal_bias; // default 0.1 (of the smallest spacing)
 uniform float pb_view_bias;   // default 0.1
+uniform float pb_depth_unit;  // metres per depth unit: the volume file's (header offset 180)
 
 ivec2 pb_texel_2d(int i)
 {

@@ -67,10 +67,14 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
             return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u probe points: need 1 to 2^24", d->points->count);
         if (!(d->points->spacing >= 0) || !isfinite(d->points->spacing))
             return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "points spacing must be finite and >= 0");
-        for (uint64_t i = 0; i < 3ull * d->points->count; ++i)
-            if (!isfinite(d->points->positions[i]))
-                return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probe point %llu is not finite",
-                               (unsigned long long)(i / 3));
+        for (uint64_t i = 0; i < 3ull * d->points->count; ++i) {
+            double x = d->points->positions[i];
+            if (!(fabs(x) <= PB_MAX_COORDINATE) || !(fabs(x - s->origin[i % 3]) <= PB_MAX_COORDINATE))
+                return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                               "probe point %llu (id %u) has coordinate %g: must be finite and within +-%g m of the "
+                               "origin and of the scene", (unsigned long long)(i / 3), d->points->ids ? d->points->ids[i / 3] : (uint32_t)(i / 3), x,
+                               PB_MAX_COORDINATE);
+        }
     } else {
         uint64_t probes = (uint64_t)d->grid.counts[0] * d->grid.counts[1] * d->grid.counts[2];
         if (!probes || probes > (1u << 24))
@@ -94,9 +98,9 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u bounces: at most 64", d->bounces);
     if (d->octmap_res > 64)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "octahedral map %u: at most 64 texels per side", d->octmap_res);
-    for (int k = 0; k < 3; ++k)
-        if (!(d->sky[k] >= 0.f) || !isfinite(d->sky[k]))
-            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sky radiance must be finite and >= 0");
+    pb_result r = pb_bake_check_light(s, d->sky, d->environment, err);
+    if (r != PB_OK)
+        return r;
     if (d->environment && (!d->environment->rgb || !d->environment->width || !d->environment->height ||
                            (uint64_t)d->environment->width * d->environment->height > (1u << 24) ||
                            !isfinite(d->environment->rotation_deg)))
@@ -576,13 +580,14 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
             f |= PB_PROBE_CONVERGED;
         out->probe_flags[p] = f;
         uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
+        double unit = out->depth_unit; /* a power of two: the division is exact */
         for (uint32_t by = 0; by < n + 2; ++by)
             for (uint32_t bx = 0; bx < n + 2; ++bx) {
                 uint32_t x, y;
                 pb_oct_border_source(bx, by, n, &x, &y);
                 const double *m = depth_sum + 2 * ((size_t)texels * p + (size_t)y * n + x);
-                tile[2 * (by * (n + 2) + bx)] = pb_half_from_float((float)(m[0] / done_p));
-                tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / done_p));
+                tile[2 * (by * (n + 2) + bx)] = pb_half_from_float((float)(m[0] / done_p / unit));
+                tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / done_p / (unit * unit)));
             }
     }
     if (!d.points)

@@ -2,8 +2,54 @@
 #include "bake/shading.h"
 #include "common/common.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+static int radiometric_ok(float x)
+{
+    return x >= 0.f && x <= PB_MAX_RADIOMETRIC; /* false for NaN and Inf */
+}
+
+pb_result pb_bake_check_light(const pb_scene *scene, const float sky[3], const pb_environment *environment,
+                              pb_error *err)
+{
+    const char *file = scene->path[0] ? scene->path : "scene";
+    for (uint32_t m = 0; m < scene->material_count; ++m)
+        for (int k = 0; k < 3; ++k)
+            if (!radiometric_ok(scene->materials[m].emissive[k]))
+                return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                               "%s: material %u '%s' emits %g (emissive factor x strength): radiances must be finite, "
+                               ">= 0 and at most %g", file, m, scene->materials[m].name,
+                               (double)scene->materials[m].emissive[k], (double)PB_MAX_RADIOMETRIC);
+    for (uint32_t l = 0; l < scene->light_count; ++l) {
+        const pb_light *L = &scene->lights[l];
+        for (int k = 0; k < 3; ++k)
+            if (!radiometric_ok(L->intensity) || !radiometric_ok(L->color[k]) ||
+                !radiometric_ok(L->color[k] * L->intensity))
+                return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                               "%s: light %u '%s' has intensity %g and colour (%g, %g, %g): colour x intensity must "
+                               "be finite, >= 0 and at most %g", file, l, L->name, (double)L->intensity,
+                               (double)L->color[0], (double)L->color[1], (double)L->color[2],
+                               (double)PB_MAX_RADIOMETRIC);
+        if (!isfinite(L->range) || L->range < 0.f)
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: light %u '%s' has range %g: must be finite and >= 0",
+                           file, l, L->name, (double)L->range);
+    }
+    for (int k = 0; k < 3; ++k)
+        if (!radiometric_ok(sky[k]))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                           "sky radiance (%g, %g, %g): each must be finite, >= 0 and at most %g", (double)sky[0],
+                           (double)sky[1], (double)sky[2], (double)PB_MAX_RADIOMETRIC);
+    if (environment && environment->rgb)
+        for (uint64_t i = 0; i < 3ull * environment->width * environment->height; ++i)
+            if (!radiometric_ok(environment->rgb[i]))
+                return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                               "%s: environment texel %llu is %g after the intensity: radiances must be finite, >= 0 "
+                               "and at most %g", environment->path[0] ? environment->path : "environment",
+                               (unsigned long long)(i / 3), (double)environment->rgb[i], (double)PB_MAX_RADIOMETRIC);
+    return PB_OK;
+}
 
 static pb_result upload(pb_context *ctx, pb_buffer *b, uint64_t bytes, const char *what, const void *data,
                         pb_error *err)

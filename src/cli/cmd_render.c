@@ -80,7 +80,8 @@ int cmd_render(const options *o)
         goto out;
     if (cli_environment(o, &env, &err) != PB_OK)
         goto out;
-    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
+    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK ||
+        pb_bake_check_light(s, o->sky, o->env ? &env : NULL, &err) != PB_OK)
         goto out;
     if (o->volume) {
         uint64_t h = pb_hash64(s->positions, (size_t)s->triangle_count * 36,

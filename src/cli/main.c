@@ -429,6 +429,31 @@ static void json_string(const char *s)
     putchar('"');
 }
 
+/* A JSON number: JSON has no NaN or Infinity, so those print as null.
+ * Returned by value: J(x).s lives until the end of the printf using it. */
+typedef struct json_num {
+    char s[32];
+} json_num;
+
+static json_num J(double x)
+{
+    json_num j;
+    if (isfinite(x))
+        snprintf(j.s, sizeof j.s, "%.9g", x);
+    else
+        snprintf(j.s, sizeof j.s, "null");
+    return j;
+}
+
+/* Full double precision (origins far from zero). */
+static json_num J17(double x)
+{
+    json_num j = J(x);
+    if (isfinite(x))
+        snprintf(j.s, sizeof j.s, "%.17g", x);
+    return j;
+}
+
 static int cmd_devices(const options *o)
 {
     pb_device_info infos[16];
@@ -514,22 +539,24 @@ static int cmd_info(const options *o)
             const pb_light *l = &s->lights[i];
             printf("%s{\"type\": \"%s\", \"name\": ", i ? ", " : "", light_type(l->type));
             json_string(l->name);
-            printf(", \"color\": [%g, %g, %g], \"intensity\": %g, \"range\": %g, \"position\": [%.9g, %.9g, %.9g]}",
-                   l->color[0], l->color[1], l->color[2], l->intensity, l->range, l->position[0] + s->origin[0],
-                   l->position[1] + s->origin[1], l->position[2] + s->origin[2]);
+            printf(", \"color\": [%s, %s, %s], \"intensity\": %s, \"range\": %s, \"position\": [%s, %s, %s]}",
+                   J(l->color[0]).s, J(l->color[1]).s, J(l->color[2]).s, J(l->intensity).s, J(l->range).s,
+                   J(l->position[0] + s->origin[0]).s, J(l->position[1] + s->origin[1]).s,
+                   J(l->position[2] + s->origin[2]).s);
         }
         printf("],\n  \"cameras\": [");
         for (uint32_t i = 0; i < s->camera_count; ++i) {
             const pb_camera *c = &s->cameras[i];
             printf("%s{\"name\": ", i ? ", " : "");
             json_string(c->name);
-            printf(", \"perspective\": %s, \"yfov\": %g, \"position\": [%.9g, %.9g, %.9g]}",
-                   c->perspective ? "true" : "false", c->yfov, c->position[0] + s->origin[0],
-                   c->position[1] + s->origin[1], c->position[2] + s->origin[2]);
+            printf(", \"perspective\": %s, \"yfov\": %s, \"position\": [%s, %s, %s]}",
+                   c->perspective ? "true" : "false", J(c->yfov).s, J(c->position[0] + s->origin[0]).s,
+                   J(c->position[1] + s->origin[1]).s, J(c->position[2] + s->origin[2]).s);
         }
-        printf("],\n  \"bounds_min\": [%.9g, %.9g, %.9g],\n  \"bounds_max\": [%.9g, %.9g, %.9g],\n"
-               "  \"origin\": [%.17g, %.17g, %.17g]\n}\n",
-               lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], s->origin[0], s->origin[1], s->origin[2]);
+        printf("],\n  \"bounds_min\": [%s, %s, %s],\n  \"bounds_max\": [%s, %s, %s],\n"
+               "  \"origin\": [%s, %s, %s]\n}\n",
+               J(lo[0]).s, J(lo[1]).s, J(lo[2]).s, J(hi[0]).s, J(hi[1]).s, J(hi[2]).s, J17(s->origin[0]).s,
+               J17(s->origin[1]).s, J17(s->origin[2]).s);
     } else {
         printf("scene       %s\n", o->scene);
         printf("triangles   %u kept of %llu (%llu degenerate, %llu NaN/Inf dropped)\n", s->triangle_count,
@@ -666,12 +693,12 @@ static void print_probe_json(const pb_volume *v, uint32_t i, int last)
 {
     double p[3];
     pb_volume_probe_position(v, i, p);
-    printf("    {\"index\": %u, \"position\": [%.9g, %.9g, %.9g], \"offset\": [%g, %g, %g], \"flags\": ", i, p[0],
-           p[1], p[2], v->offset[3 * i], v->offset[3 * i + 1], v->offset[3 * i + 2]);
+    printf("    {\"index\": %u, \"position\": [%s, %s, %s], \"offset\": [%s, %s, %s], \"flags\": ", i, J(p[0]).s,
+           J(p[1]).s, J(p[2]).s, J(v->offset[3 * i]).s, J(v->offset[3 * i + 1]).s, J(v->offset[3 * i + 2]).s);
     print_flags(v->probe_flags[i]);
     printf(", \"sh\": [");
     for (int c = 0; c < 27; ++c)
-        printf("%s%.9g", c ? ", " : "", v->sh[27 * (size_t)i + c]);
+        printf("%s%s", c ? ", " : "", J(v->sh[27 * (size_t)i + c]).s);
     printf("]}%s\n", last ? "" : ",");
 }
 
@@ -722,17 +749,19 @@ static int cmd_inspect(const options *o)
         printf("{\n  \"file\": ");
         json_string(o->scene);
         printf(",\n  \"version\": %u,\n  \"probes\": %u,\n  \"grid\": %s,\n  \"counts\": [%u, %u, %u],\n"
-               "  \"origin\": [%.17g, %.17g, %.17g],\n  \"spacing\": [%g, %g, %g],\n  \"sh\": \"%s\",\n"
-               "  \"direct\": %s,\n  \"octmap_res\": %u,\n  \"max_distance\": %g,\n  \"seed\": %llu,\n"
+               "  \"origin\": [%s, %s, %s],\n  \"spacing\": [%s, %s, %s],\n  \"sh\": \"%s\",\n"
+               "  \"direct\": %s,\n  \"octmap_res\": %u,\n  \"max_distance\": %s,\n  \"depth_unit\": %s,\n"
+               "  \"seed\": %llu,\n"
                "  \"scene_hash\": \"%016llx\",\n  \"rays_per_probe\": %u,\n  \"passes\": %u,\n  \"bounces\": %u,\n"
-               "  \"indirect\": \"%s\",\n  \"sh_window\": \"%s\",\n  \"sh_window_width\": %g,\n  \"indirect_clamp\": %g,\n"
+               "  \"indirect\": \"%s\",\n  \"sh_window\": \"%s\",\n  \"sh_window_width\": %s,\n  \"indirect_clamp\": %s,\n"
                "  \"device\": ",
                PB_VOLUME_VERSION, v.probe_count, v.flags & PB_VOLUME_GRID ? "true" : "false", v.counts[0], v.counts[1],
-               v.counts[2], v.origin[0], v.origin[1], v.origin[2], v.spacing[0], v.spacing[1], v.spacing[2], kind,
-               v.flags & PB_VOLUME_DIRECT ? "true" : "false", v.octmap_res, s->max_distance,
-               (unsigned long long)s->seed, (unsigned long long)s->scene_hash, s->rays_per_probe, s->passes,
-               s->bounces, s->indirect_mode ? "volume" : "path", window_name(s->sh_window), s->sh_window_width,
-               s->indirect_clamp);
+               v.counts[2], J17(v.origin[0]).s, J17(v.origin[1]).s, J17(v.origin[2]).s, J(v.spacing[0]).s,
+               J(v.spacing[1]).s, J(v.spacing[2]).s, kind, v.flags & PB_VOLUME_DIRECT ? "true" : "false", v.octmap_res,
+               J(s->max_distance).s, J(v.depth_unit).s, (unsigned long long)s->seed,
+               (unsigned long long)s->scene_hash, s->rays_per_probe, s->passes, s->bounces,
+               s->indirect_mode ? "volume" : "path", window_name(s->sh_window), J(s->sh_window_width).s,
+               J(s->indirect_clamp).s);
         json_string(v.device);
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
@@ -833,7 +862,8 @@ static int cmd_bake(const options *o)
         goto out;
     if (cli_environment(o, &env, &err) != PB_OK)
         goto out;
-    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
+    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK ||
+        pb_bake_check_light(s, o->sky, o->env ? &env : NULL, &err) != PB_OK)
         goto out;
     if (s->triangle_count == 0 && !o->has_bounds && !o->points) {
         snprintf(err.message, sizeof err.message, "%s: no triangles and no --bounds: nowhere to put probes", o->scene);

@@ -150,6 +150,12 @@ static int read_point(cursor *c, pb_points *out, uint32_t *cap)
             c->failed = 1;
         }
     }
+    for (int k = 0; k < 3 && !c->failed; ++k)
+        if (!(fabs(v[k]) <= PB_MAX_COORDINATE)) {
+            pb_fail(c->err, PB_ERROR_PARSE, "%s: point %u at (%g, %g, %g): coordinates must be within +-%g m",
+                    c->path, out->count, v[0], v[1], v[2], PB_MAX_COORDINATE);
+            c->failed = 1;
+        }
     if (c->failed)
         return 0;
     out->ids[out->count++] = id;

@@ -5,6 +5,7 @@
 #include "probebake/volume.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,7 +14,8 @@
 #define HEADER_BYTES 512u
 #define MAGIC "PBVOLUME"
 #define MAX_PROBES (1u << 28)
-#define DEPTH_FORMAT_F16 1u
+#define DEPTH_FORMAT_F16_METRES 1u /* version 1: float16 metres (overflows past 256 m) */
+#define DEPTH_FORMAT_F16_UNITS 2u  /* version 2: float16 in depth units (a power of two) */
 #define SH_FORMAT_F32 1u
 
 /* ------------------------------------------------------------ sizes */
@@ -49,6 +51,18 @@ uint64_t pb_volume_file_bytes(const pb_volume *v)
     return layout_of(v->probe_count, v->octmap_res).end;
 }
 
+float pb_volume_depth_unit(float max_distance)
+{
+    if (!(max_distance > 0.f) || !isfinite(max_distance))
+        return 1.f;
+    int e;
+    frexpf(max_distance / 128.f, &e); /* max_distance / 128 = m 2^e, m in [0.5, 1) */
+    float u = ldexpf(1.f, e);         /* >= max_distance / 128, less than twice it */
+    if (ldexpf(1.f, e - 1) >= max_distance / 128.f)
+        u = ldexpf(1.f, e - 1);       /* an exact power of two already */
+    return u;
+}
+
 /* ------------------------------------------------------------ memory */
 
 pb_result pb_volume_alloc(pb_volume *v, pb_error *err)
@@ -58,6 +72,8 @@ pb_result pb_volume_alloc(pb_volume *v, pb_error *err)
                        v->probe_count);
     if (v->octmap_res < 1 || v->octmap_res > 256)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "octahedral map size %u is outside 1..256", v->octmap_res);
+    if (v->depth_unit == 0.f) /* derived from the rays' reach unless the caller chose one */
+        v->depth_unit = pb_volume_depth_unit(v->settings.max_distance);
     size_t n = v->probe_count;
     v->base = calloc(n * 3, sizeof(float));
     v->offset = calloc(n * 3, sizeof(float));
@@ -177,7 +193,7 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     put_u32(b + 116, s->indirect_mode);
     put_f32(b + 120, s->target_error);
     put_f32(b + 124, s->max_distance);
-    put_u32(b + 128, DEPTH_FORMAT_F16);
+    put_u32(b + 128, DEPTH_FORMAT_F16_UNITS);
     put_u32(b + 132, SH_FORMAT_F32);
     put_u64(b + 136, l.base);
     put_u64(b + 144, l.offset);
@@ -185,6 +201,7 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     put_u64(b + 160, l.sh);
     put_u64(b + 168, l.depth);
     put_u32(b + 176, v->octmap_res + 2);
+    put_f32(b + 180, v->depth_unit);
     const double *t = &v->timings.load;
     for (int i = 0; i < 8; ++i)
         put_f64(b + 184 + 8 * i, t[i]);
@@ -210,11 +227,50 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     return b;
 }
 
+static int half_finite(uint16_t h)
+{
+    return (h & 0x7c00u) != 0x7c00u;
+}
+
+/* The first non-finite value of the volume, as a message; NULL if none. */
+static const char *first_nonfinite(const pb_volume *v, uint32_t *probe)
+{
+    *probe = 0;
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(v->origin[k]) || !isfinite(v->spacing[k]))
+            return "the grid origin or spacing";
+    if (!(v->depth_unit > 0.f) || !isfinite(v->depth_unit))
+        return "the depth unit";
+    uint64_t halves = pb_volume_tile_halves(v->octmap_res);
+    for (uint32_t p = 0; p < v->probe_count; ++p) {
+        *probe = p;
+        for (int k = 0; k < 3; ++k) {
+            if (!isfinite(v->base[3 * (size_t)p + k]))
+                return "its position";
+            if (!isfinite(v->offset[3 * (size_t)p + k]))
+                return "its relocation offset";
+        }
+        for (int c = 0; c < 27; ++c)
+            if (!isfinite(v->sh[27 * (size_t)p + c]))
+                return "an SH coefficient";
+        for (uint64_t i = 0; i < halves; ++i)
+            if (!half_finite(v->depth[halves * p + i]))
+                return "a depth texel";
+    }
+    return NULL;
+}
+
 pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err)
 {
     pb_error_clear(err);
     if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth || !v->probe_count)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: volume has no probe data to write", path);
+    uint32_t bad_probe;
+    const char *bad = first_nonfinite(v, &bad_probe);
+    if (bad)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "%s: not written: probe %u has a NaN or infinite value in %s (no volume file holds one)", path,
+                       bad_probe, bad);
     uint64_t size = 0;
     unsigned char *bytes = encode(v, &size);
     if (!bytes)
@@ -254,6 +310,26 @@ pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err)
     return r;
 }
 
+/* Version 1 stored metres; texels past 256 m overflowed to +Inf (the
+ * squares first). Rays never see farther than max_distance, so an
+ * overflowed or larger texel is max_distance (squared), and the rest is
+ * re-expressed in the depth unit a version-2 writer would choose. */
+static void convert_v1_depth(pb_volume *v)
+{
+    float maxd = v->settings.max_distance > 0.f && isfinite(v->settings.max_distance) ? v->settings.max_distance
+                                                                                      : 65504.f;
+    v->depth_unit = pb_volume_depth_unit(maxd);
+    float u = v->depth_unit;
+    uint64_t texels = (uint64_t)v->probe_count * pb_volume_tile_halves(v->octmap_res) / 2u;
+    for (uint64_t t = 0; t < texels; ++t) {
+        float m1 = pb_half_to_float(v->depth[2 * t]), m2 = pb_half_to_float(v->depth[2 * t + 1]);
+        m1 = m1 >= 0.f && m1 <= maxd ? m1 : maxd;          /* NaN and +Inf too */
+        m2 = m2 >= 0.f && m2 <= maxd * maxd ? m2 : maxd * maxd;
+        v->depth[2 * t] = pb_half_from_float(m1 / u);
+        v->depth[2 * t + 1] = pb_half_from_float(m2 / u / u);
+    }
+}
+
 pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
 {
     pb_error_clear(err);
@@ -274,7 +350,7 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     uint32_t version = get_u32(h + 8);
     if (version > PB_VOLUME_VERSION || version == 0) {
         fclose(f);
-        return pb_fail(err, PB_ERROR_UNSUPPORTED, "%s: volume format version %u; this build reads version %u", path,
+        return pb_fail(err, PB_ERROR_UNSUPPORTED, "%s: volume format version %u; this build reads versions 1 to %u", path,
                        version, PB_VOLUME_VERSION);
     }
     v->flags = get_u32(h + 16);
@@ -310,8 +386,11 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         bad = "probe count out of range";
     else if (v->octmap_res < 1 || v->octmap_res > 256 || get_u32(h + 176) != v->octmap_res + 2)
         bad = "octahedral map size out of range";
-    else if (get_u32(h + 128) != DEPTH_FORMAT_F16 || get_u32(h + 132) != SH_FORMAT_F32)
+    else if (get_u32(h + 128) != (version == 1 ? DEPTH_FORMAT_F16_METRES : DEPTH_FORMAT_F16_UNITS) ||
+             get_u32(h + 132) != SH_FORMAT_F32)
         bad = "unknown SH or depth format";
+    else if (version >= 2 && (!(get_f32(h + 180) > 0.f) || !isfinite(get_f32(h + 180))))
+        bad = "depth unit not a positive finite number";
     else if ((v->flags & PB_VOLUME_GRID) &&
              (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != v->probe_count)
         bad = "grid counts do not match the probe count";
@@ -352,5 +431,9 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     for (uint64_t i = 0; i < halves; ++i)
         v->depth[i] = (uint16_t)(b[l.depth + 2 * i] | b[l.depth + 2 * i + 1] << 8);
     free(b);
+    if (version == 1)
+        convert_v1_depth(v);
+    else
+        v->depth_unit = get_f32(h + 180);
     return PB_OK;
 }

@@ -35,7 +35,9 @@ pb_result pb_volume_depth_atlas(const pb_volume *v, unsigned char **rgb8, uint32
     *rgb8 = calloc((size_t)*width * *height, 3);
     if (!*rgb8)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the atlas");
-    float maxd = v->settings.max_distance > 0.f ? v->settings.max_distance : 1.f;
+    /* the tiles hold depth units: the reach in those units */
+    float maxd = (v->settings.max_distance > 0.f ? v->settings.max_distance : 1.f) /
+                 (v->depth_unit > 0.f ? v->depth_unit : 1.f);
     for (uint32_t p = 0; p < v->probe_count; ++p)
         for (uint32_t y = 0; y < side; ++y)
             for (uint32_t x = 0; x < side; ++x) {

@@ -86,6 +86,8 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
 {
     pb_error_clear(err);
     pb_result r = pb_render_check(desc, err);
+    if (r == PB_OK)
+        r = pb_bake_check_light(scene, desc->sky, desc->environment, err);
     if (r != PB_OK)
         return r;
     pb_render_desc d = *desc;

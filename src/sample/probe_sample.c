@@ -32,6 +32,7 @@ pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3
     out->octmap_res = (int32_t)v->octmap_res;
     out->normal_bias = normal_bias > 0.f ? normal_bias : PB_SAMPLE_NORMAL_BIAS;
     out->view_bias = view_bias > 0.f ? view_bias : PB_SAMPLE_VIEW_BIAS;
+    out->depth_unit = v->depth_unit > 0.f ? v->depth_unit : 1.f;
     out->probe_count = P;
     for (uint32_t p = 0; p < P; ++p) {
         double pos[3];
@@ -111,6 +112,21 @@ static float chebyshev(const float m[2], float r)
     return c * c * c;
 }
 
+float pb_sample_visibility_cpu(const pb_sample_volume *s, int probe, const float q[3], const float n[3],
+                               float detail[3])
+{
+    const float *pp = s->probes + 4 * (size_t)probe;
+    float from[3] = {q[0] - pp[0], q[1] - pp[1], q[2] - pp[2]};
+    float r = sqrtf(from[0] * from[0] + from[1] * from[1] + from[2] * from[2]);
+    float dir[3] = {r > 0.f ? from[0] / r : n[0], r > 0.f ? from[1] / r : n[1], r > 0.f ? from[2] / r : n[2]};
+    float m[2];
+    depth_moments(s, probe, dir, m);
+    float ru = r / s->depth_unit; /* the moments are in depth units */
+    if (detail)
+        detail[0] = m[0], detail[1] = m[1], detail[2] = ru;
+    return chebyshev(m, ru);
+}
+
 void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3])
 {
     float smin = 1e30f;
@@ -152,12 +168,7 @@ void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3]
         float dl = sqrtf(to[0] * to[0] + to[1] * to[1] + to[2] * to[2]);
         float wb = (dl > 0.f ? (to[0] / dl * n[0] + to[1] / dl * n[1] + to[2] / dl * n[2]) : 1.f) * 0.5f + 0.5f;
         float w = wb * wb + 0.2f;
-        float from[3] = {biased[0] - pp[0], biased[1] - pp[1], biased[2] - pp[2]};
-        float r = sqrtf(from[0] * from[0] + from[1] * from[1] + from[2] * from[2]);
-        float dir[3] = {r > 0.f ? from[0] / r : n[0], r > 0.f ? from[1] / r : n[1], r > 0.f ? from[2] / r : n[2]};
-        float m[2];
-        depth_moments(s, probe, dir, m);
-        w *= chebyshev(m, r);
+        w *= pb_sample_visibility_cpu(s, probe, biased, n, NULL);
         w = fmaxf(w, 1e-6f);
         if (w < 0.2f)
             w *= w * w * 25.f;

@@ -37,6 +37,7 @@ pb_result pb_sample_upload(pb_context *ctx, const pb_sample_volume *s, pb_sample
     g->origin_nbias[3] = s->normal_bias;
     g->spacing_vbias[3] = s->view_bias;
     g->counts_res[3] = s->octmap_res;
+    g->depth_unit = s->depth_unit;
     return PB_OK;
 }
 

@@ -10,12 +10,15 @@
 #include <stddef.h>
 
 typedef struct gpu_volume_refs {
-    uint64_t probes, sh, depth, pad;
+    uint64_t probes, sh, depth;
+    float depth_unit, pad;
     float origin_nbias[4];
     float spacing_vbias[4];
     int32_t counts_res[4];
 } gpu_volume_refs;
 _Static_assert(sizeof(gpu_volume_refs) == 80, "PbVolumeRefs layout");
+_Static_assert(offsetof(gpu_volume_refs, depth_unit) == 24 && offsetof(gpu_volume_refs, origin_nbias) == 32,
+               "PbVolumeRefs layout");
 
 typedef struct pb_sample_buffers {
     pb_buffer probes, sh, depth;
