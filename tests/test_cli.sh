@@ -77,7 +77,7 @@ expect inspect-atlas 0 "wrote $tmp/atlas.png: 34x23, depth atlas of 6 probes" --
     "$pb" inspect "$tmp/v.probes" --atlas "$tmp/atlas.png"
 expect inspect-sh-view 0 "wrote $tmp/sh.png: 52x35, SH irradiance view of 6 probes" -- \
     "$pb" inspect "$tmp/v.probes" --sh-view "$tmp/sh.png"
-expect inspect-atlas-unwritable 1 "error: $tmp/no/such/dir/a.png: cannot write the image" -- \
+expect inspect-atlas-unwritable 1 "error: $tmp/no/such/dir/a.png: cannot write in $tmp/no/such/dir: No such file or directory" -- \
     "$pb" inspect "$tmp/v.probes" --atlas "$tmp/no/such/dir/a.png"
 head -c 700 "$tmp/v.probes" >"$tmp/cut.probes"
 expect inspect-truncated 1 "error: $tmp/cut.probes: file is 700 bytes" -- "$pb" inspect "$tmp/cut.probes"
@@ -100,7 +100,7 @@ expect points-unknown-key 1 'unknown key "pointz"' -- "$pb" bake "$demo" --point
     for _ in 1 2 3 4 5 6 7 8; do printf '\x80\x80\x80\x81'; done
 } >"$tmp/sky.hdr"
 head -c 40 "$tmp/sky.hdr" >"$tmp/cut.hdr"
-expect env-missing 1 "error: $tmp/none.hdr: cannot open environment map" -- \
+expect env-missing 1 "error: $tmp/none.hdr: cannot open: No such file or directory" -- \
     "$pb" bake "$demo" --env "$tmp/none.hdr" -o "$tmp/x.probes"
 expect env-not-hdr 1 "error: $demo: not a Radiance .hdr file" -- "$pb" bake "$demo" --env "$demo" -o "$tmp/x.probes"
 expect env-truncated 1 "error: $tmp/cut.hdr: cannot decode the .hdr file" -- \
@@ -141,6 +141,39 @@ expect inspect-json-nan-null 0 '"index": 0, .*"sh": \[null, 0.00999999978' -- "$
 expect inspect-json-no-nan 0 '^clean$' -- \
     bash -c "'$pb' inspect '$tmp/nan.probes' --json | grep -Eqi '(: |\\[|, )-?(nan|inf)' && echo dirty || echo clean"
 expect inspect-json-depth-unit 0 '"depth_unit": 0.25,' -- "$pb" inspect "$tmp/v.probes" --json
+
+# inputs that are not regular files, outputs that must not be replaced (issue 10); checked before any device work
+mkdir "$tmp/adir"
+expect info-directory 1 "error: $tmp/adir: is a directory" -- "$pb" info "$tmp/adir"
+expect bake-directory-scene 1 "error: $tmp/adir: is a directory" -- "$pb" bake "$tmp/adir" -o "$tmp/x.probes"
+mkfifo "$tmp/scene.fifo"
+expect info-fifo-no-hang 1 "error: $tmp/scene.fifo: is not a regular file \(a FIFO\)" -- timeout 20 "$pb" info "$tmp/scene.fifo"
+expect inspect-fifo-no-hang 1 "is not a regular file \(a FIFO\)" -- timeout 20 "$pb" inspect "$tmp/scene.fifo"
+expect points-fifo-no-hang 1 "error: $tmp/scene.fifo: is not a regular file \(a FIFO\)" -- \
+    timeout 20 "$pb" bake "$demo" --points "$tmp/scene.fifo" -o "$tmp/x.probes"
+cp "$demo" "$tmp/mine.gltf"
+ln "$tmp/mine.gltf" "$tmp/mine-hard.gltf"
+ln -s mine.gltf "$tmp/mine-link.gltf"
+for out in mine.gltf mine-hard.gltf mine-link.gltf; do
+    expect "bake-over-input-$out" 1 "error: $tmp/$out: is the same file as the input $tmp/mine.gltf" -- \
+        "$pb" bake "$tmp/mine.gltf" -o "$tmp/$out"
+done
+expect render-over-input 1 "is the same file as the input" -- "$pb" render "$tmp/mine.gltf" -o "$tmp/mine-link.gltf"
+expect inputs-intact 0 '^same$' -- bash -c "cmp -s '$demo' '$tmp/mine.gltf' && echo same || echo changed"
+expect bake-output-directory 1 "error: $tmp/adir: is a directory: not an output" -- "$pb" bake "$demo" -o "$tmp/adir"
+expect bake-output-missing-dir 1 "error: $tmp/nodir/v.probes: cannot write in $tmp/nodir: No such file or directory" -- \
+    "$pb" bake "$demo" -o "$tmp/nodir/v.probes"
+expect render-pfm-stdout 2 '--pfm writes beside -o FILE' -- "$pb" render "$demo" --pfm -o -
+expect inspect-atlas-stdout 0 '^PNG$' -- bash -c "'$pb' inspect '$tmp/v.probes' --atlas - | head -c 4 | tail -c 3"
+if [ "$(id -u)" = 0 ]; then # device nodes of our own in $tmp, never the machine's /dev
+    mknod "$tmp/zero" c 1 5 && mknod "$tmp/null" c 1 3 && mknod "$tmp/full" c 1 7
+    expect info-char-device 1 "error: $tmp/zero: is not a regular file \(a character device\)" -- "$pb" info "$tmp/zero"
+    expect atlas-to-null 0 "wrote $tmp/null" -- "$pb" inspect "$tmp/v.probes" --atlas "$tmp/null"
+    expect atlas-to-full 1 "error: $tmp/full: write failed: No space left on device" -- \
+        "$pb" inspect "$tmp/v.probes" --atlas "$tmp/full"
+    expect devices-still-devices 0 '^character special file character special file$' -- \
+        bash -c "echo \$(stat -c %F '$tmp/null') \$(stat -c %F '$tmp/full')"
+fi
 
 # render: parameters checked before any device work
 expect render-no-output 2 'render needs -o IMG.png' -- "$pb" render "$demo"
@@ -199,6 +232,31 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-env 0 "environment $tmp/sky.hdr \(4x2, x2, turned 30 deg\)" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --env "$tmp/sky.hdr" --env-intensity 2 \
         --env-rotation 30 --validation -o "$tmp/e.probes"
+    # outputs: a device is written into, "-" is standard output, a symlink is written through
+    if [ "$(id -u)" = 0 ]; then
+        expect bake-to-null 0 "wrote $tmp/null: 8 probes" -- \
+            "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --quiet -o "$tmp/null"
+        expect bake-to-full 1 "error: $tmp/full: write failed: No space left on device" -- \
+            "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --quiet -o "$tmp/full"
+    fi
+    expect bake-to-stdout 0 '^PBVOLUME$' -- \
+        bash -c "'$pb' bake '$demo' --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --quiet -o - 2>/dev/null | head -c 8"
+    ln -s later/through.probes "$tmp/through-link.probes"
+    mkdir "$tmp/later"
+    expect bake-through-symlink 0 '^symbolic link regular file 6[0-9][0-9]$' -- \
+        bash -c "'$pb' bake '$demo' --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --quiet -o '$tmp/through-link.probes' >/dev/null &&
+                 echo \$(stat -c %F '$tmp/through-link.probes') \$(stat -c '%F %a' '$tmp/later/through.probes')"
+    # SIGTERM during a bake: exit 143, the previous output untouched, no temporary left
+    printf 'previous' >"$tmp/term.probes"
+    "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/term.probes" >"$tmp/term.log" 2>&1 &
+    term_pid=$!
+    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/term.log" && break; sleep 0.1; done
+    sleep 1
+    kill -TERM "$term_pid"
+    wait "$term_pid"
+    term_rc=$?
+    expect bake-sigterm 0 '^143 previous none$' -- \
+        bash -c "echo $term_rc \$(cat '$tmp/term.probes') \$(ls '$tmp' | grep -c 'term.probes.tmp' | sed 's/^0\$/none/')"
     # Ctrl-C during a long bake: exit 130 after 'bake cancelled', and no file
     "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/int.probes" >"$tmp/int.log" 2>&1 &
     bake_pid=$!

@@ -1,6 +1,9 @@
 /* Scene loader: hierarchy transforms, primitive modes, file forms, attribute
  * encodings, dropped triangles, and every malformed-file error. CPU only. */
+#define _DEFAULT_SOURCE /* mknod, makedev */
 #include "test_util.h"
+
+#include <sys/sysmacros.h>
 
 /* ------------------------------------------------------------ helpers */
 
@@ -199,13 +202,9 @@ static void strips_fans_and_unindexed(void)
     pb_scene_destroy(s);
 }
 
-static void glb_and_external_buffers(void)
+/* A .glb: header, JSON chunk (space padded), BIN chunk of the triangle. */
+static const char *write_glb(const char *name, const char *json)
 {
-    /* GLB: header, JSON chunk, BIN chunk */
-    const char *json = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
-                       "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
-                       "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
-                       "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"buffers\":[{\"byteLength\":36}]}";
     uint32_t jlen = (uint32_t)((strlen(json) + 3) & ~3u);
     uint32_t total = 12 + 8 + jlen + 8 + 36;
     unsigned char *glb = calloc(1, total);
@@ -218,10 +217,28 @@ static void glb_and_external_buffers(void)
     uint32_t bc[2] = {36, 0x004E4942u};
     memcpy(glb + 20 + jlen, bc, 8);
     memcpy(glb + 28 + jlen, tri_pos, 36);
-    pb_scene *s = load_ok(write_file("tri.glb", glb, total));
+    const char *path = write_file(name, glb, total);
+    free(glb);
+    return path;
+}
+
+/* The triangle as a .glb whose POSITION accessor claims `count` elements. */
+static const char *glb_with_count(const char *name, const char *count)
+{
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+             "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":%s,\"type\":\"VEC3\"}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"buffers\":[{\"byteLength\":36}]}", count);
+    return write_glb(name, json);
+}
+
+static void glb_and_external_buffers(void)
+{
+    pb_scene *s = load_ok(glb_with_count("tri.glb", "3"));
     CHECK(s && s->triangle_count == 1);
     pb_scene_destroy(s);
-    free(glb);
 
     /* .gltf with an external .bin beside it */
     write_file("tri.bin", tri_pos, 36);
@@ -360,6 +377,62 @@ static void malformed_files_get_clear_errors(void)
     load_fails(one_triangle("nomesh.gltf", "\"nodes\":[{\"mesh\":3}],"), PB_ERROR_PARSE, "mesh 3");
 }
 
+/* Hostile inputs (issue 10): what is not a regular file is named as such
+ * without blocking, accessor counts are checked against the buffer before
+ * anything is sized from them, and JSON nesting is bounded before the
+ * parser recurses. Each is a one-line error naming the file, never a crash
+ * (this runs under ASan/UBSan in CI, where a 2^32 x 24-byte allocation
+ * would abort). */
+static void hostile_inputs_refused(void)
+{
+    char dir[600], fifo[600], dev[600];
+    snprintf(dir, sizeof dir, "%s/a-directory.gltf", temp_dir());
+    mkdir(dir, 0755);
+    load_fails(dir, PB_ERROR_IO, "is a directory");
+    snprintf(fifo, sizeof fifo, "%s/fifo.gltf", temp_dir());
+    unlink(fifo);
+    CHECK(mkfifo(fifo, 0644) == 0);
+    load_fails(fifo, PB_ERROR_IO, "is not a regular file (a FIFO)"); /* no writer: must not hang */
+    if (geteuid() == 0) { /* a null device of our own, never the machine's /dev */
+        snprintf(dev, sizeof dev, "%s/zero.gltf", temp_dir());
+        unlink(dev);
+        CHECK(mknod(dev, S_IFCHR | 0644, makedev(1, 5)) == 0);
+        load_fails(dev, PB_ERROR_IO, "is not a regular file (a character device)");
+        unlink(dev);
+    }
+    load_fails(glb_with_count("count-2e32.glb", "4294967295"), PB_ERROR_PARSE, "reads past the end of bufferView");
+    load_fails(glb_with_count("count-2e61.glb", "2305843009213693952"), PB_ERROR_PARSE, "reads past the end");
+    load_fails(glb_with_count("count-2e8.glb", "200000000"), PB_ERROR_PARSE, "reads past the end");
+    const char *noview = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                         "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+                         "\"accessors\":[{\"componentType\":5126,\"count\":4294967295,\"type\":\"VEC3\"}]}";
+    load_fails(write_file("count-no-view.gltf", noview, strlen(noview)), PB_ERROR_PARSE, "no bufferView");
+    /* 20,000 levels overflowed the parser's stack; 500 still load */
+    for (int deep = 0; deep < 2; ++deep) {
+        int levels = deep ? 20000 : 500;
+        size_t n = 64 + 2 * (size_t)levels;
+        char *json = malloc(n), *o = json;
+        o += sprintf(o, "{\"asset\":{\"version\":\"2.0\"},\"extras\":");
+        memset(o, '[', (size_t)levels - 2), o += levels - 2;
+        memset(o, ']', (size_t)levels - 2), o += levels - 2;
+        o += sprintf(o, "}");
+        const char *path = write_file(deep ? "nested-20000.gltf" : "nested-500.gltf", json, (size_t)(o - json));
+        if (deep) {
+            load_fails(path, PB_ERROR_PARSE, "JSON nested deeper than 512 levels");
+        } else {
+            pb_scene *s = load_ok(path);
+            pb_scene_destroy(s);
+        }
+        free(json);
+    }
+    /* an external buffer that is a directory */
+    const char *ext = "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":36,\"uri\":\"a-directory.gltf\"}]}";
+    pb_scene *s = (pb_scene *)1;
+    pb_error err;
+    pb_result r = pb_scene_load(write_file("buffer-dir.gltf", ext, strlen(ext)), NULL, &s, &err);
+    CHECKF(r != PB_OK && s == NULL && strstr(err.message, "buffer-dir.gltf"), "%s: %s", pb_result_name(r), err.message);
+}
+
 static void corrupt_texture_is_a_warning(void)
 {
     const char *json =
@@ -435,6 +508,7 @@ int main(void)
     RUN(bad_triangles_dropped_and_counted);
     RUN(far_from_origin_is_rebased);
     RUN(malformed_files_get_clear_errors);
+    RUN(hostile_inputs_refused);
     RUN(corrupt_texture_is_a_warning);
     RUN(shared_scenes_load);
     return test_summary();

@@ -1,9 +1,15 @@
 /* Volume files and half floats: exhaustive half round trips, rounding
  * against a reference, file round trip, atomic writes, every malformed-file
  * error. CPU only. */
+#define _DEFAULT_SOURCE /* mknod, makedev, symlink */
 #include "test_util.h"
 
 #include <dirent.h>
+#include <fcntl.h>
+#include <pthread.h>
+#include <sys/socket.h>
+#include <sys/sysmacros.h>
+#include <sys/un.h>
 
 /* Every finite half converts to float and back to itself; NaNs stay NaN;
  * +-0 and +-Inf keep their bit patterns. (Exhaustive: the domain is small.) */
@@ -324,6 +330,151 @@ static void version1_files_convert(void)
     pb_volume_free(&v);
 }
 
+/* ------------------------------------------------------------ output rules (issue 10) */
+
+static uint64_t g_fifo_read;
+
+static void *drain_fifo(void *path)
+{
+    int fd = open(path, O_RDONLY);
+    char buf[65536];
+    ssize_t n;
+    while (fd >= 0 && (n = read(fd, buf, sizeof buf)) > 0)
+        g_fifo_read += (uint64_t)n;
+    if (fd >= 0)
+        close(fd);
+    return NULL;
+}
+
+static mode_t mode_of(const char *path)
+{
+    struct stat st;
+    return lstat(path, &st) == 0 ? st.st_mode : 0;
+}
+
+/* Devices and FIFOs are written into, never renamed over; directories and
+ * sockets refused; symlinks written through; modes follow the umask or the
+ * replaced file; a cancelled write replaces nothing and leaves no temporary.
+ * Device nodes are made here with mknod (as root), never the machine's /dev. */
+static void outputs_never_replace_what_they_are_not(void)
+{
+    pb_volume v;
+    fill(&v, 2, 2, 2, 4);
+    uint64_t bytes = pb_volume_file_bytes(&v);
+    char dir[512], p[700], q[700];
+    snprintf(dir, sizeof dir, "%s/outputs", temp_dir());
+    mkdir(dir, 0755);
+    pb_error err;
+    if (geteuid() == 0) {
+        snprintf(p, sizeof p, "%s/null", dir);
+        CHECK(mknod(p, S_IFCHR | 0666, makedev(1, 3)) == 0);
+        CHECKF(pb_volume_write(p, &v, &err) == PB_OK, "%s", err.message);
+        CHECK(S_ISCHR(mode_of(p)));
+        snprintf(q, sizeof q, "%s/full", dir);
+        CHECK(mknod(q, S_IFCHR | 0666, makedev(1, 7)) == 0);
+        pb_result r = pb_volume_write(q, &v, &err);
+        CHECKF(r == PB_ERROR_IO && strstr(err.message, q) && strstr(err.message, "No space left on device"), "%s",
+               err.message);
+        CHECK(S_ISCHR(mode_of(q)));
+        unlink(p), unlink(q);
+    } else {
+        fprintf(stderr, "  not root: device nodes not made (FIFO, directory, socket, links and modes still run)\n");
+    }
+    /* a FIFO with a reader gets every byte, and stays a FIFO */
+    snprintf(p, sizeof p, "%s/pipe", dir);
+    CHECK(mkfifo(p, 0644) == 0);
+    pthread_t reader;
+    g_fifo_read = 0;
+    pthread_create(&reader, NULL, drain_fifo, p);
+    CHECKF(pb_volume_write(p, &v, &err) == PB_OK, "%s", err.message);
+    pthread_join(reader, NULL);
+    CHECK(g_fifo_read == bytes && S_ISFIFO(mode_of(p)));
+    unlink(p);
+    /* a directory and a socket are errors */
+    snprintf(p, sizeof p, "%s/sub", dir);
+    mkdir(p, 0755);
+    CHECK(pb_volume_write(p, &v, &err) == PB_ERROR_IO && strstr(err.message, "is a directory"));
+    CHECK(pb_output_check(p, NULL, 0, &err) == PB_ERROR_IO && strstr(err.message, "is a directory"));
+    struct sockaddr_un sa = {.sun_family = AF_UNIX};
+    char sp[700];
+    snprintf(sp, sizeof sp, "%s/sock", dir);
+    int fits = strlen(sp) < sizeof sa.sun_path;
+    if (fits)
+        memcpy(sa.sun_path, sp, strlen(sp) + 1);
+    int sfd = socket(AF_UNIX, SOCK_STREAM, 0);
+    if (sfd >= 0 && fits && bind(sfd, (struct sockaddr *)&sa, sizeof sa) == 0) {
+        CHECK(pb_volume_write(sa.sun_path, &v, &err) == PB_ERROR_IO && strstr(err.message, "socket"));
+        CHECK(pb_output_check(sa.sun_path, NULL, 0, &err) == PB_ERROR_IO && strstr(err.message, "socket"));
+        unlink(sa.sun_path);
+    }
+    if (sfd >= 0)
+        close(sfd);
+    /* modes: a new file follows the umask, a replaced one keeps its mode */
+    snprintf(p, sizeof p, "%s/new.probes", dir);
+    mode_t old = umask(022);
+    CHECK(pb_volume_write(p, &v, &err) == PB_OK && (mode_of(p) & 0777) == 0644);
+    unlink(p);
+    umask(077);
+    CHECK(pb_volume_write(p, &v, &err) == PB_OK && (mode_of(p) & 0777) == 0600);
+    umask(old);
+    chmod(p, 0640);
+    CHECK(pb_volume_write(p, &v, &err) == PB_OK && (mode_of(p) & 0777) == 0640);
+    /* a symlink is written through: existing target and a target to be */
+    snprintf(q, sizeof q, "%s/link.probes", dir);
+    CHECK(symlink("new.probes", q) == 0);
+    CHECK(pb_volume_write(q, &v, &err) == PB_OK && S_ISLNK(mode_of(q)) && S_ISREG(mode_of(p)));
+    unlink(q);
+    CHECK(symlink("sub/later.probes", q) == 0);
+    CHECKF(pb_volume_write(q, &v, &err) == PB_OK, "%s", err.message);
+    snprintf(p, sizeof p, "%s/sub/later.probes", dir);
+    CHECK(S_ISLNK(mode_of(q)) && S_ISREG(mode_of(p)));
+    /* the same file as an input: by name, hard link or symlink */
+    char hard[700];
+    snprintf(hard, sizeof hard, "%s/hard.probes", dir);
+    CHECK(link(p, hard) == 0);
+    const char *inputs[2] = {NULL, p};
+    CHECK(pb_output_check(p, inputs, 2, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "same file"));
+    CHECK(pb_output_check(hard, inputs, 2, &err) == PB_ERROR_INVALID_ARGUMENT);
+    CHECK(pb_output_check(q, inputs, 2, &err) == PB_ERROR_INVALID_ARGUMENT);
+    snprintf(q, sizeof q, "%s/missing/x.probes", dir);
+    CHECK(pb_output_check(q, NULL, 0, &err) == PB_ERROR_IO && strstr(err.message, "No such file or directory"));
+    snprintf(q, sizeof q, "%s/fresh.probes", dir);
+    CHECK(pb_output_check(q, inputs, 2, &err) == PB_OK && mode_of(q) == 0); /* the check leaves nothing */
+    CHECK(pb_output_check("-", inputs, 2, &err) == PB_OK);
+    pb_volume_free(&v);
+}
+
+static int cancel_on_call(void *user)
+{
+    int *calls = user;
+    return --*calls <= 0;
+}
+
+/* A write cancelled at any point (first chunk, before the rename) leaves
+ * the previous file as it was and no temporary beside it. */
+static void cancelled_write_replaces_nothing(void)
+{
+    pb_volume v, big, w;
+    fill(&v, 2, 2, 1, 4);
+    fill(&big, 16, 16, 8, 16); /* 2048 probes, ~2.9 MB: several chunks */
+    char dir[512], p[700];
+    snprintf(dir, sizeof dir, "%s/cancel", temp_dir());
+    mkdir(dir, 0755);
+    snprintf(p, sizeof p, "%s/keep.probes", dir);
+    pb_error err;
+    CHECK(pb_volume_write(p, &v, &err) == PB_OK);
+    for (int when = 1; when <= 4; ++when) {
+        int calls = when;
+        pb_result r = pb_volume_write_ex(p, &big, cancel_on_call, &calls, &err);
+        CHECKF(r == PB_ERROR_CANCELLED, "cancel at call %d: %s", when, pb_result_name(r));
+        CHECK(count_files(dir) == 1);
+        CHECK(pb_volume_read(p, &w, &err) == PB_OK && w.probe_count == 4);
+        pb_volume_free(&w);
+    }
+    pb_volume_free(&big);
+    pb_volume_free(&v);
+}
+
 int main(void)
 {
     RUN(half_round_trip_exhaustive);
@@ -334,5 +485,7 @@ int main(void)
     RUN(depth_unit_bounds_the_reach);
     RUN(writer_refuses_nonfinite_values);
     RUN(version1_files_convert);
+    RUN(outputs_never_replace_what_they_are_not);
+    RUN(cancelled_write_replaces_nothing);
     return test_summary();
 }

@@ -48,6 +48,7 @@
 #include "probebake/trace.h"
 #include "probebake/sh.h"
 #include "probebake/octahedral.h"
+#include "probebake/files.h"
 #include "probebake/volume.h"
 #include "probebake/bake.h"
 #include "probebake/environment.h"

@@ -16,6 +16,7 @@
 #define PROBEBAKE_VOLUME_H
 
 #include "probebake/base.h"
+#include "probebake/files.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -98,11 +99,17 @@ pb_result pb_volume_alloc(pb_volume *v, pb_error *err);
 /* Frees the per-probe arrays (the struct itself is the caller's). */
 void pb_volume_free(pb_volume *v);
 
-/* Writes v to `path` atomically. Returns PB_ERROR_IO naming the path, or
+/* Writes v to `path` by the output rules of files.h (atomic for regular
+ * files, directly into devices and FIFOs, through symlinks, "-" for
+ * standard output). Returns PB_ERROR_IO naming the path, or
  * PB_ERROR_INVALID_ARGUMENT naming the probe when any value (position,
  * offset, SH, depth texel, origin, spacing, depth unit) is NaN or infinite:
  * no file ever holds one. */
 pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err);
+
+/* pb_volume_write with cancellation (files.h: checked between chunks and
+ * before the rename; PB_ERROR_CANCELLED replaces nothing). */
+pb_result pb_volume_write_ex(const char *path, const pb_volume *v, pb_cancel_fn cancel, void *user, pb_error *err);
 
 /* Reads and validates a volume file into *v (arrays owned by v afterwards).
  * Version-1 files (depth in metres) are converted to depth units on read;

@@ -56,7 +56,12 @@ typedef struct cli_progress_state {
     uint64_t rays_total;
 } cli_progress_state;
 int cli_progress(float fraction, const char *label, void *user);
-void cli_catch_sigint(int on);
+/* SIGINT / SIGTERM: installed once by main; until cli_defer_signals() a
+ * signal exits at once (nothing is being written), after it the signal only
+ * cancels (cli_progress, cli_interrupted as the writer's pb_cancel_fn). */
+void cli_catch_signals(void);
+void cli_defer_signals(void);
+int cli_interrupted(void *user);
 
 /* PB_INJECT_FAULT=allocation:N or submission:N (tests of the error paths):
  * the Nth device allocation or submission fails as out of memory / device

@@ -59,6 +59,10 @@ int cmd_render(const options *o)
         return cli_usage_error("%s: give --camera or --eye/--target, not both", "render");
     if (o->has_eye != o->has_target)
         return cli_usage_error("%s: --eye and --target go together", "render");
+    if (o->pfm && !strcmp(o->output, "-"))
+        return cli_usage_error("%s: --pfm writes beside -o FILE; -o - has no file to write beside", "render");
+    char pfm[1100];
+    sibling(o->output, ".pfm", pfm, sizeof pfm);
     pb_log log = {cli_log_to_stderr, (void *)&o->log};
     pb_scene_desc sd = {log, 0};
     pb_scene *s = NULL;
@@ -76,6 +80,10 @@ int cmd_render(const options *o)
     float *img = NULL, *img_direct = NULL, *ref = NULL, *ref_direct = NULL;
     unsigned char *rgb8 = NULL;
     int rc = 1;
+    /* outputs checked before any work: not a directory, writable, no input */
+    const char *inputs[3] = {o->scene, o->env, o->volume};
+    if (pb_output_check(o->output, inputs, 3, &err) != PB_OK || (o->pfm && pb_output_check(pfm, inputs, 3, &err) != PB_OK))
+        goto out;
     if (o->volume && pb_volume_read(o->volume, &vol, &err) != PB_OK)
         goto out;
     if (cli_environment(o, &env, &err) != PB_OK)
@@ -169,14 +177,12 @@ int cmd_render(const options *o)
                              (uint64_t)d.width * d.height * (d.spp ? d.spp : (mode == PB_RENDER_REFERENCE ? 64 : 1))};
     d.progress = cli_progress;
     d.progress_user = &ps;
-    cli_catch_sigint(1);
+    cli_defer_signals(); /* from here a signal cancels the render; no image is written */
     pb_result rr = pb_render(ctx, s, gs, &d, img, img_direct, &ms, &err);
     if (ps.show)
         fprintf(stderr, "\n");
-    if (rr != PB_OK) {
-        cli_catch_sigint(0);
+    if (rr != PB_OK)
         goto out;
-    }
     double rmse = 0, rmse_indirect = 0;
     if (diff) {
         /* the reference (path traced), and the direct image the probe image's indirect part is measured against */
@@ -207,35 +213,33 @@ int cmd_render(const options *o)
         float ev = o->has_exposure ? o->exposure : pb_auto_exposure(img, d.width, d.height);
         pb_tonemap_image(img, d.width, d.height, ev, rgb8);
     }
-    cli_catch_sigint(0);
-    if (pb_write_png(o->output, rgb8, d.width, d.height, &err) != PB_OK)
-        goto out;
-    if (o->pfm) {
-        char pfm[1100];
-        sibling(o->output, ".pfm", pfm, sizeof pfm);
-        if (pb_write_pfm(pfm, img, d.width, d.height, &err) != PB_OK) {
-            remove(o->output);
-            goto out;
-        }
-    }
     if (o->validation && pb_context_validation_messages(ctx)) {
         snprintf(err.message, sizeof err.message, "%u Vulkan validation messages", pb_context_validation_messages(ctx));
-        remove(o->output);
         goto out;
     }
+    if (cli_interrupted(NULL)) { /* images are written in one short call: cancel before it */
+        err.code = PB_ERROR_CANCELLED;
+        snprintf(err.message, sizeof err.message, "cancelled; no image written");
+        goto out;
+    }
+    if (o->pfm && pb_write_pfm(pfm, img, d.width, d.height, &err) != PB_OK)
+        goto out;
+    if (pb_write_png(o->output, rgb8, d.width, d.height, &err) != PB_OK)
+        goto out;
+    FILE *report = strcmp(o->output, "-") ? stdout : stderr; /* stdout carries the image for -o - */
     uint32_t spp = d.spp ? d.spp : (mode == PB_RENDER_REFERENCE ? 64 : 1);
     if (o->json) {
-        printf("{\"image\": \"%s\", \"mode\": \"%s\", \"width\": %u, \"height\": %u, \"spp\": %u, \"gpu_ms\": %.3f",
+        fprintf(report, "{\"image\": \"%s\", \"mode\": \"%s\", \"width\": %u, \"height\": %u, \"spp\": %u, \"gpu_ms\": %.3f",
                o->output, mode_name, d.width, d.height, spp, ms);
         if (diff)
-            printf(", \"reference_spp\": %u, \"reference_gpu_ms\": %.3f, \"relative_rmse\": %.6f, "
+            fprintf(report, ", \"reference_spp\": %u, \"reference_gpu_ms\": %.3f, \"relative_rmse\": %.6f, "
                    "\"relative_rmse_indirect\": %.6f",
                    o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect);
-        printf("}\n");
+        fprintf(report, "}\n");
     } else {
-        printf("wrote %s: %ux%u, %s, %u spp, GPU %.0f ms\n", o->output, d.width, d.height, mode_name, spp, ms);
+        fprintf(report, "wrote %s: %ux%u, %s, %u spp, GPU %.0f ms\n", o->output, d.width, d.height, mode_name, spp, ms);
         if (diff)
-            printf("probes vs reference (%u spp, GPU %.0f ms): relative RMSE %.4f of the image, %.4f of the indirect "
+            fprintf(report, "probes vs reference (%u spp, GPU %.0f ms): relative RMSE %.4f of the image, %.4f of the indirect "
                    "light (surface pixels); heat map: black 0, red >= 50 %%\n",
                    o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect);
     }

@@ -31,10 +31,13 @@ double cli_now_ms(void)
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
+static volatile sig_atomic_t interrupted, deferring; /* see on_signal */
+
 int cli_fail(const pb_error *err)
 {
     fprintf(stderr, "probebake: error: %s\n", err->message[0] ? err->message : pb_result_name(err->code));
-    return err->code == PB_ERROR_CANCELLED ? 130 : 1; /* 128 + SIGINT, as shells report it */
+    /* 128 + the signal, as shells report it (SIGINT 130, SIGTERM 143) */
+    return err->code == PB_ERROR_CANCELLED ? 128 + (interrupted ? (int)interrupted : SIGINT) : 1;
 }
 
 int cli_parse_floats(const char *s, int n, float *out)
@@ -725,6 +728,11 @@ static int cmd_inspect(const options *o)
     for (int k = 0; k < 2; ++k) {
         if (!views[k])
             continue;
+        const char *inputs[1] = {o->scene};
+        if (pb_output_check(views[k], inputs, 1, &err) != PB_OK) {
+            pb_volume_free(&v);
+            return cli_fail(&err);
+        }
         unsigned char *img = NULL;
         uint32_t w = 0, h = 0;
         pb_result r = k == 0 ? pb_volume_depth_atlas(&v, &img, &w, &h, &err) : pb_volume_sh_atlas(&v, 16, &img, &w, &h, &err);
@@ -804,20 +812,38 @@ static int cmd_inspect(const options *o)
     return 0;
 }
 
-/* Ctrl-C: the progress callback sees this and cancels; no output file is
- * written (volumes and images are written atomically, after success). The
- * flag is the one piece of process state a signal handler may touch. */
-static volatile sig_atomic_t interrupted;
-
-static void on_sigint(int sig)
+/* SIGINT and SIGTERM. Outside a deferred section nothing is being written,
+ * so the handler exits at once (128 + signal, as shells report it). Inside
+ * one (a bake or render and its final write) it only records the signal:
+ * the progress callback and the writer's cancel check see it, the work
+ * stops, the temporary file goes and the previous output stays. These two
+ * flags are the only process state a signal handler may touch. */
+static void on_signal(int sig)
 {
-    (void)sig;
-    interrupted = 1;
+    interrupted = sig;
+    if (!deferring)
+        _exit(128 + sig);
 }
 
-void cli_catch_sigint(int on)
+void cli_catch_signals(void)
 {
-    signal(SIGINT, on ? on_sigint : SIG_DFL);
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+}
+
+void cli_defer_signals(void)
+{
+    deferring = 1;
+}
+
+int cli_interrupted(void *user)
+{
+    (void)user;
+    return interrupted != 0;
 }
 
 int cli_progress(float fraction, const char *label, void *user)
@@ -830,7 +856,7 @@ int cli_progress(float fraction, const char *label, void *user)
                 el > 0 ? fraction * (double)ps->rays_total / el / 1e6 : 0.0, eta);
         fflush(stderr);
     }
-    return interrupted != 0;
+    return cli_interrupted(NULL);
 }
 
 static int cmd_bake(const options *o)
@@ -858,6 +884,11 @@ static int cmd_bake(const options *o)
     pb_error err;
     int rc = 1;
     double t0 = cli_now_ms();
+    /* the output is checked before any work: not a directory, writable,
+     * not one of the inputs (hard links and symlinks too) */
+    const char *inputs[3] = {o->scene, o->env, o->points};
+    if (pb_output_check(o->output, inputs, 3, &err) != PB_OK)
+        goto out;
     if (o->points && pb_points_read(o->points, &pts, &err) != PB_OK)
         goto out;
     if (cli_environment(o, &env, &err) != PB_OK)
@@ -950,23 +981,22 @@ static int cmd_bake(const options *o)
     cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};
     d.progress = cli_progress;
     d.progress_user = &ps;
-    cli_catch_sigint(1);
+    cli_defer_signals(); /* from here a signal cancels the bake or the write */
     pb_result r = pb_bake(ctx, s, gs, &d, &vol, &err);
-    cli_catch_sigint(0);
     if (ps.show)
         fprintf(stderr, "\n");
     if (r != PB_OK)
         goto out;
+    if (o->validation && pb_context_validation_messages(ctx)) {
+        snprintf(err.message, sizeof err.message, "%u Vulkan validation messages", pb_context_validation_messages(ctx));
+        goto out;
+    }
     vol.timings.load = 0;
     vol.timings.bvh = bvh->stats.build_ms;
     vol.timings.total = cli_now_ms() - t0;
-    if (pb_volume_write(o->output, &vol, &err) != PB_OK)
+    if (pb_volume_write_ex(o->output, &vol, cli_interrupted, NULL, &err) != PB_OK)
         goto out;
-    if (o->validation && pb_context_validation_messages(ctx)) {
-        snprintf(err.message, sizeof err.message, "%u Vulkan validation messages", pb_context_validation_messages(ctx));
-        remove(o->output);
-        goto out;
-    }
+    FILE *report = strcmp(o->output, "-") ? stdout : stderr; /* stdout carries the volume for -o - */
     uint32_t valid = 0, outside = 0, relocated = 0, dilated = 0, converged = 0;
     for (uint32_t i = 0; i < vol.probe_count; ++i) {
         valid += (vol.probe_flags[i] & PB_PROBE_VALID) != 0;
@@ -976,12 +1006,12 @@ static int cmd_bake(const options *o)
         converged += (vol.probe_flags[i] & PB_PROBE_CONVERGED) != 0;
     }
     double rays = (double)vol.rays_traced;
-    printf("wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside", o->output,
+    fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside", o->output,
            (unsigned long long)probes, valid, relocated, vol.probe_count - valid, dilated, outside);
     if (d.target_error > 0.f)
-        printf(", %u converged before the last pass", converged);
-    printf("), %.3g probe rays in %s%u passes\n", rays, d.target_error > 0.f ? "up to " : "", vol.settings.passes);
-    printf("time: bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, depth %.0f ms; "
+        fprintf(report, ", %u converged before the last pass", converged);
+    fprintf(report, "), %.3g probe rays in %s%u passes\n", rays, d.target_error > 0.f ? "up to " : "", vol.settings.passes);
+    fprintf(report, "time: bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, depth %.0f ms; "
            "total %.0f ms wall\n",
            vol.timings.bvh, vol.timings.trace, vol.timings.trace > 0 ? rays / (vol.timings.trace * 1e3) : 0.0,
            vol.timings.trace > 0 ? (double)vol.traversals / (vol.timings.trace * 1e3) : 0.0, vol.timings.sh,
@@ -1000,6 +1030,7 @@ out:
 
 int main(int argc, char **argv)
 {
+    cli_catch_signals();
     options o;
     int r = parse(argc, argv, &o);
     if (r)

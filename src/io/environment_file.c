@@ -3,6 +3,7 @@
  * PB_ENVIRONMENT_MAX_WIDTH texels across. */
 #include "common/common.h"
 #include "probebake/environment.h"
+#include "probebake/files.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -20,9 +21,10 @@ pb_result pb_environment_load(const char *path, float intensity, float rotation_
                        intensity);
     if (!isfinite(rotation_deg))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: environment rotation must be finite", path);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return pb_fail(err, PB_ERROR_IO, "%s: cannot open environment map", path);
+    FILE *f;
+    pb_result opened = pb_input_open(path, 1ull << 31, &f, NULL, err); /* regular files only, at most 2 GiB */
+    if (opened != PB_OK)
+        return opened;
     if (!stbi_is_hdr_from_file(f)) {
         fclose(f);
         return pb_fail(err, PB_ERROR_PARSE, "%s: not a Radiance .hdr file", path);

@@ -10,6 +10,7 @@
  * the same values as in the whole grid. */
 #include "common/common.h"
 #include "probebake/bake.h"
+#include "probebake/files.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -166,24 +167,12 @@ pb_result pb_points_read(const char *path, pb_points *out, pb_error *err)
 {
     pb_error_clear(err);
     memset(out, 0, sizeof *out);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return pb_fail(err, PB_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    if (size < 0 || size > (256l << 20)) {
-        fclose(f);
-        return pb_fail(err, PB_ERROR_PARSE, "%s: not a points file (size)", path);
-    }
-    char *text = malloc((size_t)size + 1);
-    if (!text || fread(text, 1, (size_t)size, f) != (size_t)size) {
-        free(text);
-        fclose(f);
-        return pb_fail(err, PB_ERROR_IO, "%s: read failed", path);
-    }
-    fclose(f);
-    text[size] = '\0';
+    unsigned char *bytes;
+    uint64_t size;
+    pb_result rr = pb_input_read(path, 256u << 20, &bytes, &size, err); /* regular files only, at most 256 MiB */
+    if (rr != PB_OK)
+        return rr;
+    char *text = (char *)bytes;
     cursor c = {text, text, path, err, 0};
     uint32_t cap = 0;
     int have_points = 0;

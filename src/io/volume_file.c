@@ -2,6 +2,7 @@
  * atomic writes (temporary file + fsync + rename), validating reads. */
 #define _POSIX_C_SOURCE 200809L
 #include "common/common.h"
+#include "probebake/files.h"
 #include "probebake/volume.h"
 
 #include <errno.h>
@@ -260,7 +261,7 @@ static const char *first_nonfinite(const pb_volume *v, uint32_t *probe)
     return NULL;
 }
 
-pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err)
+pb_result pb_volume_write_ex(const char *path, const pb_volume *v, pb_cancel_fn cancel, void *user, pb_error *err)
 {
     pb_error_clear(err);
     if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth || !v->probe_count)
@@ -275,39 +276,14 @@ pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err)
     unsigned char *bytes = encode(v, &size);
     if (!bytes)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory encoding the volume", path);
-    size_t plen = strlen(path);
-    char *tmp = malloc(plen + 16);
-    if (!tmp) {
-        free(bytes);
-        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
-    }
-    snprintf(tmp, plen + 16, "%s.tmp-XXXXXX", path);
-    int fd = mkstemp(tmp);
-    pb_result r = PB_OK;
-    if (fd < 0) {
-        r = pb_fail(err, PB_ERROR_IO, "%s: cannot create a file there: %s", path, strerror(errno));
-    } else {
-        uint64_t done = 0;
-        while (done < size) {
-            ssize_t w = write(fd, bytes + done, (size_t)(size - done));
-            if (w <= 0) {
-                r = pb_fail(err, PB_ERROR_IO, "%s: write failed: %s", path, w < 0 ? strerror(errno) : "disk full");
-                break;
-            }
-            done += (uint64_t)w;
-        }
-        if (r == PB_OK && fsync(fd) != 0)
-            r = pb_fail(err, PB_ERROR_IO, "%s: fsync failed: %s", path, strerror(errno));
-        if (close(fd) != 0 && r == PB_OK)
-            r = pb_fail(err, PB_ERROR_IO, "%s: close failed: %s", path, strerror(errno));
-        if (r == PB_OK && rename(tmp, path) != 0)
-            r = pb_fail(err, PB_ERROR_IO, "%s: cannot replace the file: %s", path, strerror(errno));
-        if (r != PB_OK)
-            unlink(tmp); /* never leave a partial file behind */
-    }
-    free(tmp);
+    pb_result r = pb_output_write(path, bytes, size, cancel, user, err);
     free(bytes);
     return r;
+}
+
+pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err)
+{
+    return pb_volume_write_ex(path, v, NULL, NULL, err);
 }
 
 /* Version 1 stored metres; texels past 256 m overflowed to +Inf (the
@@ -334,9 +310,11 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
 {
     pb_error_clear(err);
     memset(v, 0, sizeof *v);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return pb_fail(err, PB_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
+    FILE *f;
+    uint64_t file_bytes;
+    pb_result opened = pb_input_open(path, UINT64_MAX, &f, &file_bytes, err); /* regular files only */
+    if (opened != PB_OK)
+        return opened;
     unsigned char h[HEADER_BYTES];
     size_t got = fread(h, 1, HEADER_BYTES, f);
     if (got < 8 || memcmp(h, MAGIC, 8) != 0) {
@@ -402,11 +380,10 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         fclose(f);
         return pb_fail(err, PB_ERROR_PARSE, "%s: %s", path, bad);
     }
-    if (fseek(f, 0, SEEK_END) != 0 || (uint64_t)ftell(f) != l.end) {
-        long have = ftell(f);
+    if (file_bytes != l.end) { /* sizes agree before anything is allocated */
         fclose(f);
-        return pb_fail(err, PB_ERROR_PARSE, "%s: file is %ld bytes, the header describes %llu (truncated?)", path,
-                       have, (unsigned long long)l.end);
+        return pb_fail(err, PB_ERROR_PARSE, "%s: file is %llu bytes, the header describes %llu (truncated?)", path,
+                       (unsigned long long)file_bytes, (unsigned long long)l.end);
     }
     unsigned char *b = malloc((size_t)l.end);
     pb_result r = b ? pb_volume_alloc(v, err) : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of memory", path);

@@ -1,6 +1,7 @@
 /* Display and comparison of rendered images: exposure, ACES tone curve,
  * sRGB, error heat maps and metrics, PNG (stb_image_write) and PFM files. */
 #include "common/common.h"
+#include "probebake/files.h"
 #include "probebake/render.h"
 
 #include <math.h>
@@ -86,42 +87,58 @@ double pb_image_relative_rmse(const float *a, const float *b, uint32_t width, ui
     return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;
 }
 
-/* temporary file beside the target, renamed over it when complete */
-static pb_result finish(const char *tmp, const char *path, int ok, pb_error *err)
+/* stb_image_write's output callback: appends to a growing buffer. */
+typedef struct byte_sink {
+    unsigned char *b;
+    size_t n, cap;
+    int failed;
+} byte_sink;
+
+static void sink_put(void *user, void *data, int size)
 {
-    if (!ok || rename(tmp, path) != 0) {
-        remove(tmp);
-        return pb_fail(err, PB_ERROR_IO, "%s: cannot write the image", path);
+    byte_sink *s = user;
+    if (s->failed || size <= 0)
+        return;
+    if (s->n + (size_t)size > s->cap) {
+        size_t cap = s->cap ? 2 * s->cap : 65536;
+        while (cap < s->n + (size_t)size)
+            cap *= 2;
+        unsigned char *nb = realloc(s->b, cap);
+        if (!nb) {
+            s->failed = 1;
+            return;
+        }
+        s->b = nb, s->cap = cap;
     }
-    return PB_OK;
+    memcpy(s->b + s->n, data, (size_t)size);
+    s->n += (size_t)size;
 }
 
 pb_result pb_write_png(const char *path, const unsigned char *rgb8, uint32_t width, uint32_t height, pb_error *err)
 {
-    char tmp[1100];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    int ok = stbi_write_png(tmp, (int)width, (int)height, 3, rgb8, (int)width * 3) != 0;
-    return finish(tmp, path, ok, err);
+    byte_sink sink = {0};
+    int ok = stbi_write_png_to_func(sink_put, &sink, (int)width, (int)height, 3, rgb8, (int)width * 3) != 0;
+    pb_result r = ok && !sink.failed ? pb_output_write(path, sink.b, sink.n, NULL, NULL, err)
+                                     : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: cannot encode the image", path);
+    free(sink.b);
+    return r;
 }
 
 pb_result pb_write_pfm(const char *path, const float *rgba, uint32_t width, uint32_t height, pb_error *err)
 {
-    char tmp[1100];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "wb");
-    int ok = f != NULL;
-    if (f) {
-        ok = fprintf(f, "PF\n%u %u\n-1.0\n", width, height) > 0;
-        float *row = malloc((size_t)width * 3 * sizeof(float));
-        ok = ok && row;
-        for (uint32_t y = 0; ok && y < height; ++y) { /* PFM rows go bottom to top */
-            const float *src = rgba + 4 * (size_t)width * (height - 1 - y);
-            for (uint32_t x = 0; x < width; ++x)
-                memcpy(row + 3 * x, src + 4 * x, 12);
-            ok = fwrite(row, 12, width, f) == width;
-        }
-        free(row);
-        ok = (fclose(f) == 0) && ok;
+    char head[64];
+    int hl = snprintf(head, sizeof head, "PF\n%u %u\n-1.0\n", width, height);
+    size_t size = (size_t)hl + (size_t)width * height * 12;
+    unsigned char *b = malloc(size);
+    if (!b)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory for the image", path);
+    memcpy(b, head, (size_t)hl);
+    for (uint32_t y = 0; y < height; ++y) { /* PFM rows go bottom to top */
+        const float *src = rgba + 4 * (size_t)width * (height - 1 - y);
+        for (uint32_t x = 0; x < width; ++x)
+            memcpy(b + hl + 12 * ((size_t)width * y + x), src + 4 * x, 12);
     }
-    return finish(tmp, path, ok, err);
+    pb_result r = pb_output_write(path, b, size, NULL, NULL, err);
+    free(b);
+    return r;
 }

@@ -7,7 +7,10 @@
 
 extern "C" {
 #include "common/common.h"
+#include "probebake/files.h"
 }
+
+#include <sys/stat.h>
 
 #include <stb_image.h>
 #include <tiny_gltf.h>
@@ -16,6 +19,7 @@ extern "C" {
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -151,6 +155,15 @@ pb_result fail(reader &r, pb_result code, const std::string &what)
     return pb_fail(r.err, code, "%s: %s", r.path, what.c_str());
 }
 
+// An accessor without a bufferView reads as zeros of any count; larger ones
+// are refused rather than allocated.
+const size_t PB_GLTF_MAX_ZERO_ELEMENTS = size_t(1) << 24;
+
+// JSON deeper than this is refused before the parser (which recurses once
+// per level: 20,000 levels overflowed an 8 MiB stack) sees it. Real glTF
+// nests about ten levels; 512 leaves room for deep extras.
+const int PB_GLTF_MAX_NESTING = 512;
+
 // Reads `count` elements of accessor `index` as `ncomp` doubles each, after
 // checking every byte it touches lies inside its buffer view and buffer.
 pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &out, const char *what)
@@ -169,11 +182,19 @@ pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &ou
     if (comps < ncomp)
         return fail(r, PB_ERROR_PARSE, name + " has " + std::to_string(comps) + " components, needs " +
                                            std::to_string(ncomp));
-    out.assign((size_t)a.count * ncomp, 0.0);
-    if (a.count == 0)
+    // every size is checked before anything is allocated from it
+    if (a.count == 0) {
+        out.clear();
         return PB_OK;
-    if (a.bufferView < 0)
-        return PB_OK; // glTF: all zeros
+    }
+    if (a.bufferView < 0) { // glTF: all zeros; no buffer bounds the count, so a fixed limit does
+        if (a.count > PB_GLTF_MAX_ZERO_ELEMENTS)
+            return fail(r, PB_ERROR_PARSE, name + " has " + std::to_string(a.count) +
+                                               " elements and no bufferView: at most " +
+                                               std::to_string(PB_GLTF_MAX_ZERO_ELEMENTS));
+        out.assign((size_t)a.count * ncomp, 0.0);
+        return PB_OK;
+    }
     if (a.bufferView >= (int)m.bufferViews.size())
         return fail(r, PB_ERROR_PARSE, name + " refers to missing bufferView " + std::to_string(a.bufferView));
     const tinygltf::BufferView &v = m.bufferViews[a.bufferView];
@@ -195,6 +216,7 @@ pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &ou
     if (a.count > SIZE_MAX / stride || need < a.byteOffset || need > v.byteLength)
         return fail(r, PB_ERROR_PARSE, name + " (" + std::to_string(a.count) + " elements) reads past the end of bufferView " +
                                            std::to_string(a.bufferView));
+    out.assign((size_t)a.count * ncomp, 0.0); // bounded: count x stride fits in the view
     const unsigned char *base = buf.data() + v.byteOffset + a.byteOffset;
     for (size_t i = 0; i < a.count; ++i) {
         const unsigned char *e = base + i * stride;
@@ -483,13 +505,6 @@ pb_result visit(reader &r, int node_index, const mat4 parent, int depth)
     return PB_OK;
 }
 
-bool has_glb_magic(FILE *f)
-{
-    char magic[4] = {0, 0, 0, 0};
-    size_t got = fread(magic, 1, 4, f);
-    return got == 4 && memcmp(magic, "glTF", 4) == 0;
-}
-
 std::string first_line(const std::string &s)
 {
     std::string t = s.substr(0, s.find('\n'));
@@ -498,25 +513,110 @@ std::string first_line(const std::string &s)
     return t;
 }
 
-} // namespace
 
-extern "C" pb_result pb_gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builder *b, pb_error *err)
+// Deepest nesting of [ and { in JSON text (strings skipped), stopping early
+// once past `limit`.
+int json_nesting(const unsigned char *s, size_t n, int limit)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return pb_fail(err, PB_ERROR_IO, "%s: cannot open: %s", path, strerror(errno));
-    bool glb = has_glb_magic(f);
-    fclose(f);
+    int depth = 0, deepest = 0;
+    bool in_string = false;
+    for (size_t i = 0; i < n && deepest <= limit; ++i) {
+        unsigned char c = s[i];
+        if (in_string) {
+            if (c == '\\')
+                ++i;
+            else if (c == '"')
+                in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            deepest = ++depth > deepest ? depth : deepest;
+        } else if ((c == ']' || c == '}') && depth > 0) {
+            --depth;
+        }
+    }
+    return deepest;
+}
+
+// The JSON of a file: all of a .gltf, the first chunk of a .glb (when its
+// header says so; tinygltf judges the rest).
+void json_part(const unsigned char *bytes, size_t n, bool glb, size_t *begin, size_t *len)
+{
+    *begin = 0, *len = n;
+    if (glb && n >= 20) {
+        uint32_t chunk;
+        memcpy(&chunk, bytes + 12, 4);
+        *begin = 20;
+        *len = chunk <= n - 20 ? chunk : n - 20;
+    }
+}
+
+// tinygltf's file access for external buffers and images: regular files only
+// (a FIFO would hang, a directory reads as LONG_MAX bytes), sizes bounded.
+bool fs_exists(const std::string &path, void *)
+{
+    struct stat st;
+    return stat(path.c_str(), &st) == 0;
+}
+
+std::string fs_expand(const std::string &path, void *)
+{
+    return path; // no shell expansion of names found in files
+}
+
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *)
+{
+    unsigned char *bytes = nullptr;
+    uint64_t size = 0;
+    pb_error e;
+    if (pb_input_read(path.c_str(), UINT32_MAX, &bytes, &size, &e) != PB_OK) {
+        if (err)
+            *err += std::string(e.message) + "\n";
+        return false;
+    }
+    out->assign(bytes, bytes + size);
+    free(bytes);
+    return true;
+}
+
+bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *)
+{
+    if (err)
+        *err += "probebake never writes glTF files\n";
+    return false;
+}
+
+pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builder *b, pb_error *err)
+{
+    unsigned char *bytes = nullptr;
+    uint64_t size = 0;
+    // regular files only; tinygltf takes 32-bit lengths
+    pb_result res = pb_input_read(path, UINT32_MAX, &bytes, &size, err);
+    if (res != PB_OK)
+        return res;
+    std::unique_ptr<unsigned char, void (*)(void *)> owned(bytes, free);
+    if (size == 0)
+        return pb_fail(err, PB_ERROR_PARSE, "%s: file is empty", path);
+    bool glb = size >= 4 && memcmp(bytes, "glTF", 4) == 0;
+    size_t jb, jl;
+    json_part(bytes, (size_t)size, glb, &jb, &jl);
+    if (json_nesting(bytes + jb, jl, PB_GLTF_MAX_NESTING) > PB_GLTF_MAX_NESTING)
+        return pb_fail(err, PB_ERROR_PARSE, "%s: JSON nested deeper than %d levels", path, PB_GLTF_MAX_NESTING);
 
     tinygltf::TinyGLTF loader;
     image_ctx ictx = {path, b->log, desc->skip_textures ? 1 : 0};
     loader.SetImageLoader(load_image, &ictx);
+    tinygltf::FsCallbacks fs = {fs_exists, fs_expand, fs_read, fs_write, nullptr};
+    loader.SetFsCallbacks(fs);
+    std::string p(path), base = p.find('/') == std::string::npos ? std::string(".") : p.substr(0, p.rfind('/'));
+    if (base.empty())
+        base = "/";
     tinygltf::Model model;
     std::string gerr, gwarn;
     bool ok;
     try {
-        ok = glb ? loader.LoadBinaryFromFile(&model, &gerr, &gwarn, path)
-                 : loader.LoadASCIIFromFile(&model, &gerr, &gwarn, path);
+        ok = glb ? loader.LoadBinaryFromMemory(&model, &gerr, &gwarn, bytes, (unsigned)size, base)
+                 : loader.LoadASCIIFromString(&model, &gerr, &gwarn, (const char *)bytes, (unsigned)size, base);
     } catch (const std::exception &e) { // nlohmann throws on some malformed input
         return pb_fail(err, PB_ERROR_PARSE, "%s: malformed glTF: %s", path, e.what());
     }
@@ -552,7 +652,7 @@ extern "C" pb_result pb_gltf_read(const char *path, const pb_scene_desc *desc, p
     }
 
     reader r{model, path, b, err, {}, 0};
-    pb_result res = read_textures(r, desc->skip_textures);
+    res = read_textures(r, desc->skip_textures);
     if (res != PB_OK)
         return res;
     read_materials(r);
@@ -574,4 +674,20 @@ extern "C" pb_result pb_gltf_read(const char *path, const pb_scene_desc *desc, p
     if (b->out_of_memory)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
     return PB_OK;
+}
+
+} // namespace
+
+// No exception leaves this file: each becomes the one-line error.
+extern "C" pb_result pb_gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builder *b, pb_error *err)
+{
+    try {
+        return gltf_read(path, desc, b, err);
+    } catch (const std::bad_alloc &) {
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory reading the file", path);
+    } catch (const std::exception &e) {
+        return pb_fail(err, PB_ERROR_PARSE, "%s: malformed glTF: %s", path, e.what());
+    } catch (...) {
+        return pb_fail(err, PB_ERROR_PARSE, "%s: malformed glTF", path);
+    }
 }
