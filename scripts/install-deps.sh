@@ -1,11 +1,18 @@
 #!/usr/bin/env bash
 # Installs probebake's build, test and bench dependencies from Debian's packages.
-# Non-interactive and idempotent: packages already present are not fetched again.
+# Everything comes from bookworm except Mesa's Vulkan drivers (lavapipe), which
+# come from bookworm-backports at a pinned version: Mesa 25's llvmpipe runs our
+# kernels several times faster than bookworm's 22.3 (bench/RESULTS.md) and has
+# no 65,535-iteration loop cap. The backports suite is added from the mirror
+# the machine's apt sources already use. Non-interactive and idempotent.
 set -euo pipefail
+
+MESA_SUITE=bookworm-backports
+MESA_VERSION=25.0.7-2~bpo12+1
 
 pkgs=(
   build-essential cmake pkg-config
-  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers
+  libvulkan-dev vulkan-validationlayers
   glslang-tools spirv-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev
   libvulkan-volk-dev
@@ -13,17 +20,37 @@ pkgs=(
   gnuplot-nox
 )
 
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all packages present"
+mesa_now=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)
+if [ ${#missing[@]} -eq 0 ] && [ "$mesa_now" = "$MESA_VERSION" ]; then
+  echo "install-deps: all packages present (mesa-vulkan-drivers $MESA_VERSION)"
   exit 0
 fi
-echo "install-deps: installing ${missing[*]}"
-SUDO=""
-[ "$(id -u)" -eq 0 ] || SUDO="sudo"
-export DEBIAN_FRONTEND=noninteractive
+
+# The backports suite, on the mirror the existing sources name (deb822 or
+# one-line format); no host name is written here.
+if ! grep -rqs "$MESA_SUITE" /etc/apt/sources.list /etc/apt/sources.list.d/; then
+  mirror=$(grep -hs '^URIs:' /etc/apt/sources.list.d/*.sources | awk '{print $2}' | grep -v -- '-security' | head -n 1 || true)
+  [ -n "$mirror" ] || mirror=$(grep -hs '^deb ' /etc/apt/sources.list /etc/apt/sources.list.d/*.list |
+                               awk '{print $2}' | grep -v -- '-security' | head -n 1 || true)
+  if [ -z "$mirror" ]; then
+    echo "install-deps: error: cannot find a Debian mirror in /etc/apt/sources.list*" >&2
+    exit 1
+  fi
+  echo "install-deps: adding $MESA_SUITE from $mirror"
+  printf 'Types: deb\nURIs: %s\nSuites: %s\nComponents: main\nSigned-By: /usr/share/keyrings/debian-archive-keyring.gpg\n' \
+    "$mirror" "$MESA_SUITE" | $SUDO tee /etc/apt/sources.list.d/probebake-backports.sources >/dev/null
+fi
+
+echo "install-deps: installing ${missing[*]} mesa-vulkan-drivers=$MESA_VERSION"
 $SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+[ ${#missing[@]} -eq 0 ] || $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# -t lets the driver's own dependencies (libdrm) come from backports too
+$SUDO apt-get install -y -qq --no-install-recommends -t "$MESA_SUITE" "mesa-vulkan-drivers=$MESA_VERSION"

@@ -8,7 +8,9 @@ bash scripts/install-deps.sh
 jobs=$(nproc)
 
 # Default to Mesa's lavapipe so results do not depend on the machine's GPU.
-lvp=/usr/share/vulkan/icd.d/lvp_icd.x86_64.json
+# (Mesa 25 names its manifest lvp_icd.json, 22.3 lvp_icd.x86_64.json)
+lvp=/usr/share/vulkan/icd.d/lvp_icd.json
+[ -f "$lvp" ] || lvp=/usr/share/vulkan/icd.d/lvp_icd.x86_64.json
 if [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ] && [ -f "$lvp" ]; then
     export VK_DRIVER_FILES=$lvp VK_ICD_FILENAMES=$lvp
 fi

@@ -415,6 +415,18 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                        "(%.1f MiB): use fewer probes or rays",
                        P, rpp, need / 1048576.0, ctx->info.name, ctx->info.device_local_bytes / 1048576.0,
                        ctx->info.device_local_bytes / 2097152.0);
+    /* host memory too: lavapipe (Mesa 25) reports a heap as large as host
+     * memory, so the device check alone lets through bakes whose host
+     * accumulators (depth sums in double, the volume) cannot be allocated */
+    uint64_t tile_bytes = pb_volume_tile_halves(n) * 2u;
+    uint64_t host_need = (uint64_t)P * (16 + 48 + 27 * 8 + (uint64_t)texels * 16 + 16 + 24 + 12 + 16 + 24 + 136 +
+                                        tile_bytes) + (uint64_t)rpp * 16 + reduced_floats * 4;
+    uint64_t host_have = pb_host_memory_bytes();
+    if (host_have && host_need > host_have / 2)
+        return pb_fail(err, PB_ERROR_TOO_LARGE,
+                       "%u probes x %u rays need %.1f MiB of host memory; the budget is half of this machine's %.1f MiB "
+                       "(%.1f MiB): use fewer probes or a smaller octahedral map",
+                       P, rpp, host_need / 1048576.0, host_have / 1048576.0, host_have / 2097152.0);
 
     /* host side: probe positions, direction set, shading data, accumulators */
     float *probes = calloc((size_t)P * 4, sizeof(float));

@@ -1,3 +1,4 @@
+#define _DEFAULT_SOURCE /* sysconf(_SC_PHYS_PAGES) */
 #define _POSIX_C_SOURCE 200809L
 #include "common/common.h"
 
@@ -138,4 +139,10 @@ uint64_t pb_hash64(const void *data, size_t size, uint64_t seed)
         h *= 1099511628211ull;
     }
     return h;
+}
+
+uint64_t pb_host_memory_bytes(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+    return pages > 0 && size > 0 ? (uint64_t)pages * (uint64_t)size : 0;
 }

@@ -12,6 +12,7 @@
 #define PB_PRINTF(f, a) __attribute__((format(printf, f, a)))
 #else
 #define PB_PRINTF(f, a)
+
 #endif
 
 /* Records `code` and a formatted one-line message in err (may be NULL) and
@@ -39,5 +40,8 @@ void pb_parallel_for(uint64_t count, uint64_t grain, uint32_t threads, pb_range_
 
 /* FNV-1a over bytes; used for scene hashes and deterministic seeds. */
 uint64_t pb_hash64(const void *data, size_t size, uint64_t seed);
+
+/* Physical memory of this machine in bytes (0 if unknown). */
+uint64_t pb_host_memory_bytes(void);
 
 #endif
