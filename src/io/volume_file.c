@@ -233,10 +233,11 @@ static int half_finite(uint16_t h)
     return (h & 0x7c00u) != 0x7c00u;
 }
 
-/* The first non-finite value of the volume, as a message; NULL if none. */
+/* The first non-finite value of the volume, as a message; NULL if none.
+ * *probe: the probe holding it, UINT32_MAX for header values. */
 static const char *first_nonfinite(const pb_volume *v, uint32_t *probe)
 {
-    *probe = 0;
+    *probe = UINT32_MAX;
     for (int k = 0; k < 3; ++k)
         if (!isfinite(v->origin[k]) || !isfinite(v->spacing[k]))
             return "the grid origin or spacing";
@@ -268,6 +269,9 @@ pb_result pb_volume_write_ex(const char *path, const pb_volume *v, pb_cancel_fn 
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: volume has no probe data to write", path);
     uint32_t bad_probe;
     const char *bad = first_nonfinite(v, &bad_probe);
+    if (bad && bad_probe == UINT32_MAX) /* the grid origin or spacing, the depth unit */
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "%s: not written: %s is NaN or infinite (no volume file holds one)", path, bad);
     if (bad)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "%s: not written: probe %u has a NaN or infinite value in %s (no volume file holds one)", path,
