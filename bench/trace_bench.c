@@ -3,9 +3,11 @@
  * cores). Prints a table and writes JSON.
  *
  *   trace_bench [--probes N] [--rays N] [--repeat N] [--instanced K]
- *               [--leaf N] [--tc C] [--device D] [--json FILE] [SCENE ...]
+ *               [--leaf N] [--tc C] [--device D] [--portable] [--json FILE] [SCENE ...]
  *
  * --leaf and --tc set the BVH's maximum leaf size and SAH traversal cost.
+ * --portable runs the kernels built without shaderInt64/shaderFloat64 even
+ * where the device has them (to measure what the native64 build buys).
  *
  * Rays: a probe grid over the scene bounds, `--rays` spherical-Fibonacci
  * directions per probe, randomly rotated per probe (pb_probe_rays). GPU rates
@@ -33,6 +35,7 @@ typedef struct options {
     const char *scenes[16];
     int scene_count;
     int validation;           /* --validation: fail on any Vulkan validation message */
+    int portable;             /* --portable: the kernels without 64-bit types */
 } options;
 
 typedef struct result {
@@ -219,6 +222,8 @@ int main(int argc, char **argv)
             o.device = argv[++i];
         else if (!strcmp(a, "--validation"))
             o.validation = 1;
+        else if (!strcmp(a, "--portable"))
+            o.portable = 1;
         else if (!strcmp(a, "--json") && v)
             o.json = argv[++i];
         else if (a[0] == '-') {
@@ -249,6 +254,7 @@ int main(int argc, char **argv)
     }
 
     pb_context_desc cd = {o.device, (uint32_t)o.validation, 0, 0, {0}};
+    cd.portable_kernels = (uint32_t)o.portable;
     pb_context *ctx = NULL;
     pb_error err;
     if (pb_context_create(&cd, &ctx, &err) != PB_OK) {
@@ -258,7 +264,9 @@ int main(int argc, char **argv)
     RTCDevice edev = rtcNewDevice(NULL);
     const pb_device_info *dev = pb_context_device(ctx);
     uint32_t host_threads = pb_host_threads();
-    printf("device: %s (%s); Embree 3 on %u host threads\n", dev->name, dev->driver, host_threads);
+    const char *kernels = pb_context_native64(ctx) ? "native64" : "portable";
+    printf("device: %s (%s), %s kernels; Embree 3 on %u host threads\n", dev->name, dev->driver, kernels,
+           host_threads);
     printf("%-22s %9s %8s %6s %8s %9s %11s %11s %11s %8s %7s\n", "scene", "tris", "bvh ms", "depth", "B/tri",
            "rays", "gpu Mr/s", "gpu wall", "embree Mr/s", "ratio", "agree");
     result res[16];
@@ -278,8 +286,8 @@ int main(int argc, char **argv)
     FILE *f = fopen(o.json, "w");
     if (f) {
         fprintf(f, "{\n  \"bench\": \"trace\",\n  \"device\": \"%s\",\n  \"driver\": \"%s\",\n"
-                   "  \"host_threads\": %u,\n  \"rays_per_probe\": %u,\n  \"results\": [\n",
-                dev->name, dev->driver, host_threads, o.rays);
+                   "  \"kernels\": \"%s\",\n  \"host_threads\": %u,\n  \"rays_per_probe\": %u,\n  \"results\": [\n",
+                dev->name, dev->driver, kernels, host_threads, o.rays);
         for (int i = 0; i < nres; ++i) {
             result *r = &res[i];
             double gk = r->gpu_kernel_ms > 0 ? r->rays / (r->gpu_kernel_ms * 1e3) : 0;

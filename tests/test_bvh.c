@@ -2,6 +2,10 @@
  * hostile inputs, traversal == brute force, watertightness, robust origins.
  * CPU only (also run under ASan/UBSan). */
 #include "scenes_gen.h"
+#include "exact_inputs.h"
+#include "bvh/intersect.h"
+
+#include <float.h>
 
 /* Every triangle in exactly one leaf; each child box holds its subtree. */
 static uint32_t check_node(const pb_bvh *b, uint32_t node, const float lo[3], const float hi[3], uint32_t depth,
@@ -403,6 +407,62 @@ static void offset_is_tiny_and_on_the_right_side(void)
     CHECK(bad == 0);
 }
 
+/* pb_exact_diff is the exact a*b - c*d rounded once: equal to the double
+ * computation wherever that is exact (checked by two-sum), right in sign
+ * everywhere, 0 exactly when a*b == c*d. And wherever the edge function's
+ * float path is uncertain, it equals the double fallback the native64
+ * kernels use, so both kernel variants return the same bits. */
+static float double_fallback(float a, float b, float c, float d)
+{
+    double e = (double)a * b - (double)c * d;
+    float f = (float)e;
+    if (e != 0.0 && !(fabsf(f) >= FLT_MIN))
+        f = e > 0.0 ? 1e-37f : -1e-37f;
+    return f;
+}
+
+static void exact_diff_is_exact(void)
+{
+    test_rng r = {77};
+    uint32_t n = 3000000, compared = 0, uncertain = 0, bad_value = 0, bad_sign = 0, bad_fallback = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        float q[4];
+        exact_inputs(&r, i, q);
+        float f = pb_exact_diff(q[0], q[1], q[2], q[3]);
+        double p = (double)q[0] * q[1], m = (double)q[2] * q[3], e = p - m;
+        double bv = e - p, err = (p - (e - bv)) + (-m - bv); /* two-sum: e + err == p - m exactly */
+        int sign = p > m ? 1 : p < m ? -1 : 0;
+        if ((f > 0.f ? 1 : f < 0.f ? -1 : 0) != sign)
+            ++bad_sign;
+        if (err == 0.0 && fabs(e) <= FLT_MAX) {
+            ++compared;
+            if (memcmp(&(float){double_fallback(q[0], q[1], q[2], q[3])}, &f, 4) != 0) {
+                if (bad_value < 5)
+                    fprintf(stderr, "  %a*%a - %a*%a: %a, double %a\n", q[0], q[1], q[2], q[3], f, e);
+                ++bad_value;
+            }
+        }
+        float fp = q[0] * q[1], fq = q[2] * q[3], fr = fp - fq;
+        if (isfinite(fp) && isfinite(fq) && !(fabsf(fr) > PB_EDGE_ERROR_BOUND * (fabsf(fp) + fabsf(fq)))) {
+            ++uncertain;
+            float g = double_fallback(q[0], q[1], q[2], q[3]);
+            bad_fallback += memcmp(&g, &f, 4) != 0;
+        }
+    }
+    printf("  %u inputs: %u compared with an exact double, %u where the float path is uncertain\n", n, compared,
+           uncertain);
+    CHECKF(compared > n / 2 && uncertain > n / 10, "too few useful inputs (%u, %u)", compared, uncertain);
+    CHECKF(bad_sign == 0, "%u results of the wrong sign", bad_sign);
+    CHECKF(bad_value == 0, "%u results differ from the exact double rounded once", bad_value);
+    CHECKF(bad_fallback == 0, "%u uncertain edge functions where the double fallback differs", bad_fallback);
+    CHECK(pb_exact_diff(3.f, 5.f, 5.f, 3.f) == 0.f && !signbit(pb_exact_diff(3.f, 5.f, 5.f, 3.f)));
+    /* 1 + 2^-24 is a tie: nearest-even keeps 1; 1 + 3*2^-24 rounds up to 1 + 2^-22 */
+    CHECK(pb_exact_diff(1.f + 0x1p-23f, 1.f, 0x1p-12f, 0x1p-12f) == 1.f);
+    CHECK(pb_exact_diff(1.f + 0x1p-22f, 1.f, 0x1p-12f, 0x1p-12f) == 1.f + 0x1p-22f);
+    CHECK(pb_exact_diff(0x1p-100f, 0x1p-100f, 0.f, 0.f) == 1e-37f);
+    CHECK(pb_exact_diff(0x1p100f, 0x1p100f, -0x1p100f, 0x1p100f) == INFINITY);
+}
+
 int main(void)
 {
     RUN(structure_of_random_soups);
@@ -415,5 +475,6 @@ int main(void)
     RUN(sliver_has_no_phantom_hit);
     RUN(robust_offset_avoids_self_intersection);
     RUN(offset_is_tiny_and_on_the_right_side);
+    RUN(exact_diff_is_exact);
     return test_summary();
 }

@@ -200,7 +200,7 @@ one_error_line no-driver-one-line -- env VK_DRIVER_FILES=/nonexistent.json VK_IC
 
 if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect devices 0 'llvmpipe|GPU|CPU' -- "$pb" devices
-    expect devices-json 0 '"subgroup_size": [0-9]+' -- "$pb" devices --json
+    expect devices-json 0 '"subgroup_size": [0-9]+.*"kernels": "(native64|portable)"' -- "$pb" devices --json
     expect trace-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
         "$pb" trace "$demo" --verify --validation --probes 64 --rays 128
     expect bake-tiny 0 "wrote $tmp/a.probes: 8 probes" -- \

@@ -5,6 +5,8 @@
 #include "scenes_gen.h"
 #include "bake/gpu_scene.h"
 #include "gpu/gpu.h"
+#include "bvh/exact_diff.h"
+#include "exact_inputs.h"
 
 #include <stb_image_write.h>
 
@@ -477,6 +479,82 @@ static void ray_offset_gpu_matches_cpu(void)
     free(p), free(nn), free(g);
 }
 
+/* exact_diff.glsl on the device equals pb_exact_diff bit for bit, on inputs
+ * of every kind (tests/exact_inputs.h): denormals, ties, cancellation. */
+static void exact_diff_gpu_matches_cpu(void)
+{
+    uint32_t n = 600000;
+    float *in = malloc((size_t)n * 16), *out = malloc((size_t)n * 4);
+    test_rng r = {91};
+    for (uint32_t i = 0; i < n; ++i)
+        exact_inputs(&r, i, in + 4 * (size_t)i);
+    pb_error err;
+    CHECKF(pb_exact_diff_gpu(ctx, in, n, out, &err) == PB_OK, "%s", err.message);
+    uint32_t bad = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        const float *q = in + 4 * (size_t)i;
+        float c = pb_exact_diff(q[0], q[1], q[2], q[3]);
+        if (memcmp(&c, out + i, 4) != 0) {
+            if (bad < 5)
+                fprintf(stderr, "  %a*%a - %a*%a: CPU %a GPU %a\n", q[0], q[1], q[2], q[3], c, out[i]);
+            ++bad;
+        }
+    }
+    CHECKF(bad == 0, "%u of %u results differ", bad, n);
+    free(in), free(out);
+}
+
+/* The portable kernels declare neither Float64 nor Int64 (nor Int64Atomics),
+ * so a device without shaderFloat64/shaderInt64 can create them; the native64
+ * ones do declare them (or the variant would be pointless). Read from the
+ * SPIR-V the build embedded (build/shaders). */
+static int spirv_capabilities(const char *path, uint32_t *caps, int max)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return -1;
+    uint32_t words[1 << 16];
+    size_t n = 0, got;
+    while ((got = fread(words + n, 4, (sizeof words / 4) - n, f)) > 0 && n < sizeof words / 4)
+        n += got;
+    fclose(f);
+    int count = 0;
+    if (n < 5 || words[0] != 0x07230203u)
+        return -1;
+    for (size_t i = 5; i < n;) {
+        uint32_t len = words[i] >> 16, op = words[i] & 0xffffu;
+        if (len == 0)
+            return -1;
+        if (op == 17 && i + 1 < n && count < max) /* OpCapability */
+            caps[count++] = words[i + 1];
+        i += len;
+    }
+    return count;
+}
+
+static void portable_kernels_need_no_64bit_types(void)
+{
+    static const char *const kernels[] = {"trace", "bake_trace", "bake_sh", "bake_depth", "render",
+                                          "probe_sample", "ray_offset", "exact_diff"};
+    for (size_t k = 0; k < sizeof kernels / sizeof *kernels; ++k) {
+        for (int native = 0; native < 2; ++native) {
+            int has_native = strcmp(kernels[k], "trace") == 0 || strcmp(kernels[k], "bake_trace") == 0 ||
+                             strcmp(kernels[k], "render") == 0;
+            if (native && !has_native)
+                continue;
+            char path[512];
+            snprintf(path, sizeof path, "%s/%s%s.spv", PB_SHADER_DIR, kernels[k], native ? "_native64" : "");
+            uint32_t caps[64];
+            int n = spirv_capabilities(path, caps, 64);
+            CHECKF(n > 0, "cannot read %s", path);
+            int has64 = 0;
+            for (int i = 0; i < n; ++i)
+                has64 |= caps[i] == 10 || caps[i] == 11 || caps[i] == 12; /* Float64, Int64, Int64Atomics */
+            CHECKF(has64 == native, "%s: %s", path, native ? "declares no 64-bit capability" : "declares Float64 or Int64");
+        }
+    }
+}
+
 static void device_choice_and_refusals(void)
 {
     pb_context *c = (pb_context *)1;
@@ -518,6 +596,8 @@ int main(void)
     RUN(sync_validation_catches_a_missing_barrier);
     RUN(bounded_submissions_same_bytes);
     RUN(ray_offset_gpu_matches_cpu);
+    RUN(exact_diff_gpu_matches_cpu);
+    RUN(portable_kernels_need_no_64bit_types);
     RUN(device_choice_and_refusals);
     return test_gpu_finish(ctx);
 }

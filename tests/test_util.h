@@ -189,11 +189,14 @@ static inline void test_log_line(pb_log_level level, const char *msg, void *user
 }
 
 /* The GPU tests' context: PB_TEST_DEVICE (or the best device) with the
- * validation layer on. NULL, after printing why and a failed summary line,
+ * validation layer on; PB_TEST_PORTABLE_KERNELS=1 masks shaderInt64 and
+ * shaderFloat64 off (the kernels for devices without them). NULL, after printing why and a failed summary line,
  * when there is none: the caller returns 1. */
 static inline pb_context *test_gpu_context(void)
 {
     pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {test_log_line, NULL}};
+    const char *portable = getenv("PB_TEST_PORTABLE_KERNELS");
+    d.portable_kernels = portable && strcmp(portable, "1") == 0;
     pb_context *ctx = NULL;
     pb_error err;
     if (pb_context_create(&d, &ctx, &err) != PB_OK) {
@@ -201,6 +204,14 @@ static inline pb_context *test_gpu_context(void)
         printf("0 passed, 1 failed, 0 skipped\n");
         return NULL;
     }
+    if (d.portable_kernels && pb_context_native64(ctx)) {
+        fprintf(stderr, "PB_TEST_PORTABLE_KERNELS=1 but the context runs the native64 kernels\n");
+        printf("0 passed, 1 failed, 0 skipped\n");
+        pb_context_destroy(ctx);
+        return NULL;
+    }
+    printf("kernels: %s\n", pb_context_native64(ctx) ? "native64 (shaderInt64 + shaderFloat64)"
+                                                       : "portable (no shaderInt64, no shaderFloat64)");
     return ctx;
 }
 

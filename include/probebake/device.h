@@ -41,7 +41,9 @@ typedef struct pb_device_info {
     uint32_t subgroup_size;
     uint64_t max_storage_buffer_range;
     uint64_t max_memory_allocation;
-    uint32_t usable;              /* 1 if it has what probebake needs (Vulkan 1.2, BDA, int64, float64) */
+    uint32_t usable;              /* 1 if it has what probebake needs (Vulkan 1.2, bufferDeviceAddress, compute) */
+    uint32_t shader_int64;        /* optional: with shaderFloat64 too, the faster "native64" kernels run */
+    uint32_t shader_float64;
     char unusable_reason[128];
 } pb_device_info;
 
@@ -60,6 +62,8 @@ typedef struct pb_context_desc {
      * submission with VK_ERROR_DEVICE_LOST, as real drivers report them. */
     uint32_t fail_allocation;
     uint32_t fail_submission;
+    uint32_t portable_kernels;    /* 1: run the kernels that need neither shaderInt64 nor shaderFloat64
+                                     even where the device has them (tests that path; same results) */
 } pb_context_desc;
 
 /* Lists the Vulkan devices. Writes up to `capacity` entries to `out` (may be
@@ -80,6 +84,10 @@ const pb_device_info *pb_context_device(const pb_context *ctx);
 
 /* "discrete GPU", "CPU", ... for a pb_device_type. */
 const char *pb_device_type_name(uint32_t type);
+
+/* 1 when this context runs the *_native64 kernels (shaderInt64 and
+ * shaderFloat64 enabled), 0 for the portable ones. */
+int pb_context_native64(const pb_context *ctx);
 
 /* Number of validation-layer messages (warnings and errors) received so far. */
 uint32_t pb_context_validation_messages(const pb_context *ctx);

@@ -16,7 +16,7 @@
 layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push {
-    uint64_t params;
+    pb_addr params;
 } pc;
 
 shared vec4 cached[64];

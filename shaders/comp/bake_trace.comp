@@ -14,7 +14,7 @@
 layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push {
-    uint64_t params;
+    pb_addr params;
 } pc;
 
 void main()
@@ -28,13 +28,13 @@ void main()
     vec3 origin = Vec4Buf(P.probes).v[probe].xyz;
     uint state = rng_seed(P.seed, probe_id(P, probe), P.pass_index, ray);
     PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, state);
-    if (P.volume.probes != 0ul && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
+    if (!addr_null(P.volume.probes) && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
         pb_volume = P.volume;
         pr.L += pr.albedo / PB_PI * pb_sample_irradiance(pb_volume_grid(pb_volume), pr.x, pr.ng, -d);
     }
     float first_distance = isinf(pr.first_t) ? P.max_distance : sign(pr.first_t) * min(abs(pr.first_t), P.max_distance);
     Vec4RW(P.rays).v[i] = vec4(pr.L, first_distance);
-    if (P.counters != 0ul) {
+    if (!addr_null(P.counters)) {
         atomicAdd(UintRW(P.counters).v[0], pb_traversals);
         // near llvmpipe's per-invocation loop cap (65535 iterations, triangle
         // loops included), where it silently cuts paths short: the host warns

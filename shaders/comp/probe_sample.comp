@@ -13,10 +13,10 @@ layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer Q
 
 layout(push_constant) uniform Push {
     PbVolumeRefs volume;
-    uint64_t points;
-    uint64_t normals;
-    uint64_t views;
-    uint64_t out_rgb;
+    pb_addr points;
+    pb_addr normals;
+    pb_addr views;
+    pb_addr out_rgb;
     uint count;
 } pc;
 

@@ -4,8 +4,7 @@
 // CPU reference: pb_offset_ray_origin. The bake's kernels include
 // ray_offset.glsl directly; this kernel exists so the include is tested.
 #extension GL_GOOGLE_include_directive : require
-#extension GL_EXT_buffer_reference : require
-#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#include "address.glsl"
 
 #include "ray_offset.glsl"
 
@@ -15,9 +14,9 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Ve
 layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer Vec4Out { vec4 v[]; };
 
 layout(push_constant) uniform Push {
-    uint64_t points;
-    uint64_t normals;
-    uint64_t origins;
+    pb_addr points;
+    pb_addr normals;
+    pb_addr origins;
     uint count;
 } pc;
 

@@ -25,8 +25,8 @@ struct RenderParams {
     vec4 right;         // scaled: tan(fov / 2) x aspect
     vec4 up;            // scaled: tan(fov / 2)
     PbVolumeRefs volume;
-    uint64_t image;     // vec4 per pixel
-    uint64_t image_direct;
+    pb_addr image;     // vec4 per pixel
+    pb_addr image_direct;
     uint width, height, spp, mode;
     uint seed, bounces, first_row, rows;
     uint volume_direct; // the volume's irradiance includes direct light
@@ -38,8 +38,8 @@ struct RenderParams {
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer RenderParamsBuf { RenderParams r; };
 
 layout(push_constant) uniform Push {
-    uint64_t bake_params;
-    uint64_t render_params;
+    pb_addr bake_params;
+    pb_addr render_params;
 } pc;
 
 #define MODE_DIRECT 0u

@@ -27,8 +27,8 @@ layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer Hi
 
 layout(push_constant) uniform Push {
     SceneRefs scene;
-    uint64_t rays;
-    uint64_t hits;
+    pb_addr rays;
+    pb_addr hits;
     uint count;
 } pc;
 

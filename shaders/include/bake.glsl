@@ -47,19 +47,19 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer UintRW { uin
 
 struct BakeParams {
     SceneRefs scene;
-    uint64_t materials;     // ShadeMaterial[]
-    uint64_t lights;        // Light[]
-    uint64_t probes;        // vec4 per probe slot: local position, w = probe id (uint bits; keys its random numbers)
-    uint64_t rotations;     // 3 vec4 rows per probe (this pass)
-    uint64_t directions;    // vec4 per ray index: the unrotated spherical Fibonacci set
-    uint64_t rays;          // out/in: vec4 per ray: radiance rgb, w = distance (negative: back face)
-    uint64_t reduced;       // out: per probe, see bake_sh.comp and bake_depth.comp
-    uint64_t probe_list;    // 0: probes first_probe.. in order; else uint slots, read from first_probe on
-    uint64_t emitters;      // Emitter[]: the alias table over emissive triangles by power
-    uint64_t emit_pdf;      // float per leaf-ordered triangle: area density when sampled (p_i / area), 0 if not an emitter
-    uint64_t env;           // EnvTexel[] (environment.glsl); 0: no environment (black)
-    uint64_t counters;      // uint: BVH traversals of this submission are added here; 0: not counted
-    uint64_t pad0;
+    pb_addr materials;     // ShadeMaterial[]
+    pb_addr lights;        // Light[]
+    pb_addr probes;        // vec4 per probe slot: local position, w = probe id (uint bits; keys its random numbers)
+    pb_addr rotations;     // 3 vec4 rows per probe (this pass)
+    pb_addr directions;    // vec4 per ray index: the unrotated spherical Fibonacci set
+    pb_addr rays;          // out/in: vec4 per ray: radiance rgb, w = distance (negative: back face)
+    pb_addr reduced;       // out: per probe, see bake_sh.comp and bake_depth.comp
+    pb_addr probe_list;    // 0: probes first_probe.. in order; else uint slots, read from first_probe on
+    pb_addr emitters;      // Emitter[]: the alias table over emissive triangles by power
+    pb_addr emit_pdf;      // float per leaf-ordered triangle: area density when sampled (p_i / area), 0 if not an emitter
+    pb_addr env;           // EnvTexel[] (environment.glsl); 0: no environment (black)
+    pb_addr counters;      // uint: BVH traversals of this submission are added here; 0: not counted
+    pb_addr pad0;
     vec4 env_rotation;      // x cos, y sin of the environment's rotation about +Y
     uint first_probe;
     uint probe_count;       // in this submission
@@ -77,7 +77,7 @@ struct BakeParams {
     uint env_width, env_height;
     uint env_count;         // texels to sample; 0: none (black environment)
     PbVolumeRefs volume;    // --indirect volume: the previous bounce's volume (volume.probes 0: none)
-    uint64_t light_table;   // Emitter[] over punctual lights (tri = light index, pad = probability)
+    pb_addr light_table;   // Emitter[] over punctual lights (tri = light index, pad = probability)
     uint light_select;      // 1: one punctual light drawn per hit by power; 0: every light
     float indirect_clamp;   // > 0: reflected light is clamped per path contribution to this radiance
 };
@@ -101,7 +101,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Ba
 // The probe slot the `local`-th invocation of this submission works on.
 uint probe_slot(BakeParams P, uint local)
 {
-    return P.probe_list != 0ul ? UintBuf(P.probe_list).v[P.first_probe + local] : P.first_probe + local;
+    return !addr_null(P.probe_list) ? UintBuf(P.probe_list).v[P.first_probe + local] : P.first_probe + local;
 }
 
 // Read as an integer: small ids are denormal floats, and a float load may

@@ -17,7 +17,7 @@ struct EnvTexel {
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer EnvBuf { EnvTexel t[]; };
 
 struct Env {
-    uint64_t texels;        // EnvTexel[]; 0: no environment
+    pb_addr texels;        // EnvTexel[]; 0: no environment
     uint width, height, count; // count 0: nothing to sample (black)
     float c, s;             // cos, sin of the rotation about +Y
 };
@@ -34,7 +34,7 @@ uint env_texel_of(Env e, vec3 d)
 
 vec3 env_radiance(Env e, vec3 d)
 {
-    if (e.texels == 0ul)
+    if (addr_null(e.texels))
         return vec3(0.0);
     return EnvBuf(e.texels).t[env_texel_of(e, d)].rgb;
 }

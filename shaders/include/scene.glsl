@@ -4,8 +4,7 @@
 #ifndef PB_SCENE_GLSL
 #define PB_SCENE_GLSL
 
-#extension GL_EXT_buffer_reference : require
-#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#include "address.glsl"
 
 #define PB_NO_HIT 0xffffffffu
 #define PB_FLAG_ALPHA_MASK 0x80000000u
@@ -34,7 +33,6 @@ struct Texture {
     uint wrap; // wrap_s | wrap_t << 8
 };
 
-layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Words64 { uint64_t v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer FloatBuf { float v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer UintBuf { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MaterialBuf { Material m[]; };
@@ -42,21 +40,32 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Te
 
 // Nodes and triangles are read as 64-bit words: half as many load
 // instructions as 32-bit components. On GPUs this is the same bytes in wider
-// transactions; on lavapipe, which runs every load component as a loop over
-// its SIMD lanes, it halves the loop trips of the hottest loads.
-vec2 unpack_float2(uint64_t w)
+// transactions; on lavapipe, which gathers every load component separately,
+// a 64-bit component is one gather where a uvec2 is two (10 % faster on The
+// Crypt). So kernels are built twice (CMakeLists.txt): PB_NATIVE64 for
+// devices with shaderInt64 and shaderFloat64, and a portable variant.
+#ifdef PB_NATIVE64
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Words64 { uint64_t v[]; };
+#define PB_WORD(w, i) unpack32((w).v[i])
+#else
+layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Words64 { uvec2 v[]; };
+#define PB_WORD(w, i) ((w).v[i])
+#endif
+
+vec2 unpack_float2(uvec2 w)
 {
-    return uintBitsToFloat(unpack32(w));
+    return uintBitsToFloat(w);
 }
 
-Node load_node(uint64_t base, uint index)
+Node load_node(pb_addr base, uint index)
 {
     Words64 w = Words64(base);
     uint b = 8u * index;
-    vec2 x0 = unpack_float2(w.v[b + 0u]), x1 = unpack_float2(w.v[b + 1u]);
-    vec2 y0 = unpack_float2(w.v[b + 2u]), y1 = unpack_float2(w.v[b + 3u]);
-    vec2 z0 = unpack_float2(w.v[b + 4u]), z1 = unpack_float2(w.v[b + 5u]);
-    uvec2 ch = unpack32(w.v[b + 6u]), ct = unpack32(w.v[b + 7u]);
+    vec2 x0 = unpack_float2(PB_WORD(w, b + 0u)), x1 = unpack_float2(PB_WORD(w, b + 1u));
+    vec2 y0 = unpack_float2(PB_WORD(w, b + 2u)), y1 = unpack_float2(PB_WORD(w, b + 3u));
+    vec2 z0 = unpack_float2(PB_WORD(w, b + 4u)), z1 = unpack_float2(PB_WORD(w, b + 5u));
+    uvec2 ch = PB_WORD(w, b + 6u), ct = PB_WORD(w, b + 7u);
     Node n;
     n.x = vec4(x0, x1);
     n.y = vec4(y0, y1);
@@ -71,15 +80,15 @@ struct Tri {
     uint flags;
 };
 
-Tri load_tri(uint64_t base, uint index)
+Tri load_tri(pb_addr base, uint index)
 {
     Words64 w = Words64(base);
     uint b = 5u * index;
-    vec2 a = unpack_float2(w.v[b + 0u]);   // v0.x v0.y
-    vec2 c = unpack_float2(w.v[b + 1u]);   // v0.z v1.x
-    vec2 d = unpack_float2(w.v[b + 2u]);   // v1.y v1.z
-    vec2 e = unpack_float2(w.v[b + 3u]);   // v2.x v2.y
-    uvec2 f = unpack32(w.v[b + 4u]);       // v2.z, flags
+    vec2 a = unpack_float2(PB_WORD(w, b + 0u));   // v0.x v0.y
+    vec2 c = unpack_float2(PB_WORD(w, b + 1u));   // v0.z v1.x
+    vec2 d = unpack_float2(PB_WORD(w, b + 2u));   // v1.y v1.z
+    vec2 e = unpack_float2(PB_WORD(w, b + 3u));   // v2.x v2.y
+    uvec2 f = PB_WORD(w, b + 4u);      // v2.z, flags
     Tri t;
     t.v0 = vec3(a, c.x);
     t.v1 = vec3(c.y, d);
@@ -90,12 +99,12 @@ Tri load_tri(uint64_t base, uint index)
 
 // Addresses of the uploaded scene, in leaf order (see bvh.h).
 struct SceneRefs {
-    uint64_t nodes;     // Node[]
-    uint64_t tris;      // 10 words per triangle: 9 position floats, flags (material | PB_FLAG_ALPHA_MASK)
-    uint64_t tri_uv;    // float[6] per triangle
-    uint64_t materials; // Material[]
-    uint64_t textures;  // Texture[]
-    uint64_t texels;    // RGBA8 words
+    pb_addr nodes;     // Node[]
+    pb_addr tris;      // 10 words per triangle: 9 position floats, flags (material | PB_FLAG_ALPHA_MASK)
+    pb_addr tri_uv;    // float[6] per triangle
+    pb_addr materials; // Material[]
+    pb_addr textures;  // Texture[]
+    pb_addr texels;    // RGBA8 words
     uint triangle_count;
     uint pad;
 };

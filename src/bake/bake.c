@@ -21,6 +21,7 @@
 #include "bake_depth.spv.h"
 #include "bake_sh.spv.h"
 #include "bake_trace.spv.h"
+#include "bake_trace_native64.spv.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -467,7 +468,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         r = make_buffer(ctx, &B.reduced, reduced_floats * 4, PB_MEMORY_DOWNLOAD, "probe results", NULL, err);
     uint32_t spec[1] = {gs->bvh_depth + 1};
     if (r == PB_OK)
-        r = pb_pipeline_create(ctx, pb_spv_bake_trace, sizeof pb_spv_bake_trace, sizeof(bake_push), spec, 1, 64,
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 1, 64,
                                "bake_trace", &B.trace, err);
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, pb_spv_bake_sh, sizeof pb_spv_bake_sh, sizeof(bake_push), spec, 1, 64, "bake_sh",

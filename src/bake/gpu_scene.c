@@ -5,6 +5,7 @@
 #include "probebake/scene.h"
 
 #include "trace.spv.h"
+#include "trace_native64.spv.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -96,10 +97,10 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     free(tris), free(uvs), free(mats), free(texs);
     if (r == PB_OK) {
         uint32_t spec_closest[2] = {gs->bvh_depth + 1, 0}, spec_any[2] = {gs->bvh_depth + 1, 1};
-        r = pb_pipeline_create(ctx, pb_spv_trace, sizeof pb_spv_trace, sizeof(trace_push), spec_closest, 2, 64,
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, trace), sizeof(trace_push), spec_closest, 2, 64,
                                "trace (closest)", &gs->trace_closest, err);
         if (r == PB_OK)
-            r = pb_pipeline_create(ctx, pb_spv_trace, sizeof pb_spv_trace, sizeof(trace_push), spec_any, 2, 64,
+            r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, trace), sizeof(trace_push), spec_any, 2, 64,
                                    "trace (any)", &gs->trace_any, err);
     }
     if (r != PB_OK) {

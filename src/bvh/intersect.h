@@ -13,10 +13,9 @@
  * sliver's edge functions to 0 or to the wrong sign and report phantom hits
  * far from the ray (seen on The Crypt). So each a*b - c*d is an adaptive
  * predicate: the float result when its magnitude exceeds its rounding-error
- * bound (then its sign is certain), else the double result, exact in sign
- * because a product of two floats is exact in double. Both paths give the
- * exact sign, so shared edges stay consistent. (Kahan's FMA algorithm would
- * avoid doubles, but lavapipe lowers GLSL fma() to mul + add.)
+ * bound (then its sign is certain), else the exact value rounded once
+ * (exact_diff.h, integer arithmetic: no double, no 64-bit integer on the
+ * device). Both paths give the exact sign, so shared edges stay consistent.
  *
  * Box test: slabs with the far distance scaled by 1 + 2*gamma(3) (Ize,
  * "Robust BVH Ray Traversal", JCGT 2013) so rounding never culls a box the
@@ -26,6 +25,8 @@
 
 #include <math.h>
 #include <stdint.h>
+
+#include "bvh/exact_diff.h"
 
 typedef struct pb_ray_pre {
     float org[3];
@@ -70,11 +71,7 @@ static inline float pb_edge_function(float a, float b, float c, float d)
     float r = p - q;
     if (fabsf(r) > PB_EDGE_ERROR_BOUND * (fabsf(p) + fabsf(q)))
         return r;
-    double e = (double)a * (double)b - (double)c * (double)d;
-    float f = (float)e;
-    if (f == 0.f && e != 0.0) /* keep the sign of values below float range */
-        f = e > 0.0 ? 1e-37f : -1e-37f;
-    return f;
+    return pb_exact_diff(a, b, c, d);
 }
 
 /* Entry distance into the box [lo, hi] clipped to [tmin, tmax], or +inf. */

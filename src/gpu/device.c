@@ -184,16 +184,14 @@ static void describe(VkPhysicalDevice pd, uint32_t index, pb_device_info *info)
         return;
     }
     vkGetPhysicalDeviceFeatures2(pd, &f2);
+    info->shader_int64 = f2.features.shaderInt64 != 0;
+    info->shader_float64 = f2.features.shaderFloat64 != 0;
     if (!f12.bufferDeviceAddress) {
         info->usable = 0;
         snprintf(info->unusable_reason, sizeof info->unusable_reason, "no bufferDeviceAddress");
-    } else if (!f2.features.shaderInt64) {
-        info->usable = 0;
-        snprintf(info->unusable_reason, sizeof info->unusable_reason, "no shaderInt64");
-    } else if (!f2.features.shaderFloat64) {
-        info->usable = 0; /* exact-sign fallback of the watertight triangle test */
-        snprintf(info->unusable_reason, sizeof info->unusable_reason, "no shaderFloat64");
     }
+    /* shaderInt64 and shaderFloat64 are not needed: addresses are uvec2 in the
+     * kernels and the exact edge functions use 32-bit integers. */
     uint32_t qn = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, NULL);
     VkQueueFamilyProperties qf[16];
@@ -299,7 +297,7 @@ static pb_result pick_device(pb_context *ctx, pb_error *err)
         pb_result r = want && *want ? pb_fail(err, PB_ERROR_NO_DEVICE, "no Vulkan device matches --device '%s' "
                                                                         "(see `probebake devices`)", want)
                                     : pb_fail(err, PB_ERROR_NO_DEVICE, "no usable Vulkan device (need Vulkan 1.2 with "
-                                                                        "bufferDeviceAddress, shaderInt64, shaderFloat64)");
+                                                                        "bufferDeviceAddress and a compute queue)");
         free(pds), free(infos);
         return r;
     }
@@ -336,8 +334,10 @@ static pb_result create_device(pb_context *ctx, pb_error *err)
     VkPhysicalDeviceVulkan12Features f12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
     f12.bufferDeviceAddress = VK_TRUE;
     VkPhysicalDeviceFeatures2 f2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
-    f2.features.shaderInt64 = VK_TRUE;
-    f2.features.shaderFloat64 = VK_TRUE;
+    /* 64-bit types are optional: enabled only for the native64 kernels */
+    ctx->native64 = ctx->info.shader_int64 && ctx->info.shader_float64 && !ctx->desc.portable_kernels;
+    f2.features.shaderInt64 = ctx->native64 ? VK_TRUE : VK_FALSE;
+    f2.features.shaderFloat64 = ctx->native64 ? VK_TRUE : VK_FALSE;
     VkDeviceCreateInfo dci = {VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
     dci.queueCreateInfoCount = 1;
     dci.pQueueCreateInfos = &qci;
@@ -433,6 +433,11 @@ void pb_context_destroy(pb_context *ctx)
 const pb_device_info *pb_context_device(const pb_context *ctx)
 {
     return &ctx->info;
+}
+
+int pb_context_native64(const pb_context *ctx)
+{
+    return ctx ? ctx->native64 : 0;
 }
 
 uint32_t pb_context_validation_messages(const pb_context *ctx)

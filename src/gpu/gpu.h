@@ -48,7 +48,15 @@ typedef struct pb_context {
     uint32_t validation_messages;
     uint32_t allocations, submissions; /* counted for desc.fail_allocation / fail_submission */
     int recording;
+    int native64;                /* shaderInt64 + shaderFloat64 enabled: run the *_native64 kernels */
 } pb_context;
+
+/* SPIR-V and its size for kernel `name` on this context: the _native64
+ * variant where 64-bit types are enabled, else the portable one (see
+ * CMakeLists.txt). Both headers must be included. */
+#define PB_KERNEL_SPIRV(ctx, name)                                                                                      \
+    ((ctx)->native64 ? pb_spv_##name##_native64 : pb_spv_##name),                                                      \
+        ((ctx)->native64 ? sizeof pb_spv_##name##_native64 : sizeof pb_spv_##name)
 
 /* Maps a Vulkan error to a pb_result and a message naming `what`. */
 pb_result pb_vk_fail(pb_context *ctx, pb_error *err, VkResult vr, const char *what);

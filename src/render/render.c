@@ -6,6 +6,7 @@
 #include "render/render_types.h"
 
 #include "render.spv.h"
+#include "render_native64.spv.h"
 
 #define PB_RENDER_SAMPLES_PER_DISPATCH 4u
 
@@ -116,7 +117,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
         r = pb_buffer_create(ctx, pixels * 16, PB_MEMORY_DOWNLOAD, "direct image", &imgd, err);
     uint32_t spec[1] = {gs->bvh_depth + 1};
     if (r == PB_OK)
-        r = pb_pipeline_create(ctx, pb_spv_render, sizeof pb_spv_render, 16, spec, 1, 64, "render", &pipe, err);
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, render), 16, spec, 1, 64, "render", &pipe, err);
     if (r == PB_OK) {
         gpu_bake_params prm;
         memset(&prm, 0, sizeof prm);
