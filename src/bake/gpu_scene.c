@@ -4,8 +4,6 @@
 #include "common/common.h"
 #include "probebake/scene.h"
 
-#include "trace.spv.h"
-#include "trace_native64.spv.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -95,14 +93,6 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     if (r == PB_OK) r = upload_array(ctx, &gs->textures, texs, sizes[4], names[4], err);
     if (r == PB_OK) r = upload_array(ctx, &gs->texels, scene->texels, sizes[5], names[5], err);
     free(tris), free(uvs), free(mats), free(texs);
-    if (r == PB_OK) {
-        uint32_t spec_closest[2] = {gs->bvh_depth + 1, 0}, spec_any[2] = {gs->bvh_depth + 1, 1};
-        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, trace), sizeof(trace_push), spec_closest, 2, 64,
-                               "trace (closest)", &gs->trace_closest, err);
-        if (r == PB_OK)
-            r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, trace), sizeof(trace_push), spec_any, 2, 64,
-                                   "trace (any)", &gs->trace_any, err);
-    }
     if (r != PB_OK) {
         pb_gpu_scene_destroy_ctx(ctx, gs);
         return r;

@@ -2,6 +2,10 @@
  * carries at most rays_per_submit rays: copy in (when the device is not
  * UMA), dispatch between two timestamps, copy out. */
 #include "bake/gpu_scene.h"
+#include "gpu/gpu.h"
+
+#include "trace.spv.h"
+#include "trace_native64.spv.h"
 #include "common/common.h"
 
 #include <string.h>
@@ -42,7 +46,14 @@ pb_result pb_trace(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, uint32
             r = pb_buffer_create(ctx, (uint64_t)chunk * sizeof(pb_hit), PB_MEMORY_DOWNLOAD, "hit staging",
                                  &out_staging, err);
     }
-    const pb_pipeline *pipe = mode == PB_TRACE_ANY ? &gs->trace_any : &gs->trace_closest;
+    /* made on first use: a bake never traces through this kernel, and on
+     * lavapipe each of the two costs 15-20 ms to create */
+    pb_pipeline *pipe = mode == PB_TRACE_ANY ? &gs->trace_any : &gs->trace_closest;
+    if (r == PB_OK && !pipe->pipeline) {
+        uint32_t spec[2] = {gs->bvh_depth + 1, mode == PB_TRACE_ANY};
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, trace), sizeof(trace_push), spec, 2, 64,
+                               mode == PB_TRACE_ANY ? "trace (any)" : "trace (closest)", pipe, err);
+    }
     for (uint32_t done = 0; r == PB_OK && done < count; done += chunk) {
         uint32_t n = count - done < chunk ? count - done : chunk;
         memcpy(staged ? in_staging.mapped : gs->rays.mapped, rays + done, (size_t)n * sizeof(pb_ray));

@@ -14,6 +14,7 @@ pb_result pb_pipeline_create(pb_context *ctx, const uint32_t *spirv, size_t spir
     if (push_size > ctx->limits.maxPushConstantsSize)
         return pb_fail(err, PB_ERROR_UNSUPPORTED, "%s: kernel %s needs %u bytes of push constants, device allows %u",
                        ctx->info.name, what, push_size, ctx->limits.maxPushConstantsSize);
+    double t0 = pb_now_ms();
     VkShaderModuleCreateInfo smci = {VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     smci.codeSize = spirv_bytes;
     smci.pCode = spirv;
@@ -51,6 +52,8 @@ pb_result pb_pipeline_create(pb_context *ctx, const uint32_t *spirv, size_t spir
     }
     out->push_size = push_size;
     out->local_size = local_size;
+    /* driver compile time: on lavapipe the bake's kernels take most of a small bake's host time */
+    pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "kernel %s: pipeline created in %.1f ms", what, pb_now_ms() - t0);
     return PB_OK;
 }
 
