@@ -10,6 +10,8 @@
 
 #include <stb_image_write.h>
 
+#include <dirent.h>
+
 static pb_context *ctx;
 
 static const pb_log test_log = {test_log_line, NULL};
@@ -532,27 +534,52 @@ static int spirv_capabilities(const char *path, uint32_t *caps, int max)
     return count;
 }
 
+static int has_64bit_capability(const char *path)
+{
+    uint32_t caps[64];
+    int n = spirv_capabilities(path, caps, 64);
+    if (n <= 0)
+        return -1;
+    for (int i = 0; i < n; ++i)
+        if (caps[i] == 10 || caps[i] == 11 || caps[i] == 12) /* Float64, Int64, Int64Atomics */
+            return 1;
+    return 0;
+}
+
+/* Every kernel the build embedded (each .spv in build/shaders, whatever
+ * CMakeLists.txt lists): the portable ones declare no 64-bit capability,
+ * each <name>_native64 does, and each has its portable twin. */
 static void portable_kernels_need_no_64bit_types(void)
 {
-    static const char *const kernels[] = {"trace", "bake_trace", "bake_sh", "bake_depth", "render",
-                                          "probe_sample", "ray_offset", "exact_diff"};
-    for (size_t k = 0; k < sizeof kernels / sizeof *kernels; ++k) {
-        for (int native = 0; native < 2; ++native) {
-            int has_native = strcmp(kernels[k], "trace") == 0 || strcmp(kernels[k], "bake_trace") == 0 ||
-                             strcmp(kernels[k], "render") == 0;
-            if (native && !has_native)
-                continue;
-            char path[512];
-            snprintf(path, sizeof path, "%s/%s%s.spv", PB_SHADER_DIR, kernels[k], native ? "_native64" : "");
-            uint32_t caps[64];
-            int n = spirv_capabilities(path, caps, 64);
-            CHECKF(n > 0, "cannot read %s", path);
-            int has64 = 0;
-            for (int i = 0; i < n; ++i)
-                has64 |= caps[i] == 10 || caps[i] == 11 || caps[i] == 12; /* Float64, Int64, Int64Atomics */
-            CHECKF(has64 == native, "%s: %s", path, native ? "declares no 64-bit capability" : "declares Float64 or Int64");
+    DIR *dir = opendir(PB_SHADER_DIR);
+    CHECKF(dir != NULL, "cannot list %s", PB_SHADER_DIR);
+    if (!dir)
+        return;
+    int portable = 0, native = 0;
+    struct dirent *e;
+    while ((e = readdir(dir)) != NULL) {
+        size_t len = strlen(e->d_name);
+        if (len < 5 || strcmp(e->d_name + len - 4, ".spv") != 0)
+            continue;
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", PB_SHADER_DIR, e->d_name);
+        int is_native = len > 13 && strcmp(e->d_name + len - 13, "_native64.spv") == 0;
+        int has64 = has_64bit_capability(path);
+        CHECKF(has64 >= 0, "cannot read %s", path);
+        CHECKF(has64 == is_native, "%s: %s", path,
+               is_native ? "declares no 64-bit capability" : "declares Float64 or Int64");
+        if (is_native) {
+            char twin[1024];
+            snprintf(twin, sizeof twin, "%s/%.*s.spv", PB_SHADER_DIR, (int)(len - 13), e->d_name);
+            CHECKF(has_64bit_capability(twin) == 0, "%s has no portable twin %s", path, twin);
+            ++native;
+        } else {
+            ++portable;
         }
     }
+    closedir(dir);
+    printf("  %d portable kernels, %d native64 variants\n", portable, native);
+    CHECKF(portable >= 8 && native >= 3, "only %d portable and %d native64 kernels found", portable, native);
 }
 
 static void device_choice_and_refusals(void)

@@ -41,7 +41,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Te
 // Nodes and triangles are read as 64-bit words: half as many load
 // instructions as 32-bit components. On GPUs this is the same bytes in wider
 // transactions; on lavapipe, which gathers every load component separately,
-// a 64-bit component is one gather where a uvec2 is two (10 % faster on The
+// a 64-bit component is one gather where a uvec2 is two (7 % faster on The
 // Crypt). So kernels are built twice (CMakeLists.txt): PB_NATIVE64 for
 // devices with shaderInt64 and shaderFloat64, and a portable variant.
 #ifdef PB_NATIVE64

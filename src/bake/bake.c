@@ -20,6 +20,7 @@
 
 #include "bake_depth.spv.h"
 #include "bake_sh.spv.h"
+#include "bake_sh_native64.spv.h"
 #include "bake_trace.spv.h"
 #include "bake_trace_native64.spv.h"
 
@@ -471,7 +472,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 1, 64,
                                "bake_trace", &B.trace, err);
     if (r == PB_OK)
-        r = pb_pipeline_create(ctx, pb_spv_bake_sh, sizeof pb_spv_bake_sh, sizeof(bake_push), spec, 1, 64, "bake_sh",
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_sh), sizeof(bake_push), spec, 1, 64, "bake_sh",
                                &B.sh, err);
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 1, 64,
