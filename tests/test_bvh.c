@@ -4,6 +4,7 @@
 #include "scenes_gen.h"
 #include "exact_inputs.h"
 #include "bvh/intersect.h"
+#include "bvh/bvh_wide.h"
 
 #include <float.h>
 
@@ -44,8 +45,88 @@ static uint32_t check_node(const pb_bvh *b, uint32_t node, const float lo[3], co
     return bad;
 }
 
+typedef struct wide_check {
+    const pb_bvh *b;
+    uint32_t *seen, max_depth, bad, loose;
+} wide_check;
+
+/* The traced 4-wide form: every triangle in exactly one leaf, each decoded
+ * child box encloses its subtree's triangles (conservative quantization) and
+ * overshoots them by at most one quantization step per bound (tight).
+ * Returns the exact bounds of the subtree's vertices. */
+static void check_wide_node(wide_check *c, uint32_t node, uint32_t depth, float lo[3], float hi[3])
+{
+    const pb_bvh4_node *n = &c->b->wide_nodes[node];
+    for (int k = 0; k < 3; ++k)
+        lo[k] = INFINITY, hi[k] = -INFINITY;
+    if (depth + 1 > c->max_depth)
+        c->max_depth = depth + 1;
+    for (uint32_t i = 0; i < 4; ++i) {
+        if (n->child[i] == PB_BVH4_EMPTY) {
+            c->bad += n->count[i] != 0;
+            continue;
+        }
+        float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        if (n->count[i]) {
+            for (uint32_t t = n->child[i]; t < n->child[i] + n->count[i]; ++t) {
+                if (t >= c->b->triangle_count) {
+                    ++c->bad;
+                    continue;
+                }
+                c->seen[t]++;
+                const float *p = c->b->tri_positions + 9 * (size_t)t;
+                for (int v = 0; v < 9; ++v) {
+                    clo[v % 3] = fminf(clo[v % 3], p[v]);
+                    chi[v % 3] = fmaxf(chi[v % 3], p[v]);
+                }
+            }
+        } else if (n->child[i] <= node || n->child[i] >= c->b->wide_node_count) {
+            ++c->bad;
+            continue;
+        } else {
+            check_wide_node(c, n->child[i], depth + 1, clo, chi);
+        }
+        float qlo[3], qhi[3];
+        pb_bvh4_child_box(n, i, qlo, qhi);
+        for (int k = 0; k < 3; ++k) {
+            c->bad += !(qlo[k] <= clo[k]) || !(qhi[k] >= chi[k]);
+            /* one step of slack, plus the rounding of the decode near large origins */
+            float step = pb_bvh4_scale(n->exponent[k]), ulp = fabsf(n->origin[k]) * FLT_EPSILON;
+            c->loose += clo[k] - qlo[k] > step + ulp || qhi[k] - chi[k] > step + 2 * ulp;
+            lo[k] = fminf(lo[k], clo[k]);
+            hi[k] = fmaxf(hi[k], chi[k]);
+        }
+    }
+    /* each axis's scale is the finest whose 255 steps reach the node's extent */
+    for (int k = 0; k < 3; ++k) {
+        float half_step = pb_bvh4_scale((uint8_t)(n->exponent[k] - 1));
+        c->loose += n->exponent[k] > 1 && n->origin[k] + 255.f * half_step >= hi[k];
+    }
+}
+
+static void check_wide(const pb_bvh *b, const char *what)
+{
+    wide_check c = {b, calloc(b->triangle_count + 1, sizeof(uint32_t)), 0, 0, 0};
+    float lo[3], hi[3];
+    CHECK(b->wide_node_count >= 1 && b->wide_node_count <= b->node_count);
+    if (b->triangle_count)
+        check_wide_node(&c, 0, 0, lo, hi);
+    uint32_t once = 0;
+    for (uint32_t t = 0; t < b->triangle_count; ++t)
+        once += c.seen[t] == 1;
+    CHECKF(c.bad == 0, "%s: %u violations in the 4-wide BVH (a box not enclosing its triangles)", what, c.bad);
+    CHECKF(c.loose == 0, "%s: %u quantized bounds looser than one step or scales coarser than needed", what, c.loose);
+    CHECKF(once == b->triangle_count, "%s: %u of %u triangles in exactly one 4-wide leaf", what, once,
+           b->triangle_count);
+    CHECKF(!b->triangle_count || c.max_depth == b->stats.wide_depth, "%s: 4-wide depth %u, stats say %u", what,
+           c.max_depth, b->stats.wide_depth);
+    CHECK(b->stats.wide_depth <= b->stats.depth || b->triangle_count == 0);
+    free(c.seen);
+}
+
 static void check_structure(const pb_scene *s, const pb_bvh *b, const char *what)
 {
+    check_wide(b, what);
     uint32_t *seen = calloc(b->triangle_count + 1, sizeof *seen);
     uint32_t *order_seen = calloc(b->triangle_count + 1, sizeof *order_seen);
     float lo[3] = {-INFINITY, -INFINITY, -INFINITY}, hi[3] = {INFINITY, INFINITY, INFINITY};
@@ -121,6 +202,8 @@ static void build_is_deterministic_across_threads(void)
             break;
         CHECK(b[i]->node_count == b[0]->node_count);
         CHECK(memcmp(b[i]->nodes, b[0]->nodes, (size_t)b[0]->node_count * sizeof(pb_bvh_node)) == 0);
+        CHECK(b[i]->wide_node_count == b[0]->wide_node_count &&
+              memcmp(b[i]->wide_nodes, b[0]->wide_nodes, (size_t)b[0]->wide_node_count * sizeof(pb_bvh4_node)) == 0);
         CHECK(memcmp(b[i]->tri_order, b[0]->tri_order, (size_t)b[0]->triangle_count * 4) == 0);
     }
     if (b[0])

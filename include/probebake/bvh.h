@@ -14,6 +14,18 @@
  * reordered so each leaf's triangles are contiguous ("leaf order");
  * tri_order[k] is the scene index of leaf-ordered triangle k. An empty child
  * slot (a scene with one leaf) has count 0, child -1 and an inverted box.
+ *
+ * Traversals (GPU and the CPU reference) walk a 4-wide form of the same
+ * tree (src/bvh/bvh_wide.c): each node (64 bytes) holds up to four child
+ * boxes quantized to 8 bits per bound in the node's frame:
+ *
+ *   float origin[3]            the frame's corner
+ *   uint8 exponent[3]          axis scale 2^(exponent - 127)
+ *   uint8 qbox[3][2][4]        [axis][lo, hi][child]: bound = origin + q * scale
+ *   uint32 child[4]            node index (count 0), first triangle, or PB_BVH4_EMPTY
+ *   uint8 count[4]             triangles in the leaf, 0 for an inner node
+ *
+ * Decoded boxes enclose the exact ones; node 0 is the root.
  */
 #ifndef PROBEBAKE_BVH_H
 #define PROBEBAKE_BVH_H
@@ -35,11 +47,25 @@ typedef struct pb_bvh_node {
     uint32_t count[2];
 } pb_bvh_node;
 
+#define PB_BVH4_EMPTY 0xffffffffu
+
+typedef struct pb_bvh4_node {
+    float origin[3];
+    uint8_t exponent[3];
+    uint8_t pad0;
+    uint8_t qbox[3][2][4];
+    uint32_t child[4];
+    uint8_t count[4];
+    uint32_t pad1;
+} pb_bvh4_node;
+
 typedef struct pb_bvh_stats {
     uint32_t nodes;           /* inner nodes (each holds two child boxes) */
     uint32_t leaves;
     uint32_t depth;           /* edges from the root to the deepest leaf */
     uint32_t max_leaf_size;   /* largest leaf actually built */
+    uint32_t wide_nodes;      /* 4-wide nodes the traversals walk */
+    uint32_t wide_depth;      /* their depth */
     double sah_cost;          /* expected cost per ray, traversal step = 1 */
     double build_ms;          /* wall time of the build (binning + flatten) */
     uint32_t threads;         /* host threads used */
@@ -48,6 +74,8 @@ typedef struct pb_bvh_stats {
 typedef struct pb_bvh {
     uint32_t node_count;
     pb_bvh_node *nodes;
+    uint32_t wide_node_count;
+    pb_bvh4_node *wide_nodes; /* the traversed form (see above) */
     uint32_t triangle_count;
     uint32_t *tri_order;      /* leaf order -> scene triangle index */
     float *tri_positions;     /* 9 floats per leaf-ordered triangle */
@@ -63,9 +91,12 @@ typedef struct pb_bvh_desc {
     float intersection_cost;  /* SAH cost of one triangle test, default 1.0 */
 } pb_bvh_desc;
 
-/* Deepest stack any traversal of a BVH can need: depth + 1 entries. The
- * GPU kernel is specialised with this, so overflow cannot happen. */
+/* Deepest child-pair tree the build makes. A traversal pushes at most three
+ * entries per 4-wide level, so its stack needs 3 * wide_depth + 1 entries
+ * (PB_BVH_STACK_SIZE); the GPU kernel is specialised with this, so overflow
+ * cannot happen. */
 #define PB_BVH_MAX_DEPTH 64
+#define PB_BVH_STACK_SIZE(wide_depth) (3u * (wide_depth) + 1u)
 
 /* Builds the BVH of `scene` (which must outlive nothing: the BVH copies the
  * positions it needs). Deterministic: the result does not depend on the

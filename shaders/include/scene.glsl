@@ -10,13 +10,17 @@
 #define PB_FLAG_ALPHA_MASK 0x80000000u
 #define PB_INF uintBitsToFloat(0x7f800000u)
 
-// Child-pair BVH node (include/probebake/bvh.h): x, y, z hold
-// (c0.lo, c0.hi, c1.lo, c1.hi); c holds (child0, child1, count0, count1).
-struct Node {
-    vec4 x;
-    vec4 y;
-    vec4 z;
-    ivec4 c;
+#define PB_BVH4_EMPTY 0xffffffffu
+
+// 4-wide quantized BVH node (include/probebake/bvh.h), decoded: child i's
+// box on axis a is origin[a] + q[a][i] * scale[a], q from qlo / qhi.
+struct Node4 {
+    vec3 origin;
+    vec3 scale;
+    vec4 qlo[3];
+    vec4 qhi[3];
+    uvec4 child;
+    uvec4 count;
 };
 
 struct Material { // alpha-test view of a material
@@ -58,19 +62,26 @@ vec2 unpack_float2(uvec2 w)
     return uintBitsToFloat(w);
 }
 
-Node load_node(pb_addr base, uint index)
+vec4 unpack_bytes(uint w)
+{
+    return vec4((uvec4(w) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu);
+}
+
+Node4 load_node4(pb_addr base, uint index)
 {
     Words64 w = Words64(base);
     uint b = 8u * index;
-    vec2 x0 = unpack_float2(PB_WORD(w, b + 0u)), x1 = unpack_float2(PB_WORD(w, b + 1u));
-    vec2 y0 = unpack_float2(PB_WORD(w, b + 2u)), y1 = unpack_float2(PB_WORD(w, b + 3u));
-    vec2 z0 = unpack_float2(PB_WORD(w, b + 4u)), z1 = unpack_float2(PB_WORD(w, b + 5u));
-    uvec2 ch = PB_WORD(w, b + 6u), ct = PB_WORD(w, b + 7u);
-    Node n;
-    n.x = vec4(x0, x1);
-    n.y = vec4(y0, y1);
-    n.z = vec4(z0, z1);
-    n.c = ivec4(ch, ct);
+    uvec2 o = PB_WORD(w, b + 0u), oe = PB_WORD(w, b + 1u);
+    Node4 n;
+    n.origin = vec3(uintBitsToFloat(o), uintBitsToFloat(oe.x));
+    n.scale = uintBitsToFloat(((uvec3(oe.y) >> uvec3(0u, 8u, 16u)) & 0xffu) << 23u);
+    for (uint a = 0u; a < 3u; ++a) {
+        uvec2 q = PB_WORD(w, b + 2u + a);
+        n.qlo[a] = unpack_bytes(q.x);
+        n.qhi[a] = unpack_bytes(q.y);
+    }
+    n.child = uvec4(PB_WORD(w, b + 5u), PB_WORD(w, b + 6u));
+    n.count = (uvec4(PB_WORD(w, b + 7u).x) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu;
     return n;
 }
 
@@ -99,7 +110,7 @@ Tri load_tri(pb_addr base, uint index)
 
 // Addresses of the uploaded scene, in leaf order (see bvh.h).
 struct SceneRefs {
-    pb_addr nodes;     // Node[]
+    pb_addr nodes;     // Node4[] (64 bytes each)
     pb_addr tris;      // 10 words per triangle: 9 position floats, flags (material | PB_FLAG_ALPHA_MASK)
     pb_addr tri_uv;    // float[6] per triangle
     pb_addr materials; // Material[]

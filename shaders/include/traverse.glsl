@@ -1,8 +1,9 @@
-// BVH traversal: src/bvh/bvh_traverse.c in GLSL. Child-pair nodes; a leaf's
-// triangles are tested as soon as its box is hit; the nearer inner child is
-// visited first and the farther one pushed. At most one entry per level is
-// ever on the stack, and STACK_SIZE (a specialisation constant) is the BVH's
-// depth + 1, so the stack cannot overflow.
+// BVH traversal: src/bvh/bvh_traverse.c in GLSL. 4-wide quantized nodes
+// (include/probebake/bvh.h): the four child boxes are sorted near to far,
+// hit leaves are tested in that order, the nearest hit inner child is
+// visited next and the others pushed. At most three entries per level are
+// ever on the stack, and STACK_SIZE (a specialisation constant) is
+// 3 * wide depth + 1, so the stack cannot overflow.
 #ifndef PB_TRAVERSE_GLSL
 #define PB_TRAVERSE_GLSL
 
@@ -10,7 +11,15 @@
 #include "intersect.glsl"
 #include "alpha.glsl"
 
-layout(constant_id = 0) const uint STACK_SIZE = 64u;
+layout(constant_id = 0) const uint STACK_SIZE = 193u;
+
+// Compare-exchange of child slots a and b by box distance; ties keep slot order.
+#define PB_SORT2(a, b)                                                          \
+    if (d[b] < d[a]) {                                                          \
+        float td_ = d[a]; uint tc_ = ch[a], tn_ = cnt[a];                       \
+        d[a] = d[b]; ch[a] = ch[b]; cnt[a] = cnt[b];                            \
+        d[b] = td_; ch[b] = tc_; cnt[b] = tn_;                                  \
+    }
 
 struct TraceResult {
     float t;
@@ -44,48 +53,63 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
 #ifdef PB_COUNT_TRAVERSALS
         ++pb_loop_steps;
 #endif
-        Node nd = load_node(s.nodes, node);
-        float d[2];
-        d[0] = nd.c.x == -1 ? PB_INF : ray_box(r, vec3(nd.x.x, nd.y.x, nd.z.x), vec3(nd.x.y, nd.y.y, nd.z.y), tmin, tmax);
-        d[1] = nd.c.y == -1 ? PB_INF : ray_box(r, vec3(nd.x.z, nd.y.z, nd.z.z), vec3(nd.x.w, nd.y.w, nd.z.w), tmin, tmax);
-        for (int sl = 0; sl < 2; ++sl) {
-            uint count = uint(nd.c[2 + sl]);
-            if (count == 0u || !(d[sl] < PB_INF && d[sl] <= tmax))
-                continue;
-            uint first = uint(nd.c[sl]);
-            for (uint k = first; k < first + count; ++k) {
-                Tri tri = load_tri(s.tris, k);
-                float t, u, v;
-                if (!ray_triangle(r, tri.v0, tri.v1, tri.v2, tmin, tmax, t, u, v))
-                    continue;
-                uint f = tri.flags;
-                if ((f & PB_FLAG_ALPHA_MASK) != 0u && !alpha_opaque(s, k, f, u, v))
-                    continue;
-                tmax = t;
-                res.t = t;
-                res.tri = k;
-                res.u = u;
-                res.v = v;
-                if (any_hit)
-                    return res;
-            }
-            d[sl] = PB_INF;
+        Node4 nd = load_node4(s.nodes, node);
+        float d[4];
+        uint ch[4], cnt[4];
+        for (int i = 0; i < 4; ++i) {
+            ch[i] = nd.child[i];
+            cnt[i] = nd.count[i];
+            // q * scale is exact, so the decoded bound is one rounding fused or not
+            // (no `precise` needed; glslang also takes minutes marking it here)
+            vec3 lo = nd.origin + vec3(nd.qlo[0][i], nd.qlo[1][i], nd.qlo[2][i]) * nd.scale;
+            vec3 hi = nd.origin + vec3(nd.qhi[0][i], nd.qhi[1][i], nd.qhi[2][i]) * nd.scale;
+            d[i] = ch[i] == PB_BVH4_EMPTY ? PB_INF : ray_box(r, lo, hi, tmin, tmax);
         }
-        bool go0 = nd.c.z == 0 && d[0] < PB_INF && d[0] <= tmax; // a miss is +inf, tmax may be too
-        bool go1 = nd.c.w == 0 && d[1] < PB_INF && d[1] <= tmax;
-        if (go0 && go1) {
-            bool near1 = d[1] < d[0];
-            stack[sp++] = uint(near1 ? nd.c.x : nd.c.y);
-            node = uint(near1 ? nd.c.y : nd.c.x);
-        } else if (go0) {
-            node = uint(nd.c.x);
-        } else if (go1) {
-            node = uint(nd.c.y);
-        } else {
+        // near to far (ties keep slot order): leaves tested in this order, inner children pushed far first
+        PB_SORT2(0, 1);
+        PB_SORT2(2, 3);
+        PB_SORT2(0, 2);
+        PB_SORT2(1, 3);
+        PB_SORT2(1, 2);
+        // The hit leaves, near to far, as one run of triangles: one loop
+        // (llvmpipe runs a loop's body even where no lane enters it).
+        uint e[4];
+        uint run = 0u;
+        for (int i = 0; i < 4; ++i) {
+            run += cnt[i] != 0u && d[i] < PB_INF && d[i] <= tmax ? cnt[i] : 0u;
+            e[i] = run;
+        }
+        for (uint j = 0u; j < run; ++j) {
+            uint k = j < e[0] ? ch[0] + j : j < e[1] ? ch[1] + (j - e[0]) : j < e[2] ? ch[2] + (j - e[1]) : ch[3] + (j - e[2]);
+            Tri tri = load_tri(s.tris, k);
+            float t, u, v;
+            if (!ray_triangle(r, tri.v0, tri.v1, tri.v2, tmin, tmax, t, u, v))
+                continue;
+            uint f = tri.flags;
+            if ((f & PB_FLAG_ALPHA_MASK) != 0u && !alpha_opaque(s, k, f, u, v))
+                continue;
+            tmax = t;
+            res.t = t;
+            res.tri = k;
+            res.u = u;
+            res.v = v;
+            if (any_hit)
+                return res;
+        }
+        uint next = PB_BVH4_EMPTY;
+        for (int i = 3; i >= 0; --i) {
+            if (cnt[i] != 0u || !(d[i] < PB_INF && d[i] <= tmax)) // a miss is +inf, tmax may be too
+                continue;
+            if (next != PB_BVH4_EMPTY)
+                stack[sp++] = next;
+            next = ch[i];
+        }
+        if (next == PB_BVH4_EMPTY) {
             if (sp == 0u)
                 break;
-            node = stack[--sp];
+            next = stack[--sp];
         }
+        node = next;
     }
     return res;
 }

@@ -467,7 +467,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         r = make_buffer(ctx, &B.rays, (uint64_t)chunk * rpp * 16, PB_MEMORY_DEVICE, "probe rays", NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.reduced, reduced_floats * 4, PB_MEMORY_DOWNLOAD, "probe results", NULL, err);
-    uint32_t spec[1] = {gs->bvh_depth + 1};
+    uint32_t spec[1] = {gs->stack_size};
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 1, 64,
                                "bake_trace", &B.trace, err);

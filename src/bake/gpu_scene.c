@@ -25,11 +25,11 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     if (bvh->triangle_count != scene->triangle_count)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH (%u triangles) does not belong to scene %s (%u)",
                        bvh->triangle_count, scene->path, scene->triangle_count);
-    if (bvh->stats.depth + 1 > PB_BVH_MAX_DEPTH + 1)
+    if (bvh->stats.depth > PB_BVH_MAX_DEPTH || bvh->stats.wide_depth > PB_BVH_MAX_DEPTH)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH depth %u exceeds %d", bvh->stats.depth, PB_BVH_MAX_DEPTH);
     uint32_t n = scene->triangle_count;
     uint64_t sizes[6] = {
-        (uint64_t)bvh->node_count * sizeof(pb_bvh_node),
+        (uint64_t)bvh->wide_node_count * sizeof(pb_bvh4_node),
         (uint64_t)n * sizeof(gpu_tri),
         (uint64_t)n * 24u,
         (uint64_t)scene->material_count * sizeof(gpu_material),
@@ -84,9 +84,9 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     }
     memcpy(gs->tri_order, bvh->tri_order, (size_t)n * 4);
     gs->triangle_count = n;
-    gs->bvh_depth = bvh->stats.depth;
+    gs->stack_size = PB_BVH_STACK_SIZE(bvh->stats.wide_depth);
 
-    pb_result r = upload_array(ctx, &gs->nodes, bvh->nodes, sizes[0], names[0], err);
+    pb_result r = upload_array(ctx, &gs->nodes, bvh->wide_nodes, sizes[0], names[0], err);
     if (r == PB_OK) r = upload_array(ctx, &gs->tris, tris, sizes[1], names[1], err);
     if (r == PB_OK) r = upload_array(ctx, &gs->tri_uv, uvs, sizes[2], names[2], err);
     if (r == PB_OK) r = upload_array(ctx, &gs->materials, mats, sizes[3], names[3], err);

@@ -10,7 +10,7 @@ struct pb_gpu_scene {
     pb_buffer nodes, tris, tri_uv, materials, textures, texels;
     uint32_t *tri_order;      /* leaf -> scene triangle, host copy */
     uint32_t triangle_count;
-    uint32_t bvh_depth;
+    uint32_t stack_size;      /* traversal stack entries (PB_BVH_STACK_SIZE) */
     gpu_scene_refs refs;
     pb_pipeline trace_closest, trace_any;
     uint64_t bytes, traversal_bytes;

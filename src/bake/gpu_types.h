@@ -28,8 +28,10 @@ typedef struct gpu_texture {
 } gpu_texture;
 _Static_assert(sizeof(gpu_texture) == 16, "gpu_texture layout");
 
-_Static_assert(sizeof(pb_bvh_node) == 64, "Node layout");
-_Static_assert(offsetof(pb_bvh_node, child) == 48 && offsetof(pb_bvh_node, count) == 56, "Node layout");
+_Static_assert(sizeof(pb_bvh4_node) == 64, "Node4 layout");
+_Static_assert(offsetof(pb_bvh4_node, qbox) == 16 && offsetof(pb_bvh4_node, child) == 40 &&
+                   offsetof(pb_bvh4_node, count) == 56,
+               "Node4 layout");
 
 /* Leaf-ordered triangle record (Tri in scene.glsl), read as 64-bit words. */
 typedef struct gpu_tri {

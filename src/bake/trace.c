@@ -50,7 +50,7 @@ pb_result pb_trace(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, uint32
      * lavapipe each of the two costs 15-20 ms to create */
     pb_pipeline *pipe = mode == PB_TRACE_ANY ? &gs->trace_any : &gs->trace_closest;
     if (r == PB_OK && !pipe->pipeline) {
-        uint32_t spec[2] = {gs->bvh_depth + 1, mode == PB_TRACE_ANY};
+        uint32_t spec[2] = {gs->stack_size, mode == PB_TRACE_ANY};
         r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, trace), sizeof(trace_push), spec, 2, 64,
                                mode == PB_TRACE_ANY ? "trace (any)" : "trace (closest)", pipe, err);
     }

@@ -15,6 +15,7 @@
  * flatten walks the tree in a fixed order, so the output is byte-identical
  * whatever the thread count or scheduling. */
 #define _POSIX_C_SOURCE 200809L
+#include "bvh/bvh_wide.h"
 #include "common/common.h"
 #include "probebake/bvh.h"
 #include "probebake/scene.h"
@@ -571,6 +572,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     bvh->stats.max_leaf_size = fs.max_leaf;
     bvh->stats.sah_cost = fs.sah;
     bvh->stats.threads = n ? want : 1;
+    int wide_ok = pb_bvh_collapse_wide(bvh);
 
     pthread_mutex_destroy(&bd.lock);
     pthread_cond_destroy(&bd.cond);
@@ -578,6 +580,10 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     free(bd.nodes);
     free(bd.stack);
     bvh->stats.build_ms = pb_now_ms() - t0;
+    if (!wide_ok) {
+        pb_bvh_destroy(bvh);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory building the BVH of %u triangles", n);
+    }
     *out = bvh;
     return PB_OK;
 }
@@ -587,6 +593,7 @@ void pb_bvh_destroy(pb_bvh *bvh)
     if (!bvh)
         return;
     free(bvh->nodes);
+    free(bvh->wide_nodes);
     free(bvh->tri_order);
     free(bvh->tri_positions);
     free(bvh);
@@ -594,6 +601,6 @@ void pb_bvh_destroy(pb_bvh *bvh)
 
 uint64_t pb_bvh_gpu_bytes(const pb_bvh *bvh)
 {
-    /* nodes + 36 bytes of positions + 4 bytes of flags per triangle */
-    return (uint64_t)bvh->node_count * sizeof(pb_bvh_node) + (uint64_t)bvh->triangle_count * 40u;
+    /* 4-wide nodes + 36 bytes of positions + 4 bytes of flags per triangle */
+    return (uint64_t)bvh->wide_node_count * sizeof(pb_bvh4_node) + (uint64_t)bvh->triangle_count * 40u;
 }

@@ -1,8 +1,9 @@
 /* CPU reference traversal and brute force. The traversal is the GPU kernel's
- * loop in C (shaders/comp/trace.comp): child-pair nodes, leaves tested as
- * soon as their box is hit, nearer inner child first, far child on a stack
- * that holds at most one entry per level. */
+ * loop in C (shaders/include/traverse.glsl): 4-wide quantized nodes, child
+ * boxes sorted near to far, hit leaves tested in that order, the nearest hit
+ * inner child next and the others on a stack (at most three per level). */
 #include "bvh/alpha.h"
+#include "bvh/bvh_wide.h"
 #include "bvh/intersect.h"
 #include "common/common.h"
 #include "probebake/bvh.h"
@@ -34,6 +35,16 @@ static void finish_hit(const pb_scene *s, const pb_ray *ray, uint32_t tri, float
     }
 }
 
+/* Compare-exchange of child slots a and b by box distance; ties keep slot order. */
+#define PB_SORT2(a, b)                                                                                              \
+    do {                                                                                                           \
+        if (d[b] < d[a]) {                                                                                         \
+            float td = d[a]; uint32_t tc = ch[a], tn = cnt[a];                                                    \
+            d[a] = d[b], ch[a] = ch[b], cnt[a] = cnt[b];                                                           \
+            d[b] = td, ch[b] = tc, cnt[b] = tn;                                                                    \
+        }                                                                                                          \
+    } while (0)
+
 static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
 {
     const pb_bvh *bvh = j->bvh;
@@ -42,56 +53,65 @@ static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
     float tmin = ray->tmin, tmax = ray->tmax;
     uint32_t best = PB_NO_HIT;
     float bu = 0.f, bv = 0.f;
-    uint32_t stack[PB_BVH_MAX_DEPTH + 1];
+    uint32_t stack[PB_BVH_STACK_SIZE(PB_BVH_MAX_DEPTH)];
     uint32_t sp = 0, node = 0;
     if (bvh->triangle_count == 0) {
         finish_hit(j->scene, ray, PB_NO_HIT, 0.f, 0.f, 0.f, hit);
         return;
     }
     for (;;) {
-        const pb_bvh_node *nd = &bvh->nodes[node];
-        float d[2];
-        for (int s = 0; s < 2; ++s) {
+        const pb_bvh4_node *nd = &bvh->wide_nodes[node];
+        float d[4];
+        uint32_t ch[4], cnt[4];
+        for (uint32_t s = 0; s < 4; ++s) {
+            ch[s] = nd->child[s];
+            cnt[s] = nd->count[s];
             d[s] = INFINITY;
-            if (nd->child[s] == -1)
+            if (ch[s] == PB_BVH4_EMPTY)
                 continue;
-            float lo[3] = {nd->lo_hi_x[2 * s], nd->lo_hi_y[2 * s], nd->lo_hi_z[2 * s]};
-            float hi[3] = {nd->lo_hi_x[2 * s + 1], nd->lo_hi_y[2 * s + 1], nd->lo_hi_z[2 * s + 1]};
+            float lo[3], hi[3];
+            pb_bvh4_child_box(nd, s, lo, hi);
             d[s] = pb_ray_box(&r, lo, hi, tmin, tmax);
         }
-        for (int s = 0; s < 2; ++s) {
-            if (nd->count[s] == 0 || !(d[s] < INFINITY && d[s] <= tmax))
-                continue;
-            uint32_t first = (uint32_t)nd->child[s];
-            for (uint32_t k = first; k < first + nd->count[s]; ++k) {
-                const float *p = bvh->tri_positions + 9 * (size_t)k;
-                float t, u, v;
-                if (!pb_ray_triangle(&r, p, p + 3, p + 6, tmin, tmax, &t, &u, &v))
-                    continue;
-                uint32_t tri = bvh->tri_order[k];
-                if (!pb_alpha_opaque(j->scene, tri, u, v))
-                    continue;
-                tmax = t, best = tri, bu = u, bv = v;
-                if (j->mode == PB_TRACE_ANY)
-                    goto done;
-            }
-            d[s] = INFINITY;
+        /* near to far: leaves are tested in that order, inner children pushed far first */
+        PB_SORT2(0, 1);
+        PB_SORT2(2, 3);
+        PB_SORT2(0, 2);
+        PB_SORT2(1, 3);
+        PB_SORT2(1, 2);
+        /* the hit leaves, near to far, as one run of triangles (one loop in the kernel) */
+        uint32_t e[4], run = 0;
+        for (int s = 0; s < 4; ++s) {
+            run += cnt[s] != 0 && d[s] < INFINITY && d[s] <= tmax ? cnt[s] : 0;
+            e[s] = run;
         }
-        int go0 = nd->count[0] == 0 && d[0] < INFINITY && d[0] <= tmax; /* a miss is +inf, tmax may be too */
-        int go1 = nd->count[1] == 0 && d[1] < INFINITY && d[1] <= tmax;
-        if (go0 && go1) {
-            int near = d[1] < d[0];
-            stack[sp++] = (uint32_t)nd->child[1 - near];
-            node = (uint32_t)nd->child[near];
-        } else if (go0) {
-            node = (uint32_t)nd->child[0];
-        } else if (go1) {
-            node = (uint32_t)nd->child[1];
-        } else {
+        for (uint32_t i = 0; i < run; ++i) {
+            uint32_t k = i < e[0] ? ch[0] + i : i < e[1] ? ch[1] + (i - e[0]) : i < e[2] ? ch[2] + (i - e[1]) : ch[3] + (i - e[2]);
+            const float *p = bvh->tri_positions + 9 * (size_t)k;
+            float t, u, v;
+            if (!pb_ray_triangle(&r, p, p + 3, p + 6, tmin, tmax, &t, &u, &v))
+                continue;
+            uint32_t tri = bvh->tri_order[k];
+            if (!pb_alpha_opaque(j->scene, tri, u, v))
+                continue;
+            tmax = t, best = tri, bu = u, bv = v;
+            if (j->mode == PB_TRACE_ANY)
+                goto done;
+        }
+        uint32_t next = PB_BVH4_EMPTY;
+        for (int s = 3; s >= 0; --s) {
+            if (cnt[s] != 0 || !(d[s] < INFINITY && d[s] <= tmax)) /* a miss is +inf, tmax may be too */
+                continue;
+            if (next != PB_BVH4_EMPTY)
+                stack[sp++] = next;
+            next = ch[s];
+        }
+        if (next == PB_BVH4_EMPTY) {
             if (sp == 0)
                 break;
-            node = stack[--sp];
+            next = stack[--sp];
         }
+        node = next;
     }
 done:
     finish_hit(j->scene, ray, best, tmax, bu, bv, hit);

@@ -115,7 +115,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
         r = pb_buffer_create(ctx, pixels * 16, PB_MEMORY_DOWNLOAD, "image", &img, err);
     if (r == PB_OK)
         r = pb_buffer_create(ctx, pixels * 16, PB_MEMORY_DOWNLOAD, "direct image", &imgd, err);
-    uint32_t spec[1] = {gs->bvh_depth + 1};
+    uint32_t spec[1] = {gs->stack_size};
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, render), 16, spec, 1, 64, "render", &pipe, err);
     if (r == PB_OK) {
