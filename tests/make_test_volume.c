@@ -37,6 +37,8 @@ int main(int argc, char **argv)
         v.probe_flags[i] = PB_PROBE_VALID;
         for (int c = 0; c < 27; ++c)
             v.sh[27 * i + c] = (float)i + (float)c / 100.f;
+        v.probe_paths[i] = 1024u * (i + 1u);
+        v.probe_std_error[i] = i == 5 ? PB_STD_ERROR_UNKNOWN : 0.25f / (float)(1u << i);
     }
     v.offset[3 * 1 + 1] = 0.25f;
     v.probe_flags[1] |= PB_PROBE_RELOCATED;

@@ -384,14 +384,21 @@ static void closed_emissive_box(void)
     b = bake(s, &d);
     if (b.ok) {
         double want = 3.14159265 * (1 - pow(0.5, 10)) / 0.5;
-        uint32_t converged = 0;
+        uint32_t converged = 0, accounted = 0;
         double worst = 0;
         for (uint32_t p = 0; p < b.vol.probe_count; ++p) {
             float up[3] = {0, 1, 0}, e[3];
             pb_sh_eval(b.vol.sh + 27 * p, up, e);
             worst = fmax(worst, fabs(e[0] / want - 1));
             converged += (b.vol.probe_flags[p] & PB_PROBE_CONVERGED) != 0;
+            /* the file says what stopped each probe: its error under the target, after its own paths */
+            float se = b.vol.probe_std_error[p];
+            uint32_t paths = b.vol.probe_paths[p], rpp = b.vol.settings.rays_per_probe;
+            accounted += se >= 0.f && se <= 0.01f && paths % rpp == 0 && paths >= 4 * rpp &&
+                         paths <= b.vol.settings.passes * rpp;
         }
+        CHECKF(accounted == b.vol.probe_count, "%u of %u probes' paths and errors say they converged", accounted,
+               b.vol.probe_count);
         fprintf(stderr, "  target 1%%: %u of %u probes converged, at most %u passes, worst probe %.2f%%\n", converged,
                 b.vol.probe_count, b.vol.settings.passes, 100 * worst);
         CHECK(converged == b.vol.probe_count && b.vol.settings.passes > 4 && b.vol.settings.passes < 64);
@@ -1000,6 +1007,60 @@ static void passes_and_rays_agree(void)
     pb_scene_destroy(s);
 }
 
+static double dc_luminance(const float *sh)
+{
+    return 0.2126 * sh[0] + 0.7152 * sh[1] + 0.0722 * sh[2];
+}
+
+/* Per-probe accounting (issue 12): each probe's paths, and a relative
+ * standard error that predicts its actual error against a long bake of
+ * other seeds: |z| < 1 for about 68 % of probes and |z| < 2 for about 95 %
+ * (Student t with 15 degrees of freedom: 67 % and 94 %). An error estimate
+ * 2x too large or too small fails one of the two bands. One pass: unknown. */
+static void std_error_predicts_the_error(void)
+{
+    pb_scene *s = load_demo();
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 80, &d.grid);
+    d.bounces = 1;
+    d.octmap_res = 4;
+    d.skip_relocation = 1;
+    d.rays_per_probe = 64, d.passes = 16, d.seed = 2;
+    baked a = bake(s, &d);
+    d.rays_per_probe = 256, d.passes = 64, d.seed = 9;
+    baked ref = bake(s, &d);
+    d.rays_per_probe = 64, d.passes = 1, d.seed = 3;
+    baked one = bake(s, &d);
+    if (a.ok && ref.ok && one.ok) {
+        uint32_t n = 0, in1 = 0, in2 = 0, paths_ok = 0, unknown = 0;
+        for (uint32_t p = 0; p < a.vol.probe_count; ++p) {
+            paths_ok += a.vol.probe_paths[p] == 16 * 64 && ref.vol.probe_paths[p] == 64 * 256 &&
+                        one.vol.probe_paths[p] == 64;
+            unknown += one.vol.probe_std_error[p] == PB_STD_ERROR_UNKNOWN;
+            uint32_t f = a.vol.probe_flags[p];
+            if (!(f & PB_PROBE_VALID) || (f & PB_PROBE_DILATED))
+                continue;
+            double la = dc_luminance(a.vol.sh + 27 * p), lr = dc_luminance(ref.vol.sh + 27 * p);
+            double sa = a.vol.probe_std_error[p] * fabs(la), sr = ref.vol.probe_std_error[p] * fabs(lr);
+            if (!(sa > 0) || !(sr >= 0))
+                continue;
+            double z = fabs(la - lr) / sqrt(sa * sa + sr * sr);
+            in1 += z < 1, in2 += z < 2, ++n;
+        }
+        double f1 = (double)in1 / n, f2 = (double)in2 / n;
+        fprintf(stderr, "  %u probes: |z| < 1 for %.0f %%, < 2 for %.0f %% (expected about 67 and 94)\n", n, 100 * f1,
+                100 * f2);
+        CHECK(paths_ok == a.vol.probe_count && unknown == one.vol.probe_count);
+        CHECK(n >= 40 && f1 > 0.5 && f1 < 0.85 && f2 > 0.82);
+    }
+    release(&a);
+    release(&ref);
+    release(&one);
+    pb_scene_destroy(s);
+}
+
 /* With a target error, probes stop once their estimate has converged: under
  * a uniform sky every pass gives the same value (zero variance), so the bake
  * stops after the minimum 4 passes; in the noisy closed box the probes run
@@ -1469,6 +1530,7 @@ int main(void)
     RUN(scale_and_position_invariance);
     RUN(depth_finite_and_scale_free_at_km_and_mm);
     RUN(passes_and_rays_agree);
+    RUN(std_error_predicts_the_error);
     RUN(degenerate_scenes);
     RUN(many_lights_drawn_by_power);
     RUN(indirect_clamp_tames_fireflies);

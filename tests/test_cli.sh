@@ -68,10 +68,14 @@ expect device-missing-value 2 '--device needs a value' -- "$pb" trace "$demo" --
 expect inspect-text 0 'probes +6 = 3 x 2 x 1' -- "$pb" inspect "$tmp/v.probes"
 expect inspect-flags 0 '5 valid, 1 relocated, 1 dilated' -- "$pb" inspect "$tmp/v.probes"
 expect inspect-json-count 0 '"probes": 6,' -- "$pb" inspect "$tmp/v.probes" --json
-expect inspect-json-probe 0 '"index": 1, "position": \[1000001, 2.25, -5\], "offset": \[0, 0.25, 0\], "flags": \["valid", "relocated"\], "sh": \[1, 1.00999999' -- \
+expect inspect-json-probe 0 '"index": 1, "position": \[1000001, 2.25, -5\], "offset": \[0, 0.25, 0\], "flags": \["valid", "relocated"\], "paths": 2048, "std_error": 0.125, "sh": \[1, 1.00999999' -- \
     "$pb" inspect "$tmp/v.probes" --json --probe 1
 expect inspect-json-last 0 '"index": 5, .*"sh": \[5, .*5.26000023\]\}$' -- "$pb" inspect "$tmp/v.probes" --json
 expect inspect-probe-text 0 'probe 4 at .*\["dilated"\]' -- "$pb" inspect "$tmp/v.probes" --probe 4
+expect inspect-probe-error 0 '^5120 paths, relative standard error of its irradiance 1.56 %$' -- "$pb" inspect "$tmp/v.probes" --probe 4
+expect inspect-probe-error-unknown 0 '^6144 paths, standard error unknown' -- "$pb" inspect "$tmp/v.probes" --probe 5
+expect inspect-json-unknown-null 0 '"index": 5, .*"paths": 6144, "std_error": null,' -- "$pb" inspect "$tmp/v.probes" --json
+expect inspect-error-summary 0 'median 6.25 %, p95 12.5 %, worst 25 % \(5 probes\)' -- "$pb" inspect "$tmp/v.probes"
 expect inspect-probe-missing 1 "probe 6 does not exist \(6 probes\)" -- "$pb" inspect "$tmp/v.probes" --probe 6
 expect inspect-atlas 0 "wrote $tmp/atlas.png: 34x23, depth atlas of 6 probes" -- \
     "$pb" inspect "$tmp/v.probes" --atlas "$tmp/atlas.png"

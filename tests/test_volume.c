@@ -98,6 +98,8 @@ static void fill(pb_volume *v, uint32_t nx, uint32_t ny, uint32_t nz, uint32_t n
         v->probe_flags[i] = PB_PROBE_VALID | (i % 3 == 0 ? PB_PROBE_RELOCATED : 0);
         for (int c = 0; c < 27; ++c)
             v->sh[27 * i + c] = (float)(rng_uniform(&r) * 10 - 2);
+        v->probe_paths[i] = 256u * (1u + i % 8u);
+        v->probe_std_error[i] = i % 5 == 4 ? PB_STD_ERROR_UNKNOWN : (float)(rng_uniform(&r) * 0.2);
     }
     for (uint64_t t = 0; t < v->probe_count * pb_volume_tile_halves(n); ++t)
         v->depth[t] = pb_half_from_float((float)(rng_uniform(&r) * 20));
@@ -121,6 +123,8 @@ static void file_round_trip(void)
     CHECK(memcmp(w.base, v.base, 24 * 12) == 0 && memcmp(w.offset, v.offset, 24 * 12) == 0);
     CHECK(memcmp(w.probe_flags, v.probe_flags, 24 * 4) == 0 && memcmp(w.sh, v.sh, 24 * 27 * 4) == 0);
     CHECK(memcmp(w.depth, v.depth, 24 * pb_volume_tile_halves(16) * 2) == 0);
+    CHECK(memcmp(w.probe_paths, v.probe_paths, 24 * 4) == 0 && memcmp(w.probe_std_error, v.probe_std_error, 24 * 4) == 0);
+    CHECK(w.file_version == PB_VOLUME_VERSION && PB_VOLUME_VERSION == 3);
     double p[3];
     pb_volume_probe_position(&w, 1, p);
     CHECK(fabs(p[0] - (1e7 + 0.25 + 0.5 + w.offset[3])) < 1e-9);
@@ -201,6 +205,9 @@ static void malformed_files_get_clear_errors(void)
         {"unit-nan.probes", 180, 0x7fc00000u, 0, PB_ERROR_PARSE, "depth unit"},
         {"depth-format.probes", 128, 1, 0, PB_ERROR_PARSE, "depth format"},
         {"truncated.probes", 0, 0, 1000, PB_ERROR_PARSE, "truncated"},
+        {"accounting-offset.probes", 392, 16, 0, PB_ERROR_PARSE, "section offsets"},
+        {"std-error-negative.probes", size - 4, 0xbf000000u, 0, PB_ERROR_PARSE, "probe 3 has a negative or non-finite standard error"},
+        {"std-error-nan.probes", size - 4, 0x7fc00000u, 0, PB_ERROR_PARSE, "standard error"},
         {"header.probes", 0, 0, 100, PB_ERROR_PARSE, "truncated header"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
@@ -254,8 +261,8 @@ static void writer_refuses_nonfinite_values(void)
     snprintf(dir, sizeof dir, "%s/nonfinite", temp_dir());
     mkdir(dir, 0755);
     snprintf(path, sizeof path, "%s/out.probes", dir);
-    const char *what[] = {"position", "offset", "SH", "depth", "depth2", "origin", "unit"};
-    for (int c = 0; c < 7; ++c) {
+    const char *what[] = {"position", "offset", "SH", "depth", "depth2", "std error", "origin", "unit"};
+    for (int c = 0; c < 8; ++c) {
         pb_volume v;
         fill(&v, 3, 2, 2, 4);
         uint64_t tile = pb_volume_tile_halves(4);
@@ -265,12 +272,13 @@ static void writer_refuses_nonfinite_values(void)
         case 2: v.sh[27 * 5 + 13] = -INFINITY; break;
         case 3: v.depth[tile * 5 + 7] = 0x7c00u; break;          /* +Inf half */
         case 4: v.depth[tile * 5 + tile - 1] = 0x7e00u; break;   /* NaN half */
-        case 5: v.origin[1] = NAN; break;
+        case 5: v.probe_std_error[5] = -0.5f; break;             /* only -1 means unknown */
+        case 6: v.origin[1] = NAN; break;
         default: v.depth_unit = INFINITY; break;
         }
         pb_error err;
         pb_result r = pb_volume_write(path, &v, &err);
-        int names_probe = c >= 5 ? strstr(err.message, "probe ") == NULL : strstr(err.message, "probe 5 ") != NULL;
+        int names_probe = c >= 6 ? strstr(err.message, "probe ") == NULL : strstr(err.message, "probe 5 ") != NULL;
         CHECKF(r == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, path) && names_probe, "%s: %s: %s", what[c],
                pb_result_name(r), err.message);
         CHECKF(count_files(dir) == 0, "%s: a file was left", what[c]);
@@ -281,6 +289,50 @@ static void writer_refuses_nonfinite_values(void)
 /* A version-1 file (depth in metres, its squares +Inf past 256 m) reads as a
  * version-2 volume: finite texels in the depth unit, overflowed ones at the
  * max distance. */
+/* A version-3 file's bytes as version 2 wrote them: no accounting section
+ * (the last one) and no offset for it. Returns the version-2 size. */
+static size_t strip_to_version2(unsigned char *b)
+{
+    uint64_t at;
+    memcpy(&at, b + 392, 8);
+    memset(b + 392, 0, 8);
+    uint32_t two = 2;
+    memcpy(b + 8, &two, 4);
+    return (size_t)at; /* the section starts at the aligned end of the depth atlas, which ends version 2's file */
+}
+
+static void version2_files_read(void)
+{
+    pb_volume v, w;
+    fill(&v, 3, 2, 1, 4);
+    char path[512];
+    snprintf(path, sizeof path, "%s/v3.probes", temp_dir());
+    pb_error err;
+    CHECK(pb_volume_write(path, &v, &err) == PB_OK);
+    size_t size = (size_t)pb_volume_file_bytes(&v);
+    unsigned char *b = malloc(size);
+    FILE *f = fopen(path, "rb");
+    CHECK(f && fread(b, 1, size, f) == size);
+    fclose(f);
+    size_t v2 = strip_to_version2(b);
+    CHECK(v2 < size && size - v2 >= 6 * 8);
+    const char *p2 = write_file("version2.probes", b, v2);
+    CHECKF(pb_volume_read(p2, &w, &err) == PB_OK, "%s", err.message);
+    CHECK(w.file_version == 2);
+    uint32_t unknown = 0, paths_ok = 0;
+    for (uint32_t i = 0; i < w.probe_count; ++i) {
+        unknown += w.probe_std_error[i] == PB_STD_ERROR_UNKNOWN;
+        paths_ok += w.probe_paths[i] == v.settings.passes * v.settings.rays_per_probe; /* what every probe got */
+    }
+    CHECK(unknown == w.probe_count && paths_ok == w.probe_count);
+    CHECK(memcmp(w.sh, v.sh, 6 * 27 * 4) == 0 && memcmp(w.depth, v.depth, 6 * pb_volume_tile_halves(4) * 2) == 0);
+    /* a version-2 file with the version-3 section's bytes after it is not one */
+    const char *p3 = write_file("version2-long.probes", b, size);
+    CHECK(pb_volume_read(p3, &w, &err) == PB_ERROR_PARSE && strstr(err.message, "header describes"));
+    free(b);
+    pb_volume_free(&v);
+}
+
 static void version1_files_convert(void)
 {
     pb_volume v, w;
@@ -294,6 +346,7 @@ static void version1_files_convert(void)
     FILE *f = fopen(path, "rb");
     CHECK(f && fread(b, 1, size, f) == size);
     fclose(f);
+    size = strip_to_version2(b);
     uint32_t one = 1, zero = 0;
     memcpy(b + 8, &one, 4);   /* version 1 */
     memcpy(b + 128, &one, 4); /* depth format 1: metres */
@@ -322,7 +375,7 @@ static void version1_files_convert(void)
     CHECK(pb_half_to_float(w.depth[4]) == 128.f && pb_half_to_float(w.depth[5]) == 16384.f); /* NaN: likewise */
     CHECK(pb_half_to_float(w.depth[6]) == 80.f && pb_half_to_float(w.depth[7]) == 6400.f);
     CHECK(memcmp(w.sh, v.sh, 4 * 27 * 4) == 0);
-    /* and writes back as version 2 with finite depth */
+    /* and writes back as the current version with finite depth */
     snprintf(path, sizeof path, "%s/v1-rewritten.probes", temp_dir());
     CHECK(pb_volume_write(path, &w, &err) == PB_OK);
     free(b);
@@ -485,6 +538,7 @@ int main(void)
     RUN(depth_unit_bounds_the_reach);
     RUN(writer_refuses_nonfinite_values);
     RUN(version1_files_convert);
+    RUN(version2_files_read);
     RUN(outputs_never_replace_what_they_are_not);
     RUN(cancelled_write_replaces_nothing);
     return test_summary();

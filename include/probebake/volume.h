@@ -24,7 +24,7 @@ extern "C" {
 
 /* Version 2: depth texels in units of depth_unit (version 1 stored metres,
  * whose squares overflow float16 past 256 m; the reader converts). */
-#define PB_VOLUME_VERSION 2
+#define PB_VOLUME_VERSION 3
 
 enum {
     PB_VOLUME_IRRADIANCE = 1u << 0,     /* SH holds irradiance (else radiance) */
@@ -72,13 +72,20 @@ typedef struct pb_volume {
     float depth_unit;                   /* metres per depth unit: texels hold (d / unit, d^2 / unit^2); a power of two */
     uint64_t rays_traced;               /* probe rays of the bake passes (set by pb_bake; not stored in files) */
     uint64_t traversals;                /* BVH traversals of relocation and bake passes: probe, bounce, shadow rays (ditto) */
+    uint32_t file_version;              /* format version of the file it was read from; 0 if not read */
     /* per probe, caller- or reader-owned arrays (pb_volume_free frees them) */
     float *base;                        /* 3 per probe, relative to origin */
     float *offset;                      /* 3 per probe: relocation, metres */
     uint32_t *probe_flags;              /* PB_PROBE_* */
     float *sh;                          /* 27 per probe */
     uint16_t *depth;                    /* (n+2)^2 texels x 2 halves per probe, tile after tile, in depth_unit */
+    uint32_t *probe_paths;              /* paths (probe rays) traced for each probe over all its passes */
+    float *probe_std_error;             /* relative standard error of its irradiance, or PB_STD_ERROR_UNKNOWN */
 } pb_volume;
+
+/* probe_std_error where it cannot be estimated: one pass, a version 1-2
+ * file, or a probe whose mean irradiance is zero while its passes differ. */
+#define PB_STD_ERROR_UNKNOWN (-1.0f)
 
 /* The depth unit for a volume whose rays see at most max_distance metres:
  * the smallest power of two u with max_distance / u <= 128, so the stored

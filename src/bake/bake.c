@@ -36,6 +36,18 @@ typedef struct bake_buffers {
     pb_pipeline trace, sh, depth;
 } bake_buffers;
 
+/* Standard error of the mean of k per-pass estimates from their sum and sum
+ * of squares (the spread between passes; every pass is independent and
+ * equally weighted). *mean gets the mean. k < 2: 0. */
+static double pass_std_error(uint32_t k, double sum, double sq, double *mean)
+{
+    *mean = k ? sum / k : 0.0;
+    if (k < 2)
+        return 0.0;
+    double var = fmax(0.0, (sq - k * *mean * *mean) / (k - 1));
+    return sqrt(var / k);
+}
+
 static void release(pb_context *ctx, bake_buffers *b)
 {
     pb_buffer *bufs[8] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced, &b->list,
@@ -528,9 +540,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         uint32_t keep = 0;
         for (uint32_t i = 0; i < active_count; ++i) {
             uint32_t p = active[i];
-            double k = passes_done[p], mean = dc_sum[p] / k;
-            double var = fmax(0.0, (dc_sq[p] - k * mean * mean) / (k - 1));
-            double se = sqrt(var / k);
+            double mean, se = pass_std_error(passes_done[p], dc_sum[p], dc_sq[p], &mean);
             if (se <= d.target_error * fabs(mean))
                 converged_at[p] = pass + 1;
             else
@@ -593,6 +603,10 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         if (converged_at[p] && converged_at[p] < d.passes)
             f |= PB_PROBE_CONVERGED;
         out->probe_flags[p] = f;
+        out->probe_paths[p] = (uint32_t)fmin((double)passes_done[p] * rpp, (double)UINT32_MAX);
+        double mean, se = pass_std_error(passes_done[p], dc_sum[p], dc_sq[p], &mean);
+        if (passes_done[p] >= 2 && (mean != 0.0 || se == 0.0))
+            out->probe_std_error[p] = mean != 0.0 ? (float)(se / fabs(mean)) : 0.f;
         uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
         double unit = out->depth_unit; /* a power of two: the division is exact */
         for (uint32_t by = 0; by < n + 2; ++by)

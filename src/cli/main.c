@@ -703,10 +703,43 @@ static void print_probe_json(const pb_volume *v, uint32_t i, int last)
     printf("    {\"index\": %u, \"position\": [%s, %s, %s], \"offset\": [%s, %s, %s], \"flags\": ", i, J(p[0]).s,
            J(p[1]).s, J(p[2]).s, J(v->offset[3 * i]).s, J(v->offset[3 * i + 1]).s, J(v->offset[3 * i + 2]).s);
     print_flags(v->probe_flags[i]);
+    float se = v->probe_std_error[i];
+    printf(", \"paths\": %u, \"std_error\": %s", v->probe_paths[i], se == PB_STD_ERROR_UNKNOWN ? "null" : J(se).s);
     printf(", \"sh\": [");
     for (int c = 0; c < 27; ++c)
         printf("%s%s", c ? ", " : "", J(v->sh[27 * (size_t)i + c]).s);
     printf("]}%s\n", last ? "" : ",");
+}
+
+static int compare_floats(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* Paths and relative standard errors over the volume's probes (median, p95,
+ * worst), where known. */
+static void print_error_summary(FILE *out, const pb_volume *v)
+{
+    uint64_t paths = 0;
+    uint32_t lo = UINT32_MAX, hi = 0, known = 0;
+    float *e = malloc(v->probe_count * sizeof *e);
+    for (uint32_t i = 0; i < v->probe_count; ++i) {
+        paths += v->probe_paths[i];
+        lo = v->probe_paths[i] < lo ? v->probe_paths[i] : lo;
+        hi = v->probe_paths[i] > hi ? v->probe_paths[i] : hi;
+        if (e && v->probe_std_error[i] != PB_STD_ERROR_UNKNOWN)
+            e[known++] = v->probe_std_error[i];
+    }
+    fprintf(out, "paths       %llu in all, %u to %u per probe\n", (unsigned long long)paths, lo, hi);
+    if (known) {
+        qsort(e, known, sizeof *e, compare_floats);
+        fprintf(out, "std error   irradiance, relative: median %.3g %%, p95 %.3g %%, worst %.3g %% (%u probes)\n",
+               100.0 * e[known / 2], 100.0 * e[(size_t)(0.95 * (known - 1))], 100.0 * e[known - 1], known);
+    } else {
+        fprintf(out, "std error   unknown (%s)\n", v->file_version && v->file_version < 3 ? "file older than version 3" : "one pass per probe");
+    }
+    free(e);
 }
 
 static const char *window_name(uint32_t w)
@@ -767,7 +800,7 @@ static int cmd_inspect(const options *o)
                "  \"scene_hash\": \"%016llx\",\n  \"rays_per_probe\": %u,\n  \"passes\": %u,\n  \"bounces\": %u,\n"
                "  \"indirect\": \"%s\",\n  \"sh_window\": \"%s\",\n  \"sh_window_width\": %s,\n  \"indirect_clamp\": %s,\n"
                "  \"device\": ",
-               PB_VOLUME_VERSION, v.probe_count, v.flags & PB_VOLUME_GRID ? "true" : "false", v.counts[0], v.counts[1],
+               v.file_version, v.probe_count, v.flags & PB_VOLUME_GRID ? "true" : "false", v.counts[0], v.counts[1],
                v.counts[2], J17(v.origin[0]).s, J17(v.origin[1]).s, J17(v.origin[2]).s, J(v.spacing[0]).s,
                J(v.spacing[1]).s, J(v.spacing[2]).s, kind, v.flags & PB_VOLUME_DIRECT ? "true" : "false", v.octmap_res,
                J(s->max_distance).s, J(v.depth_unit).s, (unsigned long long)s->seed,
@@ -789,12 +822,18 @@ static int cmd_inspect(const options *o)
         printf("probe %u at (%.6g, %.6g, %.6g), offset (%g, %g, %g), flags ", o->probe, p[0], p[1], p[2],
                v.offset[3 * o->probe], v.offset[3 * o->probe + 1], v.offset[3 * o->probe + 2]);
         print_flags(v.probe_flags[o->probe]);
-        printf("\n%s SH (R G B per coefficient):\n", kind);
+        float se = v.probe_std_error[o->probe];
+        printf("\n%u paths, ", v.probe_paths[o->probe]);
+        if (se == PB_STD_ERROR_UNKNOWN)
+            printf("standard error unknown (%s)\n", v.file_version && v.file_version < 3 ? "file older than version 3" : "one pass, or passes around a zero mean");
+        else
+            printf("relative standard error of its irradiance %.3g %%\n", 100.0 * se);
+        printf("%s SH (R G B per coefficient):\n", kind);
         for (int c = 0; c < 9; ++c)
             printf("  %d: %12.6g %12.6g %12.6g\n", c, v.sh[27 * (size_t)o->probe + 3 * c],
                    v.sh[27 * (size_t)o->probe + 3 * c + 1], v.sh[27 * (size_t)o->probe + 3 * c + 2]);
     } else {
-        printf("volume      %s (format version %u)\n", o->scene, PB_VOLUME_VERSION);
+        printf("volume      %s (format version %u)\n", o->scene, v.file_version);
         if (v.flags & PB_VOLUME_GRID)
             printf("probes      %u = %u x %u x %u, spacing (%g, %g, %g) m\n", v.probe_count, v.counts[0],
                    v.counts[1], v.counts[2], v.spacing[0], v.spacing[1], v.spacing[2]);
@@ -810,6 +849,7 @@ static int cmd_inspect(const options *o)
         if (s->sh_window || s->indirect_clamp > 0.f)
             printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),
                    s->sh_window_width > 0.f ? s->sh_window_width : 3.f, s->indirect_clamp);
+        print_error_summary(stdout, &v);
         printf("time        %.1f ms total\n", v.timings.total);
     }
     pb_volume_free(&v);
@@ -1015,6 +1055,7 @@ static int cmd_bake(const options *o)
     if (d.target_error > 0.f)
         fprintf(report, ", %u converged before the last pass", converged);
     fprintf(report, "), %.3g probe rays in %s%u passes\n", rays, d.target_error > 0.f ? "up to " : "", vol.settings.passes);
+    print_error_summary(report, &vol);
     fprintf(report, "time: bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, depth %.0f ms; "
            "total %.0f ms wall\n",
            vol.timings.bvh, vol.timings.trace, vol.timings.trace > 0 ? rays / (vol.timings.trace * 1e3) : 0.0,

@@ -32,10 +32,12 @@ static uint64_t align16(uint64_t x)
 }
 
 typedef struct layout {
-    uint64_t base, offset, flags, sh, depth, end;
+    uint64_t base, offset, flags, sh, depth, accounting, end;
 } layout;
 
-static layout layout_of(uint32_t probes, uint32_t n)
+/* Sections of a file of `version`: the per-probe accounting (8 bytes per
+ * probe: u32 paths, f32 relative standard error) exists from version 3. */
+static layout layout_of(uint32_t probes, uint32_t n, uint32_t version)
 {
     layout l;
     l.base = HEADER_BYTES;
@@ -44,12 +46,17 @@ static layout layout_of(uint32_t probes, uint32_t n)
     l.sh = align16(l.flags + (uint64_t)probes * 4u);
     l.depth = align16(l.sh + (uint64_t)probes * 27u * 4u);
     l.end = l.depth + (uint64_t)probes * pb_volume_tile_halves(n) * 2u;
+    l.accounting = 0;
+    if (version >= 3) {
+        l.accounting = align16(l.end);
+        l.end = l.accounting + (uint64_t)probes * 8u;
+    }
     return l;
 }
 
 uint64_t pb_volume_file_bytes(const pb_volume *v)
 {
-    return layout_of(v->probe_count, v->octmap_res).end;
+    return layout_of(v->probe_count, v->octmap_res, PB_VOLUME_VERSION).end;
 }
 
 float pb_volume_depth_unit(float max_distance)
@@ -81,10 +88,14 @@ pb_result pb_volume_alloc(pb_volume *v, pb_error *err)
     v->probe_flags = calloc(n, sizeof(uint32_t));
     v->sh = calloc(n * 27, sizeof(float));
     v->depth = calloc(n * (size_t)pb_volume_tile_halves(v->octmap_res), sizeof(uint16_t));
-    if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth) {
+    v->probe_paths = calloc(n, sizeof(uint32_t));
+    v->probe_std_error = malloc(n * sizeof(float));
+    if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth || !v->probe_paths || !v->probe_std_error) {
         pb_volume_free(v);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", v->probe_count);
     }
+    for (size_t i = 0; i < n; ++i)
+        v->probe_std_error[i] = PB_STD_ERROR_UNKNOWN;
     return PB_OK;
 }
 
@@ -95,6 +106,10 @@ void pb_volume_free(pb_volume *v)
     free(v->probe_flags);
     free(v->sh);
     free(v->depth);
+    free(v->probe_paths);
+    free(v->probe_std_error);
+    v->probe_paths = NULL;
+    v->probe_std_error = NULL;
     v->base = v->offset = v->sh = NULL;
     v->probe_flags = NULL;
     v->depth = NULL;
@@ -170,7 +185,7 @@ static double get_f64(const unsigned char *p)
  * hundred MB; one buffer keeps the writer simple and the write atomic). */
 static unsigned char *encode(const pb_volume *v, uint64_t *size)
 {
-    layout l = layout_of(v->probe_count, v->octmap_res);
+    layout l = layout_of(v->probe_count, v->octmap_res, PB_VOLUME_VERSION);
     unsigned char *b = calloc(1, (size_t)l.end);
     if (!b)
         return NULL;
@@ -210,6 +225,7 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     put_u32(b + 376, s->sh_window);
     put_f32(b + 380, s->sh_window_width);
     put_f32(b + 384, s->indirect_clamp);
+    put_u64(b + 392, l.accounting);
     size_t n = v->probe_count;
     for (size_t i = 0; i < 3 * n; ++i) {
         put_f32(b + l.base + 4 * i, v->base[i]);
@@ -224,6 +240,10 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
         b[l.depth + 2 * i] = (unsigned char)v->depth[i];
         b[l.depth + 2 * i + 1] = (unsigned char)(v->depth[i] >> 8);
     }
+    for (size_t i = 0; i < n; ++i) {
+        put_u32(b + l.accounting + 8 * i, v->probe_paths[i]);
+        put_f32(b + l.accounting + 8 * i + 4, v->probe_std_error[i]);
+    }
     *size = l.end;
     return b;
 }
@@ -231,6 +251,12 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
 static int half_finite(uint16_t h)
 {
     return (h & 0x7c00u) != 0x7c00u;
+}
+
+/* A relative standard error is >= 0 and finite, or exactly "unknown". */
+static int std_error_ok(float e)
+{
+    return (e >= 0.f && isfinite(e)) || e == PB_STD_ERROR_UNKNOWN;
 }
 
 /* The first non-finite value of the volume, as a message; NULL if none.
@@ -255,6 +281,8 @@ static const char *first_nonfinite(const pb_volume *v, uint32_t *probe)
         for (int c = 0; c < 27; ++c)
             if (!isfinite(v->sh[27 * (size_t)p + c]))
                 return "an SH coefficient";
+        if (!std_error_ok(v->probe_std_error[p]))
+            return "its standard error (>= 0, or -1 for unknown)";
         for (uint64_t i = 0; i < halves; ++i)
             if (!half_finite(v->depth[halves * p + i]))
                 return "a depth texel";
@@ -265,7 +293,8 @@ static const char *first_nonfinite(const pb_volume *v, uint32_t *probe)
 pb_result pb_volume_write_ex(const char *path, const pb_volume *v, pb_cancel_fn cancel, void *user, pb_error *err)
 {
     pb_error_clear(err);
-    if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth || !v->probe_count)
+    if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth || !v->probe_paths || !v->probe_std_error ||
+        !v->probe_count)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: volume has no probe data to write", path);
     uint32_t bad_probe;
     const char *bad = first_nonfinite(v, &bad_probe);
@@ -376,9 +405,10 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     else if ((v->flags & PB_VOLUME_GRID) &&
              (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != v->probe_count)
         bad = "grid counts do not match the probe count";
-    layout l = layout_of(v->probe_count, v->octmap_res);
+    layout l = layout_of(v->probe_count, v->octmap_res, version);
     if (!bad && (get_u64(h + 136) != l.base || get_u64(h + 144) != l.offset || get_u64(h + 152) != l.flags ||
-                 get_u64(h + 160) != l.sh || get_u64(h + 168) != l.depth))
+                 get_u64(h + 160) != l.sh || get_u64(h + 168) != l.depth ||
+                 (version >= 3 && get_u64(h + 392) != l.accounting)))
         bad = "section offsets do not match the sizes";
     if (bad) {
         fclose(f);
@@ -411,7 +441,27 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     uint64_t halves = n * pb_volume_tile_halves(v->octmap_res);
     for (uint64_t i = 0; i < halves; ++i)
         v->depth[i] = (uint16_t)(b[l.depth + 2 * i] | b[l.depth + 2 * i + 1] << 8);
+    /* before version 3 a probe's paths are what the header says every probe
+     * got (an upper bound under --target-error) and its error is unknown */
+    uint32_t bad_probe = UINT32_MAX;
+    for (size_t i = 0; i < n; ++i) {
+        if (version < 3) {
+            uint64_t paths = (uint64_t)v->settings.passes * v->settings.rays_per_probe;
+            v->probe_paths[i] = paths > UINT32_MAX ? UINT32_MAX : (uint32_t)paths;
+            continue;
+        }
+        v->probe_paths[i] = get_u32(b + l.accounting + 8 * i);
+        v->probe_std_error[i] = get_f32(b + l.accounting + 8 * i + 4);
+        if (!std_error_ok(v->probe_std_error[i]) && bad_probe == UINT32_MAX)
+            bad_probe = (uint32_t)i;
+    }
     free(b);
+    v->file_version = version;
+    if (bad_probe != UINT32_MAX) {
+        pb_volume_free(v);
+        return pb_fail(err, PB_ERROR_PARSE, "%s: probe %u has a negative or non-finite standard error", path,
+                       bad_probe);
+    }
     if (version == 1)
         convert_v1_depth(v);
     else
