@@ -326,6 +326,7 @@ static void version2_files_read(void)
     }
     CHECK(unknown == w.probe_count && paths_ok == w.probe_count);
     CHECK(memcmp(w.sh, v.sh, 6 * 27 * 4) == 0 && memcmp(w.depth, v.depth, 6 * pb_volume_tile_halves(4) * 2) == 0);
+    pb_volume_free(&w);
     /* a version-2 file with the version-3 section's bytes after it is not one */
     const char *p3 = write_file("version2-long.probes", b, size);
     CHECK(pb_volume_read(p3, &w, &err) == PB_ERROR_PARSE && strstr(err.message, "header describes"));
