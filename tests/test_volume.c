@@ -289,6 +289,22 @@ static void writer_refuses_nonfinite_values(void)
 /* A version-1 file (depth in metres, its squares +Inf past 256 m) reads as a
  * version-2 volume: finite texels in the depth unit, overflowed ones at the
  * max distance. */
+/* v written to temp_dir()/name and read back as bytes (*size of them). */
+static unsigned char *written_bytes(const pb_volume *v, const char *name, size_t *size)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", temp_dir(), name);
+    pb_error err;
+    CHECK(pb_volume_write(path, v, &err) == PB_OK);
+    *size = (size_t)pb_volume_file_bytes(v);
+    unsigned char *b = malloc(*size);
+    FILE *f = fopen(path, "rb");
+    CHECK(f && fread(b, 1, *size, f) == *size);
+    if (f)
+        fclose(f);
+    return b;
+}
+
 /* A version-3 file's bytes as version 2 wrote them: no accounting section
  * (the last one) and no offset for it. Returns the version-2 size. */
 static size_t strip_to_version2(unsigned char *b)
@@ -305,15 +321,9 @@ static void version2_files_read(void)
 {
     pb_volume v, w;
     fill(&v, 3, 2, 1, 4);
-    char path[512];
-    snprintf(path, sizeof path, "%s/v3.probes", temp_dir());
     pb_error err;
-    CHECK(pb_volume_write(path, &v, &err) == PB_OK);
-    size_t size = (size_t)pb_volume_file_bytes(&v);
-    unsigned char *b = malloc(size);
-    FILE *f = fopen(path, "rb");
-    CHECK(f && fread(b, 1, size, f) == size);
-    fclose(f);
+    size_t size;
+    unsigned char *b = written_bytes(&v, "v3.probes", &size);
     size_t v2 = strip_to_version2(b);
     CHECK(v2 < size && size - v2 >= 6 * 8);
     const char *p2 = write_file("version2.probes", b, v2);
@@ -339,14 +349,9 @@ static void version1_files_convert(void)
     pb_volume v, w;
     fill(&v, 2, 2, 1, 4); /* max distance 64 m */
     char path[512];
-    snprintf(path, sizeof path, "%s/v1.probes", temp_dir());
     pb_error err;
-    CHECK(pb_volume_write(path, &v, &err) == PB_OK);
-    size_t size = (size_t)pb_volume_file_bytes(&v);
-    unsigned char *b = malloc(size);
-    FILE *f = fopen(path, "rb");
-    CHECK(f && fread(b, 1, size, f) == size);
-    fclose(f);
+    size_t size;
+    unsigned char *b = written_bytes(&v, "v1.probes", &size);
     size = strip_to_version2(b);
     uint32_t one = 1, zero = 0;
     memcpy(b + 8, &one, 4);   /* version 1 */
