@@ -22,35 +22,29 @@ pb_result pb_exact_diff_gpu(pb_context *ctx, const float *abcd, uint32_t count, 
     if (count == 0)
         return PB_OK;
     uint64_t in_bytes = (uint64_t)count * 16, out_bytes = (uint64_t)count * 4;
-    pb_buffer in = {0}, res = {0}, down = {0};
+    pb_buffer in = {0}, res = {0};
     pb_pipeline pipe = {0};
+    /* the kernel writes straight into host-visible memory, as sample_gpu.c does */
     pb_result r = pb_buffer_create(ctx, in_bytes, PB_MEMORY_DEVICE, "exact_diff inputs", &in, err);
     if (r == PB_OK)
-        r = pb_buffer_create(ctx, out_bytes, PB_MEMORY_DEVICE, "exact_diff outputs", &res, err);
+        r = pb_buffer_create(ctx, out_bytes, PB_MEMORY_DOWNLOAD, "exact_diff outputs", &res, err);
     if (r == PB_OK)
         r = pb_buffer_upload(ctx, &in, 0, abcd, in_bytes, err);
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, pb_spv_exact_diff, sizeof pb_spv_exact_diff, sizeof(exact_diff_push), NULL, 0, 64,
                                "exact_diff", &pipe, err);
-    if (r == PB_OK && !res.mapped)
-        r = pb_buffer_create(ctx, out_bytes, PB_MEMORY_DOWNLOAD, "exact_diff download", &down, err);
     if (r == PB_OK)
         r = pb_cmd_begin(ctx, err);
     if (r == PB_OK) {
         exact_diff_push push = {in.address, res.address, count, {0, 0, 0}};
         pb_cmd_dispatch(ctx, &pipe, &push, (count + 63) / 64);
-        if (!res.mapped) {
-            pb_cmd_barrier(ctx);
-            pb_cmd_copy(ctx, &res, 0, &down, 0, out_bytes);
-        }
         pb_cmd_barrier_to_host(ctx);
         r = pb_cmd_submit_wait(ctx, NULL, err);
     }
     if (r == PB_OK)
-        memcpy(out, res.mapped ? res.mapped : down.mapped, (size_t)out_bytes);
+        memcpy(out, res.mapped, (size_t)out_bytes);
     pb_pipeline_destroy(ctx, &pipe);
     pb_buffer_destroy(ctx, &in);
     pb_buffer_destroy(ctx, &res);
-    pb_buffer_destroy(ctx, &down);
     return r;
 }
