@@ -218,6 +218,18 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-same-seed-same-bytes 0 '^0 [1-9]' -- echo "$same $differ"
     expect bake-zero-bounces 0 ', 0 bounces,' -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --bounces 0 -o "$tmp/z.probes"
+    # quality presets and probe NEE: printed at the start, recorded in the file
+    expect bake-quality-preview 0 'at quality preview: .* 128 rays x 2 passes, .*probe NEE on' -- \
+        "$pb" bake "$demo" --counts 2,2,2 --octmap-res 4 --quality preview --validation -o "$tmp/q.probes"
+    expect bake-quality-inspect 0 '"techniques": \["probe-nee"\],' -- "$pb" inspect "$tmp/q.probes" --json
+    expect bake-quality-override 0 'at quality production: .* 32 rays x up to 4 passes \(until converged\)' -- \
+        "$pb" bake "$demo" --counts 2,2,2 --octmap-res 4 --quality production --rays 32 --passes 4 -o "$tmp/q.probes"
+    expect bake-probe-nee-off 0 'probe NEE off' -- \
+        "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --probe-nee off -o "$tmp/q.probes"
+    expect bake-probe-nee-off-inspect 0 'probe NEE off' -- "$pb" inspect "$tmp/q.probes"
+    expect bake-bad-quality 2 '--quality takes preview, production or reference' -- \
+        "$pb" bake "$demo" --quality best -o "$tmp/x.probes"
+    expect bake-bad-probe-nee 2 '--probe-nee takes on or off' -- "$pb" bake "$demo" --probe-nee yes -o "$tmp/x.probes"
     expect bake-bounces-range 2 "--bounces '65' is not an integer in \[0, 64\]" -- \
         "$pb" bake "$demo" --bounces 65 -o "$tmp/x.probes"
     expect bake-bad-spacing 2 "--spacing '-1' is not a positive length" -- "$pb" bake "$demo" --spacing -1 -o "$tmp/x.probes"

@@ -61,9 +61,10 @@ typedef struct pb_bake_desc {
     const pb_points *points;      /* NULL: the grid; else these probes (no grid, no dilation) */
     uint32_t rays_per_probe;      /* default 256 */
     uint32_t passes;              /* default 4; with target_error, the most passes (default 64) */
-    float target_error;           /* 0: fixed passes; else a probe stops once the standard error of its
-                                     irradiance (DC luminance) is below target_error x its mean, after at
-                                     least 4 passes; the bake stops when all have */
+    float target_error;           /* 0: fixed passes; else a probe stops once, along each axis, the standard
+                                     error of its irradiance is below target_error x its mean (or x 5 % of
+                                     the mean over all probes, if larger), after at least 4 passes; the
+                                     bake stops when all have */
     uint32_t bounces;             /* reflections after the first hit (0 is direct light only; the CLI defaults to 2) */
     uint32_t octmap_res;          /* default 16 */
     uint32_t seed;                /* default 0 is a valid seed */
@@ -83,9 +84,25 @@ typedef struct pb_bake_desc {
                                      (alias table) instead of tracing a shadow ray to every light */
     uint32_t indirect_volume;     /* 1: each bounce shades first hits from the previous bounce's volume through
                                      the run-time sampler (bounces + 1 bakes, grid only; fast, biased); 0: path tracing */
+    uint32_t probe_nee;           /* 1: the emission a probe sees directly is also sampled from the probe
+                                     (one emitter by power per probe ray, a shadow ray) and MIS-combined
+                                     with its rays (unbiased; docs/bake.md, "Estimators") */
     pb_progress_fn progress;
     void *progress_user;
 } pb_bake_desc;
+
+/* A quality preset (bake --quality): rays per pass, the most passes, the
+ * target error (0: every probe runs all passes) and whether probe NEE is on.
+ * src/bake/quality.c says what each is for; docs/bake.md, with numbers. */
+typedef struct pb_bake_quality {
+    const char *name;             /* "preview", "production", "reference" */
+    uint32_t rays_per_probe, passes;
+    float target_error;
+    uint32_t probe_nee;
+} pb_bake_quality;
+
+/* The preset of that name, or NULL. */
+const pb_bake_quality *pb_bake_quality_find(const char *name);
 
 typedef struct pb_gpu_scene pb_gpu_scene;
 
@@ -160,6 +177,8 @@ typedef struct pb_bake_pass {
     const pb_sample_volume *volume;   /* --indirect volume: the previous bounce's volume, or NULL */
     const pb_light_table *light_table; /* non-NULL: one light drawn per hit (as max_lights_per_hit decides) */
     float indirect_clamp;             /* as pb_bake_desc */
+    float *nee;                       /* probe NEE: out of trace, in to SH, 8 floats per ray (weighted
+                                         radiance / 4pi, 0, direction, 0); NULL: off */
 } pb_bake_pass;
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).

@@ -52,7 +52,13 @@ typedef struct pb_volume_settings {
     uint32_t sh_window;                 /* pb_sh_window_kind applied to the SH (0 none) */
     float sh_window_width;              /* its W (0: the default, 3) */
     float indirect_clamp;               /* reflected light clamped per path to this radiance (0: off) */
+    uint32_t techniques;                /* PB_TECHNIQUE_* bits: variance reduction the bake used */
 } pb_volume_settings;
+
+/* Variance-reduction techniques (pb_volume_settings.techniques). */
+enum {
+    PB_TECHNIQUE_PROBE_NEE = 1u << 0    /* emission seen by probes sampled from the probe too (MIS) */
+};
 
 /* Stage timings in milliseconds (0 for stages that did not run). */
 typedef struct pb_volume_timings {

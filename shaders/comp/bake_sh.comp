@@ -1,9 +1,10 @@
 #version 460
 // bake_sh: one invocation per probe. Projects this pass's ray radiances onto
-// SH L2 (weight 4pi / rays: the directions are uniform), adds the punctual
-// lights the probe sees directly as projected deltas (irradiance I/d^2 with a
-// shadow ray from the probe; when direct light is included), and counts back
-// faces and hits. Output per probe (PB_REDUCED_SH_STRIDE = 40 floats at
+// SH L2 (weight 4pi / rays: the directions are uniform; under probe NEE the
+// emitter sample each ray drew too, already divided by 4pi x its density),
+// adds the punctual lights the probe sees directly as projected deltas
+// (irradiance I/d^2 with a shadow ray from the probe; when direct light is
+// included), and counts back faces and hits. Output per probe (PB_REDUCED_SH_STRIDE = 40 floats at
 // reduced[40 * probe_in_submission]): 27 radiance coefficients, back-face
 // count, hit count, then the nearest back-face hit (distance, direction) and
 // the nearest front-face hit (distance, direction), which drive relocation;
@@ -45,6 +46,17 @@ void main()
             c[3 * k] += w * o.r * y[k];
             c[3 * k + 1] += w * o.g * y[k];
             c[3 * k + 2] += w * o.b * y[k];
+        }
+        if (!addr_null(P.nee)) { // probe NEE: the emitter sample drawn with this ray
+            Vec4Buf nee = Vec4Buf(P.nee);
+            uint j = 2u * (local * P.rays_per_probe + r);
+            vec3 L = nee.v[j].rgb;
+            sh_basis(nee.v[j + 1u].xyz, y);
+            for (int k = 0; k < 9; ++k) {
+                c[3 * k] += w * L.r * y[k];
+                c[3 * k + 1] += w * L.g * y[k];
+                c[3 * k + 2] += w * L.b * y[k];
+            }
         }
         backfaces += o.w < 0.0 ? 1.0 : 0.0;
         hits += abs(o.w) < P.max_distance ? 1.0 : 0.0;

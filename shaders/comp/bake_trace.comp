@@ -4,7 +4,8 @@
 // rotation for this pass, and returns the radiance arriving along it (path
 // traced: emission, punctual lights, emitters and the environment with shadow rays, Lambertian bounces with
 // Russian roulette after the second) and the distance to the first hit
-// (negative on a back face; max_distance on a miss).
+// (negative on a back face; max_distance on a miss). Under probe NEE it also
+// writes one emitter sample drawn from the probe (path.glsl).
 // CPU reference: pb_bake_trace_cpu (src/bake/bake_cpu.c).
 #extension GL_GOOGLE_include_directive : require
 
@@ -31,6 +32,13 @@ void main()
     if (!addr_null(P.volume.probes) && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
         pb_volume = P.volume;
         pr.L += pr.albedo / PB_PI * pb_sample_irradiance(pb_volume_grid(pb_volume), pr.x, pr.ng, -d);
+    }
+    if (!addr_null(P.nee)) { // probe NEE: one emitter sample from the probe per ray
+        vec4 nr[2] = vec4[2](vec4(0.0), vec4(0.0, 1.0, 0.0, 0.0));
+        if (P.direct != 0u && P.emitter_count > 0u)
+            nr = probe_emitter_nee(P, origin, state);
+        Vec4RW(P.nee).v[2u * i] = nr[0];
+        Vec4RW(P.nee).v[2u * i + 1u] = nr[1];
     }
     float first_distance = isinf(pr.first_t) ? P.max_distance : sign(pr.first_t) * min(abs(pr.first_t), P.max_distance);
     Vec4RW(P.rays).v[i] = vec4(pr.L, first_distance);

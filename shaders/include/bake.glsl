@@ -59,7 +59,7 @@ struct BakeParams {
     pb_addr emit_pdf;      // float per leaf-ordered triangle: area density when sampled (p_i / area), 0 if not an emitter
     pb_addr env;           // EnvTexel[] (environment.glsl); 0: no environment (black)
     pb_addr counters;      // uint: BVH traversals of this submission are added here; 0: not counted
-    pb_addr pad0;
+    pb_addr nee;           // probe NEE: 2 vec4 per ray (weighted radiance / 4pi, 0; direction, 0); 0: off
     vec4 env_rotation;      // x cos, y sin of the environment's rotation about +Y
     uint first_probe;
     uint probe_count;       // in this submission

@@ -30,13 +30,18 @@ vec3 cosine_direction(vec3 n, float u1, float u2)
     return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u1)));
 }
 
-// Next-event estimation of one emissive triangle, picked by power (alias
-// table), a uniform point on it, a shadow ray, and the MIS weight against
-// cosine-weighted bounce sampling (power heuristic). Returns emitted radiance
-// x cos / (pi pdf) x weight: the caller multiplies by throughput x albedo.
-// (A function of its own also keeps glslang's `precise` analysis of main()
-// small: inlined here, it ran out of memory.)
-vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
+// One emissive triangle, picked by power (alias table), and a uniform point
+// on it, seen from x: the direction and distance to it, its emitted
+// radiance toward x, and the solid-angle density of drawing that direction
+// (0 when its back faces x or it is degenerate). Three random numbers.
+struct EmitterSample {
+    vec3 w;
+    float dist;
+    vec3 Le;
+    float pdf;
+};
+
+EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
 {
     SceneRefs s = P.scene;
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
@@ -52,28 +57,63 @@ vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
     vec3 y = et.v0 + b1 * ee1 + b2 * ee2;
     vec3 to = y - x;
     float d2 = dot(to, to);
-    float dist = sqrt(d2);
-    vec3 w = to / dist;
-    float cos_x = dot(ng, w);
+    EmitterSample es;
+    es.dist = sqrt(d2);
+    es.w = to / es.dist;
     ShadeMaterial em = ShadeMaterialBuf(P.materials).m[et.flags & ~PB_FLAG_ALPHA_MASK];
-    float cos_e = -dot(normalize(cross(ee1, ee2)), w);
+    float cos_e = -dot(normalize(cross(ee1, ee2)), es.w);
     if (em.tex.z != 0)
         cos_e = abs(cos_e);
-    if (!(cos_x > 0.0 && cos_e > 0.0 && d2 > 0.0))
-        return vec3(0.0);
-    TraceResult shadow = trace_ray(s, x, w, 0.0, dist * 0.9999, true);
-    if (shadow.tri != PB_NO_HIT)
-        return vec3(0.0);
-    float pl = FloatBuf(P.emit_pdf).v[etri] * d2 / cos_e;
-    float pb = cos_x / PB_PI;
-    float wl = power_heuristic(pl, pb);
+    es.pdf = cos_e > 0.0 && d2 > 0.0 ? FloatBuf(P.emit_pdf).v[etri] * d2 / cos_e : 0.0;
     FloatBuf euv = FloatBuf(s.tri_uv);
     uint eb = 6u * etri;
     float ew0 = 1.0 - b1 - b2;
     vec2 yuv = ew0 * vec2(euv.v[eb], euv.v[eb + 1u]) + b1 * vec2(euv.v[eb + 2u], euv.v[eb + 3u]) +
                b2 * vec2(euv.v[eb + 4u], euv.v[eb + 5u]);
-    vec3 Le = em.emissive_metallic.rgb * texture_rgb(s, em.tex.y, yuv);
-    return Le * (cos_x / (PB_PI * pl) * wl);
+    es.Le = em.emissive_metallic.rgb * texture_rgb(s, em.tex.y, yuv);
+    return es;
+}
+
+// Next-event estimation of one emissive triangle (sample_emitter), a shadow
+// ray, and the MIS weight against cosine-weighted bounce sampling (power
+// heuristic). Returns emitted radiance x cos / (pi pdf) x weight: the caller
+// multiplies by throughput x albedo. (A function of its own also keeps
+// glslang's `precise` analysis of main() small: inlined here, it ran out of
+// memory.)
+vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
+{
+    EmitterSample es = sample_emitter(P, x, state);
+    float cos_x = dot(ng, es.w);
+    if (!(cos_x > 0.0 && es.pdf > 0.0))
+        return vec3(0.0);
+    TraceResult shadow = trace_ray(P.scene, x, es.w, 0.0, es.dist * 0.9999, true);
+    if (shadow.tri != PB_NO_HIT)
+        return vec3(0.0);
+    float pb = cos_x / PB_PI;
+    float wl = power_heuristic(es.pdf, pb);
+    return es.Le * (cos_x / (PB_PI * es.pdf) * wl);
+}
+
+// Probe NEE (--probe-nee): the emission a probe sees directly, sampled from
+// the probe by light sampling and MIS-combined (power heuristic) with the
+// probe rays that find emitters (uniform over the sphere, density 1 / 4pi).
+// Returns (radiance x weight / (4pi pdf), direction): the SH projection
+// weighs it like a probe ray (4pi / rays).
+vec4[2] probe_emitter_nee(BakeParams P, vec3 x, inout uint state)
+{
+    vec4 r[2];
+    r[0] = vec4(0.0);
+    r[1] = vec4(0.0, 1.0, 0.0, 0.0);
+    EmitterSample es = sample_emitter(P, x, state);
+    if (!(es.pdf > 0.0))
+        return r;
+    r[1] = vec4(es.w, 0.0);
+    TraceResult shadow = trace_ray(P.scene, x, es.w, 0.0, es.dist * 0.9999, true);
+    if (shadow.tri != PB_NO_HIT)
+        return r;
+    float wl = power_heuristic(es.pdf, 1.0 / (4.0 * PB_PI));
+    r[0] = vec4(es.Le * (wl / (4.0 * PB_PI * es.pdf)), 0.0);
+    return r;
 }
 
 // Next-event estimation of the environment: a direction by texel power, a
@@ -181,9 +221,12 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         if ((bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
             float w = 1.0;
             float pa = P.emitter_count > 0u ? emit_pdf.v[tr.tri] : 0.0;
-            if (bsdf_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
+            // the density of the ray that found it: its bounce's, or for a
+            // probe ray under probe NEE the uniform sphere's (else 0: weight 1)
+            float found_pdf = bounce == 0u && !addr_null(P.nee) ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
+            if (found_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
                 float pl = pa * tr.t * tr.t / abs(dot(ng, dir));
-                w = power_heuristic(bsdf_pdf, pl);
+                w = power_heuristic(found_pdf, pl);
             }
             add_found(res, throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w, bounce,
                       P.indirect_clamp);

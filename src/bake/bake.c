@@ -10,6 +10,7 @@
  * from the GPU: the per-pass sums are over at most rays_per_probe terms, so
  * adding passes never loses precision however many there are. */
 #include "bake/bake_data.h"
+#include "bake/convergence.h"
 #include "bake/gpu_scene.h"
 #include "bake/shading.h"
 #include "sample/sample_gpu.h"
@@ -31,28 +32,17 @@
 
 typedef struct bake_buffers {
     pb_buffer params, probes, rotations, directions, rays, reduced, list, counters;
+    pb_buffer nee;                 /* probe NEE: 2 vec4 per ray of a submission (unallocated when off) */
     pb_shading shading;
     pb_sample_buffers feedback;
     pb_pipeline trace, sh, depth;
 } bake_buffers;
 
-/* Standard error of the mean of k per-pass estimates from their sum and sum
- * of squares (the spread between passes; every pass is independent and
- * equally weighted). *mean gets the mean. k < 2: 0. */
-static double pass_std_error(uint32_t k, double sum, double sq, double *mean)
-{
-    *mean = k ? sum / k : 0.0;
-    if (k < 2)
-        return 0.0;
-    double var = fmax(0.0, (sq - k * *mean * *mean) / (k - 1));
-    return sqrt(var / k);
-}
-
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[8] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced, &b->list,
-                          &b->counters};
-    for (int i = 0; i < 8; ++i)
+    pb_buffer *bufs[9] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced, &b->list,
+                          &b->counters, &b->nee};
+    for (int i = 0; i < 9; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_shading_destroy(ctx, &b->shading);
     pb_sample_release(ctx, &b->feedback);
@@ -153,8 +143,7 @@ typedef struct bake_run {
     uint64_t traversals;           /* BVH traversals of relocation and bake passes (counted by bake_trace) */
     uint64_t long_paths;           /* paths whose traversal loops ran past 32768 iterations */
     gpu_volume_refs feedback;      /* --indirect volume: the previous bounce's volume (probes 0: none) */
-    uint32_t *passes_done;         /* per probe */
-    double *dc_sum, *dc_sq;        /* per probe: luminance of each pass's DC coefficient, for the standard error */
+    pb_convergence *conv;          /* per probe: passes done and the spread of their estimates */
 } bake_run;
 
 /* One pass over every probe, in bounded submissions. A relocation pass
@@ -189,8 +178,10 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         prm.probe_list = list ? B->list.address : 0;
         prm.counters = B->counters.address;
         prm.indirect_clamp = d->indirect_clamp;
-        if (!relocating)
+        if (!relocating) {
             prm.volume = run->feedback;
+            prm.nee = B->nee.address; /* 0 unless probe NEE is on */
+        }
         memset(B->counters.mapped, 0, 8);
         prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
         prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces;
@@ -244,10 +235,7 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
             for (int c = 0; c < 27; ++c)
                 run->sh_sum[27 * (size_t)p + c] += o[c];
             run->hits[p] += o[28];
-            double dc = 0.2126 * o[0] + 0.7152 * o[1] + 0.0722 * o[2];
-            run->dc_sum[p] += dc;
-            run->dc_sq[p] += dc * dc;
-            run->passes_done[p]++;
+            pb_convergence_add(run->conv, p, o);
             const float *dm = run->reduced + PB_REDUCED_SH_STRIDE * (size_t)count + 2 * (size_t)texels * l;
             for (uint32_t t = 0; t < 2 * texels; ++t)
                 run->depth_sum[2 * (size_t)texels * p + t] += dm[t];
@@ -422,7 +410,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     if (chunk > ctx->limits.maxComputeWorkGroupCount[1]) /* bake_depth dispatches one row per probe */
         chunk = ctx->limits.maxComputeWorkGroupCount[1];
     uint64_t reduced_floats = (uint64_t)chunk * (PB_REDUCED_SH_STRIDE + 2u * texels);
-    uint64_t need = (uint64_t)P * (16 + 48) + (uint64_t)rpp * 16 + (uint64_t)chunk * rpp * 16 + reduced_floats * 4;
+    uint64_t need = (uint64_t)P * (16 + 48) + (uint64_t)rpp * 16 + (uint64_t)chunk * rpp * (d.probe_nee ? 48 : 16) +
+                    reduced_floats * 4;
     if (ctx->info.device_local_bytes && need > ctx->info.device_local_bytes / 2)
         return pb_fail(err, PB_ERROR_TOO_LARGE,
                        "%u probes x %u rays need %.1f MiB of device memory; the budget is half of %s's %.1f MiB "
@@ -453,8 +442,9 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     bake_buffers B;
     memset(&B, 0, sizeof B);
     float *offsets = NULL, *near = NULL;
-    uint32_t *passes_done = NULL, *active = NULL, *converged_at = calloc(P, sizeof(uint32_t));
-    double *dc_sum = NULL, *dc_sq = NULL;
+    uint32_t *active = NULL, *converged_at = calloc(P, sizeof(uint32_t));
+    pb_convergence conv;
+    memset(&conv, 0, sizeof conv);
     if (!probes || !rotations || !directions || !sh_sum || !depth_sum || !backfaces || !hits ||
         !reduced || !converged_at || pb_sf_directions(rpp, directions) != PB_OK) {
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
@@ -477,6 +467,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         r = make_buffer(ctx, &B.directions, (uint64_t)rpp * 16, PB_MEMORY_DEVICE, "ray directions", directions, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.rays, (uint64_t)chunk * rpp * 16, PB_MEMORY_DEVICE, "probe rays", NULL, err);
+    if (r == PB_OK && d.probe_nee)
+        r = make_buffer(ctx, &B.nee, (uint64_t)chunk * rpp * 32, PB_MEMORY_DEVICE, "probe NEE samples", NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.reduced, reduced_floats * 4, PB_MEMORY_DOWNLOAD, "probe results", NULL, err);
     uint32_t spec[1] = {gs->stack_size};
@@ -491,16 +483,14 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                                "bake_depth", &B.depth, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.list, (uint64_t)P * 4, PB_MEMORY_DEVICE, "active probe list", NULL, err);
-    passes_done = calloc(P, sizeof *passes_done);
-    dc_sum = calloc(P, sizeof *dc_sum);
-    dc_sq = calloc(P, sizeof *dc_sq);
+    int conv_ok = pb_convergence_init(&conv, P);
     active = malloc(P * sizeof *active);
-    if (r == PB_OK && (!passes_done || !dc_sum || !dc_sq || !active))
+    if (r == PB_OK && (!conv_ok || !active))
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
     bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, 0, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
-                    hits, 0, 0, 0, NULL, 0, 0, {0}, passes_done, dc_sum, dc_sq};
+                    hits, 0, 0, 0, NULL, 0, 0, {0}, &conv};
     if (r == PB_OK && feedback) {
         r = pb_sample_upload(ctx, feedback, &B.feedback, err);
         run.feedback = B.feedback.refs;
@@ -528,8 +518,10 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     memset(backfaces, 0, P * sizeof(double));
     memset(hits, 0, P * sizeof(double));
     /* bake passes; with a target error, probes whose irradiance estimate has
-     * converged (standard error of the mean below target x mean, after at
-     * least 4 passes) drop out and the rest keep going */
+     * converged (after at least 4 passes, along every axis the standard
+     * error of the mean is below target x the mean, or x 5 % of the mean
+     * over all probes where that is larger: convergence.h) drop out and the
+     * rest keep going */
     uint32_t active_count = P;
     for (uint32_t p = 0; p < P; ++p)
         active[p] = p;
@@ -538,10 +530,10 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         if (r != PB_OK || !(d.target_error > 0.f) || pass + 1 < 4)
             continue;
         uint32_t keep = 0;
+        double floor = pb_convergence_floor(&conv);
         for (uint32_t i = 0; i < active_count; ++i) {
             uint32_t p = active[i];
-            double mean, se = pass_std_error(passes_done[p], dc_sum[p], dc_sq[p], &mean);
-            if (se <= d.target_error * fabs(mean))
+            if (pb_convergence_reached(&conv, p, d.target_error, floor))
                 converged_at[p] = pass + 1;
             else
                 active[keep++] = p;
@@ -565,6 +557,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         out->spacing[k] = d.points ? 0.0 : d.grid.spacing[k];
     }
     uint32_t passes_max = 0;
+    const uint32_t *passes_done = conv.passes;
     for (uint32_t p = 0; p < P; ++p) {
         passes_max = passes_done[p] > passes_max ? passes_done[p] : passes_max;
         out->rays_traced += (uint64_t)passes_done[p] * rpp;
@@ -573,6 +566,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                                         d.max_distance,   d.sh_window, d.sh_window_width, d.indirect_clamp};
     out->settings.scene_hash = pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
                                          pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
+    out->settings.techniques = d.probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u;
     snprintf(out->device, sizeof out->device, "%.127s", ctx->info.name);
     if ((r = pb_volume_alloc(out, err)) != PB_OK)
         goto done;
@@ -604,9 +598,9 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
             f |= PB_PROBE_CONVERGED;
         out->probe_flags[p] = f;
         out->probe_paths[p] = (uint32_t)fmin((double)passes_done[p] * rpp, (double)UINT32_MAX);
-        double mean, se = pass_std_error(passes_done[p], dc_sum[p], dc_sq[p], &mean);
-        if (passes_done[p] >= 2 && (mean != 0.0 || se == 0.0))
-            out->probe_std_error[p] = mean != 0.0 ? (float)(se / fabs(mean)) : 0.f;
+        float rse = pb_convergence_relative_error(&conv, p);
+        if (rse >= 0.f)
+            out->probe_std_error[p] = rse;
         uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
         double unit = out->depth_unit; /* a power of two: the division is exact */
         for (uint32_t by = 0; by < n + 2; ++by)
@@ -634,7 +628,8 @@ done:
     release(ctx, &B);
     free(probes), free(rotations), free(directions), free(sh_sum), free(depth_sum);
     free(backfaces), free(hits), free(reduced), free(offsets), free(near);
-    free(passes_done), free(active), free(converged_at), free(dc_sum), free(dc_sq);
+    free(active), free(converged_at);
+    pb_convergence_free(&conv);
     if (r != PB_OK)
         pb_volume_free(out);
     return r;

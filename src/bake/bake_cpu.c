@@ -154,12 +154,17 @@ typedef struct trace_ctx {
     _Atomic uint64_t traversals;
 } trace_ctx;
 
-/* Next-event estimation of one emissive triangle (bake_trace.comp). */
-static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const float x[3], const float ng[3],
-                        const float albedo[3], const float thr[3], uint32_t *state, float L[3])
+/* sample_emitter of path.glsl: one emissive triangle by power and a uniform
+ * point on it, seen from x. pdf 0: its back faces x, or degenerate. */
+typedef struct emitter_sample {
+    float w[3], dist, Le[3], pdf;
+} emitter_sample;
+
+static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitters *em, const float x[3],
+                                     uint32_t *state)
 {
-    const pb_bake_pass *p = c->p;
-    const pb_scene *s = p->scene;
+    const pb_scene *s = c->p->scene;
+    emitter_sample es;
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
     uint32_t etri = em->tri[pb_alias_sample(em->prob, em->alias, em->count, u0)];
     const float *v0 = s->positions + 9 * (size_t)etri, *v1 = v0 + 3, *v2 = v0 + 6;
@@ -171,26 +176,56 @@ static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const 
         to[k] = y[k] - x[k];
     }
     float d2 = to[0] * to[0] + to[1] * to[1] + to[2] * to[2];
-    float dist = sqrtf(d2), w[3] = {to[0] / dist, to[1] / dist, to[2] / dist};
-    float cos_x = ng[0] * w[0] + ng[1] * w[1] + ng[2] * w[2];
+    es.dist = sqrtf(d2);
+    for (int k = 0; k < 3; ++k)
+        es.w[k] = to[k] / es.dist;
     float ne[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
     float nl = sqrtf(ne[0] * ne[0] + ne[1] * ne[1] + ne[2] * ne[2]);
     const gpu_shade_material *m = &c->materials[s->material[etri]];
-    float cos_e = -(ne[0] * w[0] + ne[1] * w[1] + ne[2] * w[2]) / nl;
+    float cos_e = -(ne[0] * es.w[0] + ne[1] * es.w[1] + ne[2] * es.w[2]) / nl;
     if (m->tex[2] != 0)
         cos_e = fabsf(cos_e);
-    if (!(cos_x > 0.f && cos_e > 0.f && d2 > 0.f))
-        return;
-    if (trace(p, x, w, dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
-        return;
-    float pl = em->pdf_area[etri] * d2 / cos_e, pb = cos_x / PI_F;
-    float wl = power_heuristic(pl, pb);
+    es.pdf = cos_e > 0.f && d2 > 0.f ? em->pdf_area[etri] * d2 / cos_e : 0.f;
     const float *uv = s->texcoords + 6 * (size_t)etri;
     float w0 = 1.f - b1 - b2, tu = w0 * uv[0] + b1 * uv[2] + b2 * uv[4], tv = w0 * uv[1] + b1 * uv[3] + b2 * uv[5];
     float et[3];
     texture_rgb(s, m->tex[1], tu, tv, et);
     for (int k = 0; k < 3; ++k)
-        L[k] += thr[k] * albedo[k] * (m->emissive_metallic[k] * et[k]) * (cos_x / (PI_F * pl) * wl);
+        es.Le[k] = m->emissive_metallic[k] * et[k];
+    return es;
+}
+
+/* Next-event estimation of one emissive triangle (emitter_nee of path.glsl). */
+static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const float x[3], const float ng[3],
+                        const float albedo[3], const float thr[3], uint32_t *state, float L[3])
+{
+    emitter_sample es = sample_emitter(c, em, x, state);
+    float cos_x = ng[0] * es.w[0] + ng[1] * es.w[1] + ng[2] * es.w[2];
+    if (!(cos_x > 0.f && es.pdf > 0.f))
+        return;
+    if (trace(c->p, x, es.w, es.dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
+        return;
+    float pb = cos_x / PI_F, wl = power_heuristic(es.pdf, pb);
+    for (int k = 0; k < 3; ++k)
+        L[k] += thr[k] * albedo[k] * es.Le[k] * (cos_x / (PI_F * es.pdf) * wl);
+}
+
+/* probe_emitter_nee of path.glsl: out[0..2] weighted radiance / 4pi, out[4..6]
+ * the direction (8 floats, as the kernel's two vec4). */
+static void probe_emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const float x[3], uint32_t *state,
+                              float out[8])
+{
+    memset(out, 0, 8 * sizeof *out);
+    out[5] = 1.f;
+    emitter_sample es = sample_emitter(c, em, x, state);
+    if (!(es.pdf > 0.f))
+        return;
+    memcpy(out + 4, es.w, sizeof es.w);
+    if (trace(c->p, x, es.w, es.dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
+        return;
+    float wl = power_heuristic(es.pdf, 1.f / (4.f * PI_F));
+    for (int k = 0; k < 3; ++k)
+        out[k] = es.Le[k] * (wl / (4.f * PI_F * es.pdf));
 }
 
 /* env_nee of bake_trace.comp */
@@ -292,9 +327,10 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         if ((bounce > 0 || see_direct) &&
             (m->emissive_metallic[0] != 0.f || m->emissive_metallic[1] != 0.f || m->emissive_metallic[2] != 0.f)) {
             float w = 1.f, pa = em ? em->pdf_area[h.tri] : 0.f;
-            if (bsdf_pdf > 0.f && pa > 0.f) {
+            float found_pdf = bounce == 0 && p->nee ? 1.f / (4.f * PI_F) : bsdf_pdf;
+            if (found_pdf > 0.f && pa > 0.f) {
                 float pl = pa * h.t * h.t / fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]);
-                w = power_heuristic(bsdf_pdf, pl);
+                w = power_heuristic(found_pdf, pl);
             }
             float et[3];
             texture_rgb(s, m->tex[1], tu, tv, et);
@@ -384,6 +420,13 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
             for (int k = 0; k < 3; ++k)
                 r.L[k] += r.albedo[k] / PI_F * e[k];
         }
+        if (p->nee) {
+            float *nr = p->nee + 8 * i;
+            memset(nr, 0, 8 * sizeof *nr);
+            nr[5] = 1.f;
+            if (p->direct && p->emitters && p->emitters->count)
+                probe_emitter_nee(&c->path, p->emitters, o, &state, nr);
+        }
         float first = isinf(r.first_t) ? p->max_distance
                                         : (r.first_t < 0.f ? -fminf(-r.first_t, p->max_distance)
                                                            : fminf(r.first_t, p->max_distance));
@@ -447,6 +490,15 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
                 c[3 * k] += w * o[0] * y[k];
                 c[3 * k + 1] += w * o[1] * y[k];
                 c[3 * k + 2] += w * o[2] * y[k];
+            }
+            if (p->nee) {
+                const float *nr = p->nee + 8 * ((size_t)local * p->rays_per_probe + r);
+                pb_sh_basis(nr + 4, y);
+                for (int k = 0; k < 9; ++k) {
+                    c[3 * k] += w * nr[0] * y[k];
+                    c[3 * k + 1] += w * nr[1] * y[k];
+                    c[3 * k + 2] += w * nr[2] * y[k];
+                }
             }
             backfaces += o[3] < 0.f ? 1.f : 0.f;
             hits += fabsf(o[3]) < p->max_distance ? 1.f : 0.f;

@@ -24,7 +24,7 @@ _Static_assert(sizeof(gpu_light) == 64, "Light layout");
 typedef struct gpu_bake_params {
     gpu_scene_refs scene;
     uint64_t materials, lights, probes, rotations, directions, rays, reduced, probe_list, emitters, emit_pdf, env,
-        counters, pad0;
+        counters, nee;
     float env_rotation[4];
     uint32_t first_probe, probe_count, rays_per_probe, pass_index, seed, bounces, light_count, octmap_res;
     float max_distance, lobe_power;

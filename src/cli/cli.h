@@ -16,6 +16,8 @@ typedef struct options {
     const char *device;
     const char *output;
     const char *direct;
+    const char *probe_nee;      /* "on" | "off"; NULL: the preset's, else on */
+    const char *quality;        /* a pb_bake_quality name; NULL: none (the defaults below) */
     const char *points;
     const char *env;
     float spacing, sky[3], bounds[6], target_error, env_intensity, env_rotation;

@@ -120,8 +120,13 @@ static void print_help(void)
            "  --spacing M | --counts X,Y,Z   probe grid (default: about 2048 probes over the bounds)\n"
            "  --bounds x0,y0,z0,x1,y1,z1     grid box in scene coordinates (default: scene bounds)\n"
            "  --rays N  --passes N  --bounces N  --octmap-res N  --seed S\n"
+           "  --quality preview|production|reference   rays, passes, target error and estimators for\n"
+           "                                 the use (printed; explicit options override it): preview\n"
+           "                                 128 x 2 passes; production until 2 %% (at most 256 passes);\n"
+           "                                 reference until 0.25 %% (at most 4096 passes)\n"
            "  --target-error E                trace each probe until the standard error of its irradiance\n"
-           "                                 is below E x its value (at least 4, at most --passes passes)\n"
+           "                                 along every axis is below E x its value (at least 4, at most\n"
+           "                                 --passes passes)\n"
            "  --points FILE.json             probes at given positions instead of a grid:\n"
            "                                 {\"spacing\": S, \"points\": [[x,y,z] | {\"id\": I, \"position\": [x,y,z]}]}\n"
            "  --sky R,G,B                    uniform sky radiance (default black)\n"
@@ -129,6 +134,8 @@ static void print_help(void)
            "  --env-intensity K              scale of the map (default 1)\n"
            "  --env-rotation DEG             turn the map about +Y, counter-clockwise from above (default 0)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
+           "  --probe-nee on|off             emitters a probe sees are also sampled from the probe and\n"
+           "                                 MIS-combined with its rays (unbiased; default on)\n"
            "  --sh-window none|hanning[:W]|lanczos[:W]   taper SH bands against ringing (default none; W 3)\n"
            "  --max-lights-per-hit N         above N punctual lights, each hit draws one by power (default 8)\n"
            "  --clamp-indirect X             clamp each reflected-light path contribution to radiance X\n"
@@ -191,6 +198,14 @@ static int parse(int argc, char **argv, options *o)
             if (!next)
                 return cli_usage_error("%s needs a points file (JSON)", a);
             o->points = argv[++i];
+        } else if (!strcmp(a, "--quality")) {
+            if (!next || !pb_bake_quality_find(next))
+                return cli_usage_error("%s takes preview, production or reference", a);
+            o->quality = argv[++i];
+        } else if (!strcmp(a, "--probe-nee")) {
+            if (!next || (strcmp(next, "on") && strcmp(next, "off")))
+                return cli_usage_error("%s takes on or off", a);
+            o->probe_nee = argv[++i];
         } else if (!strcmp(a, "--direct")) {
             if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
                 return cli_usage_error("%s takes include or exclude", a);
@@ -799,14 +814,14 @@ static int cmd_inspect(const options *o)
                "  \"seed\": %llu,\n"
                "  \"scene_hash\": \"%016llx\",\n  \"rays_per_probe\": %u,\n  \"passes\": %u,\n  \"bounces\": %u,\n"
                "  \"indirect\": \"%s\",\n  \"sh_window\": \"%s\",\n  \"sh_window_width\": %s,\n  \"indirect_clamp\": %s,\n"
-               "  \"device\": ",
+               "  \"techniques\": [%s],\n  \"device\": ",
                v.file_version, v.probe_count, v.flags & PB_VOLUME_GRID ? "true" : "false", v.counts[0], v.counts[1],
                v.counts[2], J17(v.origin[0]).s, J17(v.origin[1]).s, J17(v.origin[2]).s, J(v.spacing[0]).s,
                J(v.spacing[1]).s, J(v.spacing[2]).s, kind, v.flags & PB_VOLUME_DIRECT ? "true" : "false", v.octmap_res,
                J(s->max_distance).s, J(v.depth_unit).s, (unsigned long long)s->seed,
                (unsigned long long)s->scene_hash, s->rays_per_probe, s->passes, s->bounces,
                s->indirect_mode ? "volume" : "path", window_name(s->sh_window), J(s->sh_window_width).s,
-               J(s->indirect_clamp).s);
+               J(s->indirect_clamp).s, s->techniques & PB_TECHNIQUE_PROBE_NEE ? "\"probe-nee\"" : "");
         json_string(v.device);
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
@@ -843,8 +858,9 @@ static int cmd_inspect(const options *o)
                counts[2], counts[3], counts[4]);
         printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
                v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
-        printf("bake        %u rays x %u passes, %u bounces (indirect %s), seed %llu, device %s\n", s->rays_per_probe,
-               s->passes, s->bounces, s->indirect_mode ? "volume" : "path", (unsigned long long)s->seed,
+        printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, seed %llu, device %s\n",
+               s->rays_per_probe, s->passes, s->bounces, s->indirect_mode ? "volume" : "path",
+               s->techniques & PB_TECHNIQUE_PROBE_NEE ? "on" : "off", (unsigned long long)s->seed,
                v.device[0] ? v.device : "?");
         if (s->sh_window || s->indirect_clamp > 0.f)
             printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),
@@ -977,13 +993,16 @@ static int cmd_bake(const options *o)
         d.points = &pts;
         memset(&d.grid, 0, sizeof d.grid);
     }
-    d.rays_per_probe = o->has_rays ? o->rays : 256;
-    d.target_error = o->target_error;
-    d.passes = o->passes ? o->passes : (o->target_error > 0.f ? 64 : 4);
+    /* a preset fills what the command line leaves out */
+    const pb_bake_quality *q = pb_bake_quality_find(o->quality);
+    d.rays_per_probe = o->has_rays ? o->rays : q ? q->rays_per_probe : 256;
+    d.target_error = o->target_error > 0.f ? o->target_error : q ? q->target_error : 0.f;
+    d.passes = o->passes ? o->passes : q ? q->passes : (d.target_error > 0.f ? 64 : 4);
     d.bounces = o->has_bounces ? o->bounces : 2;
     d.octmap_res = o->octmap_res ? o->octmap_res : 16;
     d.seed = o->has_seed ? o->seed : 1;
     d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");
+    d.probe_nee = o->probe_nee ? !strcmp(o->probe_nee, "on") : q ? q->probe_nee : 1u;
     memcpy(d.sky, o->sky, sizeof d.sky);
     d.environment = o->env ? &env : NULL;
     d.indirect_volume = (uint32_t)o->indirect_volume;
@@ -1006,11 +1025,13 @@ static int cmd_bake(const options *o)
                  d.grid.counts[2], (unsigned long long)probes, d.grid.spacing[0]);
     if (!o->log.quiet)
         fprintf(stderr,
-                "probebake: baking %s: %s, %u rays x %s%u passes%s, %u bounces, "
-                "%s, octmap %u, direct %s, indirect %s, seed %u\n",
-                o->scene, where, d.rays_per_probe, d.target_error > 0.f ? "up to " : "", d.passes,
-                d.target_error > 0.f ? " (until converged)" : "", d.bounces, light, d.octmap_res,
-                d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path", d.seed);
+                "probebake: baking %s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
+                "%s, octmap %u, direct %s, indirect %s, probe NEE %s, seed %u\n",
+                o->scene, q ? " at quality " : "", q ? q->name : "", where, d.rays_per_probe,
+                d.target_error > 0.f ? "up to " : "", d.passes, d.target_error > 0.f ? " (until converged)" : "",
+                d.bounces, light, d.octmap_res,
+                d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path",
+                d.probe_nee ? "on" : "off", d.seed);
     if (!o->log.quiet && (d.indirect_clamp > 0.f || d.sh_window))
         fprintf(stderr, "probebake: biased on request:%s%s%s\n",
                 d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",

@@ -225,6 +225,7 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     put_u32(b + 376, s->sh_window);
     put_f32(b + 380, s->sh_window_width);
     put_f32(b + 384, s->indirect_clamp);
+    put_u32(b + 388, s->techniques);
     put_u64(b + 392, l.accounting);
     size_t n = v->probe_count;
     for (size_t i = 0; i < 3 * n; ++i) {
@@ -389,6 +390,7 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     v->settings.sh_window = get_u32(h + 376);
     v->settings.sh_window_width = get_f32(h + 380);
     v->settings.indirect_clamp = get_f32(h + 384);
+    v->settings.techniques = get_u32(h + 388);
 
     const char *bad = NULL;
     if (get_u32(h + 12) != HEADER_BYTES)
