@@ -84,9 +84,9 @@ typedef struct pb_bake_desc {
                                      (alias table) instead of tracing a shadow ray to every light */
     uint32_t indirect_volume;     /* 1: each bounce shades first hits from the previous bounce's volume through
                                      the run-time sampler (bounces + 1 bakes, grid only; fast, biased); 0: path tracing */
-    uint32_t probe_nee;           /* 1: the emission a probe sees directly is also sampled from the probe
-                                     (one emitter by power per probe ray, a shadow ray) and MIS-combined
-                                     with its rays (unbiased; docs/bake.md, "Estimators") */
+    uint32_t probe_nee;           /* 1: the light a probe sees directly (emitters, environment) is also
+                                     sampled from the probe (one light sample per probe ray, a shadow ray)
+                                     and MIS-combined with its rays (unbiased; docs/bake.md, "Estimators") */
     pb_progress_fn progress;
     void *progress_user;
 } pb_bake_desc;

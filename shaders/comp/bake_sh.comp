@@ -1,7 +1,7 @@
 #version 460
 // bake_sh: one invocation per probe. Projects this pass's ray radiances onto
 // SH L2 (weight 4pi / rays: the directions are uniform; under probe NEE the
-// emitter sample each ray drew too, already divided by 4pi x its density),
+// light sample each ray drew too, already divided by 4pi x its density),
 // adds the punctual lights the probe sees directly as projected deltas
 // (irradiance I/d^2 with a shadow ray from the probe; when direct light is
 // included), and counts back faces and hits. Output per probe (PB_REDUCED_SH_STRIDE = 40 floats at
@@ -47,7 +47,7 @@ void main()
             c[3 * k + 1] += w * o.g * y[k];
             c[3 * k + 2] += w * o.b * y[k];
         }
-        if (!addr_null(P.nee)) { // probe NEE: the emitter sample drawn with this ray
+        if (!addr_null(P.nee)) { // probe NEE: the light sample drawn with this ray
             Vec4Buf nee = Vec4Buf(P.nee);
             uint j = 2u * (local * P.rays_per_probe + r);
             vec3 L = nee.v[j].rgb;

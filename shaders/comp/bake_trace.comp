@@ -5,7 +5,8 @@
 // traced: emission, punctual lights, emitters and the environment with shadow rays, Lambertian bounces with
 // Russian roulette after the second) and the distance to the first hit
 // (negative on a back face; max_distance on a miss). Under probe NEE it also
-// writes one emitter sample drawn from the probe (path.glsl).
+// writes one light sample (emitter or environment) drawn from the probe
+// (path.glsl).
 // CPU reference: pb_bake_trace_cpu (src/bake/bake_cpu.c).
 #extension GL_GOOGLE_include_directive : require
 
@@ -33,10 +34,10 @@ void main()
         pb_volume = P.volume;
         pr.L += pr.albedo / PB_PI * pb_sample_irradiance(pb_volume_grid(pb_volume), pr.x, pr.ng, -d);
     }
-    if (!addr_null(P.nee)) { // probe NEE: one emitter sample from the probe per ray
+    if (!addr_null(P.nee)) { // probe NEE: one light sample from the probe per ray
         vec4 nr[2] = vec4[2](vec4(0.0), vec4(0.0, 1.0, 0.0, 0.0));
-        if (P.direct != 0u && P.emitter_count > 0u)
-            nr = probe_emitter_nee(P, origin, state);
+        if (P.direct != 0u && (P.emitter_count > 0u || P.env_count > 0u))
+            nr = probe_light_nee(P, origin, state);
         Vec4RW(P.nee).v[2u * i] = nr[0];
         Vec4RW(P.nee).v[2u * i + 1u] = nr[1];
     }

@@ -94,25 +94,46 @@ vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
     return es.Le * (cos_x / (PB_PI * es.pdf) * wl);
 }
 
-// Probe NEE (--probe-nee): the emission a probe sees directly, sampled from
-// the probe by light sampling and MIS-combined (power heuristic) with the
-// probe rays that find emitters (uniform over the sphere, density 1 / 4pi).
-// Returns (radiance x weight / (4pi pdf), direction): the SH projection
-// weighs it like a probe ray (4pi / rays).
-vec4[2] probe_emitter_nee(BakeParams P, vec3 x, inout uint state)
+// Probe NEE (--probe-nee): the light a probe sees directly (emitters and
+// the environment), sampled from the probe by light sampling and
+// MIS-combined (power heuristic) with the probe rays that find it (uniform
+// over the sphere, density 1 / 4pi). One light sample per ray: an emitter
+// with probability probe_emitter_share, else the environment. Returns
+// (radiance x weight / (4pi pdf), direction): the SH projection weighs it
+// like a probe ray (4pi / rays).
+float probe_emitter_share(BakeParams P)
+{
+    return P.emitter_count > 0u ? (P.env_count > 0u ? 0.5 : 1.0) : 0.0;
+}
+
+vec4[2] probe_light_nee(BakeParams P, vec3 x, inout uint state)
 {
     vec4 r[2];
     r[0] = vec4(0.0);
     r[1] = vec4(0.0, 1.0, 0.0, 0.0);
-    EmitterSample es = sample_emitter(P, x, state);
-    if (!(es.pdf > 0.0))
+    Env env = bake_env(P);
+    float share = probe_emitter_share(P);
+    float us = rng_next(state);
+    vec3 w, L;
+    float tmax, pdf;
+    if (us < share) {
+        EmitterSample es = sample_emitter(P, x, state);
+        w = es.w, L = es.Le, tmax = es.dist * 0.9999, pdf = share * es.pdf;
+    } else {
+        if (env.count == 0u)
+            return r;
+        float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
+        w = env_sample(env, u0, u1, u2).xyz;
+        L = env_radiance(env, w), tmax = PB_INF, pdf = (1.0 - share) * env_pdf(env, w);
+    }
+    if (!(pdf > 0.0))
         return r;
-    r[1] = vec4(es.w, 0.0);
-    TraceResult shadow = trace_ray(P.scene, x, es.w, 0.0, es.dist * 0.9999, true);
+    r[1] = vec4(w, 0.0);
+    TraceResult shadow = trace_ray(P.scene, x, w, 0.0, tmax, true);
     if (shadow.tri != PB_NO_HIT)
         return r;
-    float wl = power_heuristic(es.pdf, 1.0 / (4.0 * PB_PI));
-    r[0] = vec4(es.Le * (wl / (4.0 * PB_PI * es.pdf)), 0.0);
+    float wl = power_heuristic(pdf, 1.0 / (4.0 * PB_PI));
+    r[0] = vec4(L * (wl / (4.0 * PB_PI * pdf)), 0.0);
     return r;
 }
 
@@ -193,9 +214,13 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         if (tr.tri == PB_NO_HIT) {
             if (bounce > 0u || see_direct) {
                 float w = 1.0;
-                if (bsdf_pdf > 0.0 && env.count > 0u) { // the environment could also have been sampled: MIS
-                    float pe = env_pdf(env, dir);
-                    w = power_heuristic(bsdf_pdf, pe);
+                // the density of the ray that found it: its bounce's, or for a probe
+                // ray under probe NEE the uniform sphere's (else 0: weight 1)
+                bool probe_nee = bounce == 0u && !addr_null(P.nee);
+                float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
+                if (found_pdf > 0.0 && env.count > 0u) { // the environment could also have been sampled: MIS
+                    float pe = env_pdf(env, dir) * (probe_nee ? 1.0 - probe_emitter_share(P) : 1.0);
+                    w = power_heuristic(found_pdf, pe);
                 }
                 add_found(res, throughput * env_radiance(env, dir) * w, bounce, P.indirect_clamp);
             }
@@ -221,11 +246,10 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         if ((bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
             float w = 1.0;
             float pa = P.emitter_count > 0u ? emit_pdf.v[tr.tri] : 0.0;
-            // the density of the ray that found it: its bounce's, or for a
-            // probe ray under probe NEE the uniform sphere's (else 0: weight 1)
-            float found_pdf = bounce == 0u && !addr_null(P.nee) ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
+            bool probe_nee = bounce == 0u && !addr_null(P.nee);
+            float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
             if (found_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
-                float pl = pa * tr.t * tr.t / abs(dot(ng, dir));
+                float pl = pa * tr.t * tr.t / abs(dot(ng, dir)) * (probe_nee ? probe_emitter_share(P) : 1.0);
                 w = power_heuristic(found_pdf, pl);
             }
             add_found(res, throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w, bounce,

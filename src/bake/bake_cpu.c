@@ -210,22 +210,44 @@ static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const 
         L[k] += thr[k] * albedo[k] * es.Le[k] * (cos_x / (PI_F * es.pdf) * wl);
 }
 
-/* probe_emitter_nee of path.glsl: out[0..2] weighted radiance / 4pi, out[4..6]
- * the direction (8 floats, as the kernel's two vec4). */
-static void probe_emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const float x[3], uint32_t *state,
-                              float out[8])
+/* probe_emitter_share of path.glsl: the probability that probe NEE's light
+ * sample is an emitter (else the environment). */
+static float probe_emitter_share(const pb_bake_pass *p)
 {
+    int env = p->env && p->env->count;
+    return p->emitters && p->emitters->count ? (env ? 0.5f : 1.f) : 0.f;
+}
+
+/* probe_light_nee of path.glsl: out[0..2] weighted radiance / 4pi, out[4..6]
+ * the direction (8 floats, as the kernel's two vec4). */
+static void probe_light_nee(const pb_path_ctx *c, const float x[3], uint32_t *state, float out[8])
+{
+    const pb_bake_pass *p = c->p;
     memset(out, 0, 8 * sizeof *out);
     out[5] = 1.f;
-    emitter_sample es = sample_emitter(c, em, x, state);
-    if (!(es.pdf > 0.f))
+    float share = probe_emitter_share(p), us = rng_next(state);
+    float w[3], L[3], tmax, pdf;
+    if (us < share) {
+        emitter_sample es = sample_emitter(c, p->emitters, x, state);
+        memcpy(w, es.w, sizeof w);
+        memcpy(L, es.Le, sizeof L);
+        tmax = es.dist * 0.9999f, pdf = share * es.pdf;
+    } else {
+        if (!p->env || !p->env->count)
+            return;
+        float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
+        pb_env_sample(p->env, u0, u1, u2, w);
+        memcpy(L, p->env->texels[pb_env_texel_of(p->env, w)].rgb, sizeof L);
+        tmax = INFINITY, pdf = (1.f - share) * pb_env_pdf(p->env, w);
+    }
+    if (!(pdf > 0.f))
         return;
-    memcpy(out + 4, es.w, sizeof es.w);
-    if (trace(c->p, x, es.w, es.dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
+    memcpy(out + 4, w, sizeof w);
+    if (trace(p, x, w, tmax, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
-    float wl = power_heuristic(es.pdf, 1.f / (4.f * PI_F));
+    float wl = power_heuristic(pdf, 1.f / (4.f * PI_F));
     for (int k = 0; k < 3; ++k)
-        out[k] = es.Le[k] * (wl / (4.f * PI_F * es.pdf));
+        out[k] = L[k] * (wl / (4.f * PI_F * pdf));
 }
 
 /* env_nee of bake_trace.comp */
@@ -290,9 +312,11 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         if (h.tri == PB_NO_HIT) {
             if ((bounce > 0 || see_direct) && p->env && p->env->width) {
                 float w = 1.f;
-                if (bsdf_pdf > 0.f && p->env->count) {
-                    float pe = pb_env_pdf(p->env, dir);
-                    w = power_heuristic(bsdf_pdf, pe);
+                int probe_nee = bounce == 0 && p->nee;
+                float found_pdf = probe_nee ? 1.f / (4.f * PI_F) : bsdf_pdf;
+                if (found_pdf > 0.f && p->env->count) {
+                    float pe = pb_env_pdf(p->env, dir) * (probe_nee ? 1.f - probe_emitter_share(p) : 1.f);
+                    w = power_heuristic(found_pdf, pe);
                 }
                 const float *Le = p->env->texels[pb_env_texel_of(p->env, dir)].rgb;
                 float cv[3] = {thr[0] * Le[0] * w, thr[1] * Le[1] * w, thr[2] * Le[2] * w};
@@ -327,9 +351,11 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         if ((bounce > 0 || see_direct) &&
             (m->emissive_metallic[0] != 0.f || m->emissive_metallic[1] != 0.f || m->emissive_metallic[2] != 0.f)) {
             float w = 1.f, pa = em ? em->pdf_area[h.tri] : 0.f;
-            float found_pdf = bounce == 0 && p->nee ? 1.f / (4.f * PI_F) : bsdf_pdf;
+            int probe_nee = bounce == 0 && p->nee;
+            float found_pdf = probe_nee ? 1.f / (4.f * PI_F) : bsdf_pdf;
             if (found_pdf > 0.f && pa > 0.f) {
-                float pl = pa * h.t * h.t / fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]);
+                float pl = pa * h.t * h.t / fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]) *
+                           (probe_nee ? probe_emitter_share(p) : 1.f);
                 w = power_heuristic(found_pdf, pl);
             }
             float et[3];
@@ -424,8 +450,8 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
             float *nr = p->nee + 8 * i;
             memset(nr, 0, 8 * sizeof *nr);
             nr[5] = 1.f;
-            if (p->direct && p->emitters && p->emitters->count)
-                probe_emitter_nee(&c->path, p->emitters, o, &state, nr);
+            if (p->direct && ((p->emitters && p->emitters->count) || (p->env && p->env->count)))
+                probe_light_nee(&c->path, o, &state, nr);
         }
         float first = isinf(r.first_t) ? p->max_distance
                                         : (r.first_t < 0.f ? -fminf(-r.first_t, p->max_distance)
