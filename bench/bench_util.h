@@ -6,6 +6,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 /* Relative RMSE of irradiance luminance of volume a against ref, over ref's
  * valid probes and 64 spherical-Fibonacci directions:
@@ -66,6 +67,18 @@ static inline int bench_default_scenes(const char *tool, const char **scenes, in
         }
     }
     return n;
+}
+
+/* Draws png with the gnuplot script gp when gnuplot is on PATH, and says
+ * which happened. */
+static inline void bench_run_gnuplot(const char *gp, const char *png)
+{
+    char cmd[2200];
+    snprintf(cmd, sizeof cmd, "command -v gnuplot >/dev/null && gnuplot '%s' 2>/dev/null", gp);
+    if (system(cmd) == 0)
+        printf("wrote %s\n", png);
+    else
+        printf("gnuplot not found or failed: %s not drawn (script %s)\n", png, gp);
 }
 
 #endif

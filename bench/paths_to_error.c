@@ -506,12 +506,7 @@ int main(int argc, char **argv)
                 "with linespoints title r, %g with lines dt 2 title 'p95 target'\n",
                 png_path, csv_path, csv_path, P95_TARGET);
         fclose(gp);
-        char cmd[2200];
-        snprintf(cmd, sizeof cmd, "command -v gnuplot >/dev/null && gnuplot '%s' 2>/dev/null", gp_path);
-        if (system(cmd) == 0)
-            printf("wrote %s\n", png_path);
-        else
-            printf("gnuplot not found or failed: %s not drawn (script %s)\n", png_path, gp_path);
+        bench_run_gnuplot(gp_path, png_path);
     }
     printf("wrote %s\n", csv_path);
     uint32_t vmsgs = pb_context_validation_messages(ctx);

@@ -263,12 +263,7 @@ int main(int argc, char **argv)
                 "title s.' '.m.' '.b.' bnc'\n",
                 png_path, csv_path, csv_path);
         fclose(gp);
-        char cmd[2200];
-        snprintf(cmd, sizeof cmd, "command -v gnuplot >/dev/null && gnuplot '%s' 2>/dev/null", gp_path);
-        if (system(cmd) == 0)
-            printf("wrote %s\n", png_path);
-        else
-            printf("gnuplot not found or failed: %s not drawn (script %s)\n", png_path, gp_path);
+        bench_run_gnuplot(gp_path, png_path);
     }
     printf("wrote %s\n", csv_path);
     return vmsgs ? 1 : 0;
