@@ -71,19 +71,23 @@ typedef struct method {
     const char *name;
     int adaptive;                /* 1: swept by target error (per-probe stopping) */
     uint32_t probe_nee;          /* pb_bake_desc.probe_nee */
+    uint32_t guide_paths;        /* pb_bake_desc.guide_paths */
 } method;
 
 static const method methods[] = {
-    {"plain", 0, 0},
-    {"adaptive", 1, 0},
-    {"probe-nee", 0, 1},
-    {"nee+adapt", 1, 1},
+    {"plain", 0, 0, 0},
+    {"adaptive", 1, 0, 0},
+    {"probe-nee", 0, 1, 0},
+    {"nee+adapt", 1, 1, 0},
+    {"guided", 0, 0, PB_GUIDE_DEFAULT_PATHS},
+    {"nee+guide", 0, 1, PB_GUIDE_DEFAULT_PATHS},
 };
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 
 static void apply_method(const method *m, pb_bake_desc *d)
 {
     d->probe_nee = m->probe_nee;
+    d->guide_paths = m->guide_paths;
 }
 
 typedef struct point {

@@ -87,19 +87,28 @@ typedef struct pb_bake_desc {
     uint32_t probe_nee;           /* 1: the light a probe sees directly (emitters, environment) is also
                                      sampled from the probe (one light sample per probe ray, a shadow ray)
                                      and MIS-combined with its rays (unbiased; docs/bake.md, "Estimators") */
+    uint32_t guide_paths;         /* > 0: path guiding, learned before the bake from this many training paths
+                                     started on the scene's surfaces; bounce directions are drawn from a
+                                     mixture of the learned distribution and the cosine lobe (unbiased;
+                                     docs/bake.md, "Estimators"); 0: off */
     pb_progress_fn progress;
     void *progress_user;
 } pb_bake_desc;
 
 /* A quality preset (bake --quality): rays per pass, the most passes, the
- * target error (0: every probe runs all passes) and whether probe NEE is on.
+ * target error (0: every probe runs all passes), whether probe NEE is on
+ * and path guiding's training paths.
  * src/bake/quality.c says what each is for; docs/bake.md, with numbers. */
 typedef struct pb_bake_quality {
     const char *name;             /* "preview", "production", "reference" */
     uint32_t rays_per_probe, passes;
     float target_error;
     uint32_t probe_nee;
+    uint32_t guide_paths;         /* path guiding's training paths (0: off) */
 } pb_bake_quality;
+
+/* Path guiding's training paths when it is on and no count is given. */
+#define PB_GUIDE_DEFAULT_PATHS (1u << 18)
 
 /* The preset of that name, or NULL. */
 const pb_bake_quality *pb_bake_quality_find(const char *name);
@@ -179,6 +188,7 @@ typedef struct pb_bake_pass {
     float indirect_clamp;             /* as pb_bake_desc */
     float *nee;                       /* probe NEE: out of trace, in to SH, 8 floats per ray (weighted
                                          radiance / 4pi, 0, direction, 0); NULL: off */
+    const struct pb_guide *guide;     /* path guiding's learned cache (src/bake/guide.h); NULL: off */
 } pb_bake_pass;
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).

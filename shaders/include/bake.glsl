@@ -80,6 +80,10 @@ struct BakeParams {
     pb_addr light_table;   // Emitter[] over punctual lights (tri = light index, pad = probability)
     uint light_select;      // 1: one punctual light drawn per hit by power; 0: every light
     float indirect_clamp;   // > 0: reflected light is clamped per path contribution to this radiance
+    pb_addr guide;          // path guiding: vec4 per learned slot and bin (guide.glsl); 0: off
+    pb_addr guide_slots;    // uint per entry: its slot, or ~0 (not learned)
+    vec4 guide_origin;      // xyz the grid's corner (local), w 1 / cell size
+    uvec4 guide_dims;       // cells per axis
 };
 
 Env bake_env(BakeParams P)

@@ -10,6 +10,7 @@
 
 #include "traverse.glsl"
 #include "bake.glsl"
+#include "guide.glsl"
 
 // Multiple importance sampling, power heuristic: the weight of a sample
 // drawn with density a when density b could also have drawn it.
@@ -80,7 +81,7 @@ EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
 // multiplies by throughput x albedo. (A function of its own also keeps
 // glslang's `precise` analysis of main() small: inlined here, it ran out of
 // memory.)
-vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
+vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, int ge, inout uint state)
 {
     EmitterSample es = sample_emitter(P, x, state);
     float cos_x = dot(ng, es.w);
@@ -89,7 +90,7 @@ vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, inout uint state)
     TraceResult shadow = trace_ray(P.scene, x, es.w, 0.0, es.dist * 0.9999, true);
     if (shadow.tri != PB_NO_HIT)
         return vec3(0.0);
-    float pb = cos_x / PB_PI;
+    float pb = bounce_pdf(P, ge, cos_x, es.w);
     float wl = power_heuristic(es.pdf, pb);
     return es.Le * (cos_x / (PB_PI * es.pdf) * wl);
 }
@@ -140,7 +141,7 @@ vec4[2] probe_light_nee(BakeParams P, vec3 x, inout uint state)
 // Next-event estimation of the environment: a direction by texel power, a
 // shadow ray, MIS against cosine-weighted bounce sampling (power heuristic).
 // Returns radiance x cos / (pi pdf) x weight, like emitter_nee.
-vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, inout uint state)
+vec3 env_nee(BakeParams P, Env env, SceneRefs s, vec3 x, vec3 ng, int ge, inout uint state)
 {
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
     vec3 w = env_sample(env, u0, u1, u2).xyz;
@@ -151,7 +152,7 @@ vec3 env_nee(Env env, SceneRefs s, vec3 x, vec3 ng, inout uint state)
     TraceResult shadow = trace_ray(s, x, w, 0.0, PB_INF, true);
     if (shadow.tri != PB_NO_HIT)
         return vec3(0.0);
-    float pb = cos_x / PB_PI;
+    float pb = bounce_pdf(P, ge, cos_x, w);
     float wl = power_heuristic(pe, pb);
     return env_radiance(env, w) * (cos_x / (PB_PI * pe) * wl);
 }
@@ -280,10 +281,11 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                 E += light_irradiance(s, lights.l[k], x, ng, true);
         }
         vec3 c = throughput * albedo * (E / PB_PI);
+        int ge = guide_entry(P, x, ng);
         if (P.emitter_count > 0u && albedo != vec3(0.0))
-            c += throughput * albedo * emitter_nee(P, x, ng, state);
+            c += throughput * albedo * emitter_nee(P, x, ng, ge, state);
         if (env.count > 0u && albedo != vec3(0.0))
-            c += throughput * albedo * env_nee(env, s, x, ng, state);
+            c += throughput * albedo * env_nee(P, env, s, x, ng, ge, state);
         c = clamp_indirect(c, P.indirect_clamp);
         res.L += c;
         if (bounce == 0u)
@@ -303,9 +305,19 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         throughput *= albedo;
         if (max(throughput.r, max(throughput.g, throughput.b)) <= 0.0)
             break;
-        float u1 = rng_next(state), u2 = rng_next(state);
-        dir = cosine_direction(ng, u1, u2);
-        bsdf_pdf = max(0.0, dot(ng, dir)) / PB_PI;
+        if (ge >= 0) { // guided: the learned distribution or the cosine lobe, weighed by the mixture
+            float uc = rng_next(state), u1 = rng_next(state), u2 = rng_next(state), u3 = rng_next(state);
+            dir = uc < PB_GUIDE_SHARE ? guide_sample(P, ge, u1, u2, u3) : cosine_direction(ng, u1, u2);
+            float cosine = dot(ng, dir);
+            if (!(cosine > 0.0))
+                break; // below the surface: no light comes from there
+            bsdf_pdf = bounce_pdf(P, ge, cosine, dir);
+            throughput *= cosine / (PB_PI * bsdf_pdf);
+        } else {
+            float u1 = rng_next(state), u2 = rng_next(state);
+            dir = cosine_direction(ng, u1, u2);
+            bsdf_pdf = max(0.0, dot(ng, dir)) / PB_PI;
+        }
         o = x;
     }
     return res;

@@ -12,6 +12,7 @@
 #include "bake/bake_data.h"
 #include "bake/convergence.h"
 #include "bake/gpu_scene.h"
+#include "bake/guide.h"
 #include "bake/shading.h"
 #include "sample/sample_gpu.h"
 #include "common/common.h"
@@ -33,6 +34,8 @@
 typedef struct bake_buffers {
     pb_buffer params, probes, rotations, directions, rays, reduced, list, counters;
     pb_buffer nee;                 /* probe NEE: 2 vec4 per ray of a submission (unallocated when off) */
+    pb_buffer guide, guide_slots;  /* path guiding's table and entry index (unallocated when off) */
+    pb_guide guide_host;           /* its host copy and grid */
     pb_shading shading;
     pb_sample_buffers feedback;
     pb_pipeline trace, sh, depth;
@@ -40,10 +43,11 @@ typedef struct bake_buffers {
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[9] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced, &b->list,
-                          &b->counters, &b->nee};
-    for (int i = 0; i < 9; ++i)
+    pb_buffer *bufs[11] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced, &b->list,
+                           &b->counters, &b->nee, &b->guide, &b->guide_slots};
+    for (int i = 0; i < 11; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
+    pb_guide_free(&b->guide_host);
     pb_shading_destroy(ctx, &b->shading);
     pb_sample_release(ctx, &b->feedback);
     pb_pipeline_destroy(ctx, &b->trace);
@@ -125,6 +129,34 @@ static pb_result make_buffer(pb_context *ctx, pb_buffer *b, uint64_t bytes, pb_m
     return r;
 }
 
+/* Path guiding's stage: the cache learned on the host from training paths
+ * that start on the surfaces (src/bake/guide.c: they depend on the scene and
+ * seed only), then uploaded. Needs the host BVH the GPU scene was made from. */
+static pb_result learn_guide(pb_context *ctx, const pb_scene *scene, const pb_gpu_scene *gs, const pb_bake_desc *d,
+                             bake_buffers *B, pb_error *err)
+{
+    pb_bake_pass tp;
+    memset(&tp, 0, sizeof tp);
+    tp.scene = scene, tp.bvh = gs->bvh, tp.seed = d->seed, tp.bounces = d->bounces, tp.direct = 1;
+    tp.env = B->shading.env_table.width ? &B->shading.env_table : NULL;
+    tp.emitters = &B->shading.emit;
+    tp.light_table = B->shading.light_select ? &B->shading.lights_drawn : NULL;
+    tp.max_distance = d->max_distance, tp.indirect_clamp = d->indirect_clamp;
+    double t0 = pb_now_ms();
+    pb_guide *g = &B->guide_host;
+    pb_result r = pb_guide_build(&tp, d->guide_paths, g, err);
+    if (r != PB_OK || !g->table)
+        return r;
+    pb_logf(&ctx->desc.log, PB_LOG_INFO, "path guiding: %u training paths, %u of %u entries learned (%.0f ms)",
+            d->guide_paths, g->learned, g->entries, pb_now_ms() - t0);
+    r = make_buffer(ctx, &B->guide_slots, (uint64_t)g->entries * 4, PB_MEMORY_DEVICE, "path guiding index", g->slot,
+                    err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B->guide, (uint64_t)(g->learned ? g->learned : 1) * PB_GUIDE_BINS * 16,
+                        PB_MEMORY_DEVICE, "path guiding table", g->table, err);
+    return r;
+}
+
 #define PB_RELOCATION_PASS 0x80000000u
 
 /* What one pass needs; per-probe host arrays are indexed by global probe. */
@@ -181,6 +213,13 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         if (!relocating) {
             prm.volume = run->feedback;
             prm.nee = B->nee.address; /* 0 unless probe NEE is on */
+            if (B->guide_host.table) {
+                const pb_guide *g = &B->guide_host;
+                prm.guide = B->guide.address, prm.guide_slots = B->guide_slots.address;
+                memcpy(prm.guide_origin, g->origin, sizeof g->origin);
+                prm.guide_origin[3] = g->inv_cell;
+                memcpy(prm.guide_dims, g->dims, sizeof g->dims);
+            }
         }
         memset(B->counters.mapped, 0, 8);
         prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
@@ -459,6 +498,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     r = make_buffer(ctx, &B.params, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "bake parameters", NULL, err);
     if (r == PB_OK)
         r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, d.max_lights_per_hit, &B.shading, err);
+    if (r == PB_OK && d.guide_paths && d.bounces)
+        r = learn_guide(ctx, scene, gs, &d, &B, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.probes, (uint64_t)P * 16, PB_MEMORY_DEVICE, "probe positions", probes, err);
     if (r == PB_OK)
@@ -566,7 +607,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                                         d.max_distance,   d.sh_window, d.sh_window_width, d.indirect_clamp};
     out->settings.scene_hash = pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
                                          pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
-    out->settings.techniques = d.probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u;
+    out->settings.techniques = (d.probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u) |
+                               (B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u);
     snprintf(out->device, sizeof out->device, "%.127s", ctx->info.name);
     if ((r = pb_volume_alloc(out, err)) != PB_OK)
         goto done;

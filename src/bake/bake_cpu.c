@@ -6,6 +6,7 @@
  * bounce-0 rays one by one and multi-bounce results statistically. */
 #include "bake/alias.h"
 #include "bake/bake_data.h"
+#include "bake/guide.h"
 #include "bake/path_cpu.h"
 #include "bvh/alpha.h"
 #include "common/common.h"
@@ -20,16 +21,19 @@
 
 #define PI_F 3.14159265358979324f
 
-static uint32_t rng_seed(uint32_t seed, uint32_t probe, uint32_t pass, uint32_t ray)
+uint32_t pb_rng_seed_cpu(uint32_t seed, uint32_t probe, uint32_t pass, uint32_t ray)
 {
     return pb_hash32(seed ^ pb_hash32(probe ^ pb_hash32(pass ^ pb_hash32(ray))));
 }
 
-static float rng_next(uint32_t *state)
+float pb_rng_next_cpu(uint32_t *state)
 {
     *state = pb_hash32(*state);
     return (float)(*state >> 8) * (1.0f / 16777216.0f);
 }
+
+#define rng_seed pb_rng_seed_cpu
+#define rng_next pb_rng_next_cpu
 
 /* power_heuristic of path.glsl */
 static float power_heuristic(float a, float b)
@@ -131,7 +135,7 @@ static void light_irradiance(const pb_bake_pass *p, const gpu_light *l, const fl
         E[k] = l->radiance[k] * (cosine * falloff);
 }
 
-static void cosine_direction(const float n[3], float u1, float u2, float out[3])
+void pb_cosine_direction_cpu(const float n[3], float u1, float u2, float out[3])
 {
     float sgn = n[2] >= 0.f ? 1.f : -1.f;
     float a = -1.f / (sgn + n[2]);
@@ -153,6 +157,15 @@ typedef struct trace_ctx {
     float *rays;
     _Atomic uint64_t traversals;
 } trace_ctx;
+
+/* bounce_pdf of path.glsl: the density with which a vertex's bounce draws
+ * direction w (cos_x = its cosine to the normal): the cosine lobe, or where
+ * the guide has learned entry ge, the mixture with the guided density. */
+static float bounce_pdf(const pb_bake_pass *p, int32_t ge, float cos_x, const float w[3])
+{
+    float pc = fmaxf(cos_x, 0.f) / PI_F;
+    return ge < 0 ? pc : (1.f - PB_GUIDE_SHARE) * pc + PB_GUIDE_SHARE * pb_guide_pdf(p->guide, ge, w);
+}
 
 /* sample_emitter of path.glsl: one emissive triangle by power and a uniform
  * point on it, seen from x. pdf 0: its back faces x, or degenerate. */
@@ -197,7 +210,7 @@ static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitter
 
 /* Next-event estimation of one emissive triangle (emitter_nee of path.glsl). */
 static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const float x[3], const float ng[3],
-                        const float albedo[3], const float thr[3], uint32_t *state, float L[3])
+                        int32_t ge, const float albedo[3], const float thr[3], uint32_t *state, float L[3])
 {
     emitter_sample es = sample_emitter(c, em, x, state);
     float cos_x = ng[0] * es.w[0] + ng[1] * es.w[1] + ng[2] * es.w[2];
@@ -205,7 +218,7 @@ static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const 
         return;
     if (trace(c->p, x, es.w, es.dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
-    float pb = cos_x / PI_F, wl = power_heuristic(es.pdf, pb);
+    float pb = bounce_pdf(c->p, ge, cos_x, es.w), wl = power_heuristic(es.pdf, pb);
     for (int k = 0; k < 3; ++k)
         L[k] += thr[k] * albedo[k] * es.Le[k] * (cos_x / (PI_F * es.pdf) * wl);
 }
@@ -251,7 +264,7 @@ static void probe_light_nee(const pb_path_ctx *c, const float x[3], uint32_t *st
 }
 
 /* env_nee of bake_trace.comp */
-static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], const float albedo[3],
+static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], int32_t ge, const float albedo[3],
                     const float thr[3], uint32_t *state, float L[3])
 {
     const pb_env_table *env = p->env;
@@ -264,7 +277,7 @@ static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], 
         return;
     if (trace(p, x, w, INFINITY, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
-    float pb = cos_x / PI_F, wl = power_heuristic(pe, pb);
+    float pb = bounce_pdf(p, ge, cos_x, w), wl = power_heuristic(pe, pb);
     const float *Le = env->texels[pb_env_texel_of(env, w)].rgb;
     for (int k = 0; k < 3; ++k)
         L[k] += thr[k] * albedo[k] * (Le[k] * (cos_x / (PI_F * pe) * wl));
@@ -397,10 +410,11 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         float cc[3];
         for (int k = 0; k < 3; ++k)
             cc[k] = thr[k] * albedo[k] * (E[k] / PI_F);
+        int32_t ge = pb_guide_entry(p->guide, x, ng);
         if (em && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-            emitter_nee(c, em, x, ng, albedo, thr, state, cc);
+            emitter_nee(c, em, x, ng, ge, albedo, thr, state, cc);
         if (env_sampled && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-            env_nee(p, x, ng, albedo, thr, state, cc);
+            env_nee(p, x, ng, ge, albedo, thr, state, cc);
         clamp_indirect(cc, p->indirect_clamp);
         for (int k = 0; k < 3; ++k) {
             res.L[k] += cc[k];
@@ -420,9 +434,23 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             thr[k] *= albedo[k];
         if (fmaxf(thr[0], fmaxf(thr[1], thr[2])) <= 0.f)
             break;
-        float u1 = rng_next(state), u2 = rng_next(state);
-        cosine_direction(ng, u1, u2, dir);
-        bsdf_pdf = fmaxf(0.f, ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]) / PI_F;
+        if (ge >= 0) { /* guided: the learned distribution or the cosine lobe, weighed by the mixture */
+            float uc = rng_next(state), u1 = rng_next(state), u2 = rng_next(state), u3 = rng_next(state);
+            if (uc < PB_GUIDE_SHARE)
+                pb_guide_sample(p->guide, ge, u1, u2, u3, dir);
+            else
+                pb_cosine_direction_cpu(ng, u1, u2, dir);
+            float cosine = ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2];
+            if (!(cosine > 0.f))
+                break; /* below the surface: no light comes from there */
+            bsdf_pdf = bounce_pdf(p, ge, cosine, dir);
+            for (int k = 0; k < 3; ++k)
+                thr[k] *= cosine / (PI_F * bsdf_pdf);
+        } else {
+            float u1 = rng_next(state), u2 = rng_next(state);
+            pb_cosine_direction_cpu(ng, u1, u2, dir);
+            bsdf_pdf = fmaxf(0.f, ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]) / PI_F;
+        }
         memcpy(o, x, sizeof x);
     }
     return res;

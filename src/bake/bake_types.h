@@ -35,9 +35,13 @@ typedef struct gpu_bake_params {
     uint64_t light_table;
     uint32_t light_select;
     float indirect_clamp;
+    uint64_t guide, guide_slots;
+    float guide_origin[4];
+    uint32_t guide_dims[4];
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 336, "BakeParams layout");
+_Static_assert(offsetof(gpu_bake_params, guide_origin) == 352, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 384, "BakeParams layout");
 _Static_assert(sizeof(pb_env_texel) == 32, "EnvTexel layout");
 
 typedef struct gpu_emitter {

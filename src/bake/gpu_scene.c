@@ -100,6 +100,7 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     gs->refs = (gpu_scene_refs){gs->nodes.address, gs->tris.address, gs->tri_uv.address, gs->materials.address,
                                 gs->textures.address, gs->texels.address, n, 0};
     gs->ctx = ctx;
+    gs->bvh = bvh;
     gs->bytes = total;
     gs->traversal_bytes = sizes[0] + sizes[1];
     *out = gs;

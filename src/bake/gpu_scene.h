@@ -7,6 +7,8 @@
 
 struct pb_gpu_scene {
     pb_context *ctx;          /* the context it lives on (not owned) */
+    const pb_bvh *bvh;        /* the host BVH it was made from (not owned; outlives it, as documented:
+                                 destroy in reverse order); host stages trace with it (path guiding) */
     pb_buffer nodes, tris, tri_uv, materials, textures, texels;
     uint32_t *tri_order;      /* leaf -> scene triangle, host copy */
     uint32_t triangle_count;

@@ -20,6 +20,12 @@ typedef struct pb_path_result {
     float x[3], ng[3], albedo[3];
 } pb_path_result;
 
+/* The kernels' random numbers (rng.glsl) and cosine-weighted directions
+ * (path.glsl), for other CPU stages that must draw alike. */
+uint32_t pb_rng_seed_cpu(uint32_t seed, uint32_t probe, uint32_t pass, uint32_t ray);
+float pb_rng_next_cpu(uint32_t *state);
+void pb_cosine_direction_cpu(const float n[3], float u1, float u2, float out[3]);
+
 int pb_path_ctx_init(pb_path_ctx *c, const pb_bake_pass *p);
 void pb_path_ctx_free(pb_path_ctx *c);
 

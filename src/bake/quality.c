@@ -1,5 +1,7 @@
 /* Quality presets (bake --quality): the path budget, the stopping error and
- * the estimators a user ships with, measured by bench/paths_to_error on the
+ * the estimators (probe NEE; not path guiding, which wins only in rooms lit
+ * through openings and loses elsewhere, so it stays a choice: --guide) a
+ * user ships with, measured by bench/paths_to_error on the
  * hard scenes (bench/RESULTS.md, "Paths to error"). */
 #include "probebake/bake.h"
 
@@ -7,13 +9,13 @@
 
 static const pb_bake_quality presets[] = {
     /* a quick look: 256 paths per probe, every probe alike */
-    {"preview", 128, 2, 0.f, 1},
+    {"preview", 128, 2, 0.f, 1, 0},
     /* what a user ships: each probe until the standard error of its
      * irradiance along every axis is 2 % (at most 256 passes, 65,536
      * paths): p95 per-axis error 4.5 % on the doorway scene */
-    {"production", 256, 256, 0.02f, 1},
+    {"production", 256, 256, 0.02f, 1, 0},
     /* a converged bake to compare against: 0.25 %, at most 2^20 paths */
-    {"reference", 256, 4096, 0.0025f, 1},
+    {"reference", 256, 4096, 0.0025f, 1, 0},
 };
 
 const pb_bake_quality *pb_bake_quality_find(const char *name)

@@ -136,6 +136,9 @@ static void print_help(void)
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
            "  --probe-nee on|off             emitters and sky a probe sees are also sampled from the probe\n"
            "                                 and MIS-combined with its rays (unbiased; default on)\n"
+           "  --guide on|off                 path guiding: bounces drawn toward where light was found by\n"
+           "                                 training paths from the surfaces (unbiased; default off: it\n"
+           "                                 pays in rooms lit through openings, costs elsewhere)\n"
            "  --sh-window none|hanning[:W]|lanczos[:W]   taper SH bands against ringing (default none; W 3)\n"
            "  --max-lights-per-hit N         above N punctual lights, each hit draws one by power (default 8)\n"
            "  --clamp-indirect X             clamp each reflected-light path contribution to radiance X\n"
@@ -202,6 +205,10 @@ static int parse(int argc, char **argv, options *o)
             if (!next || !pb_bake_quality_find(next))
                 return cli_usage_error("%s takes preview, production or reference", a);
             o->quality = argv[++i];
+        } else if (!strcmp(a, "--guide")) {
+            if (!next || (strcmp(next, "on") && strcmp(next, "off")))
+                return cli_usage_error("%s takes on or off", a);
+            o->guide = argv[++i];
         } else if (!strcmp(a, "--probe-nee")) {
             if (!next || (strcmp(next, "on") && strcmp(next, "off")))
                 return cli_usage_error("%s takes on or off", a);
@@ -762,6 +769,13 @@ static const char *window_name(uint32_t w)
     return w == 1 ? "hanning" : w == 2 ? "lanczos" : "none";
 }
 
+/* The file's techniques as JSON array items. */
+static const char *technique_list(uint32_t t)
+{
+    static const char *lists[4] = {"", "\"probe-nee\"", "\"guiding\"", "\"probe-nee\", \"guiding\""};
+    return lists[t & 3u];
+}
+
 static int cmd_inspect(const options *o)
 {
     if (!o->scene)
@@ -821,7 +835,7 @@ static int cmd_inspect(const options *o)
                J(s->max_distance).s, J(v.depth_unit).s, (unsigned long long)s->seed,
                (unsigned long long)s->scene_hash, s->rays_per_probe, s->passes, s->bounces,
                s->indirect_mode ? "volume" : "path", window_name(s->sh_window), J(s->sh_window_width).s,
-               J(s->indirect_clamp).s, s->techniques & PB_TECHNIQUE_PROBE_NEE ? "\"probe-nee\"" : "");
+               J(s->indirect_clamp).s, technique_list(s->techniques));
         json_string(v.device);
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
@@ -858,10 +872,10 @@ static int cmd_inspect(const options *o)
                counts[2], counts[3], counts[4]);
         printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
                v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
-        printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, seed %llu, device %s\n",
-               s->rays_per_probe, s->passes, s->bounces, s->indirect_mode ? "volume" : "path",
-               s->techniques & PB_TECHNIQUE_PROBE_NEE ? "on" : "off", (unsigned long long)s->seed,
-               v.device[0] ? v.device : "?");
+        printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, guiding %s, seed %llu, "
+               "device %s\n", s->rays_per_probe, s->passes, s->bounces, s->indirect_mode ? "volume" : "path",
+               s->techniques & PB_TECHNIQUE_PROBE_NEE ? "on" : "off", s->techniques & PB_TECHNIQUE_GUIDING ? "on" : "off",
+               (unsigned long long)s->seed, v.device[0] ? v.device : "?");
         if (s->sh_window || s->indirect_clamp > 0.f)
             printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),
                    s->sh_window_width > 0.f ? s->sh_window_width : 3.f, s->indirect_clamp);
@@ -1003,6 +1017,7 @@ static int cmd_bake(const options *o)
     d.seed = o->has_seed ? o->seed : 1;
     d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");
     d.probe_nee = o->probe_nee ? !strcmp(o->probe_nee, "on") : q ? q->probe_nee : 1u;
+    d.guide_paths = o->guide ? (!strcmp(o->guide, "on") ? PB_GUIDE_DEFAULT_PATHS : 0u) : q ? q->guide_paths : 0u;
     memcpy(d.sky, o->sky, sizeof d.sky);
     d.environment = o->env ? &env : NULL;
     d.indirect_volume = (uint32_t)o->indirect_volume;
@@ -1026,12 +1041,12 @@ static int cmd_bake(const options *o)
     if (!o->log.quiet)
         fprintf(stderr,
                 "probebake: baking %s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
-                "%s, octmap %u, direct %s, indirect %s, probe NEE %s, seed %u\n",
+                "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, seed %u\n",
                 o->scene, q ? " at quality " : "", q ? q->name : "", where, d.rays_per_probe,
                 d.target_error > 0.f ? "up to " : "", d.passes, d.target_error > 0.f ? " (until converged)" : "",
                 d.bounces, light, d.octmap_res,
                 d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path",
-                d.probe_nee ? "on" : "off", d.seed);
+                d.probe_nee ? "on" : "off", d.guide_paths ? "on" : "off", d.seed);
     if (!o->log.quiet && (d.indirect_clamp > 0.f || d.sh_window))
         fprintf(stderr, "probebake: biased on request:%s%s%s\n",
                 d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
