@@ -353,6 +353,18 @@ static void point_light(void)
     pb_scene_destroy(s);
 }
 
+/* Mean and worst relative error of the probes' upward irradiance against want. */
+static void box_irradiance(const pb_volume *v, double want, double *mean, double *worst)
+{
+    *mean = 0, *worst = 0;
+    for (uint32_t p = 0; p < v->probe_count; ++p) {
+        float up[3] = {0, 1, 0}, e[3];
+        pb_sh_eval(v->sh + 27 * p, up, e);
+        *mean += e[0] / v->probe_count;
+        *worst = fmax(*worst, fabs(e[0] / want - 1));
+    }
+}
+
 /* Closed box, inward faces, emission Le and albedo rho everywhere: radiance
  * Le (1 + rho + ... + rho^B) with B bounces (Le / (1 - rho) as B grows), so
  * irradiance pi times that, in every direction, at every probe inside. */
@@ -412,43 +424,28 @@ static void closed_emissive_box(void)
         CHECK(worst < 0.05);
     }
     release(&b);
-    /* probe NEE: the emission every probe ray sees is now also sampled from
-     * the probe (the box's 12 triangles) and MIS-weighted: same irradiance */
-    d.probe_nee = 1;
-    b = bake(s, &d);
-    if (b.ok) {
-        double want = 3.14159265 * (1 - pow(0.5, 10)) / 0.5, mean = 0, worst = 0;
-        for (uint32_t p = 0; p < b.vol.probe_count; ++p) {
-            float up[3] = {0, 1, 0}, e[3];
-            pb_sh_eval(b.vol.sh + 27 * p, up, e);
-            mean += e[0] / b.vol.probe_count;
-            worst = fmax(worst, fabs(e[0] / want - 1));
+    /* the unbiased estimators: the same irradiance. Probe NEE also samples
+     * the emission every probe ray sees from the probe (the box's 12
+     * triangles), MIS-weighted; guiding draws bounces from a learned mixture
+     * weighed by its density */
+    struct {
+        const char *name;
+        uint32_t probe_nee, guide_paths, techniques;
+    } variants[2] = {{"probe NEE", 1, 0, PB_TECHNIQUE_PROBE_NEE}, {"guided", 0, 1u << 14, PB_TECHNIQUE_GUIDING}};
+    for (int i = 0; i < 2; ++i) {
+        d.probe_nee = variants[i].probe_nee, d.guide_paths = variants[i].guide_paths;
+        b = bake(s, &d);
+        if (b.ok) {
+            double want = 3.14159265 * (1 - pow(0.5, 10)) / 0.5, mean = 0, worst = 0;
+            box_irradiance(&b.vol, want, &mean, &worst);
+            fprintf(stderr, "  %s: irradiance %.4f (want %.4f, %+.2f%%), worst probe %.2f%%, techniques %#x\n",
+                    variants[i].name, mean, want, 100 * (mean / want - 1), 100 * worst, b.vol.settings.techniques);
+            CHECK(fabs(mean / want - 1) < 0.015 && worst < 0.05);
+            CHECK(b.vol.settings.techniques == variants[i].techniques);
         }
-        fprintf(stderr, "  probe NEE: irradiance %.4f (want %.4f, %+.2f%%), worst probe %.2f%%, techniques %#x\n", mean,
-                want, 100 * (mean / want - 1), 100 * worst, b.vol.settings.techniques);
-        CHECK(fabs(mean / want - 1) < 0.015 && worst < 0.05);
-        CHECK(b.vol.settings.techniques == PB_TECHNIQUE_PROBE_NEE);
+        release(&b);
     }
-    release(&b);
     d.probe_nee = 0;
-    /* path guiding: bounces drawn from the learned mixture, weighed by its
-     * density: the same irradiance */
-    d.guide_paths = 1u << 14;
-    b = bake(s, &d);
-    if (b.ok) {
-        double want = 3.14159265 * (1 - pow(0.5, 10)) / 0.5, mean = 0, worst = 0;
-        for (uint32_t p = 0; p < b.vol.probe_count; ++p) {
-            float up[3] = {0, 1, 0}, e[3];
-            pb_sh_eval(b.vol.sh + 27 * p, up, e);
-            mean += e[0] / b.vol.probe_count;
-            worst = fmax(worst, fabs(e[0] / want - 1));
-        }
-        fprintf(stderr, "  guided: irradiance %.4f (want %.4f, %+.2f%%), worst probe %.2f%%, techniques %#x\n", mean,
-                want, 100 * (mean / want - 1), 100 * worst, b.vol.settings.techniques);
-        CHECK(fabs(mean / want - 1) < 0.015 && worst < 0.05);
-        CHECK(b.vol.settings.techniques == PB_TECHNIQUE_GUIDING);
-    }
-    release(&b);
     d.guide_paths = 0;
     /* the same with a 1 % target error: more passes where needed, converged */
     d.passes = 0;
@@ -486,12 +483,7 @@ static void closed_emissive_box(void)
     b = bake(s, &d);
     if (b.ok) {
         double want = 3.14159265 * (1 - pow(0.5, 10)) / 0.5, mean = 0, worst = 0;
-        for (uint32_t p = 0; p < b.vol.probe_count; ++p) {
-            float up[3] = {0, 1, 0}, e[3];
-            pb_sh_eval(b.vol.sh + 27 * p, up, e);
-            mean += e[0] / b.vol.probe_count;
-            worst = fmax(worst, fabs(e[0] / want - 1));
-        }
+        box_irradiance(&b.vol, want, &mean, &worst);
         fprintf(stderr, "  indirect volume: irradiance %.4f (want %.4f, %+.2f%%), worst probe %.2f%%, mode %u\n", mean,
                 want, 100 * (mean / want - 1), 100 * worst, b.vol.settings.indirect_mode);
         CHECK(fabs(mean / want - 1) < 0.015 && worst < 0.05 && b.vol.settings.indirect_mode == 1);
