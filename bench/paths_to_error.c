@@ -81,6 +81,7 @@ static const method methods[] = {
     {"nee+adapt", 1, 1, 0},
     {"guided", 0, 0, PB_GUIDE_DEFAULT_PATHS},
     {"nee+guide", 0, 1, PB_GUIDE_DEFAULT_PATHS},
+    {"all", 1, 1, PB_GUIDE_DEFAULT_PATHS},  /* the production preset's estimators */
 };
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 

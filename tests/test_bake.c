@@ -1216,8 +1216,12 @@ static void guided_matches_cpu_reference(void)
 
 /* Path guiding is unbiased: on the doorway scene (room B lit only through
  * the doorway, what guiding is for) a guided bake and a plain one agree
- * probe by probe within their reported standard errors, and the guided
- * one's errors are smaller for most probes of the dark room. */
+ * probe by probe within their reported standard errors; and it pays: over
+ * the dark room's probes, the pooled squared relative standard error of
+ * the DC irradiance is below 3/4 of the plain bake's (0.68 on lavapipe;
+ * pooled over 15 probes x 11 degrees of freedom, each side's estimate has
+ * about 11 % noise; a probe-by-probe count of which is smaller was too
+ * noisy to test on 12 passes). */
 static void guided_agrees_with_plain(void)
 {
     pb_scene *s = NULL;
@@ -1237,11 +1241,11 @@ static void guided_agrees_with_plain(void)
     d.skip_relocation = 1;
     d.bounces = 2, d.octmap_res = 4, d.rays_per_probe = 256, d.passes = 12, d.seed = 4;
     baked plain = bake(s, &d);
-    d.guide_paths = 1u << 16, d.seed = 5;
+    d.guide_paths = PB_GUIDE_DEFAULT_PATHS, d.seed = 5;
     baked guided = bake(s, &d);
     if (plain.ok && guided.ok) {
-        uint32_t n = 0, in2 = 0, dark = 0, smaller = 0;
-        double worst = 0;
+        uint32_t n = 0, in2 = 0, dark = 0;
+        double worst = 0, var_plain = 0, var_guided = 0;
         for (uint32_t p = 0; p < plain.vol.probe_count; ++p) {
             uint32_t f = plain.vol.probe_flags[p];
             if (!(f & PB_PROBE_VALID) || (f & PB_PROBE_DILATED))
@@ -1257,13 +1261,15 @@ static void guided_agrees_with_plain(void)
             pb_volume_probe_position(&plain.vol, p, pos);
             if (pos[0] > 0.2) { /* room B */
                 ++dark;
-                smaller += guided.vol.probe_std_error[p] < plain.vol.probe_std_error[p];
+                var_plain += (double)plain.vol.probe_std_error[p] * plain.vol.probe_std_error[p];
+                var_guided += (double)guided.vol.probe_std_error[p] * guided.vol.probe_std_error[p];
             }
         }
-        fprintf(stderr, "  %u probes: |z| < 2 for %.0f %% (expected about 94), worst %.2f; guided standard error "
-                        "smaller for %u of %u in the dark room\n", n, 100.0 * in2 / n, worst, smaller, dark);
+        fprintf(stderr, "  %u probes: |z| < 2 for %.0f %% (expected about 94), worst %.2f; dark room (%u probes): "
+                        "guided / plain squared relative error %.2f\n", n, 100.0 * in2 / n, worst, dark,
+                var_guided / var_plain);
         CHECK(n >= 24 && in2 >= 0.82 * n && worst < 5.0);
-        CHECK(dark >= 8 && smaller >= 0.75 * dark);
+        CHECK(dark >= 8 && var_guided < 0.75 * var_plain);
     }
     release(&plain);
     release(&guided);

@@ -6,7 +6,7 @@
 #define PB_GUIDE_GLSL
 
 #define PB_GUIDE_BINS 64u
-#define PB_GUIDE_SHARE 0.75
+#define PB_GUIDE_SHARE 0.5
 
 // Equal-area octahedral map (Clarberg 2008): [0,1]^2 <-> unit sphere.
 vec3 equal_area_decode(float s, float t)
