@@ -1119,6 +1119,34 @@ static void probe_nee_matches_cpu_reference(void)
     pb_scene_destroy(s);
 }
 
+/* Two bakes of the same probes by unbiased estimators: for each valid probe
+ * (valid and not dilated in a) with both errors known, z = |a - b| over
+ * their combined reported standard errors (DC luminance). Returns the
+ * probes compared; *in2 counts |z| < 2, *worst the largest. keep[p] is set
+ * to 1 for compared probes when keep is not NULL. */
+static uint32_t agreement(const pb_volume *a, const pb_volume *b, uint32_t *in2, double *worst, uint8_t *keep)
+{
+    uint32_t n = 0;
+    *in2 = 0, *worst = 0;
+    for (uint32_t p = 0; p < a->probe_count; ++p) {
+        uint32_t f = a->probe_flags[p];
+        if (keep)
+            keep[p] = 0;
+        if (!(f & PB_PROBE_VALID) || (f & PB_PROBE_DILATED))
+            continue;
+        double la = dc_luminance(a->sh + 27 * p), lb = dc_luminance(b->sh + 27 * p);
+        double sa = a->probe_std_error[p] * fabs(la), sb = b->probe_std_error[p] * fabs(lb);
+        if (!(sa > 0) || !(sb > 0))
+            continue;
+        double z = fabs(la - lb) / sqrt(sa * sa + sb * sb);
+        *in2 += z < 2, ++n;
+        *worst = fmax(*worst, z);
+        if (keep)
+            keep[p] = 1;
+    }
+    return n;
+}
+
 /* Probe NEE is unbiased: on the demo scene (a panel the probes see, a point
  * light, two bounces) it and the plain estimator agree within their
  * reported standard errors, probe by probe (|z| < 2 for most, none past 5),
@@ -1136,21 +1164,13 @@ static void probe_nee_agrees_with_plain(void)
     d.probe_nee = 1, d.seed = 5;
     baked nee = bake(s, &d);
     if (plain.ok && nee.ok) {
-        uint32_t n = 0, in2 = 0, smaller = 0;
-        double worst = 0;
-        for (uint32_t p = 0; p < plain.vol.probe_count; ++p) {
-            uint32_t f = plain.vol.probe_flags[p];
-            if (!(f & PB_PROBE_VALID) || (f & PB_PROBE_DILATED))
-                continue;
-            double la = dc_luminance(plain.vol.sh + 27 * p), lb = dc_luminance(nee.vol.sh + 27 * p);
-            double sa = plain.vol.probe_std_error[p] * fabs(la), sb = nee.vol.probe_std_error[p] * fabs(lb);
-            if (!(sa > 0) || !(sb > 0))
-                continue;
-            double z = fabs(la - lb) / sqrt(sa * sa + sb * sb);
-            in2 += z < 2, ++n;
-            worst = fmax(worst, z);
-            smaller += nee.vol.probe_std_error[p] < plain.vol.probe_std_error[p];
-        }
+        uint32_t in2, smaller = 0;
+        double worst;
+        uint8_t *keep = malloc(plain.vol.probe_count);
+        uint32_t n = agreement(&plain.vol, &nee.vol, &in2, &worst, keep);
+        for (uint32_t p = 0; p < plain.vol.probe_count; ++p)
+            smaller += keep[p] && nee.vol.probe_std_error[p] < plain.vol.probe_std_error[p];
+        free(keep);
         fprintf(stderr, "  %u probes: |z| < 2 for %.0f %% (expected about 94), worst %.2f; probe NEE's standard error "
                         "smaller for %u\n", n, 100.0 * in2 / n, worst, smaller);
         CHECK(n >= 24 && in2 >= 0.82 * n && worst < 5.0);
@@ -1244,19 +1264,13 @@ static void guided_agrees_with_plain(void)
     d.guide_paths = PB_GUIDE_DEFAULT_PATHS, d.seed = 5;
     baked guided = bake(s, &d);
     if (plain.ok && guided.ok) {
-        uint32_t n = 0, in2 = 0, dark = 0;
-        double worst = 0, var_plain = 0, var_guided = 0;
+        uint32_t in2, dark = 0;
+        double worst, var_plain = 0, var_guided = 0;
+        uint8_t *keep = malloc(plain.vol.probe_count);
+        uint32_t n = agreement(&plain.vol, &guided.vol, &in2, &worst, keep);
         for (uint32_t p = 0; p < plain.vol.probe_count; ++p) {
-            uint32_t f = plain.vol.probe_flags[p];
-            if (!(f & PB_PROBE_VALID) || (f & PB_PROBE_DILATED))
+            if (!keep[p])
                 continue;
-            double la = dc_luminance(plain.vol.sh + 27 * p), lb = dc_luminance(guided.vol.sh + 27 * p);
-            double sa = plain.vol.probe_std_error[p] * fabs(la), sb = guided.vol.probe_std_error[p] * fabs(lb);
-            if (!(sa > 0) || !(sb > 0))
-                continue;
-            double z = fabs(la - lb) / sqrt(sa * sa + sb * sb);
-            in2 += z < 2, ++n;
-            worst = fmax(worst, z);
             double pos[3];
             pb_volume_probe_position(&plain.vol, p, pos);
             if (pos[0] > 0.2) { /* room B */
@@ -1265,6 +1279,7 @@ static void guided_agrees_with_plain(void)
                 var_guided += (double)guided.vol.probe_std_error[p] * guided.vol.probe_std_error[p];
             }
         }
+        free(keep);
         fprintf(stderr, "  %u probes: |z| < 2 for %.0f %% (expected about 94), worst %.2f; dark room (%u probes): "
                         "guided / plain squared relative error %.2f\n", n, 100.0 * in2 / n, worst, dark,
                 var_guided / var_plain);
