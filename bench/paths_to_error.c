@@ -206,13 +206,6 @@ static int parse_names(const char *s, const char **out, int max, const char *con
     return n;
 }
 
-/* The scene's hash as pb_bake records it (settings.scene_hash). */
-static uint64_t scene_hash(const pb_scene *s)
-{
-    return pb_hash64(s->positions, (size_t)s->triangle_count * 36,
-                     pb_hash64(s->materials, s->material_count * sizeof(pb_material), 0));
-}
-
 static int file_exists(const char *p)
 {
     struct stat st;
@@ -336,7 +329,7 @@ int main(int argc, char **argv)
         pb_volume ref;
         memset(&ref, 0, sizeof ref);
         int have = !make_ref && file_exists(ref_path) && pb_volume_read(ref_path, &ref, &err) == PB_OK;
-        if (have && (ref.settings.scene_hash != scene_hash(s) || ref.probe_count != pb_probe_grid_count(&base.grid) ||
+        if (have && (ref.settings.scene_hash != pb_scene_hash(s) || ref.probe_count != pb_probe_grid_count(&base.grid) ||
                      mean_paths(&ref) < 0.5 * ref_paths)) {
             fprintf(stderr, "paths_to_error: %s: made for another scene, grid or path count; re-make it with "
                             "--make-reference\n", ref_path);

@@ -156,6 +156,11 @@ pb_result pb_scene_from_triangles(const double *world_positions, uint32_t triang
 /* Frees everything the scene owns. NULL is allowed. */
 void pb_scene_destroy(pb_scene *scene);
 
+/* The scene's identity as a volume records it (settings.scene_hash): a hash
+ * of the local triangle positions and the materials. A volume baked from a
+ * different scene (or a changed one) has another. */
+uint64_t pb_scene_hash(const pb_scene *scene);
+
 /* Default-initialised material (glTF defaults: white, opaque, cutoff 0.5). */
 pb_material pb_material_default(void);
 

@@ -605,8 +605,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     }
     out->settings = (pb_volume_settings){d.seed,           0, rpp, passes_max, d.bounces, 0, d.target_error,
                                         d.max_distance,   d.sh_window, d.sh_window_width, d.indirect_clamp};
-    out->settings.scene_hash = pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
-                                         pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
+    out->settings.scene_hash = pb_scene_hash(scene);
     out->settings.techniques = (d.probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u) |
                                (B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u);
     snprintf(out->device, sizeof out->device, "%.127s", ctx->info.name);

@@ -92,9 +92,7 @@ int cmd_render(const options *o)
         pb_bake_check_light(s, o->sky, o->env ? &env : NULL, &err) != PB_OK)
         goto out;
     if (o->volume) {
-        uint64_t h = pb_hash64(s->positions, (size_t)s->triangle_count * 36,
-                               pb_hash64(s->materials, s->material_count * sizeof(pb_material), 0));
-        if (h != vol.settings.scene_hash && !o->log.quiet)
+        if (pb_scene_hash(s) != vol.settings.scene_hash && !o->log.quiet)
             fprintf(stderr, "probebake: warning: %s was baked from a different scene than %s\n", o->volume, o->scene);
         if (pb_sample_volume_build(&vol, s->origin, 0.f, 0.f, &sv, &err) != PB_OK) {
             char m[sizeof err.message];

@@ -205,14 +205,10 @@ static int parse(int argc, char **argv, options *o)
             if (!next || !pb_bake_quality_find(next))
                 return cli_usage_error("%s takes preview, production or reference", a);
             o->quality = argv[++i];
-        } else if (!strcmp(a, "--guide")) {
+        } else if (!strcmp(a, "--guide") || !strcmp(a, "--probe-nee")) {
             if (!next || (strcmp(next, "on") && strcmp(next, "off")))
                 return cli_usage_error("%s takes on or off", a);
-            o->guide = argv[++i];
-        } else if (!strcmp(a, "--probe-nee")) {
-            if (!next || (strcmp(next, "on") && strcmp(next, "off")))
-                return cli_usage_error("%s takes on or off", a);
-            o->probe_nee = argv[++i];
+            *(!strcmp(a, "--guide") ? &o->guide : &o->probe_nee) = argv[++i];
         } else if (!strcmp(a, "--direct")) {
             if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
                 return cli_usage_error("%s takes include or exclude", a);

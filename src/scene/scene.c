@@ -82,3 +82,9 @@ void pb_scene_destroy(pb_scene *s)
     free(s->cameras);
     free(s);
 }
+
+uint64_t pb_scene_hash(const pb_scene *scene)
+{
+    return pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
+                     pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
+}
