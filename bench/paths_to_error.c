@@ -72,6 +72,7 @@ typedef struct method {
     int adaptive;                /* 1: swept by target error (per-probe stopping) */
     uint32_t probe_nee;          /* pb_bake_desc.probe_nee */
     uint32_t guide_paths;        /* pb_bake_desc.guide_paths */
+    uint32_t light_cells;        /* pb_bake_desc.light_cells */
 } method;
 
 static const method methods[] = {
@@ -81,7 +82,9 @@ static const method methods[] = {
     {"nee+adapt", 1, 1, 0},
     {"guided", 0, 0, PB_GUIDE_DEFAULT_PATHS},
     {"nee+guide", 0, 1, PB_GUIDE_DEFAULT_PATHS},
-    {"all", 1, 1, PB_GUIDE_DEFAULT_PATHS},  /* the production preset's estimators */
+    {"nee+cells", 0, 1, 0, 1},
+    {"nee+cells+guide", 0, 1, PB_GUIDE_DEFAULT_PATHS, 1},
+    {"all", 1, 1, PB_GUIDE_DEFAULT_PATHS, 1},  /* the production preset's estimators */
 };
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 
@@ -89,6 +92,7 @@ static void apply_method(const method *m, pb_bake_desc *d)
 {
     d->probe_nee = m->probe_nee;
     d->guide_paths = m->guide_paths;
+    d->light_cells = m->light_cells;
 }
 
 typedef struct point {

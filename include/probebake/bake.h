@@ -91,6 +91,9 @@ typedef struct pb_bake_desc {
                                      started on the scene's surfaces; bounce directions are drawn from a
                                      mixture of the learned distribution and the cosine lobe (unbiased;
                                      docs/bake.md, "Estimators"); 0: off */
+    uint32_t light_cells;         /* 1: next-event estimation draws emitters per region of space by the light
+                                     shadow rays measured from there, mixed with their power (unbiased;
+                                     docs/bake.md, "Estimators"); 0: by power alone */
     pb_progress_fn progress;
     void *progress_user;
 } pb_bake_desc;
@@ -105,6 +108,7 @@ typedef struct pb_bake_quality {
     float target_error;
     uint32_t probe_nee;
     uint32_t guide_paths;         /* path guiding's training paths (0: off) */
+    uint32_t light_cells;         /* pb_bake_desc.light_cells */
 } pb_bake_quality;
 
 /* Path guiding's training paths when it is on and no count is given. */
@@ -189,6 +193,7 @@ typedef struct pb_bake_pass {
     float *nee;                       /* probe NEE: out of trace, in to SH, 8 floats per ray (weighted
                                          radiance / 4pi, 0, direction, 0); NULL: off */
     const struct pb_guide *guide;     /* path guiding's learned cache (src/bake/guide.h); NULL: off */
+    const struct pb_light_cells *light_cells; /* emitters drawn per cell (src/bake/light_cells.h); NULL: by power */
 } pb_bake_pass;
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).

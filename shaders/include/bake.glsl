@@ -84,6 +84,13 @@ struct BakeParams {
     pb_addr guide_slots;    // uint per entry: its slot, or ~0 (not learned)
     vec4 guide_origin;      // xyz the grid's corner (local), w 1 / cell size
     uvec4 guide_dims;       // cells per axis
+    vec4 light_origin;      // light cells (light_cells.glsl): xyz the grid's corner (local), w 1 / cell size
+    uvec4 light_dims;       // cells per axis, w clusters
+    pb_addr light_cells;    // vec4 per slot and cluster (alias keep, alias, ratio, 0); 0: off
+    pb_addr light_cell_slots; // uint per cell: its slot, or ~0 (by power)
+    pb_addr light_clusters; // 2 uint per cluster: first member, member count
+    pb_addr light_members;  // Emitter[] in cluster order, alias local to the cluster
+    pb_addr light_cluster_of; // uint per leaf-ordered triangle: its cluster
 };
 
 Env bake_env(BakeParams P)

@@ -11,6 +11,7 @@
 #include "traverse.glsl"
 #include "bake.glsl"
 #include "guide.glsl"
+#include "light_cells.glsl"
 
 // Multiple importance sampling, power heuristic: the weight of a sample
 // drawn with density a when density b could also have drawn it.
@@ -31,10 +32,11 @@ vec3 cosine_direction(vec3 n, float u1, float u2)
     return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u1)));
 }
 
-// One emissive triangle, picked by power (alias table), and a uniform point
-// on it, seen from x: the direction and distance to it, its emitted
-// radiance toward x, and the solid-angle density of drawing that direction
-// (0 when its back faces x or it is degenerate). Three random numbers.
+// One emissive triangle, picked by power (alias table) or from the light
+// cell holding x, and a uniform point on it, seen from x: the direction and
+// distance to it, its emitted radiance toward x, and the solid-angle density
+// of drawing that direction (0 when its back faces x or it is degenerate).
+// Three random numbers, a fourth in a light cell.
 struct EmitterSample {
     vec3 w;
     float dist;
@@ -46,11 +48,18 @@ EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
 {
     SceneRefs s = P.scene;
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
-    EmitterBuf table = EmitterBuf(P.emitters);
-    float xe = u0 * float(P.emitter_count);
-    uint ei = min(uint(xe), P.emitter_count - 1u);
-    Emitter e = table.e[ei];
-    uint etri = xe - float(ei) < e.prob ? e.tri : table.e[e.alias].tri;
+    int lc = light_cell(P, x);
+    uint etri;
+    float ratio = 1.0;
+    if (lc >= 0) {
+        etri = light_cell_sample(P, lc, u0, rng_next(state), ratio);
+    } else {
+        EmitterBuf table = EmitterBuf(P.emitters);
+        float xe = u0 * float(P.emitter_count);
+        uint ei = min(uint(xe), P.emitter_count - 1u);
+        Emitter e = table.e[ei];
+        etri = xe - float(ei) < e.prob ? e.tri : table.e[e.alias].tri;
+    }
     Tri et = load_tri(s.tris, etri);
     float su = sqrt(u1);
     float b1 = su * (1.0 - u2), b2 = su * u2;
@@ -65,7 +74,7 @@ EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
     float cos_e = -dot(normalize(cross(ee1, ee2)), es.w);
     if (em.tex.z != 0)
         cos_e = abs(cos_e);
-    es.pdf = cos_e > 0.0 && d2 > 0.0 ? FloatBuf(P.emit_pdf).v[etri] * d2 / cos_e : 0.0;
+    es.pdf = cos_e > 0.0 && d2 > 0.0 ? FloatBuf(P.emit_pdf).v[etri] * ratio * d2 / cos_e : 0.0;
     FloatBuf euv = FloatBuf(s.tri_uv);
     uint eb = 6u * etri;
     float ew0 = 1.0 - b1 - b2;
@@ -246,7 +255,8 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                   tr.v * vec2(uvs.v[b + 4u], uvs.v[b + 5u]);
         if ((bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
             float w = 1.0;
-            float pa = P.emitter_count > 0u ? emit_pdf.v[tr.tri] : 0.0;
+            // the density with which NEE at the ray's origin draws this point
+            float pa = P.emitter_count > 0u ? emit_pdf.v[tr.tri] * light_cell_ratio(P, light_cell(P, o), tr.tri) : 0.0;
             bool probe_nee = bounce == 0u && !addr_null(P.nee);
             float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
             if (found_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS

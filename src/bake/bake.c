@@ -13,6 +13,7 @@
 #include "bake/convergence.h"
 #include "bake/gpu_scene.h"
 #include "bake/guide.h"
+#include "bake/light_cells.h"
 #include "bake/shading.h"
 #include "sample/sample_gpu.h"
 #include "common/common.h"
@@ -36,6 +37,8 @@ typedef struct bake_buffers {
     pb_buffer nee;                 /* probe NEE: 2 vec4 per ray of a submission (unallocated when off) */
     pb_buffer guide, guide_slots;  /* path guiding's table and entry index (unallocated when off) */
     pb_guide guide_host;           /* its host copy and grid */
+    pb_buffer light_cells, light_cell_slots, light_clusters, light_members, light_cluster_of; /* light cells */
+    pb_light_cells light_host;     /* their host copy (table NULL: emitters drawn by power) */
     pb_shading shading;
     pb_sample_buffers feedback;
     pb_pipeline trace, sh, depth;
@@ -43,11 +46,13 @@ typedef struct bake_buffers {
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[11] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced, &b->list,
-                           &b->counters, &b->nee, &b->guide, &b->guide_slots};
-    for (int i = 0; i < 11; ++i)
+    pb_buffer *bufs[16] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
+                           &b->list, &b->counters, &b->nee, &b->guide, &b->guide_slots, &b->light_cells,
+                           &b->light_cell_slots, &b->light_clusters, &b->light_members, &b->light_cluster_of};
+    for (int i = 0; i < 16; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_guide_free(&b->guide_host);
+    pb_light_cells_free(&b->light_host);
     pb_shading_destroy(ctx, &b->shading);
     pb_sample_release(ctx, &b->feedback);
     pb_pipeline_destroy(ctx, &b->trace);
@@ -157,6 +162,52 @@ static pb_result learn_guide(pb_context *ctx, const pb_scene *scene, const pb_gp
     return r;
 }
 
+/* Light cells' stage: emitter clusters and per-cell tables measured on the
+ * host with shadow rays from surface points (src/bake/light_cells.c; they
+ * depend on the scene and seed only), uploaded with triangles in the
+ * kernels' leaf order. */
+static pb_result learn_light_cells(pb_context *ctx, const pb_scene *scene, const pb_gpu_scene *gs,
+                                   const pb_bake_desc *d, bake_buffers *B, pb_error *err)
+{
+    pb_bake_pass tp;
+    memset(&tp, 0, sizeof tp);
+    tp.scene = scene, tp.bvh = gs->bvh, tp.seed = d->seed, tp.emitters = &B->shading.emit;
+    double t0 = pb_now_ms();
+    pb_light_cells *lc = &B->light_host;
+    pb_result r = pb_light_cells_build(&tp, lc, err);
+    if (r != PB_OK || !lc->table)
+        return r;
+    uint32_t cells = pb_cell_grid_cells(&lc->grid), E = B->shading.emit.count, T = scene->triangle_count;
+    pb_logf(&ctx->desc.log, PB_LOG_INFO, "light cells: %u emitters in %u clusters, %u of %u cells measured (%.0f ms)",
+            E, lc->clusters, lc->learned, cells, pb_now_ms() - t0);
+    uint32_t *leaf_of = malloc(T * sizeof *leaf_of), *cluster_leaf = malloc(T * sizeof *cluster_leaf);
+    gpu_emitter *members = malloc(E * sizeof *members);
+    if (!leaf_of || !cluster_leaf || !members) {
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for light cells (%u emitters)", E);
+    } else {
+        for (uint32_t k = 0; k < T; ++k)
+            leaf_of[gs->tri_order[k]] = k, cluster_leaf[k] = lc->cluster_of[gs->tri_order[k]];
+        for (uint32_t i = 0; i < E; ++i)
+            members[i] = (gpu_emitter){leaf_of[lc->member_tri[i]], lc->member_keep[i], lc->member_alias[i], 0.f};
+        r = make_buffer(ctx, &B->light_cells, (uint64_t)lc->learned * lc->clusters * 16, PB_MEMORY_DEVICE,
+                        "light cell tables", lc->table, err);
+    }
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B->light_cell_slots, (uint64_t)cells * 4, PB_MEMORY_DEVICE, "light cell index",
+                        lc->slot, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B->light_clusters, (uint64_t)lc->clusters * 8, PB_MEMORY_DEVICE, "light clusters",
+                        lc->cluster_range, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B->light_members, (uint64_t)E * sizeof *members, PB_MEMORY_DEVICE,
+                        "light cluster members", members, err);
+    if (r == PB_OK)
+        r = make_buffer(ctx, &B->light_cluster_of, (uint64_t)T * 4, PB_MEMORY_DEVICE, "emitter clusters",
+                        cluster_leaf, err);
+    free(leaf_of), free(cluster_leaf), free(members);
+    return r;
+}
+
 #define PB_RELOCATION_PASS 0x80000000u
 
 /* What one pass needs; per-probe host arrays are indexed by global probe. */
@@ -216,9 +267,19 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
             if (B->guide_host.table) {
                 const pb_guide *g = &B->guide_host;
                 prm.guide = B->guide.address, prm.guide_slots = B->guide_slots.address;
-                memcpy(prm.guide_origin, g->origin, sizeof g->origin);
-                prm.guide_origin[3] = g->inv_cell;
-                memcpy(prm.guide_dims, g->dims, sizeof g->dims);
+                memcpy(prm.guide_origin, g->grid.origin, sizeof g->grid.origin);
+                prm.guide_origin[3] = g->grid.inv_cell;
+                memcpy(prm.guide_dims, g->grid.dims, sizeof g->grid.dims);
+            }
+            if (B->light_host.table) {
+                const pb_light_cells *lc = &B->light_host;
+                memcpy(prm.light_origin, lc->grid.origin, sizeof lc->grid.origin);
+                prm.light_origin[3] = lc->grid.inv_cell;
+                memcpy(prm.light_dims, lc->grid.dims, sizeof lc->grid.dims);
+                prm.light_dims[3] = lc->clusters;
+                prm.light_cells = B->light_cells.address, prm.light_cell_slots = B->light_cell_slots.address;
+                prm.light_clusters = B->light_clusters.address, prm.light_members = B->light_members.address;
+                prm.light_cluster_of = B->light_cluster_of.address;
             }
         }
         memset(B->counters.mapped, 0, 8);
@@ -500,6 +561,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, d.max_lights_per_hit, &B.shading, err);
     if (r == PB_OK && d.guide_paths && d.bounces)
         r = learn_guide(ctx, scene, gs, &d, &B, err);
+    if (r == PB_OK && d.light_cells)
+        r = learn_light_cells(ctx, scene, gs, &d, &B, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B.probes, (uint64_t)P * 16, PB_MEMORY_DEVICE, "probe positions", probes, err);
     if (r == PB_OK)
@@ -607,7 +670,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                                         d.max_distance,   d.sh_window, d.sh_window_width, d.indirect_clamp};
     out->settings.scene_hash = pb_scene_hash(scene);
     out->settings.techniques = (d.probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u) |
-                               (B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u);
+                               (B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u) |
+                               (B.light_host.table ? PB_TECHNIQUE_LIGHT_CELLS : 0u);
     snprintf(out->device, sizeof out->device, "%.127s", ctx->info.name);
     if ((r = pb_volume_alloc(out, err)) != PB_OK)
         goto done;

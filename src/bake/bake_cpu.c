@@ -7,6 +7,7 @@
 #include "bake/alias.h"
 #include "bake/bake_data.h"
 #include "bake/guide.h"
+#include "bake/light_cells.h"
 #include "bake/path_cpu.h"
 #include "bvh/alpha.h"
 #include "common/common.h"
@@ -167,8 +168,8 @@ static float bounce_pdf(const pb_bake_pass *p, int32_t ge, float cos_x, const fl
     return ge < 0 ? pc : (1.f - PB_GUIDE_SHARE) * pc + PB_GUIDE_SHARE * pb_guide_pdf(p->guide, ge, w);
 }
 
-/* sample_emitter of path.glsl: one emissive triangle by power and a uniform
- * point on it, seen from x. pdf 0: its back faces x, or degenerate. */
+/* sample_emitter of path.glsl: one emissive triangle by power (or from the
+ * light cell holding x) and a uniform point on it, seen from x. pdf 0: its back faces x, or degenerate. */
 typedef struct emitter_sample {
     float w[3], dist, Le[3], pdf;
 } emitter_sample;
@@ -178,8 +179,10 @@ static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitter
 {
     const pb_scene *s = c->p->scene;
     emitter_sample es;
-    float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
-    uint32_t etri = em->tri[pb_alias_sample(em->prob, em->alias, em->count, u0)];
+    float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state), ratio = 1.f;
+    int32_t lc = pb_light_cells_slot(c->p->light_cells, x);
+    uint32_t etri = lc >= 0 ? pb_light_cells_sample(c->p->light_cells, lc, u0, rng_next(state), &ratio)
+                            : em->tri[pb_alias_sample(em->prob, em->alias, em->count, u0)];
     const float *v0 = s->positions + 9 * (size_t)etri, *v1 = v0 + 3, *v2 = v0 + 6;
     float su = sqrtf(u1), b1 = su * (1.f - u2), b2 = su * u2;
     float e1[3], e2[3], y[3], to[3];
@@ -198,7 +201,7 @@ static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitter
     float cos_e = -(ne[0] * es.w[0] + ne[1] * es.w[1] + ne[2] * es.w[2]) / nl;
     if (m->tex[2] != 0)
         cos_e = fabsf(cos_e);
-    es.pdf = cos_e > 0.f && d2 > 0.f ? em->pdf_area[etri] * d2 / cos_e : 0.f;
+    es.pdf = cos_e > 0.f && d2 > 0.f ? em->pdf_area[etri] * ratio * d2 / cos_e : 0.f;
     const float *uv = s->texcoords + 6 * (size_t)etri;
     float w0 = 1.f - b1 - b2, tu = w0 * uv[0] + b1 * uv[2] + b2 * uv[4], tv = w0 * uv[1] + b1 * uv[3] + b2 * uv[5];
     float et[3];
@@ -363,7 +366,10 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         float base[3];
         if ((bounce > 0 || see_direct) &&
             (m->emissive_metallic[0] != 0.f || m->emissive_metallic[1] != 0.f || m->emissive_metallic[2] != 0.f)) {
-            float w = 1.f, pa = em ? em->pdf_area[h.tri] : 0.f;
+            float w = 1.f, pa = em ? em->pdf_area[h.tri] * pb_light_cells_ratio(p->light_cells,
+                                                                            pb_light_cells_slot(p->light_cells, o),
+                                                                            h.tri)
+                                   : 0.f;
             int probe_nee = bounce == 0 && p->nee;
             float found_pdf = probe_nee ? 1.f / (4.f * PI_F) : bsdf_pdf;
             if (found_pdf > 0.f && pa > 0.f) {

@@ -38,10 +38,15 @@ typedef struct gpu_bake_params {
     uint64_t guide, guide_slots;
     float guide_origin[4];
     uint32_t guide_dims[4];
+    float light_origin[4];
+    uint32_t light_dims[4];
+    uint64_t light_cells, light_cell_slots, light_clusters, light_members, light_cluster_of;
+    uint64_t pad;
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
 _Static_assert(offsetof(gpu_bake_params, guide_origin) == 352, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 384, "BakeParams layout");
+_Static_assert(offsetof(gpu_bake_params, light_cells) == 416, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 464, "BakeParams layout");
 _Static_assert(sizeof(pb_env_texel) == 32, "EnvTexel layout");
 
 typedef struct gpu_emitter {

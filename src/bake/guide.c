@@ -12,15 +12,6 @@
 #define PI_F 3.14159265358979324f
 #define PB_GUIDE_PASS 0xC0000000u  /* the training paths' pass number in the RNG key */
 
-static double pb_triangle_area(const float *v)
-{
-    double e1[3], e2[3];
-    for (int k = 0; k < 3; ++k)
-        e1[k] = (double)v[3 + k] - v[k], e2[k] = (double)v[6 + k] - v[k];
-    double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2], cz = e1[0] * e2[1] - e1[1] * e2[0];
-    return 0.5 * sqrt(cx * cx + cy * cy + cz * cz);
-}
-
 void pb_equal_area_decode(float s, float t, float dir[3])
 {
     float u = 2.f * s - 1.f, v = 2.f * t - 1.f, au = fabsf(u), av = fabsf(v);
@@ -58,15 +49,10 @@ static uint32_t bin_of(const float dir[3])
 
 static uint32_t entry_index(const pb_guide *g, const float x[3], const float n[3])
 {
-    uint32_t c[3];
-    for (int k = 0; k < 3; ++k) {
-        float f = floorf((x[k] - g->origin[k]) * g->inv_cell);
-        c[k] = f < 0.f ? 0u : (f >= (float)g->dims[k] ? g->dims[k] - 1u : (uint32_t)f);
-    }
     float ax = fabsf(n[0]), ay = fabsf(n[1]), az = fabsf(n[2]);
     uint32_t axis = ax >= ay && ax >= az ? 0u : (ay >= az ? 1u : 2u);
     uint32_t cls = 2u * axis + (n[axis] < 0.f ? 1u : 0u);
-    return ((c[2] * g->dims[1] + c[1]) * g->dims[0] + c[0]) * 6u + cls;
+    return pb_cell_grid_index(&g->grid, x) * 6u + cls;
 }
 
 int32_t pb_guide_entry(const pb_guide *g, const float x[3], const float n[3])
@@ -97,9 +83,8 @@ float pb_guide_pdf(const pb_guide *g, int32_t slot, const float dir[3])
 typedef struct train_job {
     const pb_bake_pass *pass;
     pb_path_ctx path;
-    const float *tri_keep;
-    const uint32_t *tri_alias;
-    uint32_t triangles, paths;
+    const pb_surface_sampler *surface;
+    uint32_t paths;
     const pb_guide *g;
     float *records;               /* 3 per path: entry (uint bits, ~0 none), bin (uint bits), luminance */
 } train_job;
@@ -113,22 +98,9 @@ static void train_range(void *user, uint64_t begin, uint64_t end)
         uint32_t none = ~0u;
         memcpy(&rec[0], &none, 4);
         uint32_t state = pb_rng_seed_cpu(j->pass->seed, (uint32_t)i, PB_GUIDE_PASS, 0u);
-        float u0 = pb_rng_next_cpu(&state), u1 = pb_rng_next_cpu(&state), u2 = pb_rng_next_cpu(&state);
-        uint32_t tri = pb_alias_sample(j->tri_keep, j->tri_alias, j->triangles, u0);
-        const float *v0 = s->positions + 9 * (size_t)tri, *v1 = v0 + 3, *v2 = v0 + 6;
-        float su = sqrtf(u1), b1 = su * (1.f - u2), b2 = su * u2, e1[3], e2[3], p[3], n[3], x[3];
-        for (int k = 0; k < 3; ++k) {
-            e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
-            p[k] = v0[k] + b1 * e1[k] + b2 * e2[k];
-        }
-        n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-        float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        if (!(nl > 0.f))
+        float n[3], x[3];
+        if (!pb_surface_point(s, j->surface, &state, x, n))
             continue;
-        float flip = s->materials[s->material[tri]].double_sided && pb_rng_next_cpu(&state) < 0.5f ? -1.f : 1.f;
-        for (int k = 0; k < 3; ++k)
-            n[k] *= flip / nl;
-        pb_offset_ray_origin(p, n, x);
         float dir[3];
         float u3 = pb_rng_next_cpu(&state), u4 = pb_rng_next_cpu(&state);
         pb_cosine_direction_cpu(n, u3, u4, dir);
@@ -155,47 +127,30 @@ pb_result pb_guide_build(const pb_bake_pass *pass, uint32_t paths, pb_guide *out
     const pb_scene *s = pass->scene;
     if (!paths || !s->triangle_count)
         return PB_OK; /* nothing learned: every bounce samples the cosine lobe */
+    pb_surface_sampler surface;
+    if (!pb_surface_sampler_init(s, &surface))
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for path guiding");
     /* the grid: cubes sized so that the surface in a cell gets about
      * PB_GUIDE_CELL_RECORDS training paths, at most 64 cells per axis */
-    double area_total = 0;
-    for (uint32_t t = 0; t < s->triangle_count; ++t)
-        area_total += pb_triangle_area(s->positions + 9 * (size_t)t);
-    float ext = 0.f;
-    for (int k = 0; k < 3; ++k)
-        ext = fmaxf(ext, s->bounds_max[k] - s->bounds_min[k]);
-    ext = fmaxf(ext, 1e-6f);
-    float cell = (float)sqrt(PB_GUIDE_CELL_RECORDS * area_total / paths);
-    cell = fminf(fmaxf(cell, ext / 64.f), ext / 2.f);
-    out->inv_cell = 1.f / cell;
-    out->entries = 6;
-    for (int k = 0; k < 3; ++k) {
-        out->origin[k] = s->bounds_min[k];
-        float n = ceilf((s->bounds_max[k] - s->bounds_min[k]) * out->inv_cell);
-        out->dims[k] = n < 1.f ? 1u : (n > 64.f ? 64u : (uint32_t)n);
-        out->entries *= out->dims[k];
-    }
+    pb_cell_grid_fit(s, surface.area_total, PB_GUIDE_CELL_RECORDS, paths, &out->grid);
+    out->entries = 6u * pb_cell_grid_cells(&out->grid);
     size_t bins = (size_t)out->entries * PB_GUIDE_BINS;
     out->slot = malloc(out->entries * sizeof(uint32_t));
-    double *area = malloc(s->triangle_count * sizeof(double));
-    float *keep = malloc(s->triangle_count * sizeof(float));
-    uint32_t *alias = malloc(s->triangle_count * sizeof(uint32_t));
     float *records = malloc((size_t)paths * 3 * sizeof(float));
     double *sum = calloc(bins, sizeof(double));
     uint32_t *count = calloc(bins, sizeof(uint32_t)), *per_entry = calloc(out->entries, sizeof(uint32_t));
     train_job j;
     memset(&j, 0, sizeof j);
     pb_result r = PB_OK;
-    if (!out->slot || !area || !keep || !alias || !records || !sum || !count || !per_entry ||
+    if (!out->slot || !records || !sum || !count || !per_entry ||
         !pb_path_ctx_init(&j.path, pass)) {
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for path guiding (%u entries)", out->entries);
         goto done;
     }
     memset(out->slot, 0xff, out->entries * sizeof(uint32_t));
-    for (uint32_t t = 0; t < s->triangle_count; ++t)
-        area[t] = pb_triangle_area(s->positions + 9 * (size_t)t);
-    if (!pb_alias_build(area, s->triangle_count, keep, alias))
+    if (!(surface.area_total > 0.0))
         goto done; /* no area at all: nothing to learn */
-    j.pass = pass, j.tri_keep = keep, j.tri_alias = alias, j.triangles = s->triangle_count, j.paths = paths;
+    j.pass = pass, j.surface = &surface, j.paths = paths;
     j.g = out, j.records = records;
     pb_parallel_for(paths, 256, 0, train_range, &j);
     /* in path order, so the sums do not depend on the threads */
@@ -257,7 +212,8 @@ pb_result pb_guide_build(const pb_bake_pass *pass, uint32_t paths, pb_guide *out
     }
 done:
     pb_path_ctx_free(&j.path);
-    free(area), free(keep), free(alias), free(records), free(sum), free(count), free(per_entry);
+    pb_surface_sampler_free(&surface);
+    free(records), free(sum), free(count), free(per_entry);
     if (r != PB_OK)
         pb_guide_free(out);
     return r;

@@ -16,6 +16,7 @@
 #define PB_BAKE_GUIDE_H
 
 #include "bake/path_cpu.h"
+#include "bake/surface_cells.h"
 
 #define PB_GUIDE_BINS 64u
 #define PB_GUIDE_SHARE 0.5f /* probability of a guided bounce where an entry is learned (3/4 won 4.44x
@@ -24,8 +25,7 @@
 #define PB_GUIDE_CELL_RECORDS 256.0  /* training paths a cell's surface gets on average */
 
 typedef struct pb_guide {
-    float origin[3], inv_cell;    /* local coordinates of the grid's corner, 1 / cell size */
-    uint32_t dims[3];
+    pb_cell_grid grid;
     uint32_t entries;             /* cells x 6 */
     uint32_t *slot;               /* per entry: its learned table slot, or ~0 (not learned) */
     uint32_t learned;             /* slots in the table */

@@ -19,6 +19,7 @@ typedef struct options {
     const char *probe_nee;      /* "on" | "off"; NULL: the preset's, else on */
     const char *quality;        /* a pb_bake_quality name; NULL: none (the defaults below) */
     const char *guide;          /* "on" | "off"; NULL: the preset's, else off */
+    const char *light_cells;    /* "on" | "off"; NULL: the preset's, else on */
     const char *points;
     const char *env;
     float spacing, sky[3], bounds[6], target_error, env_intensity, env_rotation;

@@ -139,6 +139,8 @@ static void print_help(void)
            "  --guide on|off                 path guiding: bounces drawn toward where light was found by\n"
            "                                 training paths from the surfaces (unbiased; default off, on\n"
            "                                 in the production and reference presets)\n"
+           "  --light-cells on|off           emitters drawn per region of space by the light shadow rays\n"
+           "                                 measured there, mixed with power (unbiased; default on)\n"
            "  --sh-window none|hanning[:W]|lanczos[:W]   taper SH bands against ringing (default none; W 3)\n"
            "  --max-lights-per-hit N         above N punctual lights, each hit draws one by power (default 8)\n"
            "  --clamp-indirect X             clamp each reflected-light path contribution to radiance X\n"
@@ -205,10 +207,11 @@ static int parse(int argc, char **argv, options *o)
             if (!next || !pb_bake_quality_find(next))
                 return cli_usage_error("%s takes preview, production or reference", a);
             o->quality = argv[++i];
-        } else if (!strcmp(a, "--guide") || !strcmp(a, "--probe-nee")) {
+        } else if (!strcmp(a, "--guide") || !strcmp(a, "--probe-nee") || !strcmp(a, "--light-cells")) {
             if (!next || (strcmp(next, "on") && strcmp(next, "off")))
                 return cli_usage_error("%s takes on or off", a);
-            *(!strcmp(a, "--guide") ? &o->guide : &o->probe_nee) = argv[++i];
+            *(!strcmp(a, "--guide") ? &o->guide : !strcmp(a, "--probe-nee") ? &o->probe_nee : &o->light_cells) =
+                argv[++i];
         } else if (!strcmp(a, "--direct")) {
             if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
                 return cli_usage_error("%s takes include or exclude", a);
@@ -766,10 +769,14 @@ static const char *window_name(uint32_t w)
 }
 
 /* The file's techniques as JSON array items. */
-static const char *technique_list(uint32_t t)
+static const char *technique_list(uint32_t t, char buf[64])
 {
-    static const char *lists[4] = {"", "\"probe-nee\"", "\"guiding\"", "\"probe-nee\", \"guiding\""};
-    return lists[t & 3u];
+    static const char *names[3] = {"probe-nee", "guiding", "light-cells"};
+    buf[0] = 0;
+    for (int k = 0; k < 3; ++k)
+        if (t & (1u << k))
+            snprintf(buf + strlen(buf), 64 - strlen(buf), "%s\"%s\"", buf[0] ? ", " : "", names[k]);
+    return buf;
 }
 
 static int cmd_inspect(const options *o)
@@ -778,6 +785,7 @@ static int cmd_inspect(const options *o)
         return cli_usage_error("%s needs a VOLUME file", "inspect");
     pb_volume v;
     pb_error err;
+    char techniques[64];
     if (pb_volume_read(o->scene, &v, &err) != PB_OK)
         return cli_fail(&err);
     if (o->has_probe && o->probe >= v.probe_count) {
@@ -831,7 +839,7 @@ static int cmd_inspect(const options *o)
                J(s->max_distance).s, J(v.depth_unit).s, (unsigned long long)s->seed,
                (unsigned long long)s->scene_hash, s->rays_per_probe, s->passes, s->bounces,
                s->indirect_mode ? "volume" : "path", window_name(s->sh_window), J(s->sh_window_width).s,
-               J(s->indirect_clamp).s, technique_list(s->techniques));
+               J(s->indirect_clamp).s, technique_list(s->techniques, techniques));
         json_string(v.device);
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
@@ -868,10 +876,12 @@ static int cmd_inspect(const options *o)
                counts[2], counts[3], counts[4]);
         printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
                v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
-        printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, guiding %s, seed %llu, "
-               "device %s\n", s->rays_per_probe, s->passes, s->bounces, s->indirect_mode ? "volume" : "path",
-               s->techniques & PB_TECHNIQUE_PROBE_NEE ? "on" : "off", s->techniques & PB_TECHNIQUE_GUIDING ? "on" : "off",
-               (unsigned long long)s->seed, v.device[0] ? v.device : "?");
+        printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, guiding %s, light cells %s, "
+               "seed %llu, device %s\n", s->rays_per_probe, s->passes, s->bounces,
+               s->indirect_mode ? "volume" : "path", s->techniques & PB_TECHNIQUE_PROBE_NEE ? "on" : "off",
+               s->techniques & PB_TECHNIQUE_GUIDING ? "on" : "off",
+               s->techniques & PB_TECHNIQUE_LIGHT_CELLS ? "on" : "off", (unsigned long long)s->seed,
+               v.device[0] ? v.device : "?");
         if (s->sh_window || s->indirect_clamp > 0.f)
             printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),
                    s->sh_window_width > 0.f ? s->sh_window_width : 3.f, s->indirect_clamp);
@@ -1014,6 +1024,7 @@ static int cmd_bake(const options *o)
     d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");
     d.probe_nee = o->probe_nee ? !strcmp(o->probe_nee, "on") : q ? q->probe_nee : 1u;
     d.guide_paths = o->guide ? (!strcmp(o->guide, "on") ? PB_GUIDE_DEFAULT_PATHS : 0u) : q ? q->guide_paths : 0u;
+    d.light_cells = o->light_cells ? !strcmp(o->light_cells, "on") : q ? q->light_cells : 1u;
     memcpy(d.sky, o->sky, sizeof d.sky);
     d.environment = o->env ? &env : NULL;
     d.indirect_volume = (uint32_t)o->indirect_volume;
@@ -1037,12 +1048,15 @@ static int cmd_bake(const options *o)
     if (!o->log.quiet)
         fprintf(stderr,
                 "probebake: baking %s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
-                "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, seed %u\n",
+                "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, light cells %s, seed %u\n",
                 o->scene, q ? " at quality " : "", q ? q->name : "", where, d.rays_per_probe,
                 d.target_error > 0.f ? "up to " : "", d.passes, d.target_error > 0.f ? " (until converged)" : "",
                 d.bounces, light, d.octmap_res,
                 d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path",
-                d.probe_nee ? "on" : "off", d.guide_paths ? "on" : "off", d.seed);
+                d.probe_nee ? "on" : "off",
+                /* --indirect volume bakes one bounce at a time: no bounce rays to guide */
+                d.guide_paths && d.bounces && !d.indirect_volume ? "on" : "off", d.light_cells ? "on" : "off",
+                d.seed);
     if (!o->log.quiet && (d.indirect_clamp > 0.f || d.sh_window))
         fprintf(stderr, "probebake: biased on request:%s%s%s\n",
                 d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",

@@ -1,0 +1,341 @@
+/* Light cells: emitter clusters, cells measured with shadow rays
+ * (light_cells.h). */
+#include "bake/light_cells.h"
+#include "bake/alias.h"
+#include "common/common.h"
+#include "probebake/trace.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PB_LIGHT_PASS 0xC0000001u   /* the surface points' and shadow rays' pass number in the RNG key */
+#define PB_LIGHT_CELL_POINTS_PER_CELL 160.0 /* surface points per cell on average (64: 1.4x the paths on The Crypt, 400: 1.7x) */
+#define PB_LIGHT_TABLE_MAX (1u << 21) /* slots x clusters: 32 MiB of tables at most */
+#define PB_LIGHT_RAYS_PER_BATCH (1u << 18)
+
+typedef struct keyed {
+    uint64_t key;
+    uint32_t index;
+} keyed;
+
+static int cmp_keyed(const void *a, const void *b)
+{
+    const keyed *x = a, *y = b;
+    if (x->key != y->key)
+        return x->key < y->key ? -1 : 1;
+    return (x->index > y->index) - (x->index < y->index);
+}
+
+/* Emitters sorted by the cell of a grid of edge h that holds their centroid;
+ * returns the number of distinct cells (clusters). */
+static uint32_t cluster_keys(const pb_scene *s, const float *centroid, uint32_t E, float h, keyed *k)
+{
+    for (uint32_t i = 0; i < E; ++i) {
+        uint64_t c[3];
+        for (int a = 0; a < 3; ++a) {
+            float f = floorf((centroid[3 * i + a] - s->bounds_min[a]) / h);
+            c[a] = f < 0.f ? 0u : (f > 2097151.f ? 2097151u : (uint64_t)f);
+        }
+        k[i].key = c[2] << 42 | c[1] << 21 | c[0];
+        k[i].index = i;
+    }
+    qsort(k, E, sizeof *k, cmp_keyed);
+    uint32_t n = E ? 1u : 0u;
+    for (uint32_t i = 1; i < E; ++i)
+        n += k[i].key != k[i - 1].key;
+    return n;
+}
+
+/* A shadow ray of the measurement and what its light is worth if unblocked. */
+typedef struct probe_ray {
+    uint32_t slot, cluster;
+    float weight;                 /* cos at the emitter / distance^2 (clamped) */
+} probe_ray;
+
+pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const pb_scene *s = pass->scene;
+    const pb_bake_emitters *em = pass->emitters;
+    if (!em || !em->count || !s->triangle_count)
+        return PB_OK;
+    uint32_t E = em->count, T = s->triangle_count, N = PB_LIGHT_CELL_POINTS;
+    pb_result r = PB_OK;
+    pb_surface_sampler surface;
+    memset(&surface, 0, sizeof surface);
+    double *p = malloc(E * sizeof *p), *share = NULL, *U = NULL, *light = NULL, *q = NULL;
+    float *centroid = malloc(3 * (size_t)E * sizeof *centroid), *cen = NULL, *points = NULL, *keep = NULL;
+    keyed *k = malloc(E * sizeof *k);
+    uint32_t *point_cell = NULL, *first = NULL, *order = NULL, *slot_cell = NULL, *alias = NULL;
+    pb_ray *rays = NULL;
+    pb_hit *hits = NULL;
+    probe_ray *meta = NULL;
+    out->cluster_of = calloc(T, sizeof *out->cluster_of);
+    out->member_tri = malloc(E * sizeof *out->member_tri);
+    out->member_keep = malloc(E * sizeof *out->member_keep);
+    out->member_alias = malloc(E * sizeof *out->member_alias);
+    if (!p || !centroid || !k || !out->cluster_of || !out->member_tri || !out->member_keep || !out->member_alias ||
+        !pb_surface_sampler_init(s, &surface))
+        goto oom;
+
+    /* 1. clusters: emitters grouped by a grid over their centroids, coarsened
+     * until there are at most PB_LIGHT_CLUSTERS_MAX */
+    for (uint32_t i = 0; i < E; ++i) {
+        const float *v = s->positions + 9 * (size_t)em->tri[i];
+        p[i] = (double)em->pdf_area[em->tri[i]] * pb_triangle_area(v); /* its probability by power */
+        for (int a = 0; a < 3; ++a)
+            centroid[3 * i + a] = (v[a] + v[3 + a] + v[6 + a]) / 3.f;
+    }
+    pb_cell_grid_fit(s, surface.area_total, PB_LIGHT_CELL_POINTS_PER_CELL, N, &out->grid);
+    float cell = 1.f / out->grid.inv_cell, h = 0.5f * cell;
+    uint32_t C;
+    while ((C = cluster_keys(s, centroid, E, h, k)) > PB_LIGHT_CLUSTERS_MAX)
+        h *= 1.5f;
+    if (C < 2)
+        goto done; /* one cluster: every cell would draw by power */
+    out->clusters = C;
+    out->cluster_range = calloc(2 * (size_t)C, sizeof *out->cluster_range);
+    share = calloc(C, sizeof *share);
+    cen = calloc(4 * (size_t)C, sizeof *cen); /* power-weighted centre, squared radius */
+    if (!out->cluster_range || !share || !cen)
+        goto oom;
+    for (uint32_t i = 0, c = 0; i < E; ++i) {
+        if (i && k[i].key != k[i - 1].key)
+            ++c;
+        uint32_t e = k[i].index;
+        if (!out->cluster_range[2 * c + 1])
+            out->cluster_range[2 * c] = i;
+        out->cluster_range[2 * c + 1]++;
+        out->member_tri[i] = em->tri[e];
+        out->cluster_of[em->tri[e]] = c;
+        share[c] += p[e];
+    }
+    for (uint32_t c = 0; c < C; ++c) {
+        uint32_t f = out->cluster_range[2 * c], n = out->cluster_range[2 * c + 1];
+        double w[3] = {0, 0, 0}, wsum = 0;
+        for (uint32_t i = f; i < f + n; ++i) {
+            double pi = p[k[i].index] > 0 ? p[k[i].index] : 1e-30; /* zero-power members: the plain mean */
+            wsum += pi;
+            for (int a = 0; a < 3; ++a)
+                w[a] += pi * centroid[3 * k[i].index + a];
+        }
+        for (int a = 0; a < 3; ++a)
+            cen[4 * c + a] = (float)(w[a] / wsum);
+        float r2 = 0.f;
+        for (uint32_t i = f; i < f + n; ++i) {
+            float d2 = 0.f;
+            for (int a = 0; a < 3; ++a) {
+                float d = centroid[3 * k[i].index + a] - cen[4 * c + a];
+                d2 += d * d;
+            }
+            r2 = fmaxf(r2, d2);
+        }
+        cen[4 * c + 3] = r2;
+        /* within the cluster by power (alias indices local to it) */
+        double *wm = malloc(n * sizeof *wm);
+        if (!wm)
+            goto oom;
+        for (uint32_t i = 0; i < n; ++i)
+            wm[i] = p[k[f + i].index];
+        if (!pb_alias_build(wm, n, out->member_keep + f, out->member_alias + f))
+            for (uint32_t i = 0; i < n; ++i) /* no power at all: never drawn (q = 0) */
+                out->member_keep[f + i] = 1.f, out->member_alias[f + i] = i;
+        free(wm);
+    }
+
+    /* 2. surface points by area (keyed by the seed only), bucketed by cell;
+     * the cells grow while their tables would pass PB_LIGHT_TABLE_MAX */
+    points = malloc(6 * (size_t)N * sizeof *points); /* position, normal */
+    point_cell = malloc(N * sizeof *point_cell);
+    order = malloc(N * sizeof *order);
+    if (!points || !point_cell || !order)
+        goto oom;
+    uint32_t have = 0;
+    for (uint32_t i = 0; i < N; ++i) {
+        uint32_t state = pb_rng_seed_cpu(pass->seed, i, PB_LIGHT_PASS, 0u);
+        if (pb_surface_point(s, &surface, &state, points + 6 * (size_t)have, points + 6 * (size_t)have + 3))
+            ++have;
+    }
+    uint32_t cells, learnable;
+    for (;;) {
+        cells = pb_cell_grid_cells(&out->grid);
+        free(first);
+        if (!(first = calloc((size_t)cells + 1, sizeof *first)))
+            goto oom;
+        for (uint32_t i = 0; i < have; ++i)
+            first[(point_cell[i] = pb_cell_grid_index(&out->grid, points + 6 * (size_t)i)) + 1]++;
+        learnable = 0;
+        for (uint32_t c = 0; c < cells; ++c)
+            learnable += first[c + 1] >= PB_LIGHT_CELL_MIN_POINTS;
+        if ((uint64_t)learnable * C <= PB_LIGHT_TABLE_MAX)
+            break;
+        cell *= 1.5f;
+        pb_cell_grid_set(s, cell, &out->grid);
+    }
+    for (uint32_t c = 0; c < cells; ++c)
+        first[c + 1] += first[c];
+    {
+        uint32_t *fill = calloc(cells, sizeof *fill);
+        if (!fill)
+            goto oom;
+        for (uint32_t i = 0; i < have; ++i)
+            order[first[point_cell[i]] + fill[point_cell[i]]++] = i; /* point order within a cell */
+        free(fill);
+    }
+
+    /* 3. per cell: candidate clusters by power over distance squared from
+     * the mean of its points, measured with shadow rays from its points */
+    uint32_t K = C < PB_LIGHT_CELL_CANDIDATES ? C : PB_LIGHT_CELL_CANDIDATES, R = PB_LIGHT_CELL_RAYS;
+    out->slot = malloc(cells * sizeof *out->slot);
+    slot_cell = malloc((learnable ? learnable : 1) * sizeof *slot_cell);
+    U = malloc(C * sizeof *U);
+    light = calloc((size_t)(learnable ? learnable : 1) * C, sizeof *light);
+    q = malloc(C * sizeof *q);
+    keep = malloc(C * sizeof *keep);
+    alias = malloc(C * sizeof *alias);
+    out->table = calloc((size_t)(learnable ? learnable : 1) * C * 4, sizeof *out->table);
+    uint32_t batch_cells = PB_LIGHT_RAYS_PER_BATCH / (K * R) ? PB_LIGHT_RAYS_PER_BATCH / (K * R) : 1;
+    size_t batch_rays = (size_t)batch_cells * K * R;
+    rays = malloc(batch_rays * sizeof *rays);
+    hits = malloc(batch_rays * sizeof *hits);
+    meta = malloc(batch_rays * sizeof *meta);
+    if (!out->slot || !slot_cell || !U || !light || !q || !keep || !alias || !out->table || !rays || !hits || !meta)
+        goto oom;
+    memset(out->slot, 0xff, cells * sizeof *out->slot);
+    uint32_t slots = 0;
+    for (uint32_t c = 0; c < cells; ++c)
+        if (first[c + 1] - first[c] >= PB_LIGHT_CELL_MIN_POINTS)
+            slot_cell[slots++] = c;
+    float near2 = 0.25f * cell * cell, min_d2 = 0.0625f * cell * cell;
+    for (uint32_t s0 = 0; s0 < slots; s0 += batch_cells) {
+        uint32_t s1 = s0 + batch_cells < slots ? s0 + batch_cells : slots;
+        size_t nr = 0;
+        for (uint32_t sl = s0; sl < s1; ++sl) {
+            uint32_t c = slot_cell[sl], f = first[c], np = first[c + 1] - f;
+            float m[3] = {0, 0, 0};
+            for (uint32_t i = f; i < f + np; ++i)
+                for (int a = 0; a < 3; ++a)
+                    m[a] += points[6 * (size_t)order[i] + a] / (float)np;
+            for (uint32_t cl = 0; cl < C; ++cl) {
+                float d2 = 0.f;
+                for (int a = 0; a < 3; ++a) {
+                    float d = cen[4 * cl + a] - m[a];
+                    d2 += d * d;
+                }
+                U[cl] = share[cl] / fmax(d2, near2 + cen[4 * cl + 3]);
+            }
+            for (uint32_t kk = 0; kk < K; ++kk) { /* the K largest, in order */
+                uint32_t best = 0;
+                for (uint32_t cl = 1; cl < C; ++cl)
+                    best = U[cl] > U[best] ? cl : best;
+                if (!(U[best] > 0.0))
+                    break;
+                U[best] = -1.0;
+                uint32_t cf = out->cluster_range[2 * best], cn = out->cluster_range[2 * best + 1];
+                for (uint32_t ri = 0; ri < R; ++ri, ++nr) {
+                    uint32_t state = pb_rng_seed_cpu(pass->seed, c, PB_LIGHT_PASS + 1u, best * R + ri);
+                    float u0 = pb_rng_next_cpu(&state), u1 = pb_rng_next_cpu(&state);
+                    float u2 = pb_rng_next_cpu(&state), u3 = pb_rng_next_cpu(&state);
+                    uint32_t pi = (uint32_t)(u0 * (float)np) < np ? (uint32_t)(u0 * (float)np) : np - 1u;
+                    const float *x = points + 6 * (size_t)order[f + pi], *nx = x + 3;
+                    uint32_t tri = out->member_tri[cf + pb_alias_sample(out->member_keep + cf, out->member_alias + cf,
+                                                                        cn, u1)];
+                    const float *v0 = s->positions + 9 * (size_t)tri, *v1 = v0 + 3, *v2 = v0 + 6;
+                    float su = sqrtf(u2), b1 = su * (1.f - u3), b2 = su * u3, e1[3], e2[3], to[3];
+                    for (int a = 0; a < 3; ++a) {
+                        e1[a] = v1[a] - v0[a], e2[a] = v2[a] - v0[a];
+                        to[a] = v0[a] + b1 * e1[a] + b2 * e2[a] - x[a];
+                    }
+                    float ne[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                   e1[0] * e2[1] - e1[1] * e2[0]};
+                    float nl = sqrtf(ne[0] * ne[0] + ne[1] * ne[1] + ne[2] * ne[2]);
+                    float d2 = to[0] * to[0] + to[1] * to[1] + to[2] * to[2];
+                    float cos_e = nl > 0.f && d2 > 0.f
+                                      ? -(ne[0] * to[0] + ne[1] * to[1] + ne[2] * to[2]) / (nl * sqrtf(d2))
+                                      : 0.f;
+                    if (s->materials[s->material[tri]].double_sided)
+                        cos_e = fabsf(cos_e);
+                    pb_ray *ray = &rays[nr];
+                    memcpy(ray->origin, x, sizeof ray->origin);
+                    memcpy(ray->direction, to, sizeof ray->direction);
+                    ray->tmin = 0.f;
+                    float cos_x = d2 > 0.f ? (nx[0] * to[0] + nx[1] * to[1] + nx[2] * to[2]) / sqrtf(d2) : 0.f;
+                    int lit = cos_e > 0.f && cos_x > 0.f;
+                    ray->tmax = lit ? 0.9999f : 0.f;
+                    meta[nr] = (probe_ray){sl, best, lit ? cos_x * cos_e / fmaxf(d2, min_d2) : 0.f};
+                }
+            }
+        }
+        pb_trace_cpu(s, pass->bvh, rays, (uint32_t)nr, PB_TRACE_ANY, hits, 0);
+        for (size_t i = 0; i < nr; ++i) /* in ray order: sums independent of the threads */
+            if (hits[i].triangle == PB_NO_HIT)
+                light[(size_t)meta[i].slot * C + meta[i].cluster] += share[meta[i].cluster] * meta[i].weight / R;
+    }
+
+    /* 4. per cell: q = a share + (1 - a) measured / total, as an alias table
+     * with each cluster's ratio q / share */
+    for (uint32_t sl = 0; sl < slots; ++sl) {
+        const double *Lc = light + (size_t)sl * C;
+        double total = 0;
+        for (uint32_t cl = 0; cl < C; ++cl)
+            total += Lc[cl];
+        if (!(total > 0.0) || !isfinite(total))
+            continue; /* no emitter measured unblocked: by power */
+        for (uint32_t cl = 0; cl < C; ++cl)
+            q[cl] = PB_LIGHT_CELL_POWER_SHARE * share[cl] + (1.0 - PB_LIGHT_CELL_POWER_SHARE) * Lc[cl] / total;
+        if (!pb_alias_build(q, C, keep, alias))
+            goto oom;
+        float *tb = out->table + 4 * (size_t)out->learned * C;
+        for (uint32_t cl = 0; cl < C; ++cl) {
+            tb[4 * cl] = keep[cl];
+            memcpy(&tb[4 * cl + 1], &alias[cl], 4);
+            tb[4 * cl + 2] = share[cl] > 0.0 ? (float)(q[cl] / share[cl]) : 1.f;
+            tb[4 * cl + 3] = 0.f;
+        }
+        out->slot[slot_cell[sl]] = out->learned++;
+    }
+    goto done;
+oom:
+    r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for light cells (%u emitters)", E);
+done:
+    pb_surface_sampler_free(&surface);
+    free(p), free(share), free(U), free(light), free(q), free(centroid), free(cen), free(points), free(k);
+    free(point_cell), free(first), free(order), free(slot_cell), free(rays), free(hits), free(meta);
+    free(keep), free(alias);
+    if (r != PB_OK || !out->learned)
+        pb_light_cells_free(out);
+    return r;
+}
+
+void pb_light_cells_free(pb_light_cells *lc)
+{
+    free(lc->slot), free(lc->cluster_range), free(lc->member_tri), free(lc->member_keep), free(lc->member_alias);
+    free(lc->cluster_of), free(lc->table);
+    memset(lc, 0, sizeof *lc);
+}
+
+int32_t pb_light_cells_slot(const pb_light_cells *lc, const float x[3])
+{
+    if (!lc || !lc->table)
+        return -1;
+    uint32_t sl = lc->slot[pb_cell_grid_index(&lc->grid, x)];
+    return sl == ~0u ? -1 : (int32_t)sl;
+}
+
+uint32_t pb_light_cells_sample(const pb_light_cells *lc, int32_t slot, float u0, float u1, float *ratio)
+{
+    const float *tb = lc->table + 4 * (size_t)slot * lc->clusters;
+    float xc = u0 * (float)lc->clusters;
+    uint32_t i = (uint32_t)xc < lc->clusters - 1u ? (uint32_t)xc : lc->clusters - 1u, alias;
+    memcpy(&alias, &tb[4 * i + 1], 4);
+    uint32_t c = xc - (float)i < tb[4 * i] ? i : alias;
+    *ratio = tb[4 * c + 2];
+    const uint32_t *rg = lc->cluster_range + 2 * c;
+    return lc->member_tri[rg[0] + pb_alias_sample(lc->member_keep + rg[0], lc->member_alias + rg[0], rg[1], u1)];
+}
+
+float pb_light_cells_ratio(const pb_light_cells *lc, int32_t slot, uint32_t tri)
+{
+    return slot < 0 ? 1.f : lc->table[4 * ((size_t)slot * lc->clusters + lc->cluster_of[tri]) + 2];
+}
