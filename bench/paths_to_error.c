@@ -499,14 +499,18 @@ int main(int argc, char **argv)
     free(sums);
     FILE *gp = fopen(gp_path, "w");
     if (gp) {
+        /* one panel per scene, its methods as curves */
         fprintf(gp,
-                "set terminal pngcairo size 1100,700\nset output '%s'\nset datafile separator ','\n"
+                "set terminal pngcairo size 1400,1000\nset output '%s'\nset datafile separator ','\n"
                 "set logscale xy\nset xlabel 'paths per probe'\nset ylabel 'p95 per-axis irradiance error'\n"
-                "set key outside right\nset grid\n"
-                "rows = system(\"tail -n +2 '%s' | cut -d, -f1,2 | sort -u | tr '\\\\n' ' '\")\n"
-                "plot for [r in rows] '%s' using ((strcol(1).','.strcol(2)) eq r ? $4 : 1/0):8 "
-                "with linespoints title r, %g with lines dt 2 title 'p95 target'\n",
-                png_path, csv_path, csv_path, P95_TARGET);
+                "set key top right font ',8'\nset grid\n"
+                "scenes = system(\"tail -n +2 '%s' | cut -d, -f1 | awk '!s[$0]++' | tr '\\\\n' ' '\")\n"
+                "methods = system(\"tail -n +2 '%s' | cut -d, -f2 | awk '!s[$0]++' | tr '\\\\n' ' '\")\n"
+                "n = words(scenes)\nset multiplot layout (n + 1) / 2, 2\n"
+                "do for [sc in scenes] {\n  set title sc\n"
+                "  plot for [m in methods] '%s' using ((strcol(1) eq sc && strcol(2) eq m) ? $4 : 1/0):8 "
+                "with linespoints title m, %g with lines dt 2 title 'p95 target'\n}\nunset multiplot\n",
+                png_path, csv_path, csv_path, csv_path, P95_TARGET);
         fclose(gp);
         bench_run_gnuplot(gp_path, png_path);
     }

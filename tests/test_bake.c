@@ -1782,6 +1782,7 @@ static void points_subset_bakes_like_the_grid(void)
     d.probe_nee = 1; /* its emitter samples are keyed by (seed, probe, pass, ray) like the rays */
     d.bounces = 1;
     d.guide_paths = 1u << 12; /* the guide learns from the surfaces, not from the probes baked */
+    d.light_cells = 1;        /* so do the light cells (the demo's ceiling panel: 2 clusters) */
     baked whole = bake(s, &d);
     uint32_t pick[6] = {0, 5, 17, 30, 41, 0};
     pick[5] = whole.ok ? whole.vol.probe_count - 1 : 1;
@@ -1819,6 +1820,8 @@ static void points_subset_bakes_like_the_grid(void)
         }
         fprintf(stderr, "  %u of %u subset probes identical to the grid's (%u relocated)\n", same, compared, relocated);
         CHECK(compared >= 4 && same == compared);
+        CHECK(whole.vol.settings.techniques ==
+              (PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_GUIDING | PB_TECHNIQUE_LIGHT_CELLS));
         CHECK(!(sub.vol.flags & PB_VOLUME_GRID) && sub.vol.probe_count == 6);
     }
     release(&whole);
