@@ -11,7 +11,11 @@ panel.gltf    one 4 x 3 x 4 m room lit only by a 25 x 25 cm emissive ceiling
               that shadows the floor and the probes under it, and a standing
               screen. Probes 4 x 3 x 4 at 1 m; the top row sees the panel.
 
-Both are closed, single-sided and Lambertian, so every light path stays
+lamps.gltf    the doorway's rooms without the partition, lit by three 30 cm
+              emissive ceiling panels (two in room A, a dim one in room B):
+              light selection among emitters mostly hidden from each other.
+
+All are closed, single-sided and Lambertian, so every light path stays
 inside. Only the Python standard library is used.
 Run: python3 scripts/make_hard_scenes.py
 """
@@ -116,5 +120,50 @@ def panel():
     s.write(os.path.join(scenes_dir(), "panel.gltf"), gltf)
 
 
+def lamps():
+    """The doorway's two rooms without the partition, lit by three small
+    emissive ceiling panels: two in room A, one dim one in room B's far
+    corner. Many-emitter selection in miniature: from room B, room A's
+    panels are mostly behind the wall."""
+    s = Scene()
+    WALL, LIGHT, DIM = range(3)
+    door = (0.5, 1.5, 2.0)
+    t = 0.05
+    room(s, "room A", WALL, -4.0 - t, -t, -2.0, 2.0, door_side=-t, door=door)
+    room(s, "room B", WALL, t, 4.0 + t, -2.0, 2.0, door_side=t, door=door)
+    zl, zh, top = door
+    q = s.quad
+    s.add("passage", WALL, lambda: (q((-t, 0, zl), (t, 0, zl), (t, top, zl), (-t, top, zl), (0, 0, 1)),
+                                    q((t, 0, zh), (-t, 0, zh), (-t, top, zh), (t, top, zh), (0, 0, -1)),
+                                    q((-t, top, zl), (t, top, zl), (t, top, zh), (-t, top, zh), (0, -1, 0)),
+                                    q((-t, 0, zh), (t, 0, zh), (t, 0, zl), (-t, 0, zl), (0, 1, 0))))
+    h, r = H - 0.01, 0.15
+
+    def lamp(cx, cz):
+        return q((cx - r, h, cz - r), (cx + r, h, cz - r), (cx + r, h, cz + r), (cx - r, h, cz + r), (0, -1, 0))
+
+    s.add("lamps A", LIGHT, lambda: (lamp(-3.4, -1.4), lamp(-0.8, 1.5)))
+    s.add("lamp B", DIM, lambda: lamp(3.5, -1.5))
+    gltf = {
+        "asset": {"version": "2.0", "generator": "probebake scripts/make_hard_scenes.py"},
+        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "scene": 0,
+        "scenes": [{"name": "lamps", "nodes": [0, 1, 2, 3, 4]}],
+        "nodes": [{"name": "room A", "mesh": s.mesh_index("room A")},
+                  {"name": "room B", "mesh": s.mesh_index("room B")},
+                  {"name": "passage", "mesh": s.mesh_index("passage")},
+                  {"name": "lamps A", "mesh": s.mesh_index("lamps A")},
+                  {"name": "lamp B", "mesh": s.mesh_index("lamp B")}],
+        "meshes": None,
+        "materials": [material("wall", [0.7, 0.7, 0.7]),
+                      material("lamp", [0.0, 0.0, 0.0], emissiveFactor=[1.0, 0.9, 0.75],
+                               extensions={"KHR_materials_emissive_strength": {"emissiveStrength": 100.0}}),
+                      material("dim lamp", [0.0, 0.0, 0.0], emissiveFactor=[0.75, 0.85, 1.0],
+                               extensions={"KHR_materials_emissive_strength": {"emissiveStrength": 10.0}})],
+    }
+    s.write(os.path.join(scenes_dir(), "lamps.gltf"), gltf)
+
+
 doorway()
 panel()
+lamps()
