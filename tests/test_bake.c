@@ -1294,6 +1294,53 @@ static void probe_nee_agrees_with_plain(void)
     pb_scene_destroy(s);
 }
 
+/* The production preset's estimators (probe NEE, path guiding, light cells)
+ * on the doorway scene at 8,192 paths per probe against its converged
+ * reference (bench/results/reference/doorway.probes: 2^20 plain paths per
+ * probe, made by bench/paths_to_error, positions already relocated): every
+ * probe agrees within the two bakes' reported standard errors, as an
+ * unbiased estimator must (|z| < 2 for about 95 %). */
+static void doorway_matches_converged_reference(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(source_path("tests/scenes/doorway.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    pb_volume ref;
+    memset(&ref, 0, sizeof ref);
+    CHECKF(pb_volume_read(source_path("bench/results/reference/doorway.probes"), &ref, &err) == PB_OK, "%s",
+           err.message);
+    if (!s || !ref.probe_count) {
+        pb_volume_free(&ref);
+        pb_scene_destroy(s);
+        return;
+    }
+    CHECK(ref.settings.scene_hash == pb_scene_hash(s) && ref.settings.bounces == 2);
+    pb_points pts = {ref.probe_count, malloc((size_t)ref.probe_count * 3 * sizeof(double)),
+                     malloc((size_t)ref.probe_count * sizeof(uint32_t)), 0.0};
+    for (uint32_t p = 0; p < ref.probe_count; ++p) {
+        pb_volume_probe_position(&ref, p, pts.positions + 3 * (size_t)p);
+        pts.ids[p] = p;
+    }
+    pb_bake_desc d = {0};
+    d.points = &pts;
+    d.skip_relocation = 1;
+    d.bounces = 2, d.octmap_res = 4, d.rays_per_probe = 256, d.passes = 32, d.seed = 7;
+    d.probe_nee = 1, d.guide_paths = PB_GUIDE_DEFAULT_PATHS, d.light_cells = 1;
+    baked b = bake(s, &d);
+    if (b.ok) {
+        uint32_t in2;
+        double worst;
+        uint32_t n = agreement(&b.vol, &ref, &in2, &worst, NULL);
+        fprintf(stderr, "  %u probes at 8,192 paths against 2^20: |z| < 2 for %.0f %% (expected about 95), "
+                        "worst %.2f\n", n, 100.0 * in2 / n, worst);
+        CHECK(n == ref.probe_count && in2 >= 0.82 * n && worst < 5.0);
+    }
+    release(&b);
+    pb_points_free(&pts);
+    pb_volume_free(&ref);
+    pb_scene_destroy(s);
+}
+
 /* Light cells are unbiased: on the generated lamps scene (three small
  * emissive panels in two rooms joined by a doorway, mostly hidden from one
  * another) bakes with probe NEE, with and without light cells, agree probe
@@ -1928,6 +1975,7 @@ int main(void)
     RUN(probe_nee_agrees_with_plain);
     RUN(guided_agrees_with_plain);
     RUN(light_cells_agree_with_power);
+    RUN(doorway_matches_converged_reference);
     RUN(degenerate_scenes);
     RUN(many_lights_drawn_by_power);
     RUN(indirect_clamp_tames_fireflies);
