@@ -50,20 +50,27 @@ def room(s, mesh, mat, x0, x1, z0, z1, door_side=None, door=None):
             s.add(mesh, mat, lambda: xwall(x, nx, z0, z1, 0, H))
 
 
-def doorway():
-    s = Scene()
-    WALL, FLOOR, BLUE = range(3)
+def two_rooms(s, mat):
+    """Rooms A (x < 0) and B (x > 0), 4 x 3 x 4 m, on either side of a 10 cm
+    wall with a 1 x 2 m doorway (z 0.5 .. 1.5): meshes "room A", "room B"
+    and "passage"."""
     door = (0.5, 1.5, 2.0)  # z from, z to, height
     t = 0.05                # half the wall's thickness
-    room(s, "room A", WALL, -4.0 - t, -t, -2.0, 2.0, door_side=-t, door=door)
-    room(s, "room B", WALL, t, 4.0 + t, -2.0, 2.0, door_side=t, door=door)
+    room(s, "room A", mat, -4.0 - t, -t, -2.0, 2.0, door_side=-t, door=door)
+    room(s, "room B", mat, t, 4.0 + t, -2.0, 2.0, door_side=t, door=door)
     zl, zh, top = door
     q = s.quad
     # the passage through the wall: jambs, lintel, sill
-    s.add("passage", WALL, lambda: (q((-t, 0, zl), (t, 0, zl), (t, top, zl), (-t, top, zl), (0, 0, 1)),
-                                    q((t, 0, zh), (-t, 0, zh), (-t, top, zh), (t, top, zh), (0, 0, -1)),
-                                    q((-t, top, zl), (t, top, zl), (t, top, zh), (-t, top, zh), (0, -1, 0)),
-                                    q((-t, 0, zh), (t, 0, zh), (t, 0, zl), (-t, 0, zl), (0, 1, 0))))
+    s.add("passage", mat, lambda: (q((-t, 0, zl), (t, 0, zl), (t, top, zl), (-t, top, zl), (0, 0, 1)),
+                                   q((t, 0, zh), (-t, 0, zh), (-t, top, zh), (t, top, zh), (0, 0, -1)),
+                                   q((-t, top, zl), (t, top, zl), (t, top, zh), (-t, top, zh), (0, -1, 0)),
+                                   q((-t, 0, zh), (t, 0, zh), (t, 0, zl), (-t, 0, zl), (0, 1, 0))))
+
+
+def doorway():
+    s = Scene()
+    WALL, FLOOR, BLUE = range(3)
+    two_rooms(s, WALL)
     # a partition in room A hides the doorway from the lamp: room B gets no
     # direct light at all, only what room A's walls reflect through the door
     s.add("partition", WALL, lambda: s.box((-2.05, 0.0, 0.0), (-1.95, H, 2.0)))
@@ -127,16 +134,8 @@ def lamps():
     panels are mostly behind the wall."""
     s = Scene()
     WALL, LIGHT, DIM = range(3)
-    door = (0.5, 1.5, 2.0)
-    t = 0.05
-    room(s, "room A", WALL, -4.0 - t, -t, -2.0, 2.0, door_side=-t, door=door)
-    room(s, "room B", WALL, t, 4.0 + t, -2.0, 2.0, door_side=t, door=door)
-    zl, zh, top = door
+    two_rooms(s, WALL)
     q = s.quad
-    s.add("passage", WALL, lambda: (q((-t, 0, zl), (t, 0, zl), (t, top, zl), (-t, top, zl), (0, 0, 1)),
-                                    q((t, 0, zh), (-t, 0, zh), (-t, top, zh), (t, top, zh), (0, 0, -1)),
-                                    q((-t, top, zl), (t, top, zl), (t, top, zh), (-t, top, zh), (0, -1, 0)),
-                                    q((-t, 0, zh), (t, 0, zh), (t, 0, zl), (-t, 0, zl), (0, 1, 0))))
     h, r = H - 0.01, 0.15
 
     def lamp(cx, cz):

@@ -1294,6 +1294,31 @@ static void probe_nee_agrees_with_plain(void)
     pb_scene_destroy(s);
 }
 
+/* A generated scene of tests/scenes (NULL and a failed check if it does not
+ * load), and the doorway and lamps scenes' probe row: 8 x 1 x 4 probes 1 m
+ * apart at 1.5 m height, clear of every wall, relocation off (it is seeded:
+ * two bakes of different seeds would place them apart). */
+static pb_scene *load_test_scene(const char *name)
+{
+    char path[256];
+    snprintf(path, sizeof path, "tests/scenes/%s", name);
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(source_path(path), NULL, &s, &err) == PB_OK, "%s", err.message);
+    return s;
+}
+
+static void two_rooms_probes(const pb_scene *s, pb_bake_desc *d)
+{
+    const double first[3] = {-3.55, 1.5, -1.5};
+    for (int k = 0; k < 3; ++k) {
+        d->grid.counts[k] = k == 1 ? 1u : (k == 0 ? 8u : 4u);
+        d->grid.spacing[k] = 1.f;
+        d->grid.origin[k] = (float)(first[k] - s->origin[k]);
+    }
+    d->skip_relocation = 1;
+}
+
 /* The production preset's estimators (probe NEE, path guiding, light cells)
  * on the doorway scene at 8,192 paths per probe against its converged
  * reference (bench/results/reference/doorway.probes: 2^20 plain paths per
@@ -1302,9 +1327,8 @@ static void probe_nee_agrees_with_plain(void)
  * unbiased estimator must (|z| < 2 for about 95 %). */
 static void doorway_matches_converged_reference(void)
 {
-    pb_scene *s = NULL;
+    pb_scene *s = load_test_scene("doorway.gltf");
     pb_error err;
-    CHECKF(pb_scene_load(source_path("tests/scenes/doorway.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
     pb_volume ref;
     memset(&ref, 0, sizeof ref);
     CHECKF(pb_volume_read(source_path("bench/results/reference/doorway.probes"), &ref, &err) == PB_OK, "%s",
@@ -1349,19 +1373,11 @@ static void doorway_matches_converged_reference(void)
  * below 3/4 of the power-drawn bake's (0.40 on lavapipe). */
 static void light_cells_agree_with_power(void)
 {
-    pb_scene *s = NULL;
-    pb_error err;
-    CHECKF(pb_scene_load(source_path("tests/scenes/lamps.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    pb_scene *s = load_test_scene("lamps.gltf");
     if (!s)
         return;
     pb_bake_desc d = {0};
-    const double first[3] = {-3.55, 1.5, -1.5};
-    for (int k = 0; k < 3; ++k) {
-        d.grid.counts[k] = k == 1 ? 1u : (k == 0 ? 8u : 4u);
-        d.grid.spacing[k] = 1.f;
-        d.grid.origin[k] = (float)(first[k] - s->origin[k]);
-    }
-    d.skip_relocation = 1;
+    two_rooms_probes(s, &d);
     d.bounces = 2, d.octmap_res = 4, d.rays_per_probe = 256, d.passes = 12, d.seed = 4, d.probe_nee = 1;
     baked power = bake(s, &d);
     d.light_cells = 1, d.seed = 5;
@@ -1398,21 +1414,11 @@ static void light_cells_agree_with_power(void)
  * noisy to test on 12 passes). */
 static void guided_agrees_with_plain(void)
 {
-    pb_scene *s = NULL;
-    pb_error err;
-    CHECKF(pb_scene_load(source_path("tests/scenes/doorway.gltf"), NULL, &s, &err) == PB_OK, "%s", err.message);
+    pb_scene *s = load_test_scene("doorway.gltf");
     if (!s)
         return;
     pb_bake_desc d = {0};
-    /* 8 x 1 x 4 probes 1 m apart at 1.5 m height, clear of every wall (both
-     * bakes place them alike: relocation is seeded, so it stays off) */
-    const double first[3] = {-3.55, 1.5, -1.5};
-    for (int k = 0; k < 3; ++k) {
-        d.grid.counts[k] = k == 1 ? 1u : (k == 0 ? 8u : 4u);
-        d.grid.spacing[k] = 1.f;
-        d.grid.origin[k] = (float)(first[k] - s->origin[k]);
-    }
-    d.skip_relocation = 1;
+    two_rooms_probes(s, &d);
     d.bounces = 2, d.octmap_res = 4, d.rays_per_probe = 256, d.passes = 12, d.seed = 4;
     baked plain = bake(s, &d);
     d.guide_paths = PB_GUIDE_DEFAULT_PATHS, d.seed = 5;

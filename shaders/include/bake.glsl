@@ -109,6 +109,19 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Em
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer BakeParamsBuf { BakeParams p; };
 
+// The cell of a grid of cubes (corner origin.xyz, 1 / edge origin.w, dims
+// per axis) that holds x, clamped into the grid, x fastest: path guiding's
+// and light cells' grids (pb_cell_grid_index in src/bake/surface_cells.c).
+uint grid_cell(vec3 x, vec4 origin, uvec3 dims)
+{
+    uvec3 c;
+    for (int k = 0; k < 3; ++k) {
+        float f = floor((x[k] - origin[k]) * origin.w);
+        c[k] = f < 0.0 ? 0u : (f >= float(dims[k]) ? dims[k] - 1u : uint(f));
+    }
+    return (c.z * dims.y + c.y) * dims.x + c.x;
+}
+
 // The probe slot the `local`-th invocation of this submission works on.
 uint probe_slot(BakeParams P, uint local)
 {

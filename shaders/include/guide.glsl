@@ -42,15 +42,10 @@ int guide_entry(BakeParams P, vec3 x, vec3 n)
 {
     if (addr_null(P.guide))
         return -1;
-    uvec3 c;
-    for (int k = 0; k < 3; ++k) {
-        float f = floor((x[k] - P.guide_origin[k]) * P.guide_origin.w);
-        c[k] = f < 0.0 ? 0u : (f >= float(P.guide_dims[k]) ? P.guide_dims[k] - 1u : uint(f));
-    }
     vec3 a = abs(n);
     uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);
     uint cls = 2u * axis + (n[axis] < 0.0 ? 1u : 0u);
-    uint e = ((c.z * P.guide_dims.y + c.y) * P.guide_dims.x + c.x) * 6u + cls;
+    uint e = grid_cell(x, P.guide_origin, P.guide_dims.xyz) * 6u + cls;
     uint slot = UintBuf(P.guide_slots).v[e];
     return slot == 0xffffffffu ? -1 : int(slot);
 }

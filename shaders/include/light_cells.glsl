@@ -11,12 +11,7 @@ int light_cell(BakeParams P, vec3 x)
 {
     if (addr_null(P.light_cells))
         return -1;
-    uvec3 c;
-    for (int k = 0; k < 3; ++k) {
-        float f = floor((x[k] - P.light_origin[k]) * P.light_origin.w);
-        c[k] = f < 0.0 ? 0u : (f >= float(P.light_dims[k]) ? P.light_dims[k] - 1u : uint(f));
-    }
-    uint slot = UintBuf(P.light_cell_slots).v[(c.z * P.light_dims.y + c.y) * P.light_dims.x + c.x];
+    uint slot = UintBuf(P.light_cell_slots).v[grid_cell(x, P.light_origin, P.light_dims.xyz)];
     return slot == 0xffffffffu ? -1 : int(slot);
 }
 
