@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs probebake's build, test and bench dependencies from Debian's packages.
+# Installs probebake's build, test and bench dependencies from Debian's packages
+# (nodejs: the web runtime's reader, runtime/js, is tested with node's runner).
 # Everything comes from bookworm except Mesa's Vulkan drivers (lavapipe), which
 # come from bookworm-backports at a pinned version: Mesa 25's llvmpipe runs our
 # kernels several times faster than bookworm's 22.3 (bench/RESULTS.md) and has
@@ -18,6 +19,7 @@ pkgs=(
   libvulkan-volk-dev
   libembree-dev
   gnuplot-nox
+  nodejs
 )
 
 SUDO=""
