@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs probebake's build, test and bench dependencies from Debian's packages
-# (nodejs: the web runtime's reader, runtime/js, is tested with node's runner).
+# (nodejs, npm: the web runtime, runtime/, is tested with node's runner and uses
+# three.js from npm at a pinned version).
 # Everything comes from bookworm except Mesa's Vulkan drivers (lavapipe), which
 # come from bookworm-backports at a pinned version: Mesa 25's llvmpipe runs our
 # kernels several times faster than bookworm's 22.3 (bench/RESULTS.md) and has
@@ -30,9 +31,25 @@ missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# Debian's npm, unless the machine's nodejs already brings one (NodeSource's does)
+command -v npm >/dev/null || missing+=(npm)
 mesa_now=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || true)
+# three.js for the web runtime and its tests, from npm at the version
+# runtime/package-lock.json pins (into runtime/node_modules, not committed)
+npm_deps() {
+  local runtime pinned have
+  runtime="$(cd "$(dirname "$0")/.." && pwd)/runtime"
+  pinned=$(grep -o '"three": "[0-9.]*"' "$runtime/package.json" | grep -o '[0-9.]*[0-9]')
+  have=$(grep -o '"version": "[0-9.]*"' "$runtime/node_modules/three/package.json" 2>/dev/null | grep -o '[0-9.]*[0-9]' || true)
+  if [ "$have" != "$pinned" ]; then
+    echo "install-deps: three.js $pinned from npm into runtime/node_modules"
+    (cd "$runtime" && npm ci --no-audit --no-fund --loglevel=error)
+  fi
+}
+
 if [ ${#missing[@]} -eq 0 ] && [ "$mesa_now" = "$MESA_VERSION" ]; then
   echo "install-deps: all packages present (mesa-vulkan-drivers $MESA_VERSION)"
+  npm_deps
   exit 0
 fi
 
@@ -56,3 +73,4 @@ $SUDO apt-get update -qq
 [ ${#missing[@]} -eq 0 ] || $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 # -t lets the driver's own dependencies (libdrm) come from backports too
 $SUDO apt-get install -y -qq --no-install-recommends -t "$MESA_SUITE" "mesa-vulkan-drivers=$MESA_VERSION"
+npm_deps

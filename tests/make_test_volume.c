@@ -1,6 +1,7 @@
 /* Writes a small, fully specified volume for the CLI tests of `inspect`:
  * a 3 x 2 x 1 grid at a far origin, probe 1 relocated, probe 4 dilated, SH
- * coefficient c of probe i equal to i + c / 100. Usage: make_test_volume OUT */
+ * coefficient c of probe i equal to i + c / 100, depth half i equal to
+ * (i mod 1000) / 8. Usage: make_test_volume OUT */
 #include "probebake/probebake.h"
 
 #include <stdio.h>
@@ -40,6 +41,11 @@ int main(int argc, char **argv)
         v.probe_paths[i] = 1024u * (i + 1u);
         v.probe_std_error[i] = i == 5 ? PB_STD_ERROR_UNKNOWN : 0.25f / (float)(1u << i);
     }
+    /* depth texels distinct and finite (readers and the texture export are
+     * checked texel by texel) */
+    uint64_t halves = 6 * pb_volume_tile_halves(v.octmap_res);
+    for (uint64_t i = 0; i < halves; ++i)
+        v.depth[i] = pb_half_from_float((float)(i % 1000) * 0.125f);
     v.offset[3 * 1 + 1] = 0.25f;
     v.probe_flags[1] |= PB_PROBE_RELOCATED;
     v.probe_flags[4] = PB_PROBE_DILATED;

@@ -83,6 +83,12 @@ expect inspect-sh-view 0 "wrote $tmp/sh.png: 52x35, SH irradiance view of 6 prob
     "$pb" inspect "$tmp/v.probes" --sh-view "$tmp/sh.png"
 expect inspect-atlas-unwritable 1 "error: $tmp/no/such/dir/a.png: cannot write in $tmp/no/such/dir: No such file or directory" -- \
     "$pb" inspect "$tmp/v.probes" --atlas "$tmp/no/such/dir/a.png"
+expect export-textures 0 "wrote $tmp/tex/manifest.json, probes.ktx2, sh.ktx2, depth.ktx2: 6 probes \(3 x 2 x 1\)" -- \
+    "$pb" export "$tmp/v.probes" --textures "$tmp/tex"
+expect export-manifest 0 '"pb_tex_width": 42,' -- cat "$tmp/tex/manifest.json"
+expect export-no-dir 2 'export needs --textures DIR' -- "$pb" export "$tmp/v.probes"
+expect export-into-file 1 "error: $tmp/v.probes: exists and is not a directory" -- \
+    "$pb" export "$tmp/v.probes" --textures "$tmp/v.probes"
 head -c 700 "$tmp/v.probes" >"$tmp/cut.probes"
 expect inspect-truncated 1 "error: $tmp/cut.probes: file is 700 bytes" -- "$pb" inspect "$tmp/cut.probes"
 expect inspect-not-volume 1 "error: $demo: not a probebake volume" -- "$pb" inspect "$demo"

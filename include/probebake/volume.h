@@ -136,6 +136,17 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err);
 /* Original-coordinate position of probe i: origin + base + offset (double). */
 void pb_volume_probe_position(const pb_volume *v, uint32_t i, double out[3]);
 
+/* The textures of the WebGL2 sampler (runtime/probe_sample.glsl,
+ * docs/sampling.md) as files a web or game engine loads without our reader,
+ * written into directory `dir` (made if missing): probes.ktx2 (RGBA32F, one
+ * texel per probe: relocated position in the volume's frame, flags),
+ * sh.ktx2 (RGBA32F, 7 texels per probe: the 27 SH floats, a zero),
+ * depth.ktx2 (RG16F, the depth tiles side by side) and manifest.json (the
+ * sampler's uniforms, the frame's origin, sizes and encodings;
+ * docs/format.md, "Texture contract"), the manifest last. Grid volumes
+ * only: PB_ERROR_INVALID_ARGUMENT otherwise; PB_ERROR_IO naming the path. */
+pb_result pb_volume_export_textures(const pb_volume *v, const char *dir, pb_error *err);
+
 /* IEEE half <-> float, round to nearest even; NaN stays NaN, overflow is Inf. */
 uint16_t pb_half_from_float(float f);
 float pb_half_to_float(uint16_t h);

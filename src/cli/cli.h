@@ -22,6 +22,7 @@ typedef struct options {
     const char *light_cells;    /* "on" | "off"; NULL: the preset's, else on */
     const char *points;
     const char *env;
+    const char *textures;       /* export: the output directory */
     float spacing, sky[3], bounds[6], target_error, env_intensity, env_rotation;
     int has_sky, indirect_volume;
     uint32_t sh_window;
@@ -51,6 +52,7 @@ double cli_now_ms(void);
 int cli_parse_floats(const char *s, int n, float *out);
 
 int cmd_render(const options *o);
+int cmd_export(const options *o);
 
 /* Progress line on stderr (when show) for pb_progress_fn; returns nonzero
  * once Ctrl-C was pressed while cli_catch_sigint(1) was in force. */

@@ -105,6 +105,8 @@ static void print_help(void)
            "                                          probe (position, flags, 27 irradiance SH coefficients)\n"
            "  probebake render SCENE -o IMG.png [--volume V.probes] [render options]\n"
            "                                          render the scene lit by a volume, or path traced\n"
+           "  probebake export VOLUME --textures DIR  the volume as textures a web or game engine loads\n"
+           "                                          (KTX2 + manifest.json; docs/format.md)\n"
            "  probebake --help | --version\n\n"
            "options:\n"
            "  --device INDEX|NAME     pick a device (default: discrete > integrated > virtual > CPU)\n"
@@ -199,6 +201,10 @@ static int parse(int argc, char **argv, options *o)
             if (!next)
                 return cli_usage_error("%s needs a file name", a);
             o->output = argv[++i];
+        } else if (!strcmp(a, "--textures")) {
+            if (!next)
+                return cli_usage_error("%s needs a directory", a);
+            o->textures = argv[++i];
         } else if (!strcmp(a, "--points")) {
             if (!next)
                 return cli_usage_error("%s needs a points file (JSON)", a);
@@ -1138,5 +1144,7 @@ int main(int argc, char **argv)
         return cmd_bake(&o);
     if (!strcmp(o.command, "render"))
         return cmd_render(&o);
+    if (!strcmp(o.command, "export"))
+        return cmd_export(&o);
     return cli_usage_error("unknown command '%s'", o.command);
 }
