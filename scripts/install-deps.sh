@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs probebake's build, test and bench dependencies from Debian's packages
-# (nodejs, npm: the web runtime, runtime/, is tested with node's runner and uses
-# three.js from npm at a pinned version).
+# (nodejs, npm, chromium: the web runtime, runtime/, is tested with node's runner
+# and in headless Chromium, and uses three.js from npm at a pinned version).
 # Everything comes from bookworm except Mesa's Vulkan drivers (lavapipe), which
 # come from bookworm-backports at a pinned version: Mesa 25's llvmpipe runs our
 # kernels several times faster than bookworm's 22.3 (bench/RESULTS.md) and has
@@ -20,7 +20,7 @@ pkgs=(
   libvulkan-volk-dev
   libembree-dev
   gnuplot-nox
-  nodejs
+  nodejs chromium
 )
 
 SUDO=""

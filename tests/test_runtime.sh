@@ -10,13 +10,15 @@ glslang=$2
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 failed=0
-bash "$src/scripts/make_runtime_glsl.sh" "$tmp/probe_sample.glsl"
-if cmp -s "$tmp/probe_sample.glsl" "$src/runtime/probe_sample.glsl"; then
-    echo "[  OK  ] runtime/probe_sample.glsl is up to date"
-else
-    echo "[ FAIL ] runtime/probe_sample.glsl differs from scripts/make_runtime_glsl.sh's output: run it"
-    failed=1
-fi
+bash "$src/scripts/make_runtime_glsl.sh" "$tmp/probe_sample.glsl" "$tmp/probe_sample_glsl.js"
+for f in probe_sample.glsl js/probe_sample_glsl.js; do
+    if cmp -s "$tmp/$(basename "$f")" "$src/runtime/$f"; then
+        echo "[  OK  ] runtime/$f is up to date"
+    else
+        echo "[ FAIL ] runtime/$f differs from scripts/make_runtime_glsl.sh's output: run it"
+        failed=1
+    fi
+done
 awk -v f="$src/runtime/probe_sample.glsl" '/@PROBE_SAMPLE@/ { while ((getline l < f) > 0) print l; next } { print }' \
     "$src/runtime/example.frag" >"$tmp/example.frag"
 if out=$("$glslang" "$tmp/example.frag" 2>&1); then

@@ -1,0 +1,143 @@
+// The viewer page (runtime/web) in headless Chromium against the C renderer:
+// the demo scene baked by probebake, drawn indirect-only by three.js through
+// runtime/js/three-probes.js (linear float target, read back by the page) and
+// by `probebake render --mode indirect` (the Vulkan kernel through the same
+// sampling code) at the same camera and size; plus a malformed volume, which
+// the page must report, not draw. Needs a Vulkan device (lavapipe) for the
+// bake and the render, Debian's chromium, and runtime/node_modules (npm ci).
+//   PB_PROBEBAKE=build/probebake PB_CHROMIUM=/usr/bin/chromium node --test runtime/js/test/browser.test.js
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { execFileSync, spawn } from 'node:child_process';
+import { createServer } from 'node:http';
+import { mkdtempSync, readFileSync, writeFileSync, rmSync, existsSync, statSync, copyFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, normalize, extname, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const root = normalize(join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..'));
+const probebake = process.env.PB_PROBEBAKE;
+const chromium = process.env.PB_CHROMIUM || '/usr/bin/chromium';
+const dir = mkdtempSync(join(tmpdir(), 'pb-browser-'));
+const W = 160, H = 120;
+const camera = ['--eye', '0,1.5,2.3', '--target', '0,1.2,0', '--fov', '60'];
+let server, base;
+
+const types = { '.html': 'text/html', '.js': 'text/javascript', '.json': 'application/json', '.gltf': 'model/gltf+json' };
+
+// a static server: the repository at /, the test's files at /t/
+before(async () => {
+    server = createServer((req, res) => {
+        const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
+        const file = path.startsWith('/t/') ? join(dir, path.slice(3)) : join(root, path);
+        if (!file.startsWith(root) && !file.startsWith(dir)) { res.writeHead(403).end(); return; }
+        if (!existsSync(file) || !statSync(file).isFile()) { res.writeHead(404).end(); return; }
+        res.writeHead(200, { 'content-type': types[extname(file)] || 'application/octet-stream' });
+        res.end(readFileSync(file));
+    });
+    await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
+    base = `http://127.0.0.1:${server.address().port}`;
+});
+after(() => { server.close(); if (!process.env.PB_KEEP) rmSync(dir, { recursive: true, force: true }); else console.log(`# kept ${dir}`); });
+
+function run(cmd, args) {
+    return new Promise((ok, fail) => {
+        const p = spawn(cmd, args, { stdio: ['ignore', 'pipe', 'pipe'] });
+        let out = '', err = '';
+        p.stdout.on('data', (d) => { out += d; });
+        p.stderr.on('data', (d) => { err += d; });
+        p.on('error', fail);
+        p.on('close', (code) => (code === 0 ? ok(out) : fail(new Error(`${cmd} exited ${code}: ${err.slice(-2000)}`))));
+    });
+}
+
+// headless Chromium on its software WebGL2 (SwiftShader): the page's DOM
+// after it has run (virtual time lets the fetches and the render finish)
+const chromiumArgs = ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    '--ignore-gpu-blocklist', '--virtual-time-budget=60000', `--window-size=${W},${H}`, '--hide-scrollbars'];
+
+async function pageResult(query) {
+    const dom = await run(chromium, [...chromiumArgs, '--dump-dom', `${base}/runtime/web/index.html?${query}`]);
+    const m = dom.match(/<pre id="pb-result"[^>]*>([^<]*)<\/pre>/);
+    assert.ok(m && m[1], `the page wrote no result: ${dom.slice(0, 400)}`);
+    return JSON.parse(m[1].replace(/&quot;/g, '"').replace(/&amp;/g, '&'));
+}
+
+function readPFM(path) {
+    const b = readFileSync(path);
+    const head = b.subarray(0, 64).toString('latin1').split('\n');
+    const [w, h] = head[1].split(' ').map(Number);
+    const offset = head[0].length + head[1].length + head[2].length + 3;
+    const f = new Float32Array(b.buffer.slice(b.byteOffset + offset, b.byteOffset + offset + w * h * 12));
+    const rgb = new Float32Array(w * h * 3); // top row first
+    for (let y = 0; y < h; ++y) rgb.set(f.subarray(3 * w * (h - 1 - y), 3 * w * (h - y)), 3 * w * y);
+    return { w, h, rgb };
+}
+
+test('the page lights the demo scene as the C renderer does', async () => {
+    assert.ok(probebake, 'PB_PROBEBAKE names the probebake binary');
+    const scene = join(root, 'tests/scenes/demo.gltf');
+    execFileSync(probebake, ['bake', scene, '--spacing', '0.5', '--rays', '128', '--passes', '2', '--quiet',
+        '-o', join(dir, 'demo.probes')]);
+    execFileSync(probebake, ['render', scene, '--volume', join(dir, 'demo.probes'), '--mode', 'indirect',
+        '--size', `${W}x${H}`, '--spp', '1', ...camera, '--pfm', '--quiet', '-o', join(dir, 'c.png')]);
+    const c = readPFM(join(dir, 'c.pfm'));
+    const q = `scene=/tests/scenes/demo.gltf&probes=/t/demo.probes&mode=indirect&test=1&w=${W}&h=${H}` +
+        `&eye=0,1.5,2.3&target=0,1.2,0&fov=60`;
+    const r = await pageResult(q);
+    assert.equal(r.error, undefined, r.error);
+    assert.equal(r.width, W);
+    assert.equal(r.height, H);
+    assert.equal(r.nan, 0, 'NaN or infinite pixels');
+    const bytes = Buffer.from(r.rgb, 'base64');
+    const js = new Float32Array(bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.length));
+    const misplaced = Buffer.from(r.misplaced, 'base64');
+    // surface pixels: where the C image has indirect light, less those the
+    // page found shaded at a misplaced point (viewer.js, `check`); the metric of
+    // `render --mode diff`: RMS difference over the mean
+    let se = 0, sum = 0, count = 0, far = 0, worst = 0;
+    const lum = (a, i) => 0.2126 * a[3 * i] + 0.7152 * a[3 * i + 1] + 0.0722 * a[3 * i + 2];
+    for (let i = 0; i < W * H; ++i) {
+        const lc = lum(c.rgb, i), lj = lum(js, i);
+        if (!(lc > 0) || misplaced[i]) continue;
+        ++count;
+        sum += lc;
+        se += (lj - lc) ** 2;
+        far += Math.abs(lj - lc) > 0.01 * lc;
+        worst = Math.max(worst, Math.abs(lj - lc) / lc);
+    }
+    const rrmse = Math.sqrt(se / count) / (sum / count);
+    console.log(`# ${count} surface pixels (${r.misplacedCount} left out as misplaced): relative RMSE ` +
+        `${rrmse.toExponential(2)}, ${far} differ by more than 1 %, worst ${worst.toExponential(2)}`);
+    assert.ok(r.misplacedCount <= 0.01 * W * H, `${r.misplacedCount} pixels shaded away from where they were drawn`);
+    assert.ok(count > W * H / 2, 'most pixels are compared');
+    // Same data (float32 SH and positions, the same float16 depth texels) and
+    // the same GLSL: what differs is float rounding of the shading point
+    // (interpolated by the rasterizer, hit by a ray in C) and of the sampler's
+    // arithmetic on two devices. The bound: 1e-3, ten times the 1e-4 that
+    // test_sample allows between the Vulkan sampler and its C reference per
+    // query; pixels at silhouettes (the other surface) are few and count in it.
+    assert.ok(rrmse < 1e-3, `relative RMSE ${rrmse}`);
+});
+
+test('a malformed volume gives a visible error, not a blank canvas', async () => {
+    const good = readFileSync(join(dir, 'demo.probes'));
+    writeFileSync(join(dir, 'cut.probes'), good.subarray(0, 700));
+    const newer = Buffer.from(good);
+    newer.writeUInt32LE(99, 8);
+    writeFileSync(join(dir, 'newer.probes'), newer);
+    for (const [file, needle] of [['cut.probes', 'truncated'], ['newer.probes', 'version 99'],
+        ['missing.probes', 'HTTP 404']]) {
+        const r = await pageResult(`scene=/tests/scenes/demo.gltf&probes=/t/${file}&test=1&w=${W}&h=${H}`);
+        assert.ok(r.error && r.error.includes(needle), `${file}: ${JSON.stringify(r).slice(0, 200)}`);
+    }
+});
+
+test('a screenshot of the page', async () => {
+    const shot = join(dir, 'viewer.png');
+    await run(chromium, [...chromiumArgs.filter((a) => !a.startsWith('--window-size')), '--window-size=640,480',
+        `--screenshot=${shot}`,
+        `${base}/runtime/web/index.html?scene=/tests/scenes/demo.gltf&probes=/t/demo.probes&eye=0,1.5,2.3&target=0,1.2,0&fov=60`]);
+    assert.ok(statSync(shot).size > 10000, 'a non-trivial PNG');
+    if (process.env.PB_SCREENSHOT) copyFileSync(shot, process.env.PB_SCREENSHOT);
+});
