@@ -14,6 +14,7 @@ import { mkdtempSync, readFileSync, writeFileSync, rmSync, existsSync, statSync,
 import { tmpdir } from 'node:os';
 import { join, normalize, extname, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { parseProbes } from '../probes.js';
 
 const root = normalize(join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..'));
 const probebake = process.env.PB_PROBEBAKE;
@@ -60,7 +61,10 @@ async function pageResult(query) {
     const dom = await run(chromium, [...chromiumArgs, '--dump-dom', `${base}/runtime/web/index.html?${query}`]);
     const m = dom.match(/<pre id="pb-result"[^>]*>([^<]*)<\/pre>/);
     assert.ok(m && m[1], `the page wrote no result: ${dom.slice(0, 400)}`);
-    return JSON.parse(m[1].replace(/&quot;/g, '"').replace(/&amp;/g, '&'));
+    const r = JSON.parse(m[1].replace(/&quot;/g, '"').replace(/&amp;/g, '&'));
+    const shown = dom.match(/<div id="error" style="display: block;">([^<]*)<\/div>/);
+    r.shownError = shown ? shown[1] : null; // the message a user sees over the canvas
+    return r;
 }
 
 function readPFM(path) {
@@ -81,6 +85,13 @@ test('the page lights the demo scene as the C renderer does', async () => {
         '-o', join(dir, 'demo.probes')]);
     execFileSync(probebake, ['render', scene, '--volume', join(dir, 'demo.probes'), '--mode', 'indirect',
         '--size', `${W}x${H}`, '--spp', '1', ...camera, '--pfm', '--quiet', '-o', join(dir, 'c.png')]);
+    // the reader on a real bake: every probe's SH as `inspect --json` prints it
+    const v = parseProbes(new Uint8Array(readFileSync(join(dir, 'demo.probes'))), 'demo.probes');
+    const j = JSON.parse(execFileSync(probebake, ['inspect', join(dir, 'demo.probes'), '--json'],
+        { maxBuffer: 1 << 28 }).toString());
+    assert.equal(j.probe_list.length, v.probeCount);
+    for (const p of j.probe_list)
+        for (let k = 0; k < 27; ++k) assert.equal(v.sh[27 * p.index + k], Math.fround(p.sh[k]), `probe ${p.index}`);
     const c = readPFM(join(dir, 'c.pfm'));
     const q = `scene=/tests/scenes/demo.gltf&probes=/t/demo.probes&mode=indirect&test=1&w=${W}&h=${H}` +
         `&eye=0,1.5,2.3&target=0,1.2,0&fov=60`;
@@ -130,6 +141,7 @@ test('a malformed volume gives a visible error, not a blank canvas', async () =>
         ['missing.probes', 'HTTP 404']]) {
         const r = await pageResult(`scene=/tests/scenes/demo.gltf&probes=/t/${file}&test=1&w=${W}&h=${H}`);
         assert.ok(r.error && r.error.includes(needle), `${file}: ${JSON.stringify(r).slice(0, 200)}`);
+        assert.ok(r.shownError && r.shownError.includes(needle), `${file}: the page shows no error`);
     }
 });
 
