@@ -197,9 +197,13 @@ async function main() {
             misplaced: btoa(mbin), misplacedCount });
         return;
     }
+    // orbit about the point ahead of the camera, as far as the scene's centre
+    // (taken before OrbitControls, whose constructor turns the camera to its target)
+    const ahead = camera.getWorldDirection(new THREE.Vector3());
+    const pivot = eye && target ? new THREE.Vector3(...target) : camera.position.clone().addScaledVector(ahead,
+        Math.max(0.1, camera.position.distanceTo(box.getCenter(new THREE.Vector3()))));
     const controls = new OrbitControls(camera, renderer.domElement);
-    if (eye && target) controls.target.set(...target);
-    else controls.target.copy(box.getCenter(new THREE.Vector3()));
+    controls.target.copy(pivot);
     controls.update();
     addEventListener('resize', () => {
         camera.aspect = innerWidth / innerHeight;
