@@ -237,6 +237,68 @@ static void bad_parameters_refused(void)
 
 /* The tone curve and sRGB are monotonic and bounded, exposure scales, auto
  * exposure maps the log-average to middle grey, the heat map is black at 0. */
+/* The image metric of `render --mode diff` (issue 14): on a synthetic 5 x 3
+ * image with known errors, the surface pixels next to an emitter are left
+ * out and the RMSE and p95 come out as computed by hand; on the demo scene
+ * the host's pixel classes agree with the kernel's surface mask at 1 spp
+ * (a surface wherever the first hit reflects) and find its ceiling panel. */
+static void image_metric(void)
+{
+    /* classes: row 0 = emitter E then surfaces; the two pixels beside E (and
+     * the one below it, and diagonal) are left out */
+    uint8_t cls[15] = {2, 1, 1, 1, 1,
+                       1, 1, 1, 1, 0,
+                       1, 1, 1, 1, 1};
+    float ref[60], img[60];
+    for (int i = 0; i < 15; ++i)
+        for (int c = 0; c < 4; ++c)
+            ref[4 * i + c] = img[4 * i + c] = 1.f;
+    /* luminance 1 everywhere; errors: pixel 1 (excluded, next to E) +9, pixel 7 +0.5, pixel 13 -0.2 */
+    for (int c = 0; c < 3; ++c)
+        img[4 * 1 + c] = 10.f, img[4 * 7 + c] = 1.5f, img[4 * 13 + c] = 0.8f;
+    pb_image_metrics m;
+    pb_image_surface_metrics(img, ref, cls, 5, 3, &m);
+    /* compared: 15 - 1 emitter - 1 miss - 3 next to E (1, 5, 6) = 10 pixels */
+    double rmse = sqrt((0.25 + 0.04) / 10.0);
+    fprintf(stderr, "  synthetic: %llu pixels, relative RMSE %.6f (want %.6f), p95 %.4f (want 0.5)\n",
+            (unsigned long long)m.pixels, m.relative_rmse, rmse, m.p95_relative);
+    CHECK(m.pixels == 10);
+    CHECK(fabs(m.relative_rmse - rmse) < 1e-6);
+    CHECK(fabs(m.p95_relative - 0.5) < 1e-6); /* sorted: 0 x8, 0.2, 0.5: index round(9 x 0.95) = 9 */
+
+    pb_scene *s = load_demo();
+    if (!s)
+        return;
+    prepared p;
+    if (!prepare(s, NULL, &p)) {
+        release(&p);
+        return;
+    }
+    uint32_t W = 64, H = 48;
+    pb_render_desc d;
+    memset(&d, 0, sizeof d);
+    pb_camera_from_scene(&s->cameras[0], &d.camera);
+    d.width = W, d.height = H, d.mode = PB_RENDER_DIRECT, d.spp = 1;
+    float *g = malloc((size_t)W * H * 16);
+    uint8_t *c = malloc((size_t)W * H);
+    pb_error err;
+    if (g && c && pb_render(ctx, s, p.gs, &d, g, NULL, NULL, &err) == PB_OK) {
+        pb_render_pixel_classes(s, p.bvh, &d, c);
+        uint32_t agree = 0, emitters = 0;
+        for (uint32_t i = 0; i < W * H; ++i) {
+            agree += (c[i] != PB_PIXEL_NONE) == (g[4 * i + 3] > 0.f);
+            emitters += c[i] == PB_PIXEL_EMITTER;
+        }
+        fprintf(stderr, "  demo: %u of %u pixel classes agree with the kernel's surface mask, %u emitter pixels\n", agree,
+                W * H, emitters);
+        CHECK(agree == W * H && emitters > 0);
+    } else {
+        CHECKF(0, "render: %s", err.message);
+    }
+    free(g), free(c);
+    release(&p);
+}
+
 static void display_pipeline(void)
 {
     float prev = -1.f;
@@ -273,6 +335,7 @@ int main(void)
     if (!(ctx = test_gpu_context()))
         return 1;
     RUN(display_pipeline);
+    RUN(image_metric);
     RUN(bad_parameters_refused);
     RUN(kernel_matches_cpu_reference);
     RUN(constant_sky_lights_floor_evenly);

@@ -78,6 +78,25 @@ void pb_error_heatmap(const float *a, const float *b, uint32_t width, uint32_t h
  * sqrt(mean (a - b)^2) / mean b. */
 double pb_image_relative_rmse(const float *a, const float *b, uint32_t width, uint32_t height);
 
+/* What each pixel's centre sees, from the camera of desc (width, height,
+ * camera) on the host BVH: PB_PIXEL_NONE (a miss or the back of a
+ * single-sided surface), PB_PIXEL_SURFACE (a reflecting surface that does
+ * not emit) or PB_PIXEL_EMITTER. The image metric leaves emitters out. */
+enum { PB_PIXEL_NONE = 0, PB_PIXEL_SURFACE = 1, PB_PIXEL_EMITTER = 2 };
+void pb_render_pixel_classes(const pb_scene *scene, const pb_bvh *bvh, const pb_render_desc *desc, uint8_t *cls);
+
+/* Error of image a against reference b over the non-emissive surface
+ * pixels (cls PB_PIXEL_SURFACE) that are not next to an emitter pixel (the
+ * 8 neighbours: their colour mixes the emitter's along the edge). Luminance;
+ * relative_rmse = sqrt(mean (a - b)^2) / mean b; p95_relative = the 95th
+ * percentile of |a - b| / max(b, 1 % of mean b) per pixel. */
+typedef struct pb_image_metrics {
+    double relative_rmse, p95_relative;
+    uint64_t pixels;          /* compared */
+} pb_image_metrics;
+void pb_image_surface_metrics(const float *a, const float *b, const uint8_t *cls, uint32_t width, uint32_t height,
+                              pb_image_metrics *out);
+
 /* Writes 8-bit RGB PNG (stb_image_write) or linear PFM (little-endian,
  * bottom row first as PFM says), atomically. PB_ERROR_IO naming the path. */
 pb_result pb_write_png(const char *path, const unsigned char *rgb8, uint32_t width, uint32_t height, pb_error *err);

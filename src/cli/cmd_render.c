@@ -106,7 +106,9 @@ int cmd_render(const options *o)
     d.width = o->width ? o->width : 640;
     d.height = o->height ? o->height : 480;
     d.mode = mode;
-    d.spp = o->has_spp ? o->spp : 0;
+    /* a diff's probe image: 16 samples per pixel unless told (its own noise
+     * stays out of the metric: the reference has 16x more) */
+    d.spp = o->has_spp ? o->spp : (diff ? 16u : 0u);
     /* with a volume of N bounces, the matching reference traces N + 1 after the first hit (the volume's
      * light reflects once more at the surface); without one, 8 */
     d.bounces = o->has_bounces ? o->bounces : (o->volume ? vol.settings.bounces + 1 : 8);
@@ -182,6 +184,8 @@ int cmd_render(const options *o)
     if (rr != PB_OK)
         goto out;
     double rmse = 0, rmse_indirect = 0;
+    pb_image_metrics surf;
+    memset(&surf, 0, sizeof surf);
     if (diff) {
         /* the reference (path traced), and the direct image the probe image's indirect part is measured against */
         pb_render_desc dr = d;
@@ -197,6 +201,15 @@ int cmd_render(const options *o)
             goto out;
         }
         rmse = pb_image_relative_rmse(img, ref, d.width, d.height);
+        uint8_t *cls = malloc(pixels);
+        if (!cls) {
+            free(direct_img);
+            snprintf(err.message, sizeof err.message, "out of host memory for a %ux%u image", d.width, d.height);
+            goto out;
+        }
+        pb_render_pixel_classes(s, bvh, &d, cls);
+        pb_image_surface_metrics(img, ref, cls, d.width, d.height, &surf);
+        free(cls);
         for (uint64_t i = 0; i < pixels; ++i)
             for (int c = 0; c < 3; ++c) {
                 img_direct[4 * i + c] = img[4 * i + c] - direct_img[4 * i + c]; /* probes: indirect part */
@@ -231,15 +244,19 @@ int cmd_render(const options *o)
                o->output, mode_name, d.width, d.height, spp, ms);
         if (diff)
             fprintf(report, ", \"reference_spp\": %u, \"reference_gpu_ms\": %.3f, \"relative_rmse\": %.6f, "
-                   "\"relative_rmse_indirect\": %.6f",
-                   o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect);
+                   "\"relative_rmse_indirect\": %.6f, \"relative_rmse_surfaces\": %.6f, \"p95_relative_error\": %.6f, "
+                   "\"surface_pixels\": %llu",
+                   o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect, surf.relative_rmse, surf.p95_relative,
+                   (unsigned long long)surf.pixels);
         fprintf(report, "}\n");
     } else {
         fprintf(report, "wrote %s: %ux%u, %s, %u spp, GPU %.0f ms\n", o->output, d.width, d.height, mode_name, spp, ms);
         if (diff)
             fprintf(report, "probes vs reference (%u spp, GPU %.0f ms): relative RMSE %.4f of the image, %.4f of the indirect "
-                   "light (surface pixels); heat map: black 0, red >= 50 %%\n",
-                   o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect);
+                   "light; non-emissive surfaces (%llu pixels): relative RMSE %.4f, p95 per-pixel error %.4f; heat map: "
+                   "black 0, red >= 50 %%\n",
+                   o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect, (unsigned long long)surf.pixels,
+                   surf.relative_rmse, surf.p95_relative);
     }
     rc = 0;
 out:

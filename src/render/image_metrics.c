@@ -1,0 +1,105 @@
+/* A fair image metric for probe-lit renders (issue 14): the error over the
+ * non-emissive surfaces, where probes are what lights the picture, with
+ * the pixels an emitter rules left out (render.h). */
+#include "common/common.h"
+#include "probebake/render.h"
+#include "probebake/trace.h"
+#include "render/render_types.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static float luminance(const float *p)
+{
+    return 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
+}
+
+void pb_render_pixel_classes(const pb_scene *s, const pb_bvh *bvh, const pb_render_desc *d, uint8_t *cls)
+{
+    uint64_t n = (uint64_t)d->width * d->height;
+    pb_ray *rays = malloc(n * sizeof *rays);
+    pb_hit *hits = malloc(n * sizeof *hits);
+    if (!rays || !hits) {
+        memset(cls, PB_PIXEL_NONE, n);
+        free(rays), free(hits);
+        return;
+    }
+    float fwd[3], right[3], up[3];
+    pb_render_camera_basis(&d->camera, d->width, d->height, fwd, right, up);
+    for (uint32_t py = 0; py < d->height; ++py)
+        for (uint32_t px = 0; px < d->width; ++px) { /* the kernel's pixel centre (1 spp) */
+            float sx = ((float)px + 0.5f) / (float)d->width * 2.f - 1.f;
+            float sy = 1.f - ((float)py + 0.5f) / (float)d->height * 2.f;
+            pb_ray *r = &rays[(uint64_t)py * d->width + px];
+            memcpy(r->origin, d->camera.eye, 12);
+            for (int k = 0; k < 3; ++k)
+                r->direction[k] = fwd[k] + sx * right[k] + sy * up[k];
+            r->tmin = 0.f, r->tmax = INFINITY;
+        }
+    pb_trace_cpu(s, bvh, rays, (uint32_t)n, PB_TRACE_CLOSEST, hits, 0);
+    for (uint64_t i = 0; i < n; ++i) {
+        cls[i] = PB_PIXEL_NONE;
+        if (hits[i].triangle == PB_NO_HIT)
+            continue;
+        const pb_material *m = &s->materials[s->material[hits[i].triangle]];
+        if (hits[i].backface && !m->double_sided)
+            continue;
+        cls[i] = m->emissive[0] > 0.f || m->emissive[1] > 0.f || m->emissive[2] > 0.f ? PB_PIXEL_EMITTER
+                                                                                     : PB_PIXEL_SURFACE;
+    }
+    free(rays), free(hits);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+void pb_image_surface_metrics(const float *a, const float *b, const uint8_t *cls, uint32_t w, uint32_t h,
+                              pb_image_metrics *out)
+{
+    memset(out, 0, sizeof *out);
+    uint64_t n = (uint64_t)w * h;
+    uint8_t *use = calloc(n, 1);
+    double *rel = malloc(n * sizeof *rel);
+    if (!use || !rel) {
+        free(use), free(rel);
+        return;
+    }
+    double se = 0, sum = 0;
+    uint64_t count = 0;
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) {
+            uint64_t i = (uint64_t)y * w + x;
+            if (cls[i] != PB_PIXEL_SURFACE)
+                continue;
+            int near_emitter = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    int64_t xx = (int64_t)x + dx, yy = (int64_t)y + dy;
+                    if (xx >= 0 && yy >= 0 && xx < w && yy < h && cls[(uint64_t)yy * w + (uint64_t)xx] == PB_PIXEL_EMITTER)
+                        near_emitter = 1;
+                }
+            if (near_emitter)
+                continue;
+            use[i] = 1;
+            double d = (double)luminance(a + 4 * i) - luminance(b + 4 * i);
+            se += d * d, sum += luminance(b + 4 * i), ++count;
+        }
+    if (count && sum > 0) {
+        double mean = sum / count, floor_ = 0.01 * mean;
+        uint64_t k = 0;
+        for (uint64_t i = 0; i < n; ++i)
+            if (use[i]) {
+                double lb = luminance(b + 4 * i);
+                rel[k++] = fabs((double)luminance(a + 4 * i) - lb) / fmax(lb, floor_);
+            }
+        qsort(rel, k, sizeof *rel, cmp_double);
+        out->relative_rmse = sqrt(se / count) / mean;
+        out->p95_relative = rel[(uint64_t)((k - 1) * 0.95 + 0.5)];
+        out->pixels = count;
+    }
+    free(use), free(rel);
+}
