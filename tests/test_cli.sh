@@ -52,6 +52,8 @@ expect info-text 0 'triangles +40 kept of 40' -- "$pb" info "$demo"
 expect info-json-triangles 0 '"triangles": 40,' -- "$pb" info "$demo" --json
 expect info-json-lights 0 '"lights": \[\{"type": "point"' -- "$pb" info "$demo" --json
 expect info-json-bounds 0 '"bounds_min": \[-2, 0, -2.5\]' -- "$pb" info "$demo" --json
+expect info-extensions 0 '^extensions  used: KHR_lights_punctual, KHR_materials_emissive_strength; applied: KHR_lights_punctual, KHR_materials_emissive_strength$' -- "$pb" info "$demo"
+expect info-json-extensions 0 '"extensions_applied": \["KHR_lights_punctual", "KHR_materials_emissive_strength"\],' -- "$pb" info "$demo" --json
 expect info-json-bounds-max 0 '"bounds_max": \[2, 3, 2.5\]' -- "$pb" info "$demo" --json
 expect info-needs-scene 2 'needs a SCENE' -- "$pb" info
 expect info-missing 1 "error: $tmp/missing.gltf: cannot open" -- "$pb" info "$tmp/missing.gltf"

@@ -272,6 +272,98 @@ static void normalized_integer_texcoords(void)
     pb_scene_destroy(s);
 }
 
+/* Sparse accessors (core glTF 2.0): substitutions over a base bufferView
+ * and over an accessor with no bufferView (zeros), and the malformed kinds
+ * (an index past the end, indices that do not increase, values past their
+ * view) refused naming the accessor. Two triangles; the sparse part moves
+ * vertex 1 of the first and builds the second from zeros. */
+static void sparse_accessors(void)
+{
+    /* bytes: 0 base positions (6 vertices, 72 B); 72 indices u16 [1, 4, 5] (6 B, padded to 8);
+     * 80 values (3 x vec3 = 36 B); 116 indices u8 [3, 4, 5] (3 B, padded to 4); 120 values (36 B) */
+    unsigned char bin[156];
+    memset(bin, 0, sizeof bin);
+    float base[18] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5, 5, 5, 5, 5, 5, 5};
+    memcpy(bin, base, 72);
+    uint16_t i16[3] = {1, 4, 5};
+    memcpy(bin + 72, i16, 6);
+    float v1[9] = {2, 0, 0, 1, 0, 3, 0, 1, 3};
+    memcpy(bin + 80, v1, 36);
+    uint8_t i8[3] = {3, 4, 5};
+    memcpy(bin + 116, i8, 3);
+    float v2[9] = {0, 0, 7, 1, 0, 7, 0, 1, 7};
+    memcpy(bin + 120, v2, 36);
+    const char *fmt =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}},{\"attributes\":{\"POSITION\":1}}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":6,\"type\":\"VEC3\","
+        "\"sparse\":{\"count\":3,\"indices\":{\"bufferView\":1,\"componentType\":5123},"
+        "\"values\":{\"bufferView\":2}}},"
+        "{\"componentType\":5126,\"count\":6,\"type\":\"VEC3\","
+        "\"sparse\":{\"count\":3,\"indices\":{\"bufferView\":3,\"componentType\":5121},"
+        "\"values\":{\"bufferView\":%d}}}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":72},{\"buffer\":0,\"byteOffset\":72,\"byteLength\":6},"
+        "{\"buffer\":0,\"byteOffset\":80,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":116,\"byteLength\":3},"
+        "{\"buffer\":0,\"byteOffset\":120,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":120,\"byteLength\":30}],"
+        "\"buffers\":[{\"byteLength\":156,\"uri\":\"@BUF@\"}]}";
+    char json[4096];
+    snprintf(json, sizeof json, fmt, 4);
+    pb_scene *s = load_ok(write_gltf("sparse.gltf", json, bin, sizeof bin));
+    if (s) {
+        /* accessor 0 as triangles (0,1,2) (3,4,5): vertex 1 moved to (2,0,0); 4 and 5 to z = 3;
+         * accessor 1: zeros but 3, 4, 5 -> one triangle at z = 7 (its first, all-zero, is degenerate) */
+        double p[3];
+        CHECK(s->triangle_count == 3);
+        world(s, 0, 1, p);
+        CHECK(near3(p, 2, 0, 0, 1e-6));
+        world(s, 1, 1, p);
+        CHECK(near3(p, 1, 0, 3, 1e-6));
+        world(s, 2, 2, p);
+        CHECK(near3(p, 0, 1, 7, 1e-6));
+        pb_scene_destroy(s);
+    }
+    snprintf(json, sizeof json, fmt, 5); /* values view 6 bytes short */
+    load_fails(write_gltf("sparse-short.gltf", json, bin, sizeof bin), PB_ERROR_PARSE, "sparse values");
+    bin[116 + 2] = 9; /* index 9 of 6 */
+    snprintf(json, sizeof json, fmt, 4);
+    load_fails(write_gltf("sparse-past.gltf", json, bin, sizeof bin), PB_ERROR_PARSE, "past the accessor's end");
+    bin[116 + 2] = 4; /* 3, 4, 4 */
+    load_fails(write_gltf("sparse-order.gltf", json, bin, sizeof bin), PB_ERROR_PARSE, "does not increase");
+}
+
+/* Materials of extensions a bake must read: KHR_materials_pbrSpecularGlossiness
+ * (the diffuse factor is the albedo, metallic 0) and KHR_materials_unlit
+ * (it emits its base colour and reflects nothing), both accepted when
+ * required. */
+static void spec_gloss_and_unlit_materials(void)
+{
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"extensionsUsed\":[\"KHR_materials_pbrSpecularGlossiness\",\"KHR_materials_unlit\"],"
+        "\"extensionsRequired\":[\"KHR_materials_pbrSpecularGlossiness\",\"KHR_materials_unlit\"],"
+        "\"materials\":[{\"pbrMetallicRoughness\":{\"metallicFactor\":1.0},\"extensions\":{"
+        "\"KHR_materials_pbrSpecularGlossiness\":{\"diffuseFactor\":[0.2,0.4,0.6,1.0],"
+        "\"specularFactor\":[1,1,1],\"glossinessFactor\":0.9}}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorFactor\":[0.5,0.25,1.0,1.0]},\"extensions\":{\"KHR_materials_unlit\":{}}}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0},"
+        "{\"attributes\":{\"POSITION\":0},\"material\":1}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
+    pb_scene *s = load_ok(write_gltf("specgloss.gltf", json, tri_pos, sizeof tri_pos));
+    if (!s)
+        return;
+    CHECK(s->material_count >= 2);
+    const pb_material *sg = &s->materials[0], *ul = &s->materials[1];
+    fprintf(stderr, "  spec-gloss albedo (%g, %g, %g) metallic %g; unlit emits (%g, %g, %g), base (%g, %g, %g)\n",
+            sg->base_color[0], sg->base_color[1], sg->base_color[2], sg->metallic, ul->emissive[0], ul->emissive[1],
+            ul->emissive[2], ul->base_color[0], ul->base_color[1], ul->base_color[2]);
+    CHECK(sg->base_color[0] == 0.2f && sg->base_color[1] == 0.4f && sg->base_color[2] == 0.6f && sg->metallic == 0.f);
+    CHECK(ul->emissive[0] == 0.5f && ul->emissive[1] == 0.25f && ul->emissive[2] == 1.f);
+    CHECK(ul->base_color[0] == 0.f && ul->base_color[1] == 0.f && ul->base_color[2] == 0.f);
+    pb_scene_destroy(s);
+}
+
 static void bad_triangles_dropped_and_counted(void)
 {
     float pos[27] = {0, 0, 0, 1, 0, 0, 0, 1, 0,        /* good */
@@ -505,6 +597,8 @@ int main(void)
     RUN(strips_fans_and_unindexed);
     RUN(glb_and_external_buffers);
     RUN(normalized_integer_texcoords);
+    RUN(sparse_accessors);
+    RUN(spec_gloss_and_unlit_materials);
     RUN(bad_triangles_dropped_and_counted);
     RUN(far_from_origin_is_rebased);
     RUN(malformed_files_get_clear_errors);

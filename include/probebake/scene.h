@@ -96,6 +96,8 @@ typedef struct pb_scene_stats {
     uint32_t primitives_skipped;  /* points and lines: not surfaces */
     uint32_t normals_generated;   /* primitives without NORMAL (flat normals made) */
     uint32_t nodes;               /* nodes visited in the default scene */
+    char extensions_used[512];    /* the file's extensionsUsed, comma-separated ("" for none) */
+    char extensions_applied[512]; /* those of them the loader applies; the rest are ignored (logged) */
 } pb_scene_stats;
 
 typedef struct pb_scene {

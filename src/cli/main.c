@@ -534,6 +534,22 @@ static const char *light_type(uint32_t t)
     return t == PB_LIGHT_DIRECTIONAL ? "directional" : t == PB_LIGHT_SPOT ? "spot" : "point";
 }
 
+/* "A, B" as a JSON array of strings ["A", "B"] (names hold no commas) */
+static void json_name_list(const char *list)
+{
+    printf("[");
+    for (const char *p = list; *p;) {
+        const char *e = strstr(p, ", ");
+        size_t n = e ? (size_t)(e - p) : strlen(p);
+        char name[512];
+        snprintf(name, sizeof name, "%.*s", (int)n, p);
+        printf("%s", p == list ? "" : ", ");
+        json_string(name);
+        p += n + (e ? 2 : 0);
+    }
+    printf("]");
+}
+
 static int cmd_info(const options *o)
 {
     if (!o->scene)
@@ -587,7 +603,11 @@ static int cmd_info(const options *o)
                    c->perspective ? "true" : "false", J(c->yfov).s, J(c->position[0] + s->origin[0]).s,
                    J(c->position[1] + s->origin[1]).s, J(c->position[2] + s->origin[2]).s);
         }
-        printf("],\n  \"bounds_min\": [%s, %s, %s],\n  \"bounds_max\": [%s, %s, %s],\n"
+        printf("],\n  \"extensions_used\": ");
+        json_name_list(st->extensions_used);
+        printf(",\n  \"extensions_applied\": ");
+        json_name_list(st->extensions_applied);
+        printf(",\n  \"bounds_min\": [%s, %s, %s],\n  \"bounds_max\": [%s, %s, %s],\n"
                "  \"origin\": [%s, %s, %s]\n}\n",
                J(lo[0]).s, J(lo[1]).s, J(lo[2]).s, J(hi[0]).s, J(hi[1]).s, J(hi[2]).s, J17(s->origin[0]).s,
                J17(s->origin[1]).s, J17(s->origin[2]).s);
@@ -606,6 +626,9 @@ static int cmd_info(const options *o)
             printf("%s%s '%s' %g", i ? ", " : ": ", light_type(s->lights[i].type), s->lights[i].name,
                    s->lights[i].intensity);
         printf("\ncameras     %u\n", s->camera_count);
+        if (st->extensions_used[0])
+            printf("extensions  used: %s; applied: %s\n", st->extensions_used,
+                   st->extensions_applied[0] ? st->extensions_applied : "none");
         printf("bounds      (%.6g, %.6g, %.6g) .. (%.6g, %.6g, %.6g) m\n", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
     }
     pb_scene_destroy(s);

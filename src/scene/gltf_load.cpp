@@ -164,8 +164,58 @@ const size_t PB_GLTF_MAX_ZERO_ELEMENTS = size_t(1) << 24;
 // nests about ten levels; 512 leaves room for deep extras.
 const int PB_GLTF_MAX_NESTING = 512;
 
+// One component of type `type` at p as a double (normalized integers to
+// [0, 1] or [-1, 1], glTF's rule). false for an unknown component type.
+bool component(const unsigned char *p, int type, bool normalized, double *x)
+{
+    switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: { float f; memcpy(&f, p, 4); *x = f; return true; }
+    case TINYGLTF_COMPONENT_TYPE_DOUBLE: { double f; memcpy(&f, p, 8); *x = f; return true; }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: *x = normalized ? p[0] / 255.0 : p[0]; return true;
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        int8_t s; memcpy(&s, p, 1); *x = normalized ? std::fmax(s / 127.0, -1.0) : s; return true; }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t s; memcpy(&s, p, 2); *x = normalized ? s / 65535.0 : s; return true; }
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        int16_t s; memcpy(&s, p, 2); *x = normalized ? std::fmax(s / 32767.0, -1.0) : s; return true; }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+        uint32_t s; memcpy(&s, p, 4); *x = normalized ? s / 4294967295.0 : s; return true; }
+    case TINYGLTF_COMPONENT_TYPE_INT: { int32_t s; memcpy(&s, p, 4); *x = s; return true; }
+    default: return false;
+    }
+}
+
+// The bytes of bufferView `view` from `offset` that `count` elements of
+// `elem` bytes at `stride` need, checked against the view and its buffer.
+pb_result view_span(reader &r, int view, size_t offset, size_t count, size_t elem, size_t stride,
+                    const std::string &name, const unsigned char **out)
+{
+    const tinygltf::Model &m = r.m;
+    if (view < 0 || view >= (int)m.bufferViews.size())
+        return fail(r, PB_ERROR_PARSE, name + " refers to missing bufferView " + std::to_string(view));
+    const tinygltf::BufferView &v = m.bufferViews[view];
+    if (v.buffer < 0 || v.buffer >= (int)m.buffers.size())
+        return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(view) + " refers to missing buffer " +
+                                           std::to_string(v.buffer));
+    const std::vector<unsigned char> &buf = m.buffers[v.buffer].data;
+    // the view must sit in the buffer, and the elements in the view
+    if (v.byteOffset > buf.size() || v.byteLength > buf.size() - v.byteOffset)
+        return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(view) + " (offset " +
+                                           std::to_string(v.byteOffset) + ", length " + std::to_string(v.byteLength) +
+                                           ") exceeds buffer " + std::to_string(v.buffer) + " of " +
+                                           std::to_string(buf.size()) + " bytes (truncated or missing buffer?)");
+    size_t need = offset + stride * (count - 1) + elem;
+    if (count > SIZE_MAX / stride || need < offset || need > v.byteLength)
+        return fail(r, PB_ERROR_PARSE, name + " (" + std::to_string(count) + " elements) reads past the end of bufferView " +
+                                           std::to_string(view));
+    *out = buf.data() + v.byteOffset + offset;
+    return PB_OK;
+}
+
 // Reads `count` elements of accessor `index` as `ncomp` doubles each, after
-// checking every byte it touches lies inside its buffer view and buffer.
+// checking every byte it touches lies inside its buffer view and buffer;
+// a sparse accessor's substitutions (core glTF 2.0) are applied over its
+// base (its bufferView, or zeros).
 pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &out, const char *what)
 {
     const tinygltf::Model &m = r.m;
@@ -173,8 +223,6 @@ pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &ou
         return fail(r, PB_ERROR_PARSE, std::string(what) + " accessor " + std::to_string(index) + " does not exist");
     const tinygltf::Accessor &a = m.accessors[index];
     std::string name = std::string(what) + " accessor " + std::to_string(index);
-    if (a.sparse.isSparse)
-        return fail(r, PB_ERROR_UNSUPPORTED, name + " is sparse (sparse accessors are not supported)");
     int comps = tinygltf::GetNumComponentsInType((uint32_t)a.type);
     int csize = tinygltf::GetComponentSizeInBytes((uint32_t)a.componentType);
     if (comps <= 0 || csize <= 0)
@@ -187,60 +235,62 @@ pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &ou
         out.clear();
         return PB_OK;
     }
+    size_t elem = (size_t)comps * csize;
     if (a.bufferView < 0) { // glTF: all zeros; no buffer bounds the count, so a fixed limit does
         if (a.count > PB_GLTF_MAX_ZERO_ELEMENTS)
             return fail(r, PB_ERROR_PARSE, name + " has " + std::to_string(a.count) +
                                                " elements and no bufferView: at most " +
                                                std::to_string(PB_GLTF_MAX_ZERO_ELEMENTS));
         out.assign((size_t)a.count * ncomp, 0.0);
-        return PB_OK;
+    } else {
+        size_t stride = a.bufferView < (int)m.bufferViews.size() && m.bufferViews[a.bufferView].byteStride
+                            ? m.bufferViews[a.bufferView].byteStride
+                            : elem;
+        if (stride < elem)
+            return fail(r, PB_ERROR_PARSE, name + ": byteStride smaller than an element");
+        const unsigned char *base;
+        pb_result res = view_span(r, a.bufferView, a.byteOffset, a.count, elem, stride, name, &base);
+        if (res != PB_OK)
+            return res;
+        out.assign((size_t)a.count * ncomp, 0.0); // bounded: count x stride fits in the view
+        for (size_t i = 0; i < a.count; ++i)
+            for (int c = 0; c < ncomp; ++c)
+                if (!component(base + i * stride + (size_t)c * csize, a.componentType, a.normalized,
+                               &out[i * ncomp + c]))
+                    return fail(r, PB_ERROR_PARSE, name + " has an invalid component type");
     }
-    if (a.bufferView >= (int)m.bufferViews.size())
-        return fail(r, PB_ERROR_PARSE, name + " refers to missing bufferView " + std::to_string(a.bufferView));
-    const tinygltf::BufferView &v = m.bufferViews[a.bufferView];
-    if (v.buffer < 0 || v.buffer >= (int)m.buffers.size())
-        return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(a.bufferView) + " refers to missing buffer " +
-                                           std::to_string(v.buffer));
-    const std::vector<unsigned char> &buf = m.buffers[v.buffer].data;
-    size_t elem = (size_t)comps * csize;
-    size_t stride = v.byteStride ? v.byteStride : elem;
-    if (stride < elem)
-        return fail(r, PB_ERROR_PARSE, name + ": byteStride smaller than an element");
-    // the view must sit in the buffer, and the accessor in the view
-    if (v.byteOffset > buf.size() || v.byteLength > buf.size() - v.byteOffset)
-        return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(a.bufferView) + " (offset " +
-                                           std::to_string(v.byteOffset) + ", length " + std::to_string(v.byteLength) +
-                                           ") exceeds buffer " + std::to_string(v.buffer) + " of " +
-                                           std::to_string(buf.size()) + " bytes (truncated or missing buffer?)");
-    size_t need = a.byteOffset + stride * (a.count - 1) + elem;
-    if (a.count > SIZE_MAX / stride || need < a.byteOffset || need > v.byteLength)
-        return fail(r, PB_ERROR_PARSE, name + " (" + std::to_string(a.count) + " elements) reads past the end of bufferView " +
-                                           std::to_string(a.bufferView));
-    out.assign((size_t)a.count * ncomp, 0.0); // bounded: count x stride fits in the view
-    const unsigned char *base = buf.data() + v.byteOffset + a.byteOffset;
-    for (size_t i = 0; i < a.count; ++i) {
-        const unsigned char *e = base + i * stride;
-        for (int c = 0; c < ncomp; ++c) {
-            const unsigned char *p = e + (size_t)c * csize;
-            double x = 0;
-            switch (a.componentType) {
-            case TINYGLTF_COMPONENT_TYPE_FLOAT: { float f; memcpy(&f, p, 4); x = f; break; }
-            case TINYGLTF_COMPONENT_TYPE_DOUBLE: { double f; memcpy(&f, p, 8); x = f; break; }
-            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: x = a.normalized ? p[0] / 255.0 : p[0]; break;
-            case TINYGLTF_COMPONENT_TYPE_BYTE: {
-                int8_t s; memcpy(&s, p, 1);
-                x = a.normalized ? std::fmax(s / 127.0, -1.0) : s; break; }
-            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-                uint16_t s; memcpy(&s, p, 2); x = a.normalized ? s / 65535.0 : s; break; }
-            case TINYGLTF_COMPONENT_TYPE_SHORT: {
-                int16_t s; memcpy(&s, p, 2); x = a.normalized ? std::fmax(s / 32767.0, -1.0) : s; break; }
-            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
-                uint32_t s; memcpy(&s, p, 4); x = a.normalized ? s / 4294967295.0 : s; break; }
-            case TINYGLTF_COMPONENT_TYPE_INT: { int32_t s; memcpy(&s, p, 4); x = s; break; }
-            default: return fail(r, PB_ERROR_PARSE, name + " has an invalid component type");
-            }
-            out[i * ncomp + c] = x;
-        }
+    if (!a.sparse.isSparse)
+        return PB_OK;
+    // sparse: `count` (index, value) pairs, indices strictly increasing and
+    // inside the accessor, values tightly packed in the accessor's type
+    size_t n = (size_t)a.sparse.count;
+    if (a.sparse.count < 1 || n > a.count)
+        return fail(r, PB_ERROR_PARSE, name + " has a sparse count of " + std::to_string(a.sparse.count) + " for " +
+                                           std::to_string(a.count) + " elements");
+    int itype = a.sparse.indices.componentType;
+    int isize = tinygltf::GetComponentSizeInBytes((uint32_t)itype);
+    if (itype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && itype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        itype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+        return fail(r, PB_ERROR_PARSE, name + ": sparse indices must be unsigned byte, short or int");
+    const unsigned char *ip, *vp;
+    pb_result res = view_span(r, a.sparse.indices.bufferView, (size_t)a.sparse.indices.byteOffset, n, (size_t)isize,
+                              (size_t)isize, name + " sparse indices", &ip);
+    if (res == PB_OK)
+        res = view_span(r, a.sparse.values.bufferView, (size_t)a.sparse.values.byteOffset, n, elem, elem,
+                        name + " sparse values", &vp);
+    if (res != PB_OK)
+        return res;
+    double prev = -1;
+    for (size_t k = 0; k < n; ++k) {
+        double idx;
+        component(ip + k * isize, itype, false, &idx);
+        if (!(idx > prev) || idx >= (double)a.count)
+            return fail(r, PB_ERROR_PARSE, name + ": sparse index " + std::to_string((uint64_t)idx) +
+                                               (idx >= (double)a.count ? " is past the accessor's end"
+                                                                        : " does not increase"));
+        prev = idx;
+        for (int c = 0; c < ncomp; ++c)
+            component(vp + k * elem + (size_t)c * csize, a.componentType, a.normalized, &out[(size_t)idx * ncomp + c]);
     }
     return PB_OK;
 }
@@ -257,6 +307,24 @@ int32_t texture_of(reader &r, int gltf_texture, const char *material)
     return r.texture_map[gltf_texture];
 }
 
+// KHR_materials_pbrSpecularGlossiness (archived, still in many exported
+// assets): the bake needs only the diffuse albedo, diffuseFactor x
+// diffuseTexture; specular and glossiness do not enter a Lambertian bake.
+const tinygltf::Value *spec_gloss(const tinygltf::Material &mt)
+{
+    auto ext = mt.extensions.find("KHR_materials_pbrSpecularGlossiness");
+    return ext != mt.extensions.end() && ext->second.IsObject() ? &ext->second : nullptr;
+}
+
+// The texture a material's base (diffuse) colour comes from: core or spec-gloss.
+int base_texture_index(const tinygltf::Material &mt)
+{
+    const tinygltf::Value *sg = spec_gloss(mt);
+    if (sg && sg->Has("diffuseTexture") && sg->Get("diffuseTexture").Has("index"))
+        return sg->Get("diffuseTexture").Get("index").GetNumberAsInt();
+    return mt.pbrMetallicRoughness.baseColorTexture.index;
+}
+
 pb_result read_textures(reader &r, int skip)
 {
     const tinygltf::Model &m = r.m;
@@ -266,7 +334,7 @@ pb_result read_textures(reader &r, int skip)
     // colour textures are sRGB: note which ones the materials use that way
     std::vector<int> srgb(m.textures.size(), 0);
     for (const tinygltf::Material &mt : m.materials) {
-        int t0 = mt.pbrMetallicRoughness.baseColorTexture.index, t1 = mt.emissiveTexture.index;
+        int t0 = base_texture_index(mt), t1 = mt.emissiveTexture.index;
         if (t0 >= 0 && t0 < (int)srgb.size()) srgb[t0] = 1;
         if (t1 >= 0 && t1 < (int)srgb.size()) srgb[t1] = 1;
     }
@@ -315,8 +383,25 @@ void read_materials(reader &r)
         pm.alpha_mode = mt.alphaMode == "MASK" ? PB_ALPHA_MASK : mt.alphaMode == "BLEND" ? PB_ALPHA_BLEND : PB_ALPHA_OPAQUE;
         pm.alpha_cutoff = (float)mt.alphaCutoff;
         pm.double_sided = mt.doubleSided ? 1u : 0u;
-        pm.base_color_texture = texture_of(r, pbr.baseColorTexture.index, pm.name);
+        pm.base_color_texture = texture_of(r, base_texture_index(mt), pm.name);
         pm.emissive_texture = texture_of(r, mt.emissiveTexture.index, pm.name);
+        if (const tinygltf::Value *sg = spec_gloss(mt)) {
+            pm.metallic = 0.f; /* the diffuse colour is the albedo as it stands */
+            for (int k = 0; k < 4; ++k)
+                pm.base_color[k] = 1.f;
+            if (sg->Has("diffuseFactor") && sg->Get("diffuseFactor").IsArray())
+                for (int k = 0; k < 4 && k < (int)sg->Get("diffuseFactor").ArrayLen(); ++k)
+                    pm.base_color[k] = (float)sg->Get("diffuseFactor").Get(k).GetNumberAsDouble();
+        }
+        /* KHR_materials_unlit: the surface shows its base colour whatever
+         * lights it, so to the probes it is a source of that radiance, not a
+         * reflector: it emits base colour x base texture and reflects nothing */
+        if (mt.extensions.find("KHR_materials_unlit") != mt.extensions.end()) {
+            for (int k = 0; k < 3; ++k)
+                pm.emissive[k] = pm.base_color[k], pm.base_color[k] = 0.f;
+            pm.emissive_texture = pm.base_color_texture;
+            pm.metallic = 0.f;
+        }
         pb_sb_add_material(r.b, &pm);
     }
     pb_material def = pb_material_default();
@@ -634,7 +719,8 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     if (!gwarn.empty())
         pb_logf(&b->log, PB_LOG_DEBUG, "%s: tinygltf: %s", path, first_line(gwarn).c_str());
 
-    static const char *const supported[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength"};
+    static const char *const supported[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
+                                            "KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit"};
     for (const std::string &ext : model.extensionsRequired) {
         bool known = false;
         for (const char *s : supported)
@@ -643,13 +729,19 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
             return pb_fail(err, PB_ERROR_UNSUPPORTED, "%s: requires extension %s, which probebake does not support",
                            path, ext.c_str());
     }
+    std::string used, applied;
     for (const std::string &ext : model.extensionsUsed) {
         bool known = false;
         for (const char *s : supported)
             known |= ext == s;
         if (!known)
             pb_logf(&b->log, PB_LOG_INFO, "%s: extension %s is used but not supported; ignored", path, ext.c_str());
+        used += (used.empty() ? "" : ", ") + ext;
+        if (known)
+            applied += (applied.empty() ? "" : ", ") + ext;
     }
+    snprintf(b->stats.extensions_used, sizeof b->stats.extensions_used, "%s", used.c_str());
+    snprintf(b->stats.extensions_applied, sizeof b->stats.extensions_applied, "%s", applied.c_str());
 
     reader r{model, path, b, err, {}, 0};
     res = read_textures(r, desc->skip_textures);
