@@ -364,6 +364,43 @@ static void spec_gloss_and_unlit_materials(void)
     pb_scene_destroy(s);
 }
 
+/* KHR_texture_transform on the base colour texture: the UVs the scene keeps
+ * are offset + R(rotation) x scale x uv with u' = cos u + sin v,
+ * v' = -sin u + cos v (the direction the Khronos sample TextureTransformTest
+ * marks correct); checked at the three vertices (uv (0,0), (1,0), (0,1))
+ * with offset (0.5, 0.25), scale (2, 3) and a quarter turn: (0.5, 0.25),
+ * (0.5, -1.75), (3.5, 0.25). */
+static void texture_transform_applied(void)
+{
+    unsigned char bin[36 + 24];
+    memcpy(bin, tri_pos, 36);
+    float uv[6] = {0, 0, 1, 0, 0, 1};
+    memcpy(bin + 36, uv, 24);
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"extensionsUsed\":[\"KHR_texture_transform\"],\"extensionsRequired\":[\"KHR_texture_transform\"],"
+        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0,\"extensions\":{"
+        "\"KHR_texture_transform\":{\"offset\":[0.5,0.25],\"scale\":[2,3],\"rotation\":1.5707963267948966}}}}}],"
+        "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"data:image/png;base64,"
+        "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mP8z8BQDwAEhQGAhKmMIQAAAABJRU5ErkJggg==\"}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":0}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":24}],"
+        "\"buffers\":[{\"byteLength\":60,\"uri\":\"@BUF@\"}]}";
+    pb_scene *s = load_ok(write_gltf("texture-transform.gltf", json, bin, sizeof bin));
+    if (!s)
+        return;
+    const float want[6] = {0.5f, 0.25f, 0.5f, -1.75f, 3.5f, 0.25f};
+    float worst = 0.f;
+    for (int k = 0; k < 6; ++k)
+        worst = fmaxf(worst, fabsf(s->texcoords[k] - want[k]));
+    fprintf(stderr, "  uv (%g, %g) (%g, %g) (%g, %g), worst difference %.1e\n", s->texcoords[0], s->texcoords[1],
+            s->texcoords[2], s->texcoords[3], s->texcoords[4], s->texcoords[5], worst);
+    CHECK(s->triangle_count == 1 && worst < 1e-6f);
+    pb_scene_destroy(s);
+}
+
 static void bad_triangles_dropped_and_counted(void)
 {
     float pos[27] = {0, 0, 0, 1, 0, 0, 0, 1, 0,        /* good */
@@ -599,6 +636,7 @@ int main(void)
     RUN(normalized_integer_texcoords);
     RUN(sparse_accessors);
     RUN(spec_gloss_and_unlit_materials);
+    RUN(texture_transform_applied);
     RUN(bad_triangles_dropped_and_counted);
     RUN(far_from_origin_is_rebased);
     RUN(malformed_files_get_clear_errors);

@@ -15,11 +15,13 @@ extern "C" {
 #include <stb_image.h>
 #include <tiny_gltf.h>
 
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -34,6 +36,7 @@ struct reader {
     pb_error *err;
     std::vector<int32_t> texture_map; // glTF texture -> pb texture (-1: none / failed)
     uint32_t default_material = 0;
+    std::vector<std::array<double, 6>> uv_transform; // per material: KHR_texture_transform of its UVs
 };
 
 // Custom image loader: stb_image to RGBA8. A texture that fails to decode is a
@@ -316,6 +319,36 @@ const tinygltf::Value *spec_gloss(const tinygltf::Material &mt)
     return ext != mt.extensions.end() && ext->second.IsObject() ? &ext->second : nullptr;
 }
 
+// KHR_texture_transform of a textureInfo (the extension object `t`) as
+// u' = a u + b v + c, v' = d u + e v + f: offset x rotation x scale with
+// u' = cos u + sin v, v' = -sin u + cos v before the offset. That is the
+// direction the Khronos sample TextureTransformTest marks correct (its
+// arrow points at the green marker; with the matrix of columns (cos, sin),
+// (-sin, cos) that some copies of the extension's text show, it points at
+// the red "applied in the opposite direction" one). texCoord: the set it
+// overrides to (-1: none).
+void texture_transform(const tinygltf::Value &t, std::array<double, 6> &xf, int *texcoord)
+{
+    double off[2] = {0, 0}, sc[2] = {1, 1}, rot = 0;
+    for (int k = 0; k < 2; ++k) {
+        if (t.Has("offset") && t.Get("offset").IsArray() && (int)t.Get("offset").ArrayLen() > k)
+            off[k] = t.Get("offset").Get(k).GetNumberAsDouble();
+        if (t.Has("scale") && t.Get("scale").IsArray() && (int)t.Get("scale").ArrayLen() > k)
+            sc[k] = t.Get("scale").Get(k).GetNumberAsDouble();
+    }
+    if (t.Has("rotation"))
+        rot = t.Get("rotation").GetNumberAsDouble();
+    *texcoord = t.Has("texCoord") ? t.Get("texCoord").GetNumberAsInt() : -1;
+    double c = std::cos(rot), sn = std::sin(rot);
+    xf = {c * sc[0], sn * sc[1], off[0], -sn * sc[0], c * sc[1], off[1]};
+}
+
+const tinygltf::Value *transform_of(const tinygltf::ExtensionMap &ext)
+{
+    auto it = ext.find("KHR_texture_transform");
+    return it != ext.end() && it->second.IsObject() ? &it->second : nullptr;
+}
+
 // The texture a material's base (diffuse) colour comes from: core or spec-gloss.
 int base_texture_index(const tinygltf::Material &mt)
 {
@@ -402,8 +435,37 @@ void read_materials(reader &r)
             pm.emissive_texture = pm.base_color_texture;
             pm.metallic = 0.f;
         }
+        /* KHR_texture_transform: the scene keeps one UV set per triangle, so a
+         * material's UVs take its base colour texture's transform (else its
+         * emissive texture's); a different one on the other is warned of */
+        std::array<double, 6> xf = {1, 0, 0, 0, 1, 0}, xe = xf;
+        int tc_base = -1, tc_em = -1;
+        const tinygltf::Value *tb = nullptr;
+        if (const tinygltf::Value *sg = spec_gloss(mt)) {
+            if (sg->Has("diffuseTexture") && sg->Get("diffuseTexture").Has("extensions") &&
+                sg->Get("diffuseTexture").Get("extensions").Has("KHR_texture_transform"))
+                tb = &sg->Get("diffuseTexture").Get("extensions").Get("KHR_texture_transform");
+        } else {
+            tb = transform_of(pbr.baseColorTexture.extensions);
+        }
+        const tinygltf::Value *te = transform_of(mt.emissiveTexture.extensions);
+        if (tb)
+            texture_transform(*tb, xf, &tc_base);
+        if (te)
+            texture_transform(*te, xe, &tc_em);
+        if (!tb && te && pm.base_color_texture < 0)
+            xf = xe, tc_base = tc_em;
+        else if (te && pm.emissive_texture >= 0 && pm.base_color_texture >= 0 && xe != xf)
+            pb_logf(&r.b->log, PB_LOG_WARN,
+                    "%s: material '%s': its emissive texture's KHR_texture_transform differs from its base colour "
+                    "texture's; the base colour's is applied to both", r.path, pm.name);
+        if (tc_base > 0)
+            pb_logf(&r.b->log, PB_LOG_WARN, "%s: material '%s': KHR_texture_transform selects TEXCOORD_%d; "
+                    "only TEXCOORD_0 is read", r.path, pm.name, tc_base);
+        r.uv_transform.push_back(xf);
         pb_sb_add_material(r.b, &pm);
     }
+    r.uv_transform.push_back({1, 0, 0, 0, 1, 0});
     pb_material def = pb_material_default();
     snprintf(def.name, sizeof def.name, "default");
     r.default_material = (uint32_t)pb_sb_add_material(r.b, &def);
@@ -504,8 +566,10 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
                 for (int c = 0; c < 3; ++c)
                     n[3 * k + c] = (float)wn[c];
             }
-            tc[2 * k] = have_uv ? (float)uv[2 * v] : 0.f;
-            tc[2 * k + 1] = have_uv ? (float)uv[2 * v + 1] : 0.f;
+            const std::array<double, 6> &x = r.uv_transform[material];
+            double u0 = have_uv ? uv[2 * v] : 0.0, v0 = have_uv ? uv[2 * v + 1] : 0.0;
+            tc[2 * k] = (float)(x[0] * u0 + x[1] * v0 + x[2]);
+            tc[2 * k + 1] = (float)(x[3] * u0 + x[4] * v0 + x[5]);
         }
         if (!pb_sb_add_triangle(r.b, p, have_n ? n : nullptr, tc, material))
             return fail(r, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
@@ -720,7 +784,8 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
         pb_logf(&b->log, PB_LOG_DEBUG, "%s: tinygltf: %s", path, first_line(gwarn).c_str());
 
     static const char *const supported[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
-                                            "KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit"};
+                                            "KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit",
+                                            "KHR_texture_transform"};
     for (const std::string &ext : model.extensionsRequired) {
         bool known = false;
         for (const char *s : supported)
