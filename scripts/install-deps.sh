@@ -21,6 +21,7 @@ pkgs=(
   libembree-dev
   gnuplot-nox
   nodejs chromium
+  python3
 )
 
 SUDO=""

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# scripts/corpus.py over the repository's scenes and ../shared/scenes (when
+# present): every file loads or is refused with a one-line reason, none
+# crashes, every volume is finite; the files expected to load do, and the
+# shared corpus's three expected refusals are the only ones.
+# Usage: test_corpus.sh SOURCE_DIR PROBEBAKE
+set -u
+src=$1
+pb=$2
+dirs=("$src/tests/scenes")
+shared="$src/../shared/scenes"
+[ -d "$shared" ] && dirs+=("$shared") || echo "  SKIP part: $shared not present"
+out=$(python3 "$src/scripts/corpus.py" --probebake "$pb" "${dirs[@]}")
+rc=$?
+echo "$out" | python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+print("  %(files)d files: %(loaded)d loaded, %(baked)d baked, %(refused)d refused, %(crashed)d crashed, %(nan)d NaN" % d)
+for r in d["refusals"]:
+    print("  refused: " + r["reason"])
+bad = d["crashed"] or d["nan"]
+expected = {"Empty.gltf", "OnlyAccessors.gltf", "EmbedBufferInvalid.gltf"}  # no triangles; an invalid data URI
+unexpected = [r["file"] for r in d["refusals"] if r["file"].rsplit("/", 1)[-1] not in expected]
+if unexpected:
+    print("  unexpected refusals: %s" % unexpected)
+sys.exit(1 if bad or unexpected or d["files"] < 4 else 0)
+'
+check=$?
+if [ "$rc" -eq 0 ] && [ "$check" -eq 0 ]; then
+    echo "[  OK  ] corpus"
+else
+    echo "[ FAIL ] corpus (corpus.py exit $rc)"
+    exit 1
+fi
