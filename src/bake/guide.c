@@ -112,7 +112,7 @@ static void train_range(void *user, uint64_t begin, uint64_t end)
         uint32_t rest = j->pass->bounces ? j->pass->bounces - 1u : 0u;
         pb_path_result r = pb_path_radiance_cpu(&j->path, x, dir, rest, 0, &state);
         uint32_t ue = entry_index(j->g, x, n), bin = bin_of(dir);
-        float lum = 0.2126f * r.L[0] + 0.7152f * r.L[1] + 0.0722f * r.L[2];
+        float lum = pb_luminance(r.L);
         if (!isfinite(lum) || lum < 0.f)
             continue;
         memcpy(&rec[0], &ue, 4);

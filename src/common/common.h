@@ -44,4 +44,11 @@ uint64_t pb_hash64(const void *data, size_t size, uint64_t seed);
 /* Physical memory of this machine in bytes (0 if unknown). */
 uint64_t pb_host_memory_bytes(void);
 
+/* Luminance of linear RGB, Rec. 709 / sRGB primaries (what images, guiding
+ * and error metrics weigh colours by). */
+static inline float pb_luminance(const float rgb[3])
+{
+    return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
+}
+
 #endif

@@ -11,11 +11,6 @@
 
 #include <stb_image_write.h>
 
-static float luminance(const float *c)
-{
-    return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
-}
-
 float pb_tonemap_aces(float x)
 {
     /* Narkowicz's fit of the ACES reference rendering transform */
@@ -37,7 +32,7 @@ float pb_auto_exposure(const float *rgba, uint32_t width, uint32_t height)
     for (int pass = 0; pass < 2 && n == 0; ++pass)
         for (uint64_t i = 0; i < pixels; ++i)
             if (pass == 1 || rgba[4 * i + 3] > 0.f) {
-                float l = luminance(rgba + 4 * i);
+                float l = pb_luminance(rgba + 4 * i);
                 sum += log(1e-4 + (l > 0.f ? l : 0.f)); /* negative (SH ringing) or NaN counts as black */
                 ++n;
             }
@@ -61,7 +56,7 @@ void pb_error_heatmap(const float *a, const float *b, uint32_t width, uint32_t h
     /* black -> blue -> green -> yellow -> red */
     static const float ramp[5][3] = {{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0}};
     for (uint64_t i = 0; i < (uint64_t)width * height; ++i) {
-        float la = luminance(a + 4 * i), lb = luminance(b + 4 * i);
+        float la = pb_luminance(a + 4 * i), lb = pb_luminance(b + 4 * i);
         float e = fabsf(la - lb) / fmaxf(lb, 1e-3f) / max_error;
         e = e < 0.f ? 0.f : (e > 1.f ? 1.f : e);
         float x = e * 4.f;
@@ -79,9 +74,9 @@ double pb_image_relative_rmse(const float *a, const float *b, uint32_t width, ui
     for (uint64_t i = 0; i < (uint64_t)width * height; ++i) {
         if (!(b[4 * i + 3] > 0.f))
             continue;
-        double d = (double)luminance(a + 4 * i) - luminance(b + 4 * i);
+        double d = (double)pb_luminance(a + 4 * i) - pb_luminance(b + 4 * i);
         se += d * d;
-        sum += luminance(b + 4 * i);
+        sum += pb_luminance(b + 4 * i);
         ++n;
     }
     return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;

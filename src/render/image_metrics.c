@@ -10,11 +10,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static float luminance(const float *p)
-{
-    return 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
-}
-
 void pb_render_pixel_classes(const pb_scene *s, const pb_bvh *bvh, const pb_render_desc *d, uint8_t *cls)
 {
     uint64_t n = (uint64_t)d->width * d->height;
@@ -85,16 +80,16 @@ void pb_image_surface_metrics(const float *a, const float *b, const uint8_t *cls
             if (near_emitter)
                 continue;
             use[i] = 1;
-            double d = (double)luminance(a + 4 * i) - luminance(b + 4 * i);
-            se += d * d, sum += luminance(b + 4 * i), ++count;
+            double d = (double)pb_luminance(a + 4 * i) - pb_luminance(b + 4 * i);
+            se += d * d, sum += pb_luminance(b + 4 * i), ++count;
         }
     if (count && sum > 0) {
         double mean = sum / count, floor_ = 0.01 * mean;
         uint64_t k = 0;
         for (uint64_t i = 0; i < n; ++i)
             if (use[i]) {
-                double lb = luminance(b + 4 * i);
-                rel[k++] = fabs((double)luminance(a + 4 * i) - lb) / fmax(lb, floor_);
+                double lb = pb_luminance(b + 4 * i);
+                rel[k++] = fabs((double)pb_luminance(a + 4 * i) - lb) / fmax(lb, floor_);
             }
         qsort(rel, k, sizeof *rel, cmp_double);
         out->relative_rmse = sqrt(se / count) / mean;
