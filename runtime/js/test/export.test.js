@@ -75,3 +75,26 @@ test('export refuses what it cannot write, with one line naming the problem', ()
         assert.match(lines[0], /^probebake: error: /);
     }
 });
+
+// three-probes.js builds the same textures in the browser: the two sides of
+// the contract (C export, JS ProbeVolume) must agree texel by texel and on
+// the uniforms that say how the textures are laid out.
+test('ProbeVolume lays the textures out as the export does', async () => {
+    const { ProbeVolume } = await import('../three-probes.js');
+    const src = join(dir, 'pv.probes'), out = join(dir, 'pv-tex');
+    execFileSync(maker, [src]);
+    execFileSync(probebake, ['export', src, '--textures', out]);
+    const v = parseProbes(new Uint8Array(readFileSync(src)), src);
+    const m = JSON.parse(readFileSync(join(out, 'manifest.json')));
+    const pv = new ProbeVolume(v);
+    for (const name of ['pb_tex_width', 'pb_depth_tiles_per_row', 'pb_octmap_res', 'pb_depth_unit'])
+        assert.equal(pv.uniforms[name].value, m.uniforms[name], name);
+    assert.deepEqual(Array.from(pv.uniforms.pb_grid_counts.value), m.uniforms.pb_grid_counts);
+    const pairs = [['probes', 'pb_probes', 'f32'], ['sh', 'pb_sh', 'f32'], ['depth', 'pb_depth', 'u16']];
+    for (const [tex, key, kind] of pairs) {
+        const t = pv.textures[tex].image, k = ktx(join(out, m.textures[key].file));
+        assert.equal(t.width, k.k.pixelWidth, `${key} width`);
+        assert.equal(t.height, k.k.pixelHeight, `${key} height`);
+        assert.deepEqual(Array.from(t.data), Array.from(k[kind]), `${key} texels`);
+    }
+});
