@@ -17,6 +17,7 @@ pkgs=(
   libvulkan-dev vulkan-validationlayers
   glslang-tools spirv-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev
+  libdraco-dev libmeshoptimizer-dev
   libvulkan-volk-dev
   libembree-dev
   gnuplot-nox

@@ -1,6 +1,7 @@
 /* Scene loader: hierarchy transforms, primitive modes, file forms, attribute
  * encodings, dropped triangles, and every malformed-file error. CPU only. */
 #define _DEFAULT_SOURCE /* mknod, makedev */
+#include "compressed_variants.h"
 #include "test_util.h"
 
 #include <sys/sysmacros.h>
@@ -494,9 +495,9 @@ static void malformed_files_get_clear_errors(void)
     load_fails(write_gltf("badindex.gltf", badidx, bin, 42), PB_ERROR_PARSE, "out of range");
 
     /* a required extension we do not implement */
-    const char *req = "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_draco_mesh_compression\"],"
-                      "\"extensionsRequired\":[\"KHR_draco_mesh_compression\"],\"scenes\":[{\"nodes\":[]}]}";
-    load_fails(write_file("draco.gltf", req, strlen(req)), PB_ERROR_UNSUPPORTED, "KHR_draco_mesh_compression");
+    const char *req = "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_materials_volume\"],"
+                      "\"extensionsRequired\":[\"KHR_materials_volume\"],\"scenes\":[{\"nodes\":[]}]}";
+    load_fails(write_file("volume.gltf", req, strlen(req)), PB_ERROR_UNSUPPORTED, "KHR_materials_volume");
 
     /* a cycle in the node graph */
     load_fails(one_triangle("cycle.gltf", "\"nodes\":[{\"mesh\":0,\"children\":[1]},{\"children\":[0]}],"),
@@ -626,6 +627,231 @@ static void shared_scenes_load(void)
         skip("../shared/scenes not present");
 }
 
+/* ------------------------------------------------- compressed geometry */
+
+/* One triangle in world space, for matching across two loads of a scene. */
+typedef struct tri_rec {
+    double v[3][3], n[3][3], uv[3][2];
+    double cx; /* centroid x: the sort key */
+    uint32_t material;
+} tri_rec;
+
+static int by_cx(const void *a, const void *b)
+{
+    double x = ((const tri_rec *)a)->cx, y = ((const tri_rec *)b)->cx;
+    return x < y ? -1 : x > y;
+}
+
+static tri_rec *tri_records(const pb_scene *s)
+{
+    tri_rec *r = calloc(s->triangle_count ? s->triangle_count : 1, sizeof *r);
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        for (int k = 0; k < 3; ++k) {
+            world(s, t, k, r[t].v[k]);
+            for (int c = 0; c < 3; ++c)
+                r[t].n[k][c] = s->normals[9 * (size_t)t + 3 * k + c];
+            for (int c = 0; c < 2; ++c)
+                r[t].uv[k][c] = s->texcoords[6 * (size_t)t + 2 * k + c];
+        }
+        r[t].cx = (r[t].v[0][0] + r[t].v[1][0] + r[t].v[2][0]) / 3;
+        r[t].material = s->material[t];
+    }
+    qsort(r, s->triangle_count, sizeof *r, by_cx);
+    return r;
+}
+
+/* Largest per-axis distance between a's corners and b's, b's corners
+ * rotated by `rot` (Draco may start a triangle at another corner). */
+static double corner_distance(const tri_rec *a, const tri_rec *b, int rot)
+{
+    double d = 0;
+    for (int k = 0; k < 3; ++k)
+        for (int c = 0; c < 3; ++c)
+            d = fmax(d, fabs(a->v[k][c] - b->v[(k + rot) % 3][c]));
+    return d;
+}
+
+/* Twice the area over the longest edge: the triangle's height. A triangle
+ * lower than twice the position bound may be an encoding's sliver (or lose
+ * its area to it), so it need not have a partner. */
+static double tri_height(const tri_rec *t)
+{
+    double e1[3], e2[3], cr[3], longest = 0;
+    for (int c = 0; c < 3; ++c)
+        e1[c] = t->v[1][c] - t->v[0][c], e2[c] = t->v[2][c] - t->v[0][c];
+    cr[0] = e1[1] * e2[2] - e1[2] * e2[1], cr[1] = e1[2] * e2[0] - e1[0] * e2[2], cr[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    for (int k = 0; k < 3; ++k) {
+        double l = 0;
+        for (int c = 0; c < 3; ++c)
+            l += pow(t->v[(k + 1) % 3][c] - t->v[k][c], 2);
+        longest = fmax(longest, sqrt(l));
+    }
+    return longest > 0 ? sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]) / longest : 0;
+}
+
+/* Triangles of `a` (sorted) with no partner in `b` (sorted): same material,
+ * corners within `bound` per axis; partners' normals within `nbound` and
+ * texcoords within `uvbound`, else counted in *attr_bad. */
+static uint32_t unmatched(const tri_rec *a, uint32_t na, const tri_rec *b, uint32_t nb, double bound, double nbound,
+                          double uvbound, uint32_t *attr_bad)
+{
+    uint32_t missing = 0;
+    for (uint32_t i = 0; i < na; ++i) {
+        uint32_t lo = 0, hi = nb; /* first b with cx >= a.cx - bound */
+        while (lo < hi) {
+            uint32_t mid = (lo + hi) / 2;
+            if (b[mid].cx < a[i].cx - bound)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        int found = 0;
+        for (uint32_t j = lo; j < nb && b[j].cx <= a[i].cx + bound && !found; ++j)
+            for (int rot = 0; rot < 3 && !found; ++rot) {
+                if (b[j].material != a[i].material || corner_distance(&a[i], &b[j], rot) > bound)
+                    continue;
+                found = 1;
+                double dn = 0, duv = 0;
+                for (int k = 0; k < 3; ++k) {
+                    for (int c = 0; c < 3; ++c)
+                        dn = fmax(dn, fabs(a[i].n[k][c] - b[j].n[(k + rot) % 3][c]));
+                    for (int c = 0; c < 2; ++c)
+                        duv = fmax(duv, fabs(a[i].uv[k][c] - b[j].uv[(k + rot) % 3][c]));
+                }
+                *attr_bad += dn > nbound || duv > uvbound;
+            }
+        missing += !found && tri_height(&a[i]) > 2 * bound;
+    }
+    return missing;
+}
+
+/* Draco, meshopt and quantized variants of the demo scene and the shared
+ * Cornell box load to the original's geometry: lossless ones bit for bit,
+ * lossy ones within the bound of their quantization (compressed_variants.h),
+ * triangle by triangle both ways, normals within 0.01 and texcoords within
+ * their own grid's half step. Under ASan in CI, this runs both decoders. */
+static void compressed_variants_match_originals(void)
+{
+    char cornell[1024];
+    snprintf(cornell, sizeof cornell, "%s/../shared/scenes/cornell/cornellBox.gltf", PB_SOURCE_DIR);
+    const char *srcs[2] = {PB_SOURCE_DIR "/tests/scenes/demo.gltf", cornell};
+    const char *tags[2] = {"demo", "cornell"};
+    for (int si = 0; si < 2; ++si) {
+        if (!file_exists(srcs[si])) {
+            skip("%s not present: only the demo scene checked", srcs[si]);
+            continue;
+        }
+        pb_scene *o = load_ok(srcs[si]);
+        if (!o)
+            continue;
+        double diag = 0, rmax = 0, uvmax = 0;
+        for (int c = 0; c < 3; ++c)
+            diag += pow(o->bounds_max[c] - o->bounds_min[c], 2);
+        diag = sqrt(diag);
+        for (size_t i = 0; i < 6 * (size_t)o->triangle_count; ++i)
+            uvmax = fmax(uvmax, fabs(o->texcoords[i]));
+        tri_rec *ra = tri_records(o);
+        for (uint32_t t = 0; t < o->triangle_count; ++t)
+            for (int k = 0; k < 3; ++k)
+                rmax = fmax(rmax, sqrt(pow(ra[t].v[k][0], 2) + pow(ra[t].v[k][1], 2) + pow(ra[t].v[k][2], 2)));
+        for (size_t vi = 0; vi < PB_VARIANT_COUNT; ++vi) {
+            const pb_variant *v = &pb_variants[vi];
+            const char *path = compressed_variant(srcs[si], tags[si], v);
+            pb_scene *c = path ? load_ok(path) : NULL;
+            if (!c)
+                continue;
+            if (v->lossless) { /* the same triangles in the same order, bit for bit; meshopt's
+                                 * index codec may start a triangle at another corner */
+                size_t n = o->triangle_count;
+                uint32_t differ = c->triangle_count != n || memcmp(c->origin, o->origin, sizeof o->origin);
+                for (size_t t = 0; t < n && !differ; ++t) {
+                    int same = 0;
+                    for (int rot = 0; rot < 3 && !same; ++rot) {
+                        same = c->material[t] == o->material[t];
+                        for (int k = 0; k < 3; ++k) {
+                            size_t a = 3 * t + k, b = 3 * t + (k + rot) % 3;
+                            same = same && !memcmp(c->positions + 3 * b, o->positions + 3 * a, 12) &&
+                                   !memcmp(c->normals + 3 * b, o->normals + 3 * a, 12) &&
+                                   !memcmp(c->texcoords + 2 * b, o->texcoords + 2 * a, 8);
+                        }
+                    }
+                    differ += !same;
+                }
+                CHECKF(!differ, "%s: not identical to %s", path, srcs[si]);
+                pb_scene_destroy(c);
+                continue;
+            }
+            double bound = variant_position_bound(v, diag, rmax);
+            /* texcoords: Draco 12 bits over their range, quantize USHORT in
+             * [0,1] (else kept as float), meshopt-exp 16-bit mantissas */
+            double uvb = !strcmp(v->mode, "draco") ? 2 * uvmax / 4095.0 / 2 + 1e-6
+                         : !strcmp(v->mode, "quantize") ? 1 / 65535.0 / 2 + 1e-6 : uvmax * ldexp(1.0, -15) + 1e-6;
+            tri_rec *rb = tri_records(c);
+            uint32_t bad_ab = 0, bad_ba = 0;
+            uint32_t miss_ab = unmatched(ra, o->triangle_count, rb, c->triangle_count, bound, 0.01, uvb, &bad_ab);
+            uint32_t miss_ba = unmatched(rb, c->triangle_count, ra, o->triangle_count, bound, 0.01, uvb, &bad_ba);
+            CHECKF(miss_ab == 0 && miss_ba == 0 && bad_ab == 0 && bad_ba == 0,
+                   "%s: %u/%u triangles of the original/variant without a partner within %.3g m, %u/%u partners with "
+                   "normals or texcoords out of bound", path, miss_ab, miss_ba, bound, bad_ab, bad_ba);
+            printf("  %-11s %-4s %s: %u triangles (original %u), position bound %.3g m\n", v->mode, v->ext, tags[si],
+                   c->triangle_count, o->triangle_count, bound);
+            free(rb);
+            pb_scene_destroy(c);
+        }
+        free(ra);
+        pb_scene_destroy(o);
+    }
+}
+
+/* Corrupt compressed data is a one-line error naming the file, whichever
+ * codec meets it. */
+static void corrupt_compressed_data_refused(void)
+{
+    const char *demo = PB_SOURCE_DIR "/tests/scenes/demo.gltf";
+    for (size_t vi = 0; vi < PB_VARIANT_COUNT; ++vi) {
+        const pb_variant *v = &pb_variants[vi];
+        if (strcmp(v->ext, "gltf") != 0)
+            continue;
+        const char *path = compressed_variant(demo, "corrupt", v);
+        if (!path)
+            continue;
+        /* scramble the external buffer, where the compressed streams are */
+        char bin[600];
+        snprintf(bin, sizeof bin, "%s.bin", path);
+        FILE *f = fopen(bin, "r+b");
+        CHECK(f != NULL);
+        if (!f)
+            continue;
+        fseek(f, 0, SEEK_END);
+        long n = ftell(f);
+        for (long i = 0; i < n; i += 3) {
+            fseek(f, i, SEEK_SET);
+            fputc((int)((i * 131) & 0xff), f);
+        }
+        fclose(f);
+        pb_scene *s = (pb_scene *)1;
+        pb_error err;
+        pb_result r = pb_scene_load(path, NULL, &s, &err);
+        /* a scrambled stream may still decode to something; if it does not,
+         * the error is the loader's one line */
+        if (r != PB_OK) {
+            CHECK(s == NULL);
+            CHECKF(strstr(err.message, path) && !strchr(err.message, '\n'), "%s", err.message);
+            printf("  %s: %s\n", v->mode, err.message + strlen(path));
+        } else {
+            pb_scene_destroy(s);
+        }
+    }
+    /* truncated: the compressed ranges no longer fit their buffer */
+    const char *path = compressed_variant(demo, "short", &pb_variants[0]);
+    if (path) {
+        char bin[600];
+        snprintf(bin, sizeof bin, "%s.bin", path);
+        CHECK(truncate(bin, 40) == 0);
+        load_fails(path, PB_ERROR_PARSE, "size mismatch");
+    }
+}
+
 int main(void)
 {
     RUN(demo_scene_loads_everything);
@@ -643,5 +869,7 @@ int main(void)
     RUN(hostile_inputs_refused);
     RUN(corrupt_texture_is_a_warning);
     RUN(shared_scenes_load);
+    RUN(compressed_variants_match_originals);
+    RUN(corrupt_compressed_data_refused);
     return test_summary();
 }

@@ -3,6 +3,7 @@
 // composing transforms in double, assembles triangles from triangles / strips
 // / fans with or without indices, and hands world-space data to the C scene
 // builder. Nothing here outlives the call.
+#include "scene/gltf_compression.h"
 #include "scene/scene_builder.h"
 
 extern "C" {
@@ -12,6 +13,7 @@ extern "C" {
 
 #include <sys/stat.h>
 
+#include <nlohmann/json.hpp>
 #include <stb_image.h>
 #include <tiny_gltf.h>
 
@@ -20,8 +22,8 @@ extern "C" {
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <memory>
-#include <array>
 #include <string>
 #include <vector>
 
@@ -37,6 +39,16 @@ struct reader {
     std::vector<int32_t> texture_map; // glTF texture -> pb texture (-1: none / failed)
     uint32_t default_material = 0;
     std::vector<std::array<double, 6>> uv_transform; // per material: KHR_texture_transform of its UVs
+    // EXT_meshopt_compression: the decoded bytes of each compressed bufferView
+    std::vector<std::vector<unsigned char>> view_data;
+    std::vector<char> view_decoded;
+    // KHR_draco_mesh_compression: the accessors of the primitive being read,
+    // decoded (tightly packed bytes and element count), in place of their views
+    struct decoded_accessor {
+        std::vector<unsigned char> bytes;
+        size_t count;
+    };
+    std::map<int, decoded_accessor> draco_accessors;
 };
 
 // Custom image loader: stb_image to RGBA8. A texture that fails to decode is a
@@ -197,21 +209,28 @@ pb_result view_span(reader &r, int view, size_t offset, size_t count, size_t ele
     if (view < 0 || view >= (int)m.bufferViews.size())
         return fail(r, PB_ERROR_PARSE, name + " refers to missing bufferView " + std::to_string(view));
     const tinygltf::BufferView &v = m.bufferViews[view];
-    if (v.buffer < 0 || v.buffer >= (int)m.buffers.size())
-        return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(view) + " refers to missing buffer " +
-                                           std::to_string(v.buffer));
-    const std::vector<unsigned char> &buf = m.buffers[v.buffer].data;
-    // the view must sit in the buffer, and the elements in the view
-    if (v.byteOffset > buf.size() || v.byteLength > buf.size() - v.byteOffset)
-        return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(view) + " (offset " +
-                                           std::to_string(v.byteOffset) + ", length " + std::to_string(v.byteLength) +
-                                           ") exceeds buffer " + std::to_string(v.buffer) + " of " +
-                                           std::to_string(buf.size()) + " bytes (truncated or missing buffer?)");
+    const unsigned char *data;
+    size_t length;
+    if (view < (int)r.view_decoded.size() && r.view_decoded[view]) { // decompressed: its own bytes
+        data = r.view_data[view].data(), length = r.view_data[view].size();
+    } else {
+        if (v.buffer < 0 || v.buffer >= (int)m.buffers.size())
+            return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(view) + " refers to missing buffer " +
+                                               std::to_string(v.buffer));
+        const std::vector<unsigned char> &buf = m.buffers[v.buffer].data;
+        // the view must sit in the buffer, and the elements in the view
+        if (v.byteOffset > buf.size() || v.byteLength > buf.size() - v.byteOffset)
+            return fail(r, PB_ERROR_PARSE, "bufferView " + std::to_string(view) + " (offset " +
+                                               std::to_string(v.byteOffset) + ", length " + std::to_string(v.byteLength) +
+                                               ") exceeds buffer " + std::to_string(v.buffer) + " of " +
+                                               std::to_string(buf.size()) + " bytes (truncated or missing buffer?)");
+        data = buf.data() + v.byteOffset, length = v.byteLength;
+    }
     size_t need = offset + stride * (count - 1) + elem;
-    if (count > SIZE_MAX / stride || need < offset || need > v.byteLength)
+    if (count > SIZE_MAX / stride || need < offset || need > length)
         return fail(r, PB_ERROR_PARSE, name + " (" + std::to_string(count) + " elements) reads past the end of bufferView " +
                                            std::to_string(view));
-    *out = buf.data() + v.byteOffset + offset;
+    *out = data + offset;
     return PB_OK;
 }
 
@@ -233,6 +252,18 @@ pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &ou
     if (comps < ncomp)
         return fail(r, PB_ERROR_PARSE, name + " has " + std::to_string(comps) + " components, needs " +
                                            std::to_string(ncomp));
+    auto decoded = r.draco_accessors.find(index);
+    if (decoded != r.draco_accessors.end()) { // Draco: packed in the accessor's type, never sparse
+        size_t elem = (size_t)comps * csize, n = decoded->second.count;
+        if (decoded->second.bytes.size() != n * elem)
+            return fail(r, PB_ERROR_PARSE, name + " does not match its Draco attribute");
+        out.assign(n * ncomp, 0.0);
+        for (size_t i = 0; i < n; ++i)
+            for (int c = 0; c < ncomp; ++c)
+                component(decoded->second.bytes.data() + i * elem + (size_t)c * csize, a.componentType, a.normalized,
+                          &out[i * ncomp + c]);
+        return PB_OK;
+    }
     // every size is checked before anything is allocated from it
     if (a.count == 0) {
         out.clear();
@@ -294,6 +325,116 @@ pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &ou
         prev = idx;
         for (int c = 0; c < ncomp; ++c)
             component(vp + k * elem + (size_t)c * csize, a.componentType, a.normalized, &out[(size_t)idx * ncomp + c]);
+    }
+    return PB_OK;
+}
+
+// A non-negative integer member of an extension object (`dflt` when absent;
+// a negative default makes the member required).
+bool ext_uint(const tinygltf::Value &e, const char *key, double dflt, size_t *out)
+{
+    double x = dflt;
+    if (e.Has(key)) {
+        if (!e.Get(key).IsNumber())
+            return false;
+        x = e.Get(key).GetNumberAsDouble();
+    }
+    if (!(x >= 0 && x <= 9007199254740992.0) || x != std::floor(x))
+        return false;
+    *out = (size_t)x;
+    return true;
+}
+
+std::string ext_string(const tinygltf::Value &e, const char *key, const char *dflt)
+{
+    return e.Has(key) && e.Get(key).IsString() ? e.Get(key).Get<std::string>() : std::string(dflt);
+}
+
+// EXT_meshopt_compression: each compressed bufferView is decoded once, up
+// front, from the source range its extension names; from then on its
+// accessors read the decoded bytes (view_span), never the fallback buffer.
+pb_result decode_meshopt_views(reader &r)
+{
+    const tinygltf::Model &m = r.m;
+    r.view_data.assign(m.bufferViews.size(), {});
+    r.view_decoded.assign(m.bufferViews.size(), 0);
+    for (size_t i = 0; i < m.bufferViews.size(); ++i) {
+        auto it = m.bufferViews[i].extensions.find("EXT_meshopt_compression");
+        if (it == m.bufferViews[i].extensions.end())
+            continue;
+        const tinygltf::Value &e = it->second;
+        std::string name = "bufferView " + std::to_string(i) + " (EXT_meshopt_compression)";
+        size_t buffer, offset, length, stride, count;
+        if (!e.IsObject() || !ext_uint(e, "buffer", -1, &buffer) || !ext_uint(e, "byteOffset", 0, &offset) ||
+            !ext_uint(e, "byteLength", -1, &length) || !ext_uint(e, "byteStride", -1, &stride) ||
+            !ext_uint(e, "count", -1, &count))
+            return fail(r, PB_ERROR_PARSE, name + " lacks a valid buffer, byteLength, byteStride or count");
+        if (buffer >= m.buffers.size())
+            return fail(r, PB_ERROR_PARSE, name + " refers to missing buffer " + std::to_string(buffer));
+        const std::vector<unsigned char> &buf = m.buffers[buffer].data;
+        if (offset > buf.size() || length > buf.size() - offset)
+            return fail(r, PB_ERROR_PARSE, name + ": its compressed bytes (offset " + std::to_string(offset) +
+                                               ", length " + std::to_string(length) + ") exceed buffer " +
+                                               std::to_string(buffer) + " of " + std::to_string(buf.size()) + " bytes");
+        if (stride == 0 || count > SIZE_MAX / stride || count * stride != m.bufferViews[i].byteLength)
+            return fail(r, PB_ERROR_PARSE, name + " decodes to " + std::to_string(count) + " x " + std::to_string(stride) +
+                                               " bytes, not the bufferView's " +
+                                               std::to_string(m.bufferViews[i].byteLength));
+        std::string why = pb_gltf::meshopt_decode(buf.data() + offset, length, count, stride,
+                                                  ext_string(e, "mode", ""), ext_string(e, "filter", "NONE"),
+                                                  r.view_data[i]);
+        if (!why.empty())
+            return fail(r, PB_ERROR_PARSE, name + ": " + why);
+        r.view_decoded[i] = 1;
+    }
+    return PB_OK;
+}
+
+// KHR_draco_mesh_compression on a primitive: decodes its bufferView and
+// stands the decoded indices and attributes in for the accessors that name
+// them (read_accessor reads them from there), so the rest of the loader does
+// not know the mesh was compressed. Its indices accessor: *indices (moved
+// there by patch_for_tinygltf).
+pb_result decode_draco(reader &r, const tinygltf::Primitive &prim, const tinygltf::Value &e, const char *mesh_name,
+                       int *indices_out)
+{
+    const tinygltf::Model &m = r.m;
+    std::string name = "mesh '" + std::string(mesh_name) + "' (KHR_draco_mesh_compression)";
+    if (!e.IsObject() || !e.Has("bufferView") || !e.Get("bufferView").IsInt() || !e.Has("attributes") ||
+        !e.Get("attributes").IsObject())
+        return fail(r, PB_ERROR_PARSE, name + " lacks a bufferView or attributes");
+    int view = e.Get("bufferView").GetNumberAsInt();
+    if (view < 0 || view >= (int)m.bufferViews.size() || m.bufferViews[view].byteLength == 0)
+        return fail(r, PB_ERROR_PARSE, name + " refers to missing or empty bufferView " + std::to_string(view));
+    int indices = e.Has("pb_indices") && e.Get("pb_indices").IsInt() ? e.Get("pb_indices").GetNumberAsInt() : -1;
+    if (indices < 0 || indices >= (int)m.accessors.size())
+        return fail(r, PB_ERROR_PARSE, name + " needs an indices accessor");
+    size_t len = m.bufferViews[view].byteLength;
+    const unsigned char *src;
+    pb_result res = view_span(r, view, 0, 1, len, len, name, &src);
+    if (res != PB_OK)
+        return res;
+    pb_gltf::draco_mesh_ptr mesh;
+    std::string why = pb_gltf::draco_decode(src, len, mesh);
+    reader::decoded_accessor d;
+    if (why.empty())
+        why = pb_gltf::draco_indices(*mesh, m.accessors[indices].componentType, d.bytes, &d.count);
+    if (!why.empty())
+        return fail(r, PB_ERROR_PARSE, name + ": " + why);
+    r.draco_accessors[indices] = std::move(d);
+    *indices_out = indices;
+    const tinygltf::Value &attrs = e.Get("attributes");
+    for (const std::string &key : attrs.Keys()) {
+        auto pa = prim.attributes.find(key);
+        if (!attrs.Get(key).IsInt() || pa == prim.attributes.end() || pa->second < 0 ||
+            pa->second >= (int)m.accessors.size())
+            return fail(r, PB_ERROR_PARSE, name + ": attribute " + key + " has no accessor in the primitive");
+        const tinygltf::Accessor &a = m.accessors[pa->second];
+        why = pb_gltf::draco_attribute(*mesh, attrs.Get(key).GetNumberAsInt(), a.componentType,
+                                       tinygltf::GetNumComponentsInType((uint32_t)a.type), d.bytes, &d.count);
+        if (!why.empty())
+            return fail(r, PB_ERROR_PARSE, name + ": " + key + ": " + why);
+        r.draco_accessors[pa->second] = std::move(d);
     }
     return PB_OK;
 }
@@ -479,6 +620,14 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
         r.b->stats.primitives_skipped++;
         return PB_OK;
     }
+    r.draco_accessors.clear();
+    int indices = prim.indices;
+    auto draco = prim.extensions.find("KHR_draco_mesh_compression");
+    if (draco != prim.extensions.end()) {
+        pb_result res = decode_draco(r, prim, draco->second, mesh_name, &indices);
+        if (res != PB_OK)
+            return res;
+    }
     auto pos_it = prim.attributes.find("POSITION");
     if (pos_it == prim.attributes.end()) {
         pb_logf(&r.b->log, PB_LOG_WARN, "%s: a primitive of mesh '%s' has no POSITION; skipped", r.path, mesh_name);
@@ -505,19 +654,19 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
     if (have_uv && uv.size() / 2 != nv)
         return fail(r, PB_ERROR_PARSE, "TEXCOORD_0 and POSITION accessors of mesh '" + std::string(mesh_name) + "' differ in count");
     std::vector<uint32_t> order; // vertex indices, before triangle assembly
-    if (prim.indices >= 0) {
-        const tinygltf::Accessor *ia = prim.indices < (int)r.m.accessors.size() ? &r.m.accessors[prim.indices] : nullptr;
+    if (indices >= 0) {
+        const tinygltf::Accessor *ia = indices < (int)r.m.accessors.size() ? &r.m.accessors[indices] : nullptr;
         if (ia && ia->componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
             ia->componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
             ia->componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-            return fail(r, PB_ERROR_PARSE, "index accessor " + std::to_string(prim.indices) + " is not unsigned integer");
-        if ((res = read_accessor(r, prim.indices, 1, idx, "index")) != PB_OK)
+            return fail(r, PB_ERROR_PARSE, "index accessor " + std::to_string(indices) + " is not unsigned integer");
+        if ((res = read_accessor(r, indices, 1, idx, "index")) != PB_OK)
             return res;
         order.resize(idx.size());
         for (size_t i = 0; i < idx.size(); ++i) {
             if (idx[i] >= (double)nv)
                 return fail(r, PB_ERROR_PARSE, "index " + std::to_string((uint64_t)idx[i]) + " in accessor " +
-                                                   std::to_string(prim.indices) + " is out of range (" +
+                                                   std::to_string(indices) + " is out of range (" +
                                                    std::to_string(nv) + " vertices)");
             order[i] = (uint32_t)idx[i];
         }
@@ -700,6 +849,78 @@ void json_part(const unsigned char *bytes, size_t n, bool glb, size_t *begin, si
     }
 }
 
+// The extension object of `o` named `name`, or null.
+nlohmann::json *extension(nlohmann::json &o, const char *name)
+{
+    if (!o.is_object() || !o.contains("extensions") || !o["extensions"].is_object() ||
+        !o["extensions"].contains(name) || !o["extensions"][name].is_object())
+        return nullptr;
+    return &o["extensions"][name];
+}
+
+// Compressed files that tinygltf 2.7 (built without Draco) would refuse,
+// edited in their JSON before it parses them (false: nothing to edit):
+// - EXT_meshopt_compression may mark a buffer `fallback`: it has no bytes
+//   (no uri, or more than a GLB's BIN chunk holds) and is read only through
+//   decoded views. tinygltf would refuse it or hand it the BIN chunk, so it
+//   becomes a 1-byte data URI; view_span refuses any uncompressed view that
+//   still points into it.
+// - A KHR_draco_mesh_compression primitive's indices accessor has no
+//   bufferView, which tinygltf refuses; `indices` moves into the extension
+//   object (as "pb_indices"), where decode_draco finds it.
+bool patch_for_tinygltf(const unsigned char *bytes, size_t n, bool glb, std::vector<unsigned char> &out)
+{
+    size_t jb, jl;
+    json_part(bytes, n, glb, &jb, &jl);
+    std::string text((const char *)bytes + jb, jl);
+    if (text.find("\"fallback\"") == std::string::npos && text.find("KHR_draco_mesh_compression") == std::string::npos)
+        return false;
+    nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+    if (j.is_discarded() || !j.is_object())
+        return false; // tinygltf reports what is wrong
+    bool changed = false;
+    if (j.contains("buffers") && j["buffers"].is_array())
+        for (nlohmann::json &buf : j["buffers"]) {
+            nlohmann::json *mo = extension(buf, "EXT_meshopt_compression");
+            if (!mo || buf.contains("uri") || mo->value("fallback", false) != true)
+                continue;
+            buf["uri"] = "data:application/octet-stream;base64,AA==";
+            buf["byteLength"] = 1;
+            changed = true;
+        }
+    if (j.contains("meshes") && j["meshes"].is_array())
+        for (nlohmann::json &mesh : j["meshes"]) {
+            if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array())
+                continue;
+            for (nlohmann::json &prim : mesh["primitives"]) {
+                nlohmann::json *dr = extension(prim, "KHR_draco_mesh_compression");
+                if (!dr || !prim.contains("indices"))
+                    continue;
+                (*dr)["pb_indices"] = prim["indices"];
+                prim.erase("indices");
+                changed = true;
+            }
+        }
+    if (!changed)
+        return false;
+    std::string json = j.dump();
+    if (!glb) {
+        out.assign(json.begin(), json.end());
+        return true;
+    }
+    while (json.size() % 4) // GLB chunks are 4-byte aligned, JSON padded with spaces
+        json += ' ';
+    size_t rest = jb + jl; // the chunks after JSON (BIN), unchanged
+    uint32_t total = (uint32_t)(12 + 8 + json.size() + (n - rest)), chunk = (uint32_t)json.size(), type = 0x4E4F534Au;
+    out.assign(bytes, bytes + 8); // magic and version
+    out.insert(out.end(), (unsigned char *)&total, (unsigned char *)&total + 4);
+    out.insert(out.end(), (unsigned char *)&chunk, (unsigned char *)&chunk + 4);
+    out.insert(out.end(), (unsigned char *)&type, (unsigned char *)&type + 4);
+    out.insert(out.end(), json.begin(), json.end());
+    out.insert(out.end(), bytes + rest, bytes + n);
+    return true;
+}
+
 // tinygltf's file access for external buffers and images: regular files only
 // (a FIFO would hang, a directory reads as LONG_MAX bytes), sizes bounded.
 bool fs_exists(const std::string &path, void *)
@@ -760,6 +981,12 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     std::string p(path), base = p.find('/') == std::string::npos ? std::string(".") : p.substr(0, p.rfind('/'));
     if (base.empty())
         base = "/";
+    std::vector<unsigned char> patched;
+    if (patch_for_tinygltf(bytes, (size_t)size, glb, patched)) {
+        if (patched.size() > UINT32_MAX)
+            return pb_fail(err, PB_ERROR_PARSE, "%s: file too large", path);
+        bytes = patched.data(), size = patched.size();
+    }
     tinygltf::Model model;
     std::string gerr, gwarn;
     bool ok;
@@ -783,9 +1010,10 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     if (!gwarn.empty())
         pb_logf(&b->log, PB_LOG_DEBUG, "%s: tinygltf: %s", path, first_line(gwarn).c_str());
 
-    static const char *const supported[] = {"KHR_lights_punctual", "KHR_materials_emissive_strength",
+    static const char *const supported[] = {"EXT_meshopt_compression", "KHR_draco_mesh_compression",
+                                            "KHR_lights_punctual", "KHR_materials_emissive_strength",
                                             "KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit",
-                                            "KHR_texture_transform"};
+                                            "KHR_mesh_quantization", "KHR_texture_transform"};
     for (const std::string &ext : model.extensionsRequired) {
         bool known = false;
         for (const char *s : supported)
@@ -808,7 +1036,10 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     snprintf(b->stats.extensions_used, sizeof b->stats.extensions_used, "%s", used.c_str());
     snprintf(b->stats.extensions_applied, sizeof b->stats.extensions_applied, "%s", applied.c_str());
 
-    reader r{model, path, b, err, {}, 0};
+    reader r{model, path, b, err, {}, 0, {}, {}, {}, {}};
+    res = decode_meshopt_views(r);
+    if (res != PB_OK)
+        return res;
     res = read_textures(r, desc->skip_textures);
     if (res != PB_OK)
         return res;

@@ -1,0 +1,59 @@
+/* Compressed variants of a glTF file, written by the tests/gltf_compress
+ * helper (Draco, meshopt, quantized; see its header) into the test's temp
+ * directory, and the geometric bound each encoding keeps. */
+#ifndef PB_COMPRESSED_VARIANTS_H
+#define PB_COMPRESSED_VARIANTS_H
+
+#include "test_util.h"
+
+typedef struct pb_variant {
+    const char *mode;  /* gltf_compress mode */
+    const char *ext;   /* "gltf" (external .bin) or "glb" */
+    int lossless;      /* the encoding keeps every bit: the scene must be identical */
+} pb_variant;
+
+static const pb_variant pb_variants[] = {
+    {"meshopt", "gltf", 1}, {"meshopt", "glb", 1}, {"meshopt-exp", "glb", 0},
+    {"draco", "gltf", 0},   {"draco", "glb", 0},   {"quantize", "glb", 0},
+};
+#define PB_VARIANT_COUNT (sizeof pb_variants / sizeof pb_variants[0])
+
+/* Writes variant v of `src` as <tag>_<mode>.<ext>; NULL (after a CHECK
+ * failure) when the helper fails. */
+static inline const char *compressed_variant(const char *src, const char *tag, const pb_variant *v)
+{
+    static char path[8][512];
+    static int slot;
+    char *out = path[slot++ & 7], cmd[2048];
+    snprintf(out, 512, "%s/%s_%s.%s", temp_dir(), tag, v->mode, v->ext);
+    snprintf(cmd, sizeof cmd, "'%s' %s '%s' '%s'", PB_GLTF_COMPRESS, v->mode, src, out);
+    int rc = system(cmd);
+    CHECKF(rc == 0, "%s failed (%d)", cmd, rc);
+    return rc == 0 ? out : NULL;
+}
+
+/* Largest world-space position error (metres, any axis) an encoding keeps
+ * in a scene of bounding-box diagonal `diag` whose vertices lie within
+ * `rmax` of the origin. Each encoder quantizes a mesh in its own frame, and
+ * a node's similarity transform maps that frame's error vector (length at
+ * most sqrt(3) half-steps) to world space scaled as the mesh's extent is,
+ * which is at most diag:
+ * - Draco, 14 bits over the mesh's largest extent: sqrt(3)/2 diag / 16383;
+ * - quantize, each axis over its own extent in normalized SHORT:
+ *   diag / 32767 / 2;
+ * - meshopt-exp, 16-bit signed mantissas: sqrt(3) 2^-15 of a coordinate's
+ *   magnitude, at most rmax + diag for these scenes' nodes;
+ * plus float rounding of the dequantization (a few ulps of rmax). */
+static inline double variant_position_bound(const pb_variant *v, double diag, double rmax)
+{
+    double ulps = 8 * fmax(rmax, diag) * 1.1920929e-7;
+    if (!strcmp(v->mode, "draco"))
+        return sqrt(3.0) / 2 * diag / 16383.0 + ulps;
+    if (!strcmp(v->mode, "quantize"))
+        return diag / 32767.0 / 2 + ulps;
+    if (!strcmp(v->mode, "meshopt-exp"))
+        return sqrt(3.0) * ldexp(1.0, -15) * (rmax + diag) + ulps;
+    return 0;
+}
+
+#endif
