@@ -4,6 +4,8 @@
 #include "scenes_gen.h"
 #include "bake/guide.h"
 #include "bake/light_cells.h"
+#include "common/common.h"
+#include "compressed_variants.h"
 
 static pb_context *ctx;
 
@@ -1968,6 +1970,105 @@ static void bad_parameters_refused_before_gpu_work(void)
     pb_scene_destroy(s);
 }
 
+static int ascending(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Draco, meshopt and quantized variants (tests/gltf_compress) bake like the
+ * original: the lossless meshopt ones to the same irradiance bit for bit
+ * where the loaded scene is the same bit for bit (then so are the BVH and
+ * every random number), the others within the noise of the two bakes. Moving surfaces by the
+ * encoder's quantization (well under a millimetre here) changes a path only
+ * where a ray passes within that distance of an edge, and both bakes draw
+ * the same random numbers, so the bakes differ by far less than two
+ * independent ones; the bound asserted is what independent bakes would
+ * keep almost surely, per probe |dE| <= 4 sqrt(sa^2 + sb^2) E (s the
+ * probes' relative standard errors, E irradiance luminance), and the mean
+ * over probes of |dE| / E must stay under half the median s (the
+ * correlation: independent bakes would differ by about 1.1 s). */
+static void compressed_scenes_bake_like_originals(void)
+{
+    char cornell[1024];
+    snprintf(cornell, sizeof cornell, "%s/../shared/scenes/cornell/cornellBox.gltf", PB_SOURCE_DIR);
+    const char *srcs[2] = {PB_SOURCE_DIR "/tests/scenes/demo.gltf", cornell};
+    const char *tags[2] = {"demo", "cornell"};
+    for (int si = 0; si < 2; ++si) {
+        if (!file_exists(srcs[si])) {
+            skip("%s not present: only the demo scene baked", srcs[si]);
+            continue;
+        }
+        pb_scene *o = NULL;
+        pb_error err;
+        if (pb_scene_load(srcs[si], NULL, &o, &err) != PB_OK) {
+            CHECKF(0, "%s", err.message);
+            continue;
+        }
+        pb_bake_desc d = {0};
+        /* one grid for all: the variants' bounds move by the quantization */
+        pb_probe_grid_fit(o->bounds_min, o->bounds_max, 64, &d.grid);
+        d.rays_per_probe = 128, d.passes = 4, d.bounces = 2, d.octmap_res = 8, d.seed = 7;
+        d.probe_nee = 1, d.light_cells = 1;
+        d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
+        baked ref = bake(o, &d);
+        for (size_t vi = 0; ref.ok && vi < PB_VARIANT_COUNT; ++vi) {
+            const pb_variant *v = &pb_variants[vi];
+            if (!strcmp(v->ext, "gltf") && !v->lossless)
+                continue; /* the .glb of the same encoding stands for it */
+            const char *path = compressed_variant(srcs[si], tags[si], v);
+            pb_scene *c = NULL;
+            if (!path || pb_scene_load(path, NULL, &c, &err) != PB_OK) {
+                CHECKF(0, "%s", path ? err.message : "no variant");
+                continue;
+            }
+            pb_bake_desc dc = d; /* the grid in the variant's frame (its origin moved with its bounds) */
+            for (int k = 0; k < 3; ++k)
+                dc.grid.origin[k] += (float)(o->origin[k] - c->origin[k]);
+            baked b = bake(c, &dc);
+            if (b.ok && b.vol.probe_count == ref.vol.probe_count) {
+                uint32_t P = ref.vol.probe_count, outside = 0, measured = 0;
+                double mean = 0, worst = 0;
+                float s_all[4096];
+                /* sh: 9 coefficients x RGB per probe, L0's RGB first */
+                for (uint32_t p = 0; p < P; ++p) {
+                    float ea = pb_luminance(ref.vol.sh + 27 * p), eb = pb_luminance(b.vol.sh + 27 * p);
+                    float sa = ref.vol.probe_std_error[p], sb = b.vol.probe_std_error[p];
+                    if (!(ea > 0) || sa == PB_STD_ERROR_UNKNOWN || sb == PB_STD_ERROR_UNKNOWN)
+                        continue;
+                    double rel = fabs((double)ea - eb) / ea;
+                    outside += rel > 4 * sqrt((double)sa * sa + (double)sb * sb);
+                    mean += rel, worst = fmax(worst, rel);
+                    s_all[measured++ % 4096] = sa;
+                }
+                mean /= measured ? measured : 1;
+                qsort(s_all, measured < 4096 ? measured : 4096, sizeof(float), ascending);
+                float median_s = measured ? s_all[(measured < 4096 ? measured : 4096) / 2] : 0;
+                /* bit-identical where the scene is; meshopt's index codec
+                 * may start a triangle at another corner, which moves hit
+                 * points by rounding and so paths: then the noise bound */
+                int same_scene = c->triangle_count == o->triangle_count &&
+                                 !memcmp(c->positions, o->positions, 36 * (size_t)o->triangle_count);
+                if (v->lossless && same_scene)
+                    CHECKF(!memcmp(ref.vol.sh, b.vol.sh, 27 * sizeof(float) * P), "%s: irradiance not identical", path);
+                else
+                    CHECKF(measured >= P / 2 && outside == 0 && mean < 0.5 * median_s,
+                           "%s: %u of %u probes beyond 4 sigma, mean |dE|/E %.4f vs median sigma %.4f", path, outside,
+                           measured, mean, median_s);
+                printf("  %-7s %-11s %-4s: |dE|/E mean %.4f, worst %.4f over %u probes (median sigma %.4f)%s\n",
+                       tags[si], v->mode, v->ext, mean, worst, measured, median_s,
+                       v->lossless && same_scene ? ", bit-identical required" : "");
+            } else {
+                CHECK(b.ok && b.vol.probe_count == ref.vol.probe_count);
+            }
+            release(&b);
+            pb_scene_destroy(c);
+        }
+        release(&ref);
+        pb_scene_destroy(o);
+    }
+}
+
 int main(void)
 {
     if (!(ctx = test_gpu_context()))
@@ -1999,5 +2100,6 @@ int main(void)
     RUN(target_error_stops_converged_probes);
     RUN(points_subset_bakes_like_the_grid);
     RUN(bad_parameters_refused_before_gpu_work);
+    RUN(compressed_scenes_bake_like_originals);
     return test_gpu_finish(ctx);
 }

@@ -46,8 +46,11 @@ static inline void skip(const char *fmt, ...)
     t_skip_current = 1;
 }
 
+/* PB_TEST_ONLY=NAME runs only the behaviours whose names contain NAME. */
 #define RUN(fn)                                                                                                      \
     do {                                                                                                             \
+        if (getenv("PB_TEST_ONLY") && !strstr(#fn, getenv("PB_TEST_ONLY")))                                          \
+            break;                                                                                                   \
         int before = t_failures;                                                                                     \
         t_skip_current = 0;                                                                                          \
         fprintf(stderr, "[ RUN  ] %s\n", #fn);                                                                       \
