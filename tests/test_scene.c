@@ -1,6 +1,7 @@
 /* Scene loader: hierarchy transforms, primitive modes, file forms, attribute
  * encodings, dropped triangles, and every malformed-file error. CPU only. */
 #define _DEFAULT_SOURCE /* mknod, makedev */
+#include "bvh/alpha.h"
 #include "compressed_variants.h"
 #include "test_util.h"
 
@@ -270,6 +271,55 @@ static void normalized_integer_texcoords(void)
     if (!s)
         return;
     CHECK(s->texcoords[0] == 0.f && s->texcoords[2] == 1.f && fabsf(s->texcoords[5] - 0.2f) < 1e-6f);
+    pb_scene_destroy(s);
+}
+
+/* COLOR_0 (glTF: multiplies the base colour, alpha included): normalized
+ * UNSIGNED_BYTE RGBA and float RGB read exactly, a primitive without it is
+ * white beside one with it, the interpolated alpha takes part in the alpha
+ * test, and a scene without any has no colour array. */
+static void vertex_colours_loaded(void)
+{
+    /* two primitives over the same triangle: ubyte RGBA colours, then none;
+     * a third with float RGB (alpha 1) */
+    unsigned char bin[36 + 12 + 36];
+    memcpy(bin, tri_pos, 36);
+    unsigned char rgba[12] = {255, 0, 51, 255, 0, 255, 0, 0, 255, 255, 255, 0};
+    memcpy(bin + 36, rgba, 12);
+    float rgb[9] = {0.5f, 0.25f, 1.f, 0.f, 0.75f, 0.125f, 1.f, 1.f, 1.f};
+    memcpy(bin + 48, rgb, 36);
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"materials\":[{\"alphaMode\":\"MASK\",\"alphaCutoff\":0.5}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"COLOR_0\":1},\"material\":0},"
+        "{\"attributes\":{\"POSITION\":0}},{\"attributes\":{\"POSITION\":0,\"COLOR_0\":2}}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5121,\"normalized\":true,\"count\":3,\"type\":\"VEC4\"},"
+        "{\"bufferView\":2,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":12},"
+        "{\"buffer\":0,\"byteOffset\":48,\"byteLength\":36}],"
+        "\"buffers\":[{\"byteLength\":84,\"uri\":\"@BUF@\"}]}";
+    pb_scene *s = load_ok(write_gltf("color0.gltf", json, bin, sizeof bin));
+    if (!s)
+        return;
+    CHECK(s->triangle_count == 3 && s->colors != NULL);
+    if (s->triangle_count == 3 && s->colors) {
+        int ok = 1;
+        for (int k = 0; k < 12; ++k) {
+            ok &= s->colors[k] == rgba[k] / 255.f || fabsf(s->colors[k] - rgba[k] / 255.f) < 1e-7f;
+            ok &= s->colors[12 + k] == 1.f;
+            ok &= s->colors[24 + k] == (k % 4 == 3 ? 1.f : rgb[3 * (k / 4) + k % 4]);
+        }
+        CHECKF(ok, "colours read wrong");
+        /* alpha: corners 1, 0, 0: opaque near corner 0 only (cutoff 0.5) */
+        CHECK(pb_alpha_opaque(s, 0, 0.1f, 0.1f) && !pb_alpha_opaque(s, 0, 0.45f, 0.45f));
+        float c[4];
+        pb_vertex_color(s, 0, 0.25f, 0.5f, c); /* 0.25 of corner 1, 0.5 of corner 2 */
+        CHECK(fabsf(c[0] - 0.75f) < 1e-6f && fabsf(c[1] - 0.75f) < 1e-6f && fabsf(c[3] - 0.25f) < 1e-6f);
+    }
+    pb_scene_destroy(s);
+    s = load_ok(PB_SOURCE_DIR "/tests/scenes/demo.gltf");
+    CHECK(s && s->colors == NULL);
     pb_scene_destroy(s);
 }
 
@@ -860,6 +910,7 @@ int main(void)
     RUN(strips_fans_and_unindexed);
     RUN(glb_and_external_buffers);
     RUN(normalized_integer_texcoords);
+    RUN(vertex_colours_loaded);
     RUN(sparse_accessors);
     RUN(spec_gloss_and_unlit_materials);
     RUN(texture_transform_applied);

@@ -105,6 +105,8 @@ typedef struct pb_scene {
     float *positions;         /* 9 floats per triangle, local frame */
     float *normals;           /* 9 floats per triangle, unit vertex normals */
     float *texcoords;         /* 6 floats per triangle (TEXCOORD_0, 0 if absent) */
+    float *colors;            /* 12 floats per triangle, RGBA per corner (glTF COLOR_0, linear; white where a
+                                 primitive has none); NULL when no primitive has vertex colours */
     uint32_t *material;       /* material index per triangle */
 
     uint32_t material_count;

@@ -53,6 +53,8 @@ bool alpha_opaque(SceneRefs s, uint tri, uint f, float u, float v)
         uint texel = UintBuf(s.texels).v[tx.offset + texel_index(ts, tt, tx.width, tx.height, tx.wrap & 0xffu, tx.wrap >> 8)];
         a *= float(texel >> 24) * (1.0 / 255.0);
     }
+    if ((s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
+        a *= vertex_color(s, tri, u, v).a;
     if (m.mode == 2u) // glTF BLEND
         return a > alpha_blend_threshold(f & ~PB_FLAG_ALPHA_MASK, u, v);
     return a >= m.cutoff;

@@ -269,6 +269,8 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         if (bounce > bounces)
             break; // the terminal ray: it only gathers emission (see below)
         vec3 albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * (1.0 - m.emissive_metallic.w);
+        if ((s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
+            albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
         vec3 x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);
         if (bounce == 0u) {
             res.shade = true;

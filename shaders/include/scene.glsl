@@ -8,6 +8,7 @@
 
 #define PB_NO_HIT 0xffffffffu
 #define PB_FLAG_ALPHA_MASK 0x80000000u
+#define PB_SCENE_VERTEX_COLORS 1u
 #define PB_INF uintBitsToFloat(0x7f800000u)
 
 #define PB_BVH4_EMPTY 0xffffffffu
@@ -112,12 +113,28 @@ Tri load_tri(pb_addr base, uint index)
 struct SceneRefs {
     pb_addr nodes;     // Node4[] (64 bytes each)
     pb_addr tris;      // 10 words per triangle: 9 position floats, flags (material | PB_FLAG_ALPHA_MASK)
-    pb_addr tri_uv;    // float[6] per triangle
+    pb_addr tri_uv;    // float[6] per triangle; then, with PB_SCENE_VERTEX_COLORS, float[12] per triangle (RGBA per corner)
     pb_addr materials; // Material[]
     pb_addr textures;  // Texture[]
     pb_addr texels;    // RGBA8 words
     uint triangle_count;
-    uint pad;
+    uint flags;        // PB_SCENE_*
 };
+
+// Vertex colour (glTF COLOR_0) of leaf-ordered triangle `tri` at (u, v):
+// linear RGBA, white when the scene has none (src/scene/vertex_color.h is
+// the CPU reference, same arithmetic in the same order).
+vec4 vertex_color(SceneRefs s, uint tri, float u, float v)
+{
+    if ((s.flags & PB_SCENE_VERTEX_COLORS) == 0u)
+        return vec4(1.0);
+    FloatBuf c = FloatBuf(s.tri_uv);
+    uint b = 6u * s.triangle_count + 12u * tri;
+    precise float w0 = 1.0 - u - v;
+    precise vec4 r = w0 * vec4(c.v[b], c.v[b + 1u], c.v[b + 2u], c.v[b + 3u]) +
+                     u * vec4(c.v[b + 4u], c.v[b + 5u], c.v[b + 6u], c.v[b + 7u]) +
+                     v * vec4(c.v[b + 8u], c.v[b + 9u], c.v[b + 10u], c.v[b + 11u]);
+    return r;
+}
 
 #endif

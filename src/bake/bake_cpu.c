@@ -392,6 +392,12 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             albedo[k] = m->base_color[k] * base[k] * (1.f - m->emissive_metallic[3]);
             xp[k] = v0[k] + h.u * e1[k] + h.v * e2[k];
         }
+        if (s->colors) {
+            float vc[4];
+            pb_vertex_color(s, h.tri, h.u, h.v, vc);
+            for (int k = 0; k < 3; ++k)
+                albedo[k] *= vc[k];
+        }
         pb_offset_ray_origin(xp, ng, x);
         if (bounce == 0) {
             res.shade = 1;

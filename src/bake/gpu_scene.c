@@ -31,13 +31,13 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     uint64_t sizes[6] = {
         (uint64_t)bvh->wide_node_count * sizeof(pb_bvh4_node),
         (uint64_t)n * sizeof(gpu_tri),
-        (uint64_t)n * 24u,
+        (uint64_t)n * (scene->colors ? 72u : 24u), /* UVs, then vertex colours */
         (uint64_t)scene->material_count * sizeof(gpu_material),
         (uint64_t)scene->texture_count * sizeof(gpu_texture),
         scene->texel_count * 4u,
     };
-    static const char *const names[6] = {"BVH nodes", "triangles", "texture coordinates", "materials", "textures",
-                                         "texels"};
+    static const char *const names[6] = {"BVH nodes", "triangles", "texture coordinates and vertex colours",
+                                         "materials", "textures", "texels"};
     uint64_t total = 0;
     for (int i = 0; i < 6; ++i) {
         total += sizes[i];
@@ -55,7 +55,7 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
 
     pb_gpu_scene *gs = calloc(1, sizeof *gs);
     gpu_tri *tris = malloc((size_t)(n ? n : 1) * sizeof *tris);
-    float *uvs = malloc((size_t)(n ? n : 1) * 24);
+    float *uvs = malloc(sizes[2] ? (size_t)sizes[2] : 24);
     gpu_material *mats = malloc((size_t)(scene->material_count ? scene->material_count : 1) * sizeof *mats);
     gpu_texture *texs = malloc((size_t)(scene->texture_count ? scene->texture_count : 1) * sizeof *texs);
     if (gs)
@@ -81,6 +81,8 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         memcpy(tris[k].v, bvh->tri_positions + 9 * (size_t)k, 36);
         tris[k].flags = m | (scene->materials[m].alpha_mode != PB_ALPHA_OPAQUE ? PB_FLAG_ALPHA_MASK : 0u);
         memcpy(uvs + 6 * (size_t)k, scene->texcoords + 6 * (size_t)tri, 24);
+        if (scene->colors)
+            memcpy(uvs + 6 * (size_t)n + 12 * (size_t)k, scene->colors + 12 * (size_t)tri, 48);
     }
     memcpy(gs->tri_order, bvh->tri_order, (size_t)n * 4);
     gs->triangle_count = n;
@@ -98,7 +100,8 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         return r;
     }
     gs->refs = (gpu_scene_refs){gs->nodes.address, gs->tris.address, gs->tri_uv.address, gs->materials.address,
-                                gs->textures.address, gs->texels.address, n, 0};
+                                gs->textures.address, gs->texels.address, n,
+                                scene->colors ? PB_SCENE_VERTEX_COLORS : 0u};
     gs->ctx = ctx;
     gs->bvh = bvh;
     gs->bytes = total;

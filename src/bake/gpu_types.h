@@ -12,6 +12,9 @@
 #include <stdint.h>
 
 #define PB_FLAG_ALPHA_MASK 0x80000000u
+/* gpu_scene_refs.flags: vertex colours follow the texture coordinates in
+ * tri_uv (12 floats per triangle after the 6 n of the UVs) */
+#define PB_SCENE_VERTEX_COLORS 1u
 
 typedef struct gpu_material {
     float base_alpha;
@@ -42,7 +45,7 @@ _Static_assert(sizeof(gpu_tri) == 40, "Tri layout");
 
 typedef struct gpu_scene_refs {
     uint64_t nodes, tris, tri_uv, materials, textures, texels;
-    uint32_t triangle_count, pad;
+    uint32_t triangle_count, flags; /* PB_SCENE_* */
 } gpu_scene_refs;
 _Static_assert(sizeof(gpu_scene_refs) == 56, "SceneRefs layout");
 

@@ -7,6 +7,7 @@
 
 #include "probebake/scene.h"
 #include "probebake/trace.h"
+#include "scene/vertex_color.h"
 
 #include <math.h>
 #include <string.h>
@@ -66,6 +67,11 @@ static inline int pb_alpha_opaque(const pb_scene *s, uint32_t tri, float u, floa
         float tt = w0 * uv[1] + u * uv[3] + v * uv[5];
         uint32_t texel = s->texels[tx->offset + pb_texel_index(ts, tt, tx->width, tx->height, tx->wrap_s, tx->wrap_t)];
         a *= (float)(texel >> 24) * (1.f / 255.f);
+    }
+    if (s->colors) {
+        float vc[4];
+        pb_vertex_color(s, tri, u, v, vc);
+        a *= vc[3];
     }
     if (m->alpha_mode == PB_ALPHA_BLEND)
         return a > pb_alpha_blend_threshold(s->material[tri], u, v);

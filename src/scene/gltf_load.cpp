@@ -653,6 +653,19 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
         return res;
     if (have_uv && uv.size() / 2 != nv)
         return fail(r, PB_ERROR_PARSE, "TEXCOORD_0 and POSITION accessors of mesh '" + std::string(mesh_name) + "' differ in count");
+    // COLOR_0 (linear RGB or RGBA) multiplies the base colour, glTF's rule
+    std::vector<double> col;
+    int col_n = 0;
+    auto cit = prim.attributes.find("COLOR_0");
+    if (cit != prim.attributes.end()) {
+        col_n = cit->second >= 0 && cit->second < (int)r.m.accessors.size() &&
+                        r.m.accessors[cit->second].type == TINYGLTF_TYPE_VEC4 ? 4 : 3;
+        if ((res = read_accessor(r, cit->second, col_n, col, "COLOR_0")) != PB_OK)
+            return res;
+        if (col.size() / col_n != nv)
+            return fail(r, PB_ERROR_PARSE, "COLOR_0 and POSITION accessors of mesh '" + std::string(mesh_name) +
+                                               "' differ in count");
+    }
     std::vector<uint32_t> order; // vertex indices, before triangle assembly
     if (indices >= 0) {
         const tinygltf::Accessor *ia = indices < (int)r.m.accessors.size() ? &r.m.accessors[indices] : nullptr;
@@ -701,7 +714,7 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
     bool flip = det < 0; // mirrored transform: glTF says reverse the winding
     for (size_t t = 0; t + 2 < tris.size(); t += 3) {
         double p[9];
-        float n[9], tc[6];
+        float n[9], tc[6], rgba[12];
         for (int k = 0; k < 3; ++k) {
             uint32_t v = tris[t + (flip && k ? 3 - k : k)];
             xform_point(world, &pos[3 * v], &p[3 * k]);
@@ -719,8 +732,10 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
             double u0 = have_uv ? uv[2 * v] : 0.0, v0 = have_uv ? uv[2 * v + 1] : 0.0;
             tc[2 * k] = (float)(x[0] * u0 + x[1] * v0 + x[2]);
             tc[2 * k + 1] = (float)(x[3] * u0 + x[4] * v0 + x[5]);
+            for (int c = 0; c < 4 && col_n; ++c)
+                rgba[4 * k + c] = c < col_n ? (float)col[(size_t)col_n * v + c] : 1.f;
         }
-        if (!pb_sb_add_triangle(r.b, p, have_n ? n : nullptr, tc, material))
+        if (!pb_sb_add_triangle(r.b, p, have_n ? n : nullptr, tc, col_n ? rgba : nullptr, material))
             return fail(r, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
     }
     return PB_OK;

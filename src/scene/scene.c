@@ -57,7 +57,7 @@ pb_result pb_scene_from_triangles(const double *world_positions, uint32_t triang
         pb_sb_add_material(&b, &materials[i]);
     for (uint32_t i = 0; i < triangle_count; ++i) {
         uint32_t m = material_ids ? material_ids[i] : 0;
-        if (!pb_sb_add_triangle(&b, world_positions + 9 * (uint64_t)i, NULL, NULL, m))
+        if (!pb_sb_add_triangle(&b, world_positions + 9 * (uint64_t)i, NULL, NULL, NULL, m))
             break;
     }
     pb_result r = pb_sb_finish(&b, "<memory>", out, err);
@@ -74,6 +74,7 @@ void pb_scene_destroy(pb_scene *s)
     free(s->positions);
     free(s->normals);
     free(s->texcoords);
+    free(s->colors);
     free(s->material);
     free(s->materials);
     free(s->textures);

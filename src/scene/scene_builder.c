@@ -43,6 +43,7 @@ void pb_sb_free(pb_scene_builder *b)
     free(b->pos);
     free(b->nrm);
     free(b->uv);
+    free(b->rgba);
     free(b->mat);
     free(b->materials);
     free(b->textures);
@@ -79,7 +80,8 @@ static void flat_normal(const double p[9], float n[3])
     }
 }
 
-int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, uint32_t material)
+int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, const float *rgba,
+                       uint32_t material)
 {
     b->stats.triangles_in++;
     for (int i = 0; i < 9; ++i) {
@@ -104,14 +106,28 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
         uint32_t *mat = uvs ? realloc(b->mat, (size_t)(cap * sizeof(uint32_t))) : NULL;
         if (mat)
             b->mat = mat;
-        if (!mat) {
+        float *cols = b->rgba && mat ? realloc(b->rgba, (size_t)(cap * 12 * sizeof(float))) : NULL;
+        if (cols)
+            b->rgba = cols;
+        if (!mat || (b->rgba && !cols)) {
             b->out_of_memory = 1;
             return 0;
         }
         b->capacity = cap;
     }
+    if (rgba && !b->rgba) { /* the first coloured triangle: the ones before are white */
+        b->rgba = malloc((size_t)(b->capacity * 12 * sizeof(float)));
+        if (!b->rgba) {
+            b->out_of_memory = 1;
+            return 0;
+        }
+        for (uint64_t k = 0; k < 12 * b->count; ++k)
+            b->rgba[k] = 1.f;
+    }
     uint64_t i = b->count++;
     memcpy(b->pos + 9 * i, p, 9 * sizeof(double));
+    for (int k = 0; b->rgba && k < 12; ++k) /* glTF colours are in [0, 1] */
+        b->rgba[12 * i + k] = !rgba ? 1.f : isfinite(rgba[k]) ? fminf(fmaxf(rgba[k], 0.f), 1.f) : 1.f;
     float *dn = b->nrm + 9 * i;
     int nrm_ok = n != NULL;
     for (int k = 0; nrm_ok && k < 9; ++k)
@@ -242,7 +258,8 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
     s->normals = malloc((size_t)n * 9 * sizeof(float));
     s->texcoords = malloc((size_t)n * 6 * sizeof(float));
     s->material = malloc((size_t)n * sizeof(uint32_t));
-    if (!s->positions || !s->normals || !s->texcoords || !s->material) {
+    s->colors = b->rgba ? malloc((size_t)n * 12 * sizeof(float)) : NULL;
+    if (!s->positions || !s->normals || !s->texcoords || !s->material || (b->rgba && !s->colors)) {
         pb_scene_destroy(s);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
     }
@@ -279,6 +296,8 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
         }
         memcpy(s->normals + 9 * (uint64_t)kept, b->nrm + 9 * i, 9 * sizeof(float));
         memcpy(s->texcoords + 6 * (uint64_t)kept, b->uv + 6 * i, 6 * sizeof(float));
+        if (s->colors)
+            memcpy(s->colors + 12 * (uint64_t)kept, b->rgba + 12 * i, 12 * sizeof(float));
         uint32_t m = b->mat[i];
         s->material[kept] = m < b->material_count ? m : b->material_count - 1;
         ++kept;

@@ -18,6 +18,7 @@ typedef struct pb_scene_builder {
     double *pos;       /* 9 per triangle */
     float *nrm;        /* 9 per triangle */
     float *uv;         /* 6 per triangle */
+    float *rgba;       /* 12 per triangle once any triangle has vertex colours (NULL before) */
     uint32_t *mat;
     /* everything else */
     pb_material *materials;
@@ -40,9 +41,10 @@ void pb_sb_init(pb_scene_builder *b, pb_log log);
 void pb_sb_free(pb_scene_builder *b);
 
 /* Adds one triangle. p: 9 doubles (world). n: 9 floats or NULL for the flat
- * normal. uv: 6 floats or NULL. Degenerate and non-finite triangles are
- * counted and dropped. Returns 0 only when out of memory. */
-int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv,
+ * normal. uv: 6 floats or NULL. rgba: 12 floats (vertex colours) or NULL for
+ * white. Degenerate and non-finite triangles are counted and dropped.
+ * Returns 0 only when out of memory. */
+int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, const float *rgba,
                        uint32_t material);
 
 /* Appends and returns the index, or -1 when out of memory. */
