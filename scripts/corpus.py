@@ -50,7 +50,7 @@ def main():
     ap.add_argument("dirs", nargs="+")
     a = ap.parse_args()
     out = {"files": 0, "loaded": 0, "refused": 0, "crashed": 0, "nan": 0, "baked": 0,
-           "refusals": [], "crashes": [], "nans": []}
+           "refusals": [], "crashes": [], "nans": [], "baked_files": []}
     with tempfile.TemporaryDirectory() as tmp:
         for f in files_under(a.dirs):
             out["files"] += 1
@@ -79,6 +79,7 @@ def main():
                 out["refusals"].append({"file": f, "reason": "bake: " + error_line(err)[1]})
                 continue
             out["baked"] += 1
+            out["baked_files"].append(f)
             rc, js, err = run([a.probebake, "inspect", vol, "--json"], a.timeout)
             ok = rc == 0
             if ok:

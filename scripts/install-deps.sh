@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs probebake's build, test and bench dependencies from Debian's packages
 # (nodejs, npm, chromium: the web runtime, runtime/, is tested with node's runner
-# and in headless Chromium, and uses three.js from npm at a pinned version).
+# and in headless Chromium, and uses three.js from npm at a pinned version;
+# clang: the glTF loader's libFuzzer harness; libdraco-dev and
+# libmeshoptimizer-dev: compressed glTF geometry).
 # Everything comes from bookworm except Mesa's Vulkan drivers (lavapipe), which
 # come from bookworm-backports at a pinned version: Mesa 25's llvmpipe runs our
 # kernels several times faster than bookworm's 22.3 (bench/RESULTS.md) and has
@@ -18,6 +20,7 @@ pkgs=(
   glslang-tools spirv-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev
   libdraco-dev libmeshoptimizer-dev
+  clang
   libvulkan-volk-dev
   libembree-dev
   gnuplot-nox

@@ -21,6 +21,20 @@ echo "== CPU-side tests under AddressSanitizer + UndefinedBehaviorSanitizer (PB_
 PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan -L cpu --output-on-failure
 
+# A short libFuzzer run of the glTF loader (scripts/fuzz.sh is the long one):
+# from the committed corpus into a scratch folder, so the repository does not
+# change; a crash, leak or sanitizer report fails the suite and leaves the
+# input in tests/fuzz/crashers.
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPB_FUZZ=ON -DPB_BUILD_BENCH=OFF >/dev/null
+cmake --build build-fuzz -j"$jobs" --target fuzz_scene_load
+echo "== glTF loader fuzzing, ${PB_FUZZ_SECONDS:-60} s from tests/fuzz/corpus"
+scratch=$(mktemp -d)
+ASAN_OPTIONS=detect_leaks=1 build-fuzz/tests/fuzz_scene_load -max_total_time="${PB_FUZZ_SECONDS:-60}" \
+    -max_len=65536 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=tests/fuzz/crashers/ "$scratch" tests/fuzz/corpus \
+    >"$scratch.log" 2>&1 || { tail -n 40 "$scratch.log"; echo "fuzzing found a crash: tests/fuzz/crashers"; exit 1; }
+grep -E "^(Done|#[0-9]+ +DONE)" "$scratch.log" | tail -n 1
+rm -rf "$scratch" "$scratch.log"
+
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$jobs"
 echo "== full suite (validation layer on)"

@@ -3,11 +3,21 @@
 # present): every file loads or is refused with a one-line reason, none
 # crashes, every volume is finite; the files expected to load do, and the
 # shared corpus's three expected refusals are the only ones.
-# Usage: test_corpus.sh SOURCE_DIR PROBEBAKE
+# The repository's scenes also go in compressed, as tests/gltf_compress
+# writes them (Draco, meshopt, quantized; issue 15): each must load and bake.
+# Usage: test_corpus.sh SOURCE_DIR PROBEBAKE GLTF_COMPRESS
 set -u
 src=$1
 pb=$2
-dirs=("$src/tests/scenes")
+compress=$3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+for f in "$src"/tests/scenes/*.gltf; do
+    for mode in draco meshopt quantize; do
+        "$compress" "$mode" "$f" "$tmp/$(basename "$f" .gltf)_$mode.glb" || { echo "[ FAIL ] gltf_compress $mode $f"; exit 1; }
+    done
+done
+dirs=("$src/tests/scenes" "$tmp")
 shared="$src/../shared/scenes"
 [ -d "$shared" ] && dirs+=("$shared") || echo "  SKIP part: $shared not present"
 out=$(python3 "$src/scripts/corpus.py" --probebake "$pb" "${dirs[@]}")
@@ -23,7 +33,9 @@ expected = {"Empty.gltf", "OnlyAccessors.gltf", "EmbedBufferInvalid.gltf"}  # no
 unexpected = [r["file"] for r in d["refusals"] if r["file"].rsplit("/", 1)[-1] not in expected]
 if unexpected:
     print("  unexpected refusals: %s" % unexpected)
-sys.exit(1 if bad or unexpected or d["files"] < 4 else 0)
+compressed = [f for f in d["baked_files"] if "_draco." in f or "_meshopt." in f or "_quantize." in f]
+print("  %d compressed files loaded and baked" % len(compressed))
+sys.exit(1 if bad or unexpected or d["files"] < 4 or len(compressed) < 12 else 0)
 '
 check=$?
 if [ "$rc" -eq 0 ] && [ "$check" -eq 0 ]; then
