@@ -5,6 +5,8 @@
 
 #include "probebake/probebake.h"
 
+#include <stdio.h>
+
 typedef struct cli_log {
     int verbose;
     int quiet;
@@ -51,8 +53,35 @@ double cli_now_ms(void);
 /* Parses "a,b,c" into n floats; 1 on success. */
 int cli_parse_floats(const char *s, int n, float *out);
 
+/* Parses argv into o (defaults first); prints --help / --version and exits
+ * 0 for them. Returns 0, or the exit code of a usage error (2) after its
+ * one-line message. */
+int cli_parse(int argc, char **argv, options *o);
+void cli_print_help(void);
+
+/* The commands, one file each (src/cli/cmd_*.c); each returns the exit code. */
+int cmd_devices(const options *o);
+int cmd_info(const options *o);
+int cmd_trace(const options *o);
+int cmd_inspect(const options *o);
+int cmd_bake(const options *o);
 int cmd_render(const options *o);
 int cmd_export(const options *o);
+
+/* JSON output (json.c): a quoted, escaped string on stdout, and numbers
+ * (NaN and infinities as null, which JSON lacks). Returned by value: J(x).s
+ * lives until the end of the printf using it; J17 keeps full double
+ * precision (origins far from zero). */
+typedef struct json_num {
+    char s[32];
+} json_num;
+void json_string(const char *s);
+json_num J(double x);
+json_num J17(double x);
+
+/* Paths and relative standard errors over a volume's probes (median, p95,
+ * worst), where known (volume_report.c). */
+void cli_print_error_summary(FILE *out, const pb_volume *v);
 
 /* Progress line on stderr (when show) for pb_progress_fn; returns nonzero
  * once Ctrl-C was pressed while cli_catch_sigint(1) was in force. */

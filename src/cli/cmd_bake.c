@@ -1,0 +1,191 @@
+#define _POSIX_C_SOURCE 200809L
+/* probebake bake: a probe volume from a scene, with progress, a summary of
+ * what was baked, and the file written atomically (Ctrl-C leaves the old
+ * one). */
+#include "cli/cli.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+int cmd_bake(const options *o)
+{
+    if (!o->scene)
+        return cli_usage_error("%s needs a SCENE file", "bake");
+    if (!o->output)
+        return cli_usage_error("%s needs -o OUT.probes", "bake");
+    if (o->has_spacing && o->has_counts)
+        return cli_usage_error("%s: give --spacing or --counts, not both", "bake");
+    if (o->points && (o->has_spacing || o->has_counts || o->has_bounds))
+        return cli_usage_error("%s: --points replaces the grid; drop --spacing, --counts and --bounds", "bake");
+    pb_log log = {cli_log_to_stderr, (void *)&o->log};
+    pb_scene_desc sd = {log, 0};
+    pb_scene *s = NULL;
+    pb_bvh *bvh = NULL;
+    pb_context *ctx = NULL;
+    pb_gpu_scene *gs = NULL;
+    pb_volume vol;
+    memset(&vol, 0, sizeof vol);
+    pb_points pts;
+    memset(&pts, 0, sizeof pts);
+    pb_environment env;
+    memset(&env, 0, sizeof env);
+    pb_error err;
+    int rc = 1;
+    double t0 = cli_now_ms();
+    /* the output is checked before any work: not a directory, writable,
+     * not one of the inputs (hard links and symlinks too) */
+    const char *inputs[3] = {o->scene, o->env, o->points};
+    if (pb_output_check(o->output, inputs, 3, &err) != PB_OK)
+        goto out;
+    if (o->points && pb_points_read(o->points, &pts, &err) != PB_OK)
+        goto out;
+    if (cli_environment(o, &env, &err) != PB_OK)
+        goto out;
+    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK ||
+        pb_bake_check_light(s, o->sky, o->env ? &env : NULL, &err) != PB_OK)
+        goto out;
+    if (s->triangle_count == 0 && !o->has_bounds && !o->points) {
+        snprintf(err.message, sizeof err.message, "%s: no triangles and no --bounds: nowhere to put probes", o->scene);
+        goto out;
+    }
+    /* grid in the scene's local frame */
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = o->has_bounds ? (float)(o->bounds[k] - s->origin[k]) : s->bounds_min[k];
+        hi[k] = o->has_bounds ? (float)(o->bounds[3 + k] - s->origin[k]) : s->bounds_max[k];
+    }
+    pb_bake_desc d;
+    memset(&d, 0, sizeof d);
+    if (o->has_counts) {
+        for (int k = 0; k < 3; ++k) {
+            d.grid.counts[k] = o->counts[k];
+            d.grid.spacing[k] = (hi[k] - lo[k]) / (float)o->counts[k];
+            d.grid.origin[k] = lo[k] + 0.5f * d.grid.spacing[k];
+        }
+    } else if (o->has_spacing) {
+        for (int k = 0; k < 3; ++k) {
+            double n = floor((hi[k] - lo[k]) / o->spacing);
+            if (n > 65536) {
+                snprintf(err.message, sizeof err.message, "--spacing %g gives %.0f probes along an axis; at most 65536",
+                         o->spacing, n);
+                goto out;
+            }
+            d.grid.counts[k] = n < 1 ? 1u : (uint32_t)n;
+            d.grid.spacing[k] = o->spacing;
+            d.grid.origin[k] = 0.5f * (lo[k] + hi[k]) - 0.5f * o->spacing * (float)(d.grid.counts[k] - 1);
+        }
+    } else {
+        pb_probe_grid_fit(lo, hi, 2048, &d.grid); /* a room at roughly 0.3 m */
+    }
+    if (o->points) {
+        d.points = &pts;
+        memset(&d.grid, 0, sizeof d.grid);
+    }
+    /* a preset fills what the command line leaves out */
+    const pb_bake_quality *q = pb_bake_quality_find(o->quality);
+    d.rays_per_probe = o->has_rays ? o->rays : q ? q->rays_per_probe : 256;
+    d.target_error = o->target_error > 0.f ? o->target_error : q ? q->target_error : 0.f;
+    d.passes = o->passes ? o->passes : q ? q->passes : (d.target_error > 0.f ? 64 : 4);
+    d.bounces = o->has_bounces ? o->bounces : 2;
+    d.octmap_res = o->octmap_res ? o->octmap_res : 16;
+    d.seed = o->has_seed ? o->seed : 1;
+    d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");
+    d.probe_nee = o->probe_nee ? !strcmp(o->probe_nee, "on") : q ? q->probe_nee : 1u;
+    d.guide_paths = o->guide ? (!strcmp(o->guide, "on") ? PB_GUIDE_DEFAULT_PATHS : 0u) : q ? q->guide_paths : 0u;
+    d.light_cells = o->light_cells ? !strcmp(o->light_cells, "on") : q ? q->light_cells : 1u;
+    memcpy(d.sky, o->sky, sizeof d.sky);
+    d.environment = o->env ? &env : NULL;
+    d.indirect_volume = (uint32_t)o->indirect_volume;
+    d.sh_window = o->sh_window;
+    d.indirect_clamp = o->indirect_clamp;
+    d.max_lights_per_hit = o->max_lights_per_hit;
+    d.sh_window_width = o->sh_window_width;
+    char light[1200], clamp_text[32];
+    if (o->env)
+        snprintf(light, sizeof light, "environment %s (%ux%u, x%g, turned %g deg)", o->env, env.width, env.height,
+                 o->env_intensity, o->env_rotation);
+    else
+        snprintf(light, sizeof light, "sky (%g, %g, %g)", d.sky[0], d.sky[1], d.sky[2]);
+    uint64_t probes = o->points ? pts.count : (uint64_t)d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+    char where[160];
+    if (o->points)
+        snprintf(where, sizeof where, "%u points from %.100s", pts.count, o->points);
+    else
+        snprintf(where, sizeof where, "%u x %u x %u = %llu probes, spacing %.3g m", d.grid.counts[0], d.grid.counts[1],
+                 d.grid.counts[2], (unsigned long long)probes, d.grid.spacing[0]);
+    if (!o->log.quiet)
+        fprintf(stderr,
+                "probebake: baking %s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
+                "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, light cells %s, seed %u\n",
+                o->scene, q ? " at quality " : "", q ? q->name : "", where, d.rays_per_probe,
+                d.target_error > 0.f ? "up to " : "", d.passes, d.target_error > 0.f ? " (until converged)" : "",
+                d.bounces, light, d.octmap_res,
+                d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path",
+                d.probe_nee ? "on" : "off",
+                /* --indirect volume bakes one bounce at a time: no bounce rays to guide */
+                d.guide_paths && d.bounces && !d.indirect_volume ? "on" : "off", d.light_cells ? "on" : "off",
+                d.seed);
+    if (!o->log.quiet && (d.indirect_clamp > 0.f || d.sh_window))
+        fprintf(stderr, "probebake: biased on request:%s%s%s\n",
+                d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
+                d.indirect_clamp > 0.f ? (snprintf(clamp_text, sizeof clamp_text, "%g", d.indirect_clamp), clamp_text) : "",
+                d.sh_window == 1 ? " SH Hanning window" : d.sh_window == 2 ? " SH Lanczos window" : "");
+    if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
+        goto out;
+    pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
+    cli_fault_injection(&cd);
+    if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+        goto out;
+    cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};
+    d.progress = cli_progress;
+    d.progress_user = &ps;
+    cli_defer_signals(); /* from here a signal cancels the bake or the write */
+    pb_result r = pb_bake(ctx, s, gs, &d, &vol, &err);
+    if (ps.show)
+        fprintf(stderr, "\n");
+    if (r != PB_OK)
+        goto out;
+    if (o->validation && pb_context_validation_messages(ctx)) {
+        snprintf(err.message, sizeof err.message, "%u Vulkan validation messages", pb_context_validation_messages(ctx));
+        goto out;
+    }
+    vol.timings.load = 0;
+    vol.timings.bvh = bvh->stats.build_ms;
+    vol.timings.total = cli_now_ms() - t0;
+    if (pb_volume_write_ex(o->output, &vol, cli_interrupted, NULL, &err) != PB_OK)
+        goto out;
+    FILE *report = strcmp(o->output, "-") ? stdout : stderr; /* stdout carries the volume for -o - */
+    uint32_t valid = 0, outside = 0, relocated = 0, dilated = 0, converged = 0;
+    for (uint32_t i = 0; i < vol.probe_count; ++i) {
+        valid += (vol.probe_flags[i] & PB_PROBE_VALID) != 0;
+        outside += (vol.probe_flags[i] & PB_PROBE_OUTSIDE) != 0;
+        relocated += (vol.probe_flags[i] & PB_PROBE_RELOCATED) != 0;
+        dilated += (vol.probe_flags[i] & PB_PROBE_DILATED) != 0;
+        converged += (vol.probe_flags[i] & PB_PROBE_CONVERGED) != 0;
+    }
+    double rays = (double)vol.rays_traced;
+    fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside", o->output,
+           (unsigned long long)probes, valid, relocated, vol.probe_count - valid, dilated, outside);
+    if (d.target_error > 0.f)
+        fprintf(report, ", %u converged before the last pass", converged);
+    fprintf(report, "), %.3g probe rays in %s%u passes\n", rays, d.target_error > 0.f ? "up to " : "", vol.settings.passes);
+    cli_print_error_summary(report, &vol);
+    fprintf(report, "time: bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, depth %.0f ms; "
+           "total %.0f ms wall\n",
+           vol.timings.bvh, vol.timings.trace, vol.timings.trace > 0 ? rays / (vol.timings.trace * 1e3) : 0.0,
+           vol.timings.trace > 0 ? (double)vol.traversals / (vol.timings.trace * 1e3) : 0.0, vol.timings.sh,
+           vol.timings.octmap, vol.timings.total);
+    rc = 0;
+out:
+    pb_volume_free(&vol);
+    pb_points_free(&pts);
+    pb_environment_free(&env);
+    pb_gpu_scene_destroy(gs);
+    pb_context_destroy(ctx);
+    pb_bvh_destroy(bvh);
+    pb_scene_destroy(s);
+    return rc ? cli_fail(&err) : 0;
+}

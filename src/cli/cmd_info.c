@@ -1,0 +1,113 @@
+#define _POSIX_C_SOURCE 200809L
+/* probebake info: what the loader made of a scene file (triangles kept and
+ * dropped, materials, textures, lights, cameras, extensions, bounds). */
+#include "cli/cli.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static const char *light_type(uint32_t t)
+{
+    return t == PB_LIGHT_DIRECTIONAL ? "directional" : t == PB_LIGHT_SPOT ? "spot" : "point";
+}
+
+/* "A, B" as a JSON array of strings ["A", "B"] (names hold no commas) */
+static void json_name_list(const char *list)
+{
+    printf("[");
+    for (const char *p = list; *p;) {
+        const char *e = strstr(p, ", ");
+        size_t n = e ? (size_t)(e - p) : strlen(p);
+        char name[512];
+        snprintf(name, sizeof name, "%.*s", (int)n, p);
+        printf("%s", p == list ? "" : ", ");
+        json_string(name);
+        p += n + (e ? 2 : 0);
+    }
+    printf("]");
+}
+
+int cmd_info(const options *o)
+{
+    if (!o->scene)
+        return cli_usage_error("%s needs a SCENE file", "info");
+    pb_scene_desc sd = {{cli_log_to_stderr, (void *)&o->log}, 0};
+    pb_scene *s;
+    pb_error err;
+    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
+        return cli_fail(&err);
+    const pb_scene_stats *st = &s->stats;
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = s->bounds_min[k] + s->origin[k];
+        hi[k] = s->bounds_max[k] + s->origin[k];
+    }
+    uint32_t emissive = 0, masked = 0, blended = 0;
+    for (uint32_t m = 0; m < s->material_count; ++m) {
+        const pb_material *mt = &s->materials[m];
+        emissive += mt->emissive[0] > 0 || mt->emissive[1] > 0 || mt->emissive[2] > 0;
+        masked += mt->alpha_mode == PB_ALPHA_MASK;
+        blended += mt->alpha_mode == PB_ALPHA_BLEND;
+    }
+    if (o->json) {
+        printf("{\n  \"file\": ");
+        json_string(o->scene);
+        printf(",\n  \"triangles\": %u,\n  \"triangles_in\": %llu,\n  \"dropped_degenerate\": %llu,\n"
+               "  \"dropped_nonfinite\": %llu,\n  \"primitives\": %u,\n  \"primitives_skipped\": %u,\n"
+               "  \"normals_generated\": %u,\n  \"nodes\": %u,\n",
+               s->triangle_count, (unsigned long long)st->triangles_in, (unsigned long long)st->dropped_degenerate,
+               (unsigned long long)st->dropped_nonfinite, st->primitives, st->primitives_skipped,
+               st->normals_generated, st->nodes);
+        printf("  \"materials\": %u,\n  \"emissive_materials\": %u,\n  \"masked_materials\": %u,\n"
+               "  \"blended_materials\": %u,\n  \"textures\": %u,\n",
+               s->material_count, emissive, masked, blended, s->texture_count);
+        printf("  \"lights\": [");
+        for (uint32_t i = 0; i < s->light_count; ++i) {
+            const pb_light *l = &s->lights[i];
+            printf("%s{\"type\": \"%s\", \"name\": ", i ? ", " : "", light_type(l->type));
+            json_string(l->name);
+            printf(", \"color\": [%s, %s, %s], \"intensity\": %s, \"range\": %s, \"position\": [%s, %s, %s]}",
+                   J(l->color[0]).s, J(l->color[1]).s, J(l->color[2]).s, J(l->intensity).s, J(l->range).s,
+                   J(l->position[0] + s->origin[0]).s, J(l->position[1] + s->origin[1]).s,
+                   J(l->position[2] + s->origin[2]).s);
+        }
+        printf("],\n  \"cameras\": [");
+        for (uint32_t i = 0; i < s->camera_count; ++i) {
+            const pb_camera *c = &s->cameras[i];
+            printf("%s{\"name\": ", i ? ", " : "");
+            json_string(c->name);
+            printf(", \"perspective\": %s, \"yfov\": %s, \"position\": [%s, %s, %s]}",
+                   c->perspective ? "true" : "false", J(c->yfov).s, J(c->position[0] + s->origin[0]).s,
+                   J(c->position[1] + s->origin[1]).s, J(c->position[2] + s->origin[2]).s);
+        }
+        printf("],\n  \"extensions_used\": ");
+        json_name_list(st->extensions_used);
+        printf(",\n  \"extensions_applied\": ");
+        json_name_list(st->extensions_applied);
+        printf(",\n  \"bounds_min\": [%s, %s, %s],\n  \"bounds_max\": [%s, %s, %s],\n"
+               "  \"origin\": [%s, %s, %s]\n}\n",
+               J(lo[0]).s, J(lo[1]).s, J(lo[2]).s, J(hi[0]).s, J(hi[1]).s, J(hi[2]).s, J17(s->origin[0]).s,
+               J17(s->origin[1]).s, J17(s->origin[2]).s);
+    } else {
+        printf("scene       %s\n", o->scene);
+        printf("triangles   %u kept of %llu (%llu degenerate, %llu NaN/Inf dropped)\n", s->triangle_count,
+               (unsigned long long)st->triangles_in, (unsigned long long)st->dropped_degenerate,
+               (unsigned long long)st->dropped_nonfinite);
+        printf("primitives  %u (%u points/lines skipped, %u without normals: flat normals generated), %u nodes\n",
+               st->primitives, st->primitives_skipped, st->normals_generated, st->nodes);
+        printf("materials   %u (%u emissive, %u alpha-masked, %u blended)\n", s->material_count, emissive, masked,
+               blended);
+        printf("textures    %u\n", s->texture_count);
+        printf("lights      %u", s->light_count);
+        for (uint32_t i = 0; i < s->light_count; ++i)
+            printf("%s%s '%s' %g", i ? ", " : ": ", light_type(s->lights[i].type), s->lights[i].name,
+                   s->lights[i].intensity);
+        printf("\ncameras     %u\n", s->camera_count);
+        if (st->extensions_used[0])
+            printf("extensions  used: %s; applied: %s\n", st->extensions_used,
+                   st->extensions_applied[0] ? st->extensions_applied : "none");
+        printf("bounds      (%.6g, %.6g, %.6g) .. (%.6g, %.6g, %.6g) m\n", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    }
+    pb_scene_destroy(s);
+    return 0;
+}

@@ -1,0 +1,166 @@
+#define _POSIX_C_SOURCE 200809L
+/* probebake inspect: a volume file's summary, every probe as JSON, or the
+ * debug images (--atlas, --sh-view). */
+#include "cli/cli.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void print_flags(uint32_t f)
+{
+    static const char *const names[] = {"valid", "relocated", "dilated", "outside", "converged"};
+    int first = 1;
+    printf("[");
+    for (int b = 0; b < 5; ++b)
+        if (f & (1u << b)) {
+            printf("%s\"%s\"", first ? "" : ", ", names[b]);
+            first = 0;
+        }
+    printf("]");
+}
+
+static void print_probe_json(const pb_volume *v, uint32_t i, int last)
+{
+    double p[3];
+    pb_volume_probe_position(v, i, p);
+    printf("    {\"index\": %u, \"position\": [%s, %s, %s], \"offset\": [%s, %s, %s], \"flags\": ", i, J(p[0]).s,
+           J(p[1]).s, J(p[2]).s, J(v->offset[3 * i]).s, J(v->offset[3 * i + 1]).s, J(v->offset[3 * i + 2]).s);
+    print_flags(v->probe_flags[i]);
+    float se = v->probe_std_error[i];
+    printf(", \"paths\": %u, \"std_error\": %s", v->probe_paths[i], se == PB_STD_ERROR_UNKNOWN ? "null" : J(se).s);
+    printf(", \"sh\": [");
+    for (int c = 0; c < 27; ++c)
+        printf("%s%s", c ? ", " : "", J(v->sh[27 * (size_t)i + c]).s);
+    printf("]}%s\n", last ? "" : ",");
+}
+
+static const char *window_name(uint32_t w)
+{
+    return w == 1 ? "hanning" : w == 2 ? "lanczos" : "none";
+}
+
+/* The file's techniques as JSON array items. */
+static const char *technique_list(uint32_t t, char buf[64])
+{
+    static const char *names[3] = {"probe-nee", "guiding", "light-cells"};
+    buf[0] = 0;
+    for (int k = 0; k < 3; ++k)
+        if (t & (1u << k))
+            snprintf(buf + strlen(buf), 64 - strlen(buf), "%s\"%s\"", buf[0] ? ", " : "", names[k]);
+    return buf;
+}
+
+int cmd_inspect(const options *o)
+{
+    if (!o->scene)
+        return cli_usage_error("%s needs a VOLUME file", "inspect");
+    pb_volume v;
+    pb_error err;
+    char techniques[64];
+    if (pb_volume_read(o->scene, &v, &err) != PB_OK)
+        return cli_fail(&err);
+    if (o->has_probe && o->probe >= v.probe_count) {
+        fprintf(stderr, "probebake: error: %s: probe %u does not exist (%u probes)\n", o->scene, o->probe,
+                v.probe_count);
+        pb_volume_free(&v);
+        return 1;
+    }
+    const char *views[2] = {o->atlas, o->sh_view};
+    for (int k = 0; k < 2; ++k) {
+        if (!views[k])
+            continue;
+        const char *inputs[1] = {o->scene};
+        if (pb_output_check(views[k], inputs, 1, &err) != PB_OK) {
+            pb_volume_free(&v);
+            return cli_fail(&err);
+        }
+        unsigned char *img = NULL;
+        uint32_t w = 0, h = 0;
+        pb_result r = k == 0 ? pb_volume_depth_atlas(&v, &img, &w, &h, &err) : pb_volume_sh_atlas(&v, 16, &img, &w, &h, &err);
+        if (r == PB_OK)
+            r = pb_write_png(views[k], img, w, h, &err);
+        free(img);
+        if (r != PB_OK) {
+            pb_volume_free(&v);
+            return cli_fail(&err);
+        }
+        if (!o->json)
+            printf("wrote %s: %ux%u, %s of %u probes\n", views[k], w, h, k == 0 ? "depth atlas" : "SH irradiance view",
+                   v.probe_count);
+    }
+    uint32_t counts[5] = {0};
+    for (uint32_t i = 0; i < v.probe_count; ++i)
+        for (int b = 0; b < 5; ++b)
+            counts[b] += (v.probe_flags[i] >> b) & 1u;
+    const pb_volume_settings *s = &v.settings;
+    const char *kind = v.flags & PB_VOLUME_IRRADIANCE ? "irradiance" : "radiance";
+    if (o->json) {
+        printf("{\n  \"file\": ");
+        json_string(o->scene);
+        printf(",\n  \"version\": %u,\n  \"probes\": %u,\n  \"grid\": %s,\n  \"counts\": [%u, %u, %u],\n"
+               "  \"origin\": [%s, %s, %s],\n  \"spacing\": [%s, %s, %s],\n  \"sh\": \"%s\",\n"
+               "  \"direct\": %s,\n  \"octmap_res\": %u,\n  \"max_distance\": %s,\n  \"depth_unit\": %s,\n"
+               "  \"seed\": %llu,\n"
+               "  \"scene_hash\": \"%016llx\",\n  \"rays_per_probe\": %u,\n  \"passes\": %u,\n  \"bounces\": %u,\n"
+               "  \"indirect\": \"%s\",\n  \"sh_window\": \"%s\",\n  \"sh_window_width\": %s,\n  \"indirect_clamp\": %s,\n"
+               "  \"techniques\": [%s],\n  \"device\": ",
+               v.file_version, v.probe_count, v.flags & PB_VOLUME_GRID ? "true" : "false", v.counts[0], v.counts[1],
+               v.counts[2], J17(v.origin[0]).s, J17(v.origin[1]).s, J17(v.origin[2]).s, J(v.spacing[0]).s,
+               J(v.spacing[1]).s, J(v.spacing[2]).s, kind, v.flags & PB_VOLUME_DIRECT ? "true" : "false", v.octmap_res,
+               J(s->max_distance).s, J(v.depth_unit).s, (unsigned long long)s->seed,
+               (unsigned long long)s->scene_hash, s->rays_per_probe, s->passes, s->bounces,
+               s->indirect_mode ? "volume" : "path", window_name(s->sh_window), J(s->sh_window_width).s,
+               J(s->indirect_clamp).s, technique_list(s->techniques, techniques));
+        json_string(v.device);
+        printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
+               "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
+        if (o->has_probe)
+            print_probe_json(&v, o->probe, 1);
+        else
+            for (uint32_t i = 0; i < v.probe_count; ++i)
+                print_probe_json(&v, i, i + 1 == v.probe_count);
+        printf("  ]\n}\n");
+    } else if (o->has_probe) {
+        double p[3];
+        pb_volume_probe_position(&v, o->probe, p);
+        printf("probe %u at (%.6g, %.6g, %.6g), offset (%g, %g, %g), flags ", o->probe, p[0], p[1], p[2],
+               v.offset[3 * o->probe], v.offset[3 * o->probe + 1], v.offset[3 * o->probe + 2]);
+        print_flags(v.probe_flags[o->probe]);
+        float se = v.probe_std_error[o->probe];
+        printf("\n%u paths, ", v.probe_paths[o->probe]);
+        if (se == PB_STD_ERROR_UNKNOWN)
+            printf("standard error unknown (%s)\n", v.file_version && v.file_version < 3 ? "file older than version 3" : "one pass, or passes around a zero mean");
+        else
+            printf("relative standard error of its irradiance %.3g %%\n", 100.0 * se);
+        printf("%s SH (R G B per coefficient):\n", kind);
+        for (int c = 0; c < 9; ++c)
+            printf("  %d: %12.6g %12.6g %12.6g\n", c, v.sh[27 * (size_t)o->probe + 3 * c],
+                   v.sh[27 * (size_t)o->probe + 3 * c + 1], v.sh[27 * (size_t)o->probe + 3 * c + 2]);
+    } else {
+        printf("volume      %s (format version %u)\n", o->scene, v.file_version);
+        if (v.flags & PB_VOLUME_GRID)
+            printf("probes      %u = %u x %u x %u, spacing (%g, %g, %g) m\n", v.probe_count, v.counts[0],
+                   v.counts[1], v.counts[2], v.spacing[0], v.spacing[1], v.spacing[2]);
+        else
+            printf("probes      %u placed points\n", v.probe_count);
+        printf("flags       %u valid, %u relocated, %u dilated, %u outside, %u converged\n", counts[0], counts[1],
+               counts[2], counts[3], counts[4]);
+        printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
+               v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
+        printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, guiding %s, light cells %s, "
+               "seed %llu, device %s\n", s->rays_per_probe, s->passes, s->bounces,
+               s->indirect_mode ? "volume" : "path", s->techniques & PB_TECHNIQUE_PROBE_NEE ? "on" : "off",
+               s->techniques & PB_TECHNIQUE_GUIDING ? "on" : "off",
+               s->techniques & PB_TECHNIQUE_LIGHT_CELLS ? "on" : "off", (unsigned long long)s->seed,
+               v.device[0] ? v.device : "?");
+        if (s->sh_window || s->indirect_clamp > 0.f)
+            printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),
+                   s->sh_window_width > 0.f ? s->sh_window_width : 3.f, s->indirect_clamp);
+        cli_print_error_summary(stdout, &v);
+        printf("time        %.1f ms total\n", v.timings.total);
+    }
+    pb_volume_free(&v);
+    return 0;
+}
