@@ -94,6 +94,10 @@ typedef struct pb_bake_desc {
     uint32_t light_cells;         /* 1: next-event estimation draws emitters per region of space by the light
                                      shadow rays measured from there, mixed with their power (unbiased;
                                      docs/bake.md, "Estimators"); 0: by power alone */
+    uint32_t shard_index, shard_count; /* count > 0: bake part `index` (0-based) of `count` only: a contiguous
+                                     range of the probes (grid or points), undilated, as a volume with
+                                     PB_VOLUME_SHARD; pb_volume_merge joins the parts into the very bytes
+                                     of the whole bake (timings aside). 0: the whole volume */
     pb_progress_fn progress;
     void *progress_user;
 } pb_bake_desc;
@@ -118,6 +122,36 @@ typedef struct pb_bake_quality {
 const pb_bake_quality *pb_bake_quality_find(const char *name);
 
 typedef struct pb_gpu_scene pb_gpu_scene;
+
+/* Rounds of dilation a grid bake runs (its last stage). */
+#define PB_DILATION_ROUNDS 8u
+
+/* Dilation (src/bake/dilate.c): each invalid grid probe takes the
+ * distance-weighted mean SH of its valid (or already filled) neighbours,
+ * round after round (Jacobi), up to `rounds`; filled ones get
+ * PB_PROBE_DILATED. A grid volume only. */
+void pb_volume_dilate(pb_volume *v, uint32_t rounds);
+
+/* Joins the parts of a sharded bake (src/bake/merge.c): they must be one
+ * bake's (same scene hash, grid or points, settings, seed), disjoint and
+ * complete (every part 0 .. N-1 exactly once); `names` (one per part, for
+ * messages) say which file is at fault. Then the cross-part stages
+ * (dilation) run, and *out is the volume a one-process bake writes, byte
+ * for byte apart from the timings (summed) and, if parts ran on different
+ * devices, the device name. PB_ERROR_INVALID_ARGUMENT for a foreign,
+ * missing or duplicated part. */
+pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint32_t count, pb_volume *out,
+                          pb_error *err);
+
+/* A bake on `count` devices at once (src/bake/multi_device.c): part i of
+ * count (as desc->shard_index / shard_count, which must be 0 here) on
+ * ctxs[i] with its uploaded scene scenes[i], one host thread per device,
+ * joined by pb_volume_merge. On devices of one driver the result is a
+ * one-device bake's, byte for byte apart from the timings. desc->progress
+ * hears the mean fraction of all parts, from any of their threads (one at a
+ * time); its cancel stops every part. */
+pb_result pb_bake_devices(pb_context *const *ctxs, pb_gpu_scene *const *scenes, uint32_t count, const pb_scene *scene,
+                          const pb_bake_desc *desc, pb_volume *out, pb_error *err);
 
 /* Where probe `probe` starts, in the scene's local frame, and its id. The one
  * rounding rule for grids and points alike: the world position in double

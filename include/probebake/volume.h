@@ -29,8 +29,18 @@ extern "C" {
 enum {
     PB_VOLUME_IRRADIANCE = 1u << 0,     /* SH holds irradiance (else radiance) */
     PB_VOLUME_DIRECT = 1u << 1,         /* direct light included */
-    PB_VOLUME_GRID = 1u << 2            /* probes form counts[0] x counts[1] x counts[2], x fastest */
+    PB_VOLUME_GRID = 1u << 2,           /* probes form counts[0] x counts[1] x counts[2], x fastest */
+    PB_VOLUME_SHARD = 1u << 3           /* a part of a bake (pb_volume_shard), for probebake merge */
 };
+
+/* The part of a bake a shard file holds (bake --shard I/N): probes
+ * first .. first + probe_count - 1 of `total`, undilated (dilation needs
+ * neighbours across parts: pb_volume_merge runs it). count 0: a whole
+ * volume. */
+typedef struct pb_volume_shard {
+    uint32_t index, count;              /* part `index` of `count` (0-based) */
+    uint32_t first, total;              /* its first probe, and the whole bake's probe count */
+} pb_volume_shard;
 
 enum {
     PB_PROBE_VALID = 1u << 0,
@@ -78,6 +88,7 @@ typedef struct pb_volume {
     pb_volume_timings timings;
     char device[128];
     float depth_unit;                   /* metres per depth unit: texels hold (d / unit, d^2 / unit^2); a power of two */
+    pb_volume_shard shard;              /* with PB_VOLUME_SHARD: which part of a bake this is */
     uint64_t rays_traced;               /* probe rays of the bake passes (set by pb_bake; not stored in files) */
     uint64_t traversals;                /* BVH traversals of relocation and bake passes: probe, bounce, shadow rays (ditto) */
     uint32_t file_version;              /* format version of the file it was read from; 0 if not read */

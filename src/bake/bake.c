@@ -11,6 +11,7 @@
  * adding passes never loses precision however many there are. */
 #include "bake/bake_data.h"
 #include "bake/convergence.h"
+#include "bake/shard.h"
 #include "bake/gpu_scene.h"
 #include "bake/guide.h"
 #include "bake/light_cells.h"
@@ -400,59 +401,6 @@ static uint32_t relocate(bake_run *run, float *offsets)
     return moved;
 }
 
-/* Invalid probes take the distance-weighted mean of valid (or already
- * filled) grid neighbours, round after round (Jacobi: each round reads the
- * previous one), up to `rounds`. */
-static void dilate(pb_volume *v, uint32_t rounds)
-{
-    uint32_t P = v->probe_count, nx = v->counts[0], ny = v->counts[1], nz = v->counts[2];
-    uint32_t *filled = malloc(P * sizeof *filled);
-    if (!filled)
-        return;
-    for (uint32_t p = 0; p < P; ++p)
-        filled[p] = (v->probe_flags[p] & PB_PROBE_VALID) != 0;
-    for (uint32_t round = 0; round < rounds; ++round) {
-        uint32_t *next = malloc(P * sizeof *next);
-        if (!next)
-            break;
-        memcpy(next, filled, P * sizeof *next);
-        int changed = 0;
-        for (uint32_t p = 0; p < P; ++p) {
-            if (filled[p])
-                continue;
-            int x = (int)(p % nx), y = (int)((p / nx) % ny), z = (int)(p / (nx * ny));
-            double sum[27] = {0}, wsum = 0;
-            for (int dz = -1; dz <= 1; ++dz)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        int qx = x + dx, qy = y + dy, qz = z + dz;
-                        if ((dx | dy | dz) == 0 || qx < 0 || qy < 0 || qz < 0 || qx >= (int)nx || qy >= (int)ny ||
-                            qz >= (int)nz)
-                            continue;
-                        uint32_t q = (uint32_t)qx + nx * ((uint32_t)qy + ny * (uint32_t)qz);
-                        if (!filled[q])
-                            continue;
-                        double w = 1.0 / sqrt((double)(dx * dx + dy * dy + dz * dz));
-                        for (int c = 0; c < 27; ++c)
-                            sum[c] += w * v->sh[27 * (size_t)q + c];
-                        wsum += w;
-                    }
-            if (wsum > 0) {
-                for (int c = 0; c < 27; ++c)
-                    v->sh[27 * (size_t)p + c] = (float)(sum[c] / wsum);
-                v->probe_flags[p] |= PB_PROBE_DILATED;
-                next[p] = 1;
-                changed = 1;
-            }
-        }
-        memcpy(filled, next, P * sizeof *next);
-        free(next);
-        if (!changed)
-            break;
-    }
-    free(filled);
-}
-
 void pb_bake_probe_position(const pb_scene *scene, const pb_bake_desc *d, uint32_t p, float local[3], uint32_t *id)
 {
     double world[3];
@@ -499,7 +447,20 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     pb_result r = check_desc(scene, &d, err);
     if (r != PB_OK)
         return r;
-    uint32_t P = d.points ? d.points->count : d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+    /* the probes this run traces, by global index: all of them, or a part's
+     * range followed, under --target-error, by the floor sample's probes
+     * outside it (shard.h: traced for the 4 passes the floor needs, never
+     * written). Local index i < own is global probe first + i. */
+    uint32_t total = d.points ? d.points->count : d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+    uint32_t first = 0, own = total, stride = pb_floor_stride(total), samples = 0;
+    if (d.shard_count && (d.shard_index >= d.shard_count || d.shard_count > total))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "shard %u/%u: need 0 <= I < N <= the %u probes", d.shard_index,
+                       d.shard_count, total);
+    if (d.shard_count)
+        pb_shard_range(total, d.shard_index, d.shard_count, &first, &own);
+    for (uint64_t s = 0; d.target_error > 0.f && s < total; s += stride)
+        samples += d.shard_count && (s < first || s >= (uint64_t)first + own);
+    uint32_t P = own + samples;
     uint32_t rpp = d.rays_per_probe, n = d.octmap_res, texels = n * n;
     if (!scene_emits_light(scene, &d))
         pb_logf(&ctx->desc.log, PB_LOG_WARN,
@@ -543,16 +504,26 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     memset(&B, 0, sizeof B);
     float *offsets = NULL, *near = NULL;
     uint32_t *active = NULL, *converged_at = calloc(P, sizeof(uint32_t));
+    uint32_t *global = malloc((size_t)P * sizeof *global), *floor_list = malloc(PB_FLOOR_SAMPLE * sizeof *floor_list);
+    uint32_t floor_count = 0;
     pb_convergence conv;
     memset(&conv, 0, sizeof conv);
-    if (!probes || !rotations || !directions || !sh_sum || !depth_sum || !backfaces || !hits ||
-        !reduced || !converged_at || pb_sf_directions(rpp, directions) != PB_OK) {
+    if (!probes || !rotations || !directions || !sh_sum || !depth_sum || !backfaces || !hits || !reduced ||
+        !converged_at || !global || !floor_list || pb_sf_directions(rpp, directions) != PB_OK) {
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
         goto done;
     }
+    for (uint32_t i = 0; i < own; ++i)
+        global[i] = first + i;
+    for (uint64_t s = 0, extra = own; d.target_error > 0.f && s < total; s += stride) {
+        int mine = s >= first && s < (uint64_t)first + own;
+        if (!mine)
+            global[extra] = (uint32_t)s;
+        floor_list[floor_count++] = mine ? (uint32_t)s - first : (uint32_t)extra++;
+    }
     for (uint32_t p = 0; p < P; ++p) {
         uint32_t id;
-        pb_bake_probe_position(scene, &d, p, probes + 4 * (size_t)p, &id);
+        pb_bake_probe_position(scene, &d, global[p], probes + 4 * (size_t)p, &id);
         memcpy(&probes[4 * p + 3], &id, 4); /* probe id: keys its random numbers */
     }
 
@@ -629,12 +600,19 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     uint32_t active_count = P;
     for (uint32_t p = 0; p < P; ++p)
         active[p] = p;
+    double floor = 0.0;
     for (uint32_t pass = 0; r == PB_OK && pass < d.passes && active_count > 0; ++pass) {
         r = run_pass(&run, pass, 0, d.target_error > 0.f ? active : NULL, active_count, err);
         if (r != PB_OK || !(d.target_error > 0.f) || pass + 1 < 4)
             continue;
         uint32_t keep = 0;
-        double floor = pb_convergence_floor(&conv);
+        if (pass + 1 == 4) { /* the floor, once; the sample's probes of other parts are done */
+            floor = pb_convergence_floor(&conv, floor_list, floor_count);
+            for (uint32_t i = 0; i < active_count; ++i)
+                if (active[i] < own)
+                    active[keep++] = active[i];
+            active_count = keep, keep = 0;
+        }
         for (uint32_t i = 0; i < active_count; ++i) {
             uint32_t p = active[i];
             if (pb_convergence_reached(&conv, p, d.target_error, floor))
@@ -648,10 +626,13 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         goto done;
 
     /* the volume */
-    out->flags = PB_VOLUME_IRRADIANCE | (d.points ? 0u : PB_VOLUME_GRID) | (d.exclude_direct ? 0u : PB_VOLUME_DIRECT);
-    out->probe_count = P;
+    out->flags = PB_VOLUME_IRRADIANCE | (d.points ? 0u : PB_VOLUME_GRID) | (d.exclude_direct ? 0u : PB_VOLUME_DIRECT) |
+                 (d.shard_count ? PB_VOLUME_SHARD : 0u);
+    out->probe_count = own;
+    if (d.shard_count)
+        out->shard = (pb_volume_shard){d.shard_index, d.shard_count, first, total};
     if (d.points) {
-        out->counts[0] = P, out->counts[1] = out->counts[2] = 1;
+        out->counts[0] = total, out->counts[1] = out->counts[2] = 1;
     } else {
         memcpy(out->counts, d.grid.counts, sizeof out->counts);
     }
@@ -662,7 +643,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     }
     uint32_t passes_max = 0;
     const uint32_t *passes_done = conv.passes;
-    for (uint32_t p = 0; p < P; ++p) {
+    for (uint32_t p = 0; p < own; ++p) {
         passes_max = passes_done[p] > passes_max ? passes_done[p] : passes_max;
         out->rays_traced += (uint64_t)passes_done[p] * rpp;
     }
@@ -675,10 +656,10 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     snprintf(out->device, sizeof out->device, "%.127s", ctx->info.name);
     if ((r = pb_volume_alloc(out, err)) != PB_OK)
         goto done;
-    for (uint32_t p = 0; p < P; ++p) {
+    for (uint32_t p = 0; p < own; ++p) {
         uint32_t id;
         float local[3];
-        pb_bake_probe_position(scene, &d, p, local, &id);
+        pb_bake_probe_position(scene, &d, global[p], local, &id);
         for (int k = 0; k < 3; ++k) {
             /* relative to the volume origin (the grid's first probe, or the scene origin for points) */
             out->base[3 * p + k] = d.points ? local[k] : (float)((double)local[k] - (double)d.grid.origin[k]);
@@ -717,8 +698,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                 tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / done_p / (unit * unit)));
             }
     }
-    if (!d.points)
-        dilate(out, 8); /* points have no grid neighbourhood: invalid ones stay flagged */
+    if (!d.points && !d.shard_count) /* a part's neighbours are in other parts: merge dilates */
+        pb_volume_dilate(out, PB_DILATION_ROUNDS); /* points have no grid neighbourhood: invalid ones stay flagged */
     out->traversals = run.traversals;
     if (run.long_paths)
         pb_logf(&ctx->desc.log, PB_LOG_WARN,
@@ -733,7 +714,7 @@ done:
     release(ctx, &B);
     free(probes), free(rotations), free(directions), free(sh_sum), free(depth_sum);
     free(backfaces), free(hits), free(reduced), free(offsets), free(near);
-    free(active), free(converged_at);
+    free(active), free(converged_at), free(global), free(floor_list);
     pb_convergence_free(&conv);
     if (r != PB_OK)
         pb_volume_free(out);
@@ -747,6 +728,10 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
         return bake_once(ctx, scene, gs, desc, NULL, out, err);
     pb_error_clear(err);
     memset(out, 0, sizeof *out);
+    if (desc->shard_count)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "--indirect volume samples the whole previous bounce's volume: a part cannot bake it alone "
+                       "(shard the path-traced bake instead)");
     if (desc->points)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "--indirect volume samples the previous bounce's grid: it needs a grid, not points");

@@ -72,11 +72,12 @@ float pb_convergence_relative_error(const pb_convergence *c, uint32_t p)
     return mean != 0.0 ? (float)(se / fabs(mean)) : 0.f;
 }
 
-double pb_convergence_floor(const pb_convergence *c)
+double pb_convergence_floor(const pb_convergence *c, const uint32_t *list, uint32_t count)
 {
     double sum = 0;
     uint64_t n = 0;
-    for (uint32_t p = 0; p < c->probes; ++p) {
+    for (uint32_t i = 0; i < count; ++i) {
+        uint32_t p = list[i];
         if (!c->passes[p])
             continue;
         for (int a = 0; a < 6; ++a)

@@ -30,9 +30,12 @@ double pb_pass_std_error(uint32_t k, double sum, double sq, double *mean);
 float pb_convergence_relative_error(const pb_convergence *c, uint32_t p);
 
 /* The floor under the stopping rule's denominators: 5 % of the mean axis
- * irradiance over all probes that have passes (so a probe facing black
- * surfaces need not resolve them beyond that; the bench scores alike). */
-double pb_convergence_floor(const pb_convergence *c);
+ * irradiance over probes list[0..n-1] (so a probe facing black surfaces
+ * need not resolve them beyond that; the bench scores alike). The bake
+ * takes it once, after 4 passes, over a fixed sample of its probes
+ * (shard.h), so that each part of a sharded bake stops its probes exactly
+ * as the whole bake does. */
+double pb_convergence_floor(const pb_convergence *c, const uint32_t *list, uint32_t n);
 
 /* Whether probe p has converged: along every axis the standard error is at
  * most target x max(|mean|, floor). */

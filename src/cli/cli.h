@@ -41,6 +41,12 @@ typedef struct options {
     int has_eye, has_target, has_up, has_camera, has_exposure, pfm, show_probes;
     uint32_t camera, width, height, spp;
     int has_spp;
+    /* bake on several machines or devices */
+    uint32_t shard_index, shard_count; /* --shard I/N; count 0: the whole bake */
+    const char *devices;               /* --devices all|LIST */
+    /* merge: OUT is `scene`, the parts follow */
+    char **parts;
+    uint32_t part_count;
 } options;
 
 /* "probebake: error: MESSAGE" on stderr; returns the exit code (1, or 130
@@ -58,6 +64,7 @@ int cli_parse_floats(const char *s, int n, float *out);
  * one-line message. */
 int cli_parse(int argc, char **argv, options *o);
 void cli_print_help(void);
+void cli_options_free(options *o);
 
 /* The commands, one file each (src/cli/cmd_*.c); each returns the exit code. */
 int cmd_devices(const options *o);
@@ -67,6 +74,7 @@ int cmd_inspect(const options *o);
 int cmd_bake(const options *o);
 int cmd_render(const options *o);
 int cmd_export(const options *o);
+int cmd_merge(const options *o);
 
 /* JSON output (json.c): a quoted, escaped string on stdout, and numbers
  * (NaN and infinities as null, which JSON lacks). Returned by value: J(x).s

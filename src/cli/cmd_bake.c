@@ -3,12 +3,87 @@
  * what was baked, and the file written atomically (Ctrl-C leaves the old
  * one). */
 #include "cli/cli.h"
+#include "bake/shard.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+/* --devices all|LIST: the devices to bake on, as pb_context_desc.device
+ * strings ("N" indices or name parts; one may repeat, which on lavapipe
+ * runs two logical devices of one driver). Returns how many, 0 on error. */
+static uint32_t device_list(const char *spec, char names[][64], uint32_t capacity, pb_error *err)
+{
+    uint32_t n = 0;
+    if (!strcmp(spec, "all")) {
+        pb_device_info infos[64];
+        uint32_t count = 0;
+        if (pb_enumerate_devices(infos, 64, &count, err) != PB_OK)
+            return 0;
+        for (uint32_t i = 0; i < count && i < 64 && n < capacity; ++i)
+            if (infos[i].usable)
+                snprintf(names[n++], 64, "%u", infos[i].index);
+        if (!n)
+            snprintf(err->message, sizeof err->message, "--devices all: no usable Vulkan device");
+        return n;
+    }
+    for (const char *c = spec; *c && n < capacity;) {
+        size_t len = strcspn(c, ",");
+        if (len == 0 || len >= 64) {
+            snprintf(err->message, sizeof err->message, "--devices '%s': an empty or overlong entry", spec);
+            return 0;
+        }
+        memcpy(names[n], c, len);
+        names[n++][len] = '\0';
+        c += len + (c[len] == ',');
+    }
+    if (n == capacity)
+        snprintf(err->message, sizeof err->message, "--devices '%s': at most %u devices", spec, capacity - 1);
+    return n < capacity ? n : 0;
+}
+
+/* The bake on every device of --devices, merged (pb_bake_devices). */
+static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_bvh *bvh, pb_bake_desc *d, pb_log log,
+                                 pb_volume *vol, pb_error *err)
+{
+    enum { MAX_DEVICES = 33 };
+    char names[MAX_DEVICES][64];
+    pb_context *ctxs[MAX_DEVICES] = {0};
+    pb_gpu_scene *scenes[MAX_DEVICES] = {0};
+    uint32_t n = device_list(o->devices, names, MAX_DEVICES, err);
+    pb_result r = n ? PB_OK : PB_ERROR_INVALID_ARGUMENT;
+    /* contexts one after another (instance set-up is not for threads) */
+    for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
+        pb_context_desc cd = {names[i], (uint32_t)o->validation, 0, 0, log};
+        cli_fault_injection(&cd);
+        r = pb_context_create(&cd, &ctxs[i], err);
+        if (r == PB_OK)
+            r = pb_gpu_scene_create(ctxs[i], s, bvh, &scenes[i], err);
+    }
+    if (r == PB_OK && !o->log.quiet)
+        fprintf(stderr, "probebake: %u devices, one part each:", n);
+    for (uint32_t i = 0; r == PB_OK && !o->log.quiet && i < n; ++i)
+        fprintf(stderr, "%s %s", i ? "," : "", pb_context_device(ctxs[i])->name);
+    if (r == PB_OK && !o->log.quiet)
+        fprintf(stderr, "\n");
+    if (r == PB_OK) {
+        cli_defer_signals(); /* from here a signal cancels the bake or the write */
+        r = pb_bake_devices(ctxs, scenes, n, s, d, vol, err);
+    }
+    for (uint32_t i = 0; r == PB_OK && o->validation && i < n; ++i)
+        if (pb_context_validation_messages(ctxs[i])) {
+            snprintf(err->message, sizeof err->message, "%u Vulkan validation messages on device %s",
+                     pb_context_validation_messages(ctxs[i]), names[i]);
+            r = err->code = PB_ERROR_VULKAN;
+        }
+    for (uint32_t i = 0; i < n; ++i) {
+        pb_gpu_scene_destroy(scenes[i]);
+        pb_context_destroy(ctxs[i]);
+    }
+    return r;
+}
 
 int cmd_bake(const options *o)
 {
@@ -103,7 +178,8 @@ int cmd_bake(const options *o)
     d.indirect_clamp = o->indirect_clamp;
     d.max_lights_per_hit = o->max_lights_per_hit;
     d.sh_window_width = o->sh_window_width;
-    char light[1200], clamp_text[32];
+    d.shard_index = o->shard_index, d.shard_count = o->shard_count;
+    char light[1200], clamp_text[32], part[96] = "";
     if (o->env)
         snprintf(light, sizeof light, "environment %s (%ux%u, x%g, turned %g deg)", o->env, env.width, env.height,
                  o->env_intensity, o->env_rotation);
@@ -116,11 +192,22 @@ int cmd_bake(const options *o)
     else
         snprintf(where, sizeof where, "%u x %u x %u = %llu probes, spacing %.3g m", d.grid.counts[0], d.grid.counts[1],
                  d.grid.counts[2], (unsigned long long)probes, d.grid.spacing[0]);
+    if (o->shard_count) {
+        uint32_t first, count;
+        pb_shard_range((uint32_t)probes, o->shard_index, o->shard_count, &first, &count);
+        if (o->shard_count > probes) {
+            snprintf(err.message, sizeof err.message, "--shard %u/%u: only %llu probes to share", o->shard_index,
+                     o->shard_count, (unsigned long long)probes);
+            goto out;
+        }
+        snprintf(part, sizeof part, ", part %u of %u (probes %u..%u)", o->shard_index, o->shard_count, first,
+                 first + count - 1);
+    }
     if (!o->log.quiet)
         fprintf(stderr,
-                "probebake: baking %s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
+                "probebake: baking %s%s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
                 "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, light cells %s, seed %u\n",
-                o->scene, q ? " at quality " : "", q ? q->name : "", where, d.rays_per_probe,
+                o->scene, q ? " at quality " : "", q ? q->name : "", part, where, d.rays_per_probe,
                 d.target_error > 0.f ? "up to " : "", d.passes, d.target_error > 0.f ? " (until converged)" : "",
                 d.bounces, light, d.octmap_res,
                 d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path",
@@ -133,22 +220,32 @@ int cmd_bake(const options *o)
                 d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
                 d.indirect_clamp > 0.f ? (snprintf(clamp_text, sizeof clamp_text, "%g", d.indirect_clamp), clamp_text) : "",
                 d.sh_window == 1 ? " SH Hanning window" : d.sh_window == 2 ? " SH Lanczos window" : "");
-    if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
+    if (o->devices && (o->device || o->shard_count)) {
+        snprintf(err.message, sizeof err.message, "--devices splits the bake by device: drop %s",
+                 o->device ? "--device" : "--shard");
         goto out;
-    pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
-    cli_fault_injection(&cd);
-    if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+    }
+    if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};
     d.progress = cli_progress;
     d.progress_user = &ps;
-    cli_defer_signals(); /* from here a signal cancels the bake or the write */
-    pb_result r = pb_bake(ctx, s, gs, &d, &vol, &err);
+    pb_result r;
+    if (o->devices) {
+        r = bake_on_devices(o, s, bvh, &d, log, &vol, &err);
+    } else {
+        pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
+        cli_fault_injection(&cd);
+        if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+            goto out;
+        cli_defer_signals(); /* from here a signal cancels the bake or the write */
+        r = pb_bake(ctx, s, gs, &d, &vol, &err);
+    }
     if (ps.show)
         fprintf(stderr, "\n");
     if (r != PB_OK)
         goto out;
-    if (o->validation && pb_context_validation_messages(ctx)) {
+    if (o->validation && ctx && pb_context_validation_messages(ctx)) {
         snprintf(err.message, sizeof err.message, "%u Vulkan validation messages", pb_context_validation_messages(ctx));
         goto out;
     }
@@ -167,8 +264,13 @@ int cmd_bake(const options *o)
         converged += (vol.probe_flags[i] & PB_PROBE_CONVERGED) != 0;
     }
     double rays = (double)vol.rays_traced;
-    fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside", o->output,
-           (unsigned long long)probes, valid, relocated, vol.probe_count - valid, dilated, outside);
+    if (o->shard_count)
+        fprintf(report, "wrote %s: part %u of %u, %u of %llu probes, undilated (probebake merge joins the parts) (%u "
+                "valid, %u relocated, %u invalid, %u outside", o->output, o->shard_index, o->shard_count,
+                vol.probe_count, (unsigned long long)probes, valid, relocated, vol.probe_count - valid, outside);
+    else
+        fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside",
+                o->output, (unsigned long long)probes, valid, relocated, vol.probe_count - valid, dilated, outside);
     if (d.target_error > 0.f)
         fprintf(report, ", %u converged before the last pass", converged);
     fprintf(report, "), %.3g probe rays in %s%u passes\n", rays, d.target_error > 0.f ? "up to " : "", vol.settings.passes);

@@ -11,21 +11,22 @@ int main(int argc, char **argv)
     cli_catch_signals();
     options o;
     int r = cli_parse(argc, argv, &o);
-    if (r)
+    if (r) {
+        cli_options_free(&o);
         return r;
-    if (!strcmp(o.command, "devices"))
-        return cmd_devices(&o);
-    if (!strcmp(o.command, "info"))
-        return cmd_info(&o);
-    if (!strcmp(o.command, "trace"))
-        return cmd_trace(&o);
-    if (!strcmp(o.command, "inspect"))
-        return cmd_inspect(&o);
-    if (!strcmp(o.command, "bake"))
-        return cmd_bake(&o);
-    if (!strcmp(o.command, "render"))
-        return cmd_render(&o);
-    if (!strcmp(o.command, "export"))
-        return cmd_export(&o);
-    return cli_usage_error("unknown command '%s'", o.command);
+    }
+    static const struct {
+        const char *name;
+        int (*run)(const options *);
+    } commands[] = {{"devices", cmd_devices}, {"info", cmd_info},     {"trace", cmd_trace},
+                    {"inspect", cmd_inspect}, {"bake", cmd_bake},     {"render", cmd_render},
+                    {"export", cmd_export},   {"merge", cmd_merge}};
+    r = -1;
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0] && r < 0; ++i)
+        if (!strcmp(o.command, commands[i].name))
+            r = commands[i].run(&o);
+    if (r < 0)
+        r = cli_usage_error("unknown command '%s'", o.command);
+    cli_options_free(&o);
+    return r;
 }

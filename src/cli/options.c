@@ -142,7 +142,9 @@ static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
     X(OPT_PROBE, "probe", required_argument) \
     X(OPT_PROBES, "probes", required_argument) \
     X(OPT_RAYS, "rays", required_argument) \
-    X(OPT_SEED, "seed", required_argument)
+    X(OPT_SEED, "seed", required_argument) \
+    X(OPT_SHARD, "shard", required_argument) \
+    X(OPT_DEVICES, "devices", required_argument)
 
 enum {
     OPT_FIRST = 256,
@@ -377,6 +379,19 @@ static int apply(options *o, const char *a, const char *next)
             return 2;
         }
         o->has_bounces |= dst == &o->bounces; /* 0 is a valid bounce count */
+    } else if (!strcmp(a, "--shard")) {
+        unsigned i = 0, n = 0;
+        char c = 0;
+        if (!next || sscanf(next, "%u/%u%c", &i, &n, &c) != 2 || n < 1 || i >= n || n > (1u << 24)) {
+            fprintf(stderr, "probebake: error: --shard '%s' is not I/N with 0 <= I < N (part I of N, from 0)\n",
+                    next ? next : "");
+            return 2;
+        }
+        o->shard_index = i, o->shard_count = n;
+    } else if (!strcmp(a, "--devices")) {
+        if (!next)
+            return cli_usage_error("%s needs all or a comma-separated list of device indices or names", a);
+        o->devices = next;
     } else if (!strcmp(a, "--device")) {
         if (!next)
             return cli_usage_error("%s needs a value", a);
@@ -412,6 +427,11 @@ int cli_parse(int argc, char **argv, options *o)
     /* "-": operands come back in order as code 1 (so the command and its
      * SCENE may sit anywhere among the options, POSIXLY_CORRECT or not);
      * ":": a missing value comes back as ':' with optopt, unprinted */
+    o->parts = calloc((size_t)argc, sizeof *o->parts); /* at most every argument; freed by cli_options_free */
+    if (!o->parts) {
+        fprintf(stderr, "probebake: error: out of memory\n");
+        return 1;
+    }
     opterr = 0;
     optind = 0; /* glibc: a full reinitialisation */
     for (;;) {
@@ -424,6 +444,8 @@ int cli_parse(int argc, char **argv, options *o)
                 o->command = optarg;
             else if (!o->scene)
                 o->scene = optarg;
+            else if (!strcmp(o->command, "merge")) /* merge OUT PART... */
+                o->parts[o->part_count++] = optarg;
             else
                 return cli_usage_error("unexpected argument '%s'", optarg);
             continue;
@@ -442,4 +464,10 @@ int cli_parse(int argc, char **argv, options *o)
         return 2;
     }
     return 0;
+}
+
+void cli_options_free(options *o)
+{
+    free(o->parts);
+    o->parts = NULL;
 }

@@ -227,6 +227,12 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     put_f32(b + 384, s->indirect_clamp);
     put_u32(b + 388, s->techniques);
     put_u64(b + 392, l.accounting);
+    if (v->flags & PB_VOLUME_SHARD) {
+        put_u32(b + 400, v->shard.index);
+        put_u32(b + 404, v->shard.count);
+        put_u32(b + 408, v->shard.first);
+        put_u32(b + 412, v->shard.total);
+    }
     size_t n = v->probe_count;
     for (size_t i = 0; i < 3 * n; ++i) {
         put_f32(b + l.base + 4 * i, v->base[i]);
@@ -391,6 +397,10 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     v->settings.sh_window_width = get_f32(h + 380);
     v->settings.indirect_clamp = get_f32(h + 384);
     v->settings.techniques = get_u32(h + 388);
+    memset(&v->shard, 0, sizeof v->shard);
+    if (v->flags & PB_VOLUME_SHARD)
+        v->shard = (pb_volume_shard){get_u32(h + 400), get_u32(h + 404), get_u32(h + 408), get_u32(h + 412)};
+    uint64_t grid_probes = v->flags & PB_VOLUME_SHARD ? v->shard.total : v->probe_count;
 
     const char *bad = NULL;
     if (get_u32(h + 12) != HEADER_BYTES)
@@ -404,8 +414,11 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         bad = "unknown SH or depth format";
     else if (version >= 2 && (!(get_f32(h + 180) > 0.f) || !isfinite(get_f32(h + 180))))
         bad = "depth unit not a positive finite number";
-    else if ((v->flags & PB_VOLUME_GRID) &&
-             (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != v->probe_count)
+    else if ((v->flags & PB_VOLUME_SHARD) &&
+             (v->shard.index >= v->shard.count || v->shard.total > MAX_PROBES ||
+              (uint64_t)v->shard.first + v->probe_count > v->shard.total))
+        bad = "shard part out of range";
+    else if ((v->flags & PB_VOLUME_GRID) && (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != grid_probes)
         bad = "grid counts do not match the probe count";
     layout l = layout_of(v->probe_count, v->octmap_res, version);
     if (!bad && (get_u64(h + 136) != l.base || get_u64(h + 144) != l.offset || get_u64(h + 152) != l.flags ||

@@ -1,0 +1,131 @@
+/* probebake merge: the parts of a sharded bake back into the one volume a
+ * single process would have baked. Every check runs before anything is
+ * allocated, and each names the file at fault. */
+#include "bake/shard.h"
+#include "common/common.h"
+#include "probebake/bake.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* What must be equal in every part of one bake: "" if a and b agree, else
+ * the first field that differs. */
+static const char *differs(const pb_volume *a, const pb_volume *b)
+{
+    const pb_volume_settings *x = &a->settings, *y = &b->settings;
+    if (x->scene_hash != y->scene_hash)
+        return "scene hash (another scene, or another version of it)";
+    if (a->flags != b->flags)
+        return "kind (grid or points, direct light, irradiance)";
+    if (a->shard.count != b->shard.count || a->shard.total != b->shard.total)
+        return "number of parts or probes";
+    if (memcmp(a->counts, b->counts, sizeof a->counts) || memcmp(a->origin, b->origin, sizeof a->origin) ||
+        memcmp(a->spacing, b->spacing, sizeof a->spacing))
+        return "grid (counts, origin or spacing)";
+    if (x->seed != y->seed)
+        return "seed";
+    if (a->octmap_res != b->octmap_res || a->depth_unit != b->depth_unit || x->max_distance != y->max_distance)
+        return "depth map settings";
+    if (x->rays_per_probe != y->rays_per_probe || x->bounces != y->bounces || x->indirect_mode != y->indirect_mode ||
+        x->target_error != y->target_error || x->sh_window != y->sh_window ||
+        x->sh_window_width != y->sh_window_width || x->indirect_clamp != y->indirect_clamp ||
+        x->techniques != y->techniques)
+        return "bake settings (rays, bounces, target error, SH window, clamp or estimators)";
+    return "";
+}
+
+pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint32_t count, pb_volume *out,
+                          pb_error *err)
+{
+    pb_error_clear(err);
+    memset(out, 0, sizeof *out);
+    if (count == 0)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "no parts to merge");
+    for (uint32_t i = 0; i < count; ++i)
+        if (!(parts[i].flags & PB_VOLUME_SHARD))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: not a part of a sharded bake (bake --shard I/N)",
+                           names[i]);
+    for (uint32_t i = 1; i < count; ++i) {
+        const char *d = differs(&parts[0], &parts[i]);
+        if (d[0])
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: not a part of the same bake as %s: its %s differs",
+                           names[i], names[0], d);
+    }
+    uint32_t N = parts[0].shard.count, total = parts[0].shard.total;
+    /* each part once: by index, then its range must be the one its index gives */
+    const pb_volume **by_index = calloc(N, sizeof *by_index);
+    const char **name_of = calloc(N, sizeof *name_of);
+    if (!by_index || !name_of) {
+        free(by_index), free(name_of);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory merging %u parts", N);
+    }
+    pb_result r = PB_OK;
+    for (uint32_t i = 0; i < count && r == PB_OK; ++i) {
+        const pb_volume_shard *s = &parts[i].shard;
+        uint32_t first, n;
+        pb_shard_range(total, s->index, N, &first, &n);
+        if (by_index[s->index])
+            r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: part %u/%u is given twice (also %s)", names[i], s->index,
+                        N, name_of[s->index]);
+        else if (s->first != first || parts[i].probe_count != n)
+            r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                        "%s: part %u/%u holds probes %u..%u, not %u..%u as a part of %u probes must", names[i],
+                        s->index, N, s->first, s->first + parts[i].probe_count - 1, first, first + n - 1, total);
+        by_index[s->index] = &parts[i];
+        name_of[s->index] = names[i];
+    }
+    for (uint32_t k = 0; k < N && r == PB_OK; ++k)
+        if (!by_index[k])
+            r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "part %u/%u is missing (%u of %u parts given, first %s)", k, N,
+                        count, N, names[0]);
+    if (r != PB_OK) {
+        free(by_index), free(name_of);
+        return r;
+    }
+
+    /* the whole volume: the header of part 0, the probes of every part in order */
+    const pb_volume *p0 = by_index[0];
+    out->flags = p0->flags & ~PB_VOLUME_SHARD;
+    out->probe_count = total;
+    memcpy(out->counts, p0->counts, sizeof out->counts);
+    out->octmap_res = p0->octmap_res;
+    memcpy(out->origin, p0->origin, sizeof out->origin);
+    memcpy(out->spacing, p0->spacing, sizeof out->spacing);
+    out->settings = p0->settings;
+    out->depth_unit = p0->depth_unit;
+    snprintf(out->device, sizeof out->device, "%s", p0->device);
+    if ((r = pb_volume_alloc(out, err)) != PB_OK) {
+        free(by_index), free(name_of);
+        return r;
+    }
+    uint64_t halves = pb_volume_tile_halves(out->octmap_res);
+    for (uint32_t k = 0; k < N; ++k) {
+        const pb_volume *v = by_index[k];
+        size_t f = v->shard.first, n = v->probe_count;
+        memcpy(out->base + 3 * f, v->base, 12 * n);
+        memcpy(out->offset + 3 * f, v->offset, 12 * n);
+        memcpy(out->probe_flags + f, v->probe_flags, 4 * n);
+        memcpy(out->sh + 27 * f, v->sh, 108 * n);
+        memcpy(out->depth + halves * f, v->depth, 2 * halves * n);
+        memcpy(out->probe_paths + f, v->probe_paths, 4 * n);
+        memcpy(out->probe_std_error + f, v->probe_std_error, 4 * n);
+        /* a probe's passes: the most any part ran */
+        out->settings.passes = v->settings.passes > out->settings.passes ? v->settings.passes : out->settings.passes;
+        const double *t = &v->timings.load;
+        double *o = &out->timings.load;
+        for (int i = 0; i < 8; ++i)
+            o[i] += t[i];
+        out->rays_traced += v->rays_traced, out->traversals += v->traversals;
+        if (strcmp(v->device, out->device) && !strstr(out->device, v->device)) {
+            size_t len = strlen(out->device);
+            snprintf(out->device + len, sizeof out->device - len, " + %s", v->device);
+        }
+    }
+    free(by_index), free(name_of);
+    /* the stages that need neighbours across parts */
+    if (out->flags & PB_VOLUME_GRID)
+        pb_volume_dilate(out, PB_DILATION_ROUNDS);
+    return PB_OK;
+}

@@ -1,0 +1,20 @@
+/* Shards: which probes part I of N of a bake holds, and the sample of
+ * probes every part traces for the stopping rule's floor, so that parts bake
+ * exactly as the whole would (every random number is keyed by seed, probe,
+ * pass and ray; nothing else ties probes together before dilation). */
+#ifndef PB_BAKE_SHARD_H
+#define PB_BAKE_SHARD_H
+
+#include <stdint.h>
+
+/* Part `index` of `count` of `total` probes: a contiguous range, sizes
+ * within one of each other (first = floor(total x index / count)). */
+void pb_shard_range(uint32_t total, uint32_t index, uint32_t count, uint32_t *first, uint32_t *n);
+
+/* --target-error's floor (convergence.h) is taken from these probes' first 4
+ * passes: every stride-th probe, at most PB_FLOOR_SAMPLE of them, the same
+ * for a whole bake and for each of its parts. */
+#define PB_FLOOR_SAMPLE 256u
+uint32_t pb_floor_stride(uint32_t total);
+
+#endif

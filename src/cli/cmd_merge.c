@@ -1,0 +1,54 @@
+#define _POSIX_C_SOURCE 200809L
+/* probebake merge OUT PART...: the parts of a sharded bake (bake --shard I/N)
+ * into the volume one process would have written, byte for byte apart from
+ * the timings. A foreign, missing or duplicated part is a one-line error
+ * naming it, and nothing is written. */
+#include "cli/cli.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int cmd_merge(const options *o)
+{
+    if (!o->scene || o->part_count == 0)
+        return cli_usage_error("%s needs OUT.probes and the parts to join (merge OUT PART...)", "merge");
+    const char *out_path = o->scene;
+    uint32_t n = o->part_count;
+    pb_volume *parts = calloc(n, sizeof *parts), merged;
+    memset(&merged, 0, sizeof merged);
+    pb_error err;
+    memset(&err, 0, sizeof err);
+    int rc = 1;
+    if (!parts) {
+        snprintf(err.message, sizeof err.message, "out of host memory for %u parts", n);
+        goto out;
+    }
+    /* the output before any work: not a directory, writable, not a part */
+    if (pb_output_check(out_path, (const char *const *)o->parts, n, &err) != PB_OK)
+        goto out;
+    uint32_t probes = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (pb_volume_read(o->parts[i], &parts[i], &err) != PB_OK)
+            goto out;
+        probes += parts[i].probe_count;
+    }
+    cli_defer_signals(); /* from here a signal cancels the write */
+    if (pb_volume_merge(parts, (const char *const *)o->parts, n, &merged, &err) != PB_OK)
+        goto out;
+    if (pb_volume_write_ex(out_path, &merged, cli_interrupted, NULL, &err) != PB_OK)
+        goto out;
+    uint32_t dilated = 0;
+    for (uint32_t p = 0; p < merged.probe_count; ++p)
+        dilated += (merged.probe_flags[p] & PB_PROBE_DILATED) != 0;
+    FILE *report = strcmp(out_path, "-") ? stdout : stderr;
+    fprintf(report, "wrote %s: %u parts, %u probes (%u dilated across parts), %u passes at most\n", out_path, n,
+            probes, dilated, merged.settings.passes);
+    rc = 0;
+out:
+    for (uint32_t i = 0; parts && i < n; ++i)
+        pb_volume_free(&parts[i]);
+    free(parts);
+    pb_volume_free(&merged);
+    return rc ? cli_fail(&err) : 0;
+}
