@@ -64,6 +64,12 @@ expect rays-zero 2 "--rays '0' is not an integer in \[1, 65536\]" -- "$pb" trace
 expect probes-negative 2 "--probes '-5'" -- "$pb" trace "$demo" --probes -5
 expect probes-garbage 2 "--probes 'lots'" -- "$pb" trace "$demo" --probes lots
 expect device-missing-value 2 '--device needs a value' -- "$pb" trace "$demo" --device
+expect shard-out-of-range 2 "--shard '3/3' is not I/N with 0 <= I < N" -- "$pb" bake "$demo" --shard 3/3 -o "$tmp/x.probes"
+expect shard-garbage 2 "--shard 'half' is not I/N" -- "$pb" bake "$demo" --shard half -o "$tmp/x.probes"
+expect merge-needs-parts 2 'merge needs OUT.probes and the parts' -- "$pb" merge "$tmp/m.probes"
+expect merge-missing-part-file 1 "error: $tmp/nope.probes: " -- "$pb" merge "$tmp/m.probes" "$tmp/nope.probes"
+expect devices-and-device 1 '--devices splits the bake by device: drop --device' -- \
+    "$pb" bake "$demo" --devices 0,0 --device 0 -o "$tmp/x.probes"
 
 # inspect: a fixture volume (tests/make_test_volume.c)
 "$make_volume" "$tmp/v.probes"
@@ -354,6 +360,48 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-millimetres-unit 0 '"depth_unit": 64,' -- "$pb" inspect "$tmp/mm.probes" --json
     expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
         "$pb" trace "$demo" --device no-such-gpu
+    # sharded bakes (issue 16): 3 parts, merged in any order, are the whole
+    # bake's file outside the timings block (header bytes 184..247); so is a
+    # bake on two logical devices of the one driver
+    shard_args=(--counts 6,5,7 --rays 32 --passes 6 --target-error 0.05 --octmap-res 4 --quiet)
+    "$pb" bake "$demo" "${shard_args[@]}" -o "$tmp/whole.probes" >/dev/null
+    for i in 0 1 2; do
+        expect "bake-shard-$i" 0 "wrote $tmp/part$i.probes: part $i of 3, 70 of 210 probes, undilated" -- \
+            "$pb" bake "$demo" "${shard_args[@]}" --shard "$i/3" -o "$tmp/part$i.probes"
+    done
+    same_but_timings() { cmp -s <(head -c 184 "$1") <(head -c 184 "$2") && cmp -s <(tail -c +249 "$1") <(tail -c +249 "$2") && echo same || echo different; }
+    expect inspect-shard 0 '^part        1 of 3: probes 70..139 of 210, undilated' -- "$pb" inspect "$tmp/part1.probes"
+    expect inspect-shard-json 0 '"shard": \{"index": 1, "count": 3, "first": 70, "total": 210\}' -- \
+        "$pb" inspect "$tmp/part1.probes" --json
+    expect render-refuses-shard 1 'part 1 of 3 of a sharded bake: probebake merge joins the parts first' -- \
+        "$pb" render "$demo" --volume "$tmp/part1.probes" --size 16x12 -o "$tmp/s.png"
+    expect merge-parts 0 "wrote $tmp/merged.probes: 3 parts, 210 probes \(1 dilated across parts\)" -- \
+        "$pb" merge "$tmp/merged.probes" "$tmp/part2.probes" "$tmp/part0.probes" "$tmp/part1.probes"
+    expect merge-same-bytes 0 '^same$' -- bash -c "$(declare -f same_but_timings); same_but_timings '$tmp/whole.probes' '$tmp/merged.probes'"
+    expect bake-two-devices 0 "wrote $tmp/dev.probes: 210 probes" -- \
+        "$pb" bake "$demo" "${shard_args[@]}" --devices 0,0 --validation -o "$tmp/dev.probes"
+    expect two-devices-same-bytes 0 '^same$' -- bash -c "$(declare -f same_but_timings); same_but_timings '$tmp/whole.probes' '$tmp/dev.probes'"
+    "$pb" bake "$demo" "${shard_args[@]}" --seed 2 --shard 2/3 -o "$tmp/foreign2.probes" >/dev/null
+    expect merge-missing 1 "part 1/3 is missing" -- "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part2.probes"
+    expect merge-duplicated 1 "$tmp/part1.probes: part 1/3 is given twice" -- \
+        "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part1.probes" "$tmp/part1.probes" "$tmp/part2.probes"
+    expect merge-foreign 1 "$tmp/foreign2.probes: not a part of the same bake as $tmp/part0.probes: its seed differs" -- \
+        "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part1.probes" "$tmp/foreign2.probes"
+    expect merge-whole-volume 1 "$tmp/whole.probes: not a part of a sharded bake" -- \
+        "$pb" merge "$tmp/bad.probes" "$tmp/whole.probes"
+    one_error_line merge-one-line -- "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part2.probes"
+    expect merge-refusals-wrote-nothing 0 '^absent$' -- bash -c "[ -e '$tmp/bad.probes' ] && echo present || echo absent"
+    expect merge-output-is-a-part 1 "$tmp/part0.probes" -- \
+        "$pb" merge "$tmp/part0.probes" "$tmp/part0.probes" "$tmp/part1.probes" "$tmp/part2.probes"
+    # SIGTERM in a shard: exit 143, no part file, no temporary
+    "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 --shard 1/4 -o "$tmp/termshard.probes" >"$tmp/ts.log" 2>&1 &
+    ts_pid=$!
+    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/ts.log" && break; sleep 0.1; done
+    sleep 1
+    kill -TERM "$ts_pid"
+    wait "$ts_pid"
+    ts_rc=$?
+    expect shard-sigterm 0 '^143 0$' -- bash -c "echo $ts_rc \$(ls '$tmp' | grep -c termshard)"
 fi
 
 echo "$passed passed, $failed failed"

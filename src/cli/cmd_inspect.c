@@ -114,6 +114,9 @@ int cmd_inspect(const options *o)
                s->indirect_mode ? "volume" : "path", window_name(s->sh_window), J(s->sh_window_width).s,
                J(s->indirect_clamp).s, technique_list(s->techniques, techniques));
         json_string(v.device);
+        if (v.flags & PB_VOLUME_SHARD)
+            printf(",\n  \"shard\": {\"index\": %u, \"count\": %u, \"first\": %u, \"total\": %u}", v.shard.index,
+                   v.shard.count, v.shard.first, v.shard.total);
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
         if (o->has_probe)
@@ -145,6 +148,9 @@ int cmd_inspect(const options *o)
                    v.counts[1], v.counts[2], v.spacing[0], v.spacing[1], v.spacing[2]);
         else
             printf("probes      %u placed points\n", v.probe_count);
+        if (v.flags & PB_VOLUME_SHARD)
+            printf("part        %u of %u: probes %u..%u of %u, undilated (probebake merge joins the parts)\n",
+                   v.shard.index, v.shard.count, v.shard.first, v.shard.first + v.probe_count - 1, v.shard.total);
         printf("flags       %u valid, %u relocated, %u dilated, %u outside, %u converged\n", counts[0], counts[1],
                counts[2], counts[3], counts[4]);
         printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,

@@ -35,6 +35,10 @@ static pb_result write_ktx2(const char *dir, const char *name, uint32_t format, 
 pb_result pb_volume_export_textures(const pb_volume *v, const char *dir, pb_error *err)
 {
     pb_error_clear(err);
+    if (v->flags & PB_VOLUME_SHARD)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "%s: the volume is part %u of %u of a sharded bake: probebake merge joins the parts first", dir,
+                       v->shard.index, v->shard.count);
     if (!(v->flags & PB_VOLUME_GRID))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "%s: the textures are for a grid volume (the sampler interpolates a grid); this one has "

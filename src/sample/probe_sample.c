@@ -13,6 +13,10 @@ pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3
                                  float view_bias, pb_sample_volume *out, pb_error *err)
 {
     memset(out, 0, sizeof *out);
+    if (v->flags & PB_VOLUME_SHARD)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "the volume is part %u of %u of a sharded bake: probebake merge joins the parts first",
+                       v->shard.index, v->shard.count);
     if (!(v->flags & PB_VOLUME_GRID))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "the volume is a point set: run-time sampling interpolates in a grid");

@@ -1,0 +1,300 @@
+/* Sharded bakes (issue 16): parts of a bake merge to the very bytes of the
+ * whole bake (the timings block aside), on a grid and on points, with a
+ * target error (whose floor must not tie parts together); merge refuses
+ * foreign, missing, duplicated and misplaced parts; a bake on two devices
+ * (two logical devices of one driver here) equals the one-device bake. */
+#include "test_util.h"
+
+static pb_context *ctx;
+
+/* The timings block of the file header (docs/format.md): the only bytes a
+ * merged file may differ in. */
+enum { TIMINGS_BEGIN = 184, TIMINGS_END = 248 };
+
+typedef struct setup {
+    pb_scene *scene;
+    pb_bvh *bvh;
+    pb_gpu_scene *gs;
+} setup;
+
+static int setup_demo(setup *su)
+{
+    pb_error err;
+    memset(su, 0, sizeof *su);
+    if (pb_scene_load(source_path("tests/scenes/demo.gltf"), NULL, &su->scene, &err) != PB_OK ||
+        pb_bvh_build(su->scene, NULL, &su->bvh, &err) != PB_OK ||
+        pb_gpu_scene_create(ctx, su->scene, su->bvh, &su->gs, &err) != PB_OK) {
+        CHECKF(0, "%s", err.message);
+        return 0;
+    }
+    return 1;
+}
+
+static void teardown(setup *su)
+{
+    pb_gpu_scene_destroy(su->gs);
+    pb_bvh_destroy(su->bvh);
+    pb_scene_destroy(su->scene);
+}
+
+/* 8 x 6 x 10 = 480 probes in the demo scene's cells, as bake --counts
+ * places them (more than the floor sample's 256, so the sample is every
+ * second probe; a few stay inside its boxes, so dilation crosses parts),
+ * and a target error that stops some probes early. */
+static pb_bake_desc demo_desc(const pb_scene *s)
+{
+    pb_bake_desc d = {0};
+    const uint32_t counts[3] = {8, 6, 10};
+    for (int k = 0; k < 3; ++k) {
+        d.grid.counts[k] = counts[k];
+        d.grid.spacing[k] = (s->bounds_max[k] - s->bounds_min[k]) / (float)counts[k];
+        d.grid.origin[k] = s->bounds_min[k] + 0.5f * d.grid.spacing[k];
+    }
+    d.rays_per_probe = 32, d.passes = 8, d.target_error = 0.08f, d.bounces = 2, d.octmap_res = 4, d.seed = 1;
+    d.probe_nee = 1, d.light_cells = 1;
+    return d;
+}
+
+/* Writes v and reads the file's bytes back (caller frees). */
+static unsigned char *file_bytes(const pb_volume *v, const char *name, size_t *size)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", temp_dir(), name);
+    pb_error err;
+    if (pb_volume_write(path, v, &err) != PB_OK) {
+        CHECKF(0, "%s", err.message);
+        return NULL;
+    }
+    FILE *f = fopen(path, "rb");
+    fseek(f, 0, SEEK_END);
+    *size = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *b = malloc(*size);
+    *size = fread(b, 1, *size, f);
+    fclose(f);
+    return b;
+}
+
+/* 1 when a and b are the same file outside the timings block. */
+static int same_but_timings(const pb_volume *a, const pb_volume *b)
+{
+    size_t na = 0, nb = 0;
+    unsigned char *x = file_bytes(a, "a.probes", &na), *y = file_bytes(b, "b.probes", &nb);
+    int same = x && y && na == nb && !memcmp(x, y, TIMINGS_BEGIN) &&
+               !memcmp(x + TIMINGS_END, y + TIMINGS_END, na - TIMINGS_END);
+    free(x), free(y);
+    return same;
+}
+
+/* Bakes part i of n, writes it and reads it back (so the file's shard
+ * fields are what merge sees). */
+static int bake_part(setup *su, const pb_bake_desc *d, uint32_t i, uint32_t n, pb_volume *out)
+{
+    pb_bake_desc dp = *d;
+    dp.shard_index = i, dp.shard_count = n;
+    pb_volume v;
+    pb_error err;
+    if (pb_bake(ctx, su->scene, su->gs, &dp, &v, &err) != PB_OK) {
+        CHECKF(0, "part %u/%u: %s", i, n, err.message);
+        return 0;
+    }
+    char path[512];
+    snprintf(path, sizeof path, "%s/part%u.probes", temp_dir(), i);
+    pb_result r = pb_volume_write(path, &v, &err);
+    pb_volume_free(&v);
+    if (r == PB_OK)
+        r = pb_volume_read(path, out, &err);
+    CHECKF(r == PB_OK, "%s", err.message);
+    return r == PB_OK;
+}
+
+/* Parts 0..n-1 merged; returns the merge's result (the message in err). */
+static pb_result merge_parts(setup *su, const pb_bake_desc *d, uint32_t n, pb_volume *out, pb_error *err)
+{
+    pb_volume parts[8];
+    const char *names[8] = {"p0", "p1", "p2", "p3", "p4", "p5", "p6", "p7"};
+    uint32_t made = 0;
+    for (uint32_t i = 0; i < n; ++i)
+        made += bake_part(su, d, i, n, &parts[made]);
+    pb_result r = made == n ? pb_volume_merge(parts, names, n, out, err) : PB_ERROR_INVALID_ARGUMENT;
+    for (uint32_t i = 0; i < made; ++i) {
+        CHECK(parts[i].flags & PB_VOLUME_SHARD);
+        for (uint32_t p = 0; p < parts[i].probe_count; ++p)
+            CHECK(!(parts[i].probe_flags[p] & PB_PROBE_DILATED)); /* merge dilates */
+        pb_volume_free(&parts[i]);
+    }
+    return r;
+}
+
+static void parts_merge_to_the_whole_bake(void)
+{
+    setup su;
+    if (!setup_demo(&su))
+        return;
+    pb_bake_desc d = demo_desc(su.scene);
+    /* the grid, then 40 of its probes as points */
+    double positions[120];
+    uint32_t ids[40];
+    pb_points pts = {40, positions, ids, d.grid.spacing[0]};
+    for (uint32_t i = 0; i < 40; ++i) {
+        uint32_t p = i * 9 + 3, ijk[3] = {p % d.grid.counts[0], (p / d.grid.counts[0]) % d.grid.counts[1],
+                                          p / (d.grid.counts[0] * d.grid.counts[1])};
+        ids[i] = p;
+        for (int k = 0; k < 3; ++k)
+            positions[3 * i + k] = su.scene->origin[k] + (d.grid.origin[k] + (double)ijk[k] * d.grid.spacing[k]);
+    }
+    for (int points = 0; points <= 1; ++points) {
+        pb_bake_desc dd = d;
+        dd.points = points ? &pts : NULL;
+        pb_volume whole;
+        pb_error err;
+        if (pb_bake(ctx, su.scene, su.gs, &dd, &whole, &err) != PB_OK) {
+            CHECKF(0, "%s", err.message);
+            continue;
+        }
+        uint32_t converged = 0, dilated = 0, valid = 0;
+        for (uint32_t p = 0; p < whole.probe_count; ++p) {
+            valid += (whole.probe_flags[p] & PB_PROBE_VALID) != 0;
+            converged += (whole.probe_flags[p] & PB_PROBE_CONVERGED) != 0;
+            dilated += (whole.probe_flags[p] & PB_PROBE_DILATED) != 0;
+        }
+        const uint32_t counts[4] = {1, 2, 3, 7};
+        for (int c = 0; c < 4; ++c) {
+            pb_volume merged;
+            if (merge_parts(&su, &dd, counts[c], &merged, &err) != PB_OK) {
+                CHECKF(0, "%u parts: %s", counts[c], err.message);
+                continue;
+            }
+            int same = same_but_timings(&whole, &merged);
+            fprintf(stderr, "  %s, %u probes (%u valid, %u converged early, %u dilated): %u parts merge to %s\n",
+                    points ? "points" : "grid", whole.probe_count, valid, converged, dilated, counts[c],
+                    same ? "the same bytes" : "DIFFERENT bytes");
+            CHECK(same);
+            pb_volume_free(&merged);
+        }
+        CHECK(converged > 0); /* the target error did stop probes: the floor was exercised */
+        CHECK(points || dilated > 0); /* invalid probes were filled across parts */
+        pb_volume_free(&whole);
+    }
+    teardown(&su);
+}
+
+static void merge_refuses_foreign_missing_duplicated_parts(void)
+{
+    setup su;
+    if (!setup_demo(&su))
+        return;
+    pb_bake_desc d = demo_desc(su.scene);
+    d.target_error = 0.f, d.passes = 2;
+    pb_volume parts[4], other;
+    int ok = 1;
+    for (uint32_t i = 0; i < 3; ++i)
+        ok &= bake_part(&su, &d, i, 3, &parts[i]);
+    pb_bake_desc foreign = d;
+    foreign.seed = d.seed + 1;
+    ok &= bake_part(&su, &foreign, 2, 3, &other);
+    if (ok) {
+        pb_volume out;
+        pb_error err;
+        struct {
+            const char *what;
+            pb_volume v[3];
+            uint32_t n;
+            const char *needle;
+        } cases[] = {
+            {"missing", {parts[0], parts[1]}, 2, "part 2/3 is missing"},
+            {"duplicated", {parts[0], parts[1], parts[1]}, 3, "given twice"},
+            {"foreign", {parts[0], parts[1], other}, 3, "seed differs"},
+        };
+        const char *names[3] = {"a.probes", "b.probes", "c.probes"};
+        for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+            pb_result r = pb_volume_merge(cases[k].v, names, cases[k].n, &out, &err);
+            CHECKF(r == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, cases[k].needle) &&
+                       !strchr(err.message, '\n'),
+                   "%s: %s", cases[k].what, err.message);
+            fprintf(stderr, "  %s: %s\n", cases[k].what, err.message);
+            CHECK(out.probe_count == 0 && out.sh == NULL);
+        }
+        /* a part whose range is not its index's, and a whole volume */
+        pb_volume moved[3] = {parts[0], parts[1], parts[2]};
+        moved[1].shard.first += 1;
+        CHECK(pb_volume_merge(moved, names, 3, &out, &err) == PB_ERROR_INVALID_ARGUMENT &&
+              strstr(err.message, "b.probes") && strstr(err.message, "holds probes"));
+        pb_volume whole = parts[0];
+        whole.flags &= ~PB_VOLUME_SHARD;
+        CHECK(pb_volume_merge(&whole, names, 1, &out, &err) == PB_ERROR_INVALID_ARGUMENT &&
+              strstr(err.message, "not a part"));
+    }
+    for (uint32_t i = 0; i < 3; ++i)
+        pb_volume_free(&parts[i]);
+    pb_volume_free(&other);
+    teardown(&su);
+}
+
+static void shard_parameters_refused(void)
+{
+    setup su;
+    if (!setup_demo(&su))
+        return;
+    pb_bake_desc d = demo_desc(su.scene);
+    pb_volume v;
+    pb_error err;
+    d.shard_index = 3, d.shard_count = 3;
+    CHECK(pb_bake(ctx, su.scene, su.gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "shard 3/3"));
+    d.shard_index = 0, d.shard_count = 481; /* more parts than the 480 probes */
+    CHECK(pb_bake(ctx, su.scene, su.gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT);
+    d.shard_count = 2, d.indirect_volume = 1;
+    CHECK(pb_bake(ctx, su.scene, su.gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT &&
+          strstr(err.message, "--indirect volume"));
+    teardown(&su);
+}
+
+/* Two logical devices of the driver the tests run on: pb_bake_devices
+ * (part i on device i, a thread each, merged in memory) is the bake of one. */
+static void two_devices_bake_like_one(void)
+{
+    setup su;
+    if (!setup_demo(&su))
+        return;
+    pb_context_desc cd = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {test_log_line, NULL}};
+    cd.portable_kernels = pb_context_native64(ctx) ? 0u : 1u;
+    pb_context *second = NULL;
+    pb_gpu_scene *gs2 = NULL;
+    pb_error err;
+    if (pb_context_create(&cd, &second, &err) != PB_OK ||
+        pb_gpu_scene_create(second, su.scene, su.bvh, &gs2, &err) != PB_OK) {
+        CHECKF(0, "%s", err.message);
+    } else {
+        pb_bake_desc d = demo_desc(su.scene);
+        pb_volume whole, both;
+        pb_context *ctxs[2] = {ctx, second};
+        pb_gpu_scene *scenes[2] = {su.gs, gs2};
+        if (pb_bake(ctx, su.scene, su.gs, &d, &whole, &err) == PB_OK &&
+            pb_bake_devices(ctxs, scenes, 2, su.scene, &d, &both, &err) == PB_OK) {
+            int same = same_but_timings(&whole, &both);
+            fprintf(stderr, "  2 devices: %s bytes as 1\n", same ? "the same" : "DIFFERENT");
+            CHECK(same);
+            CHECK(pb_context_validation_messages(second) == 0);
+            pb_volume_free(&both);
+        } else {
+            CHECKF(0, "%s", err.message);
+        }
+        pb_volume_free(&whole);
+        d.shard_count = 2; /* already split by device */
+        CHECK(pb_bake_devices(ctxs, scenes, 2, su.scene, &d, &both, &err) == PB_ERROR_INVALID_ARGUMENT);
+    }
+    pb_gpu_scene_destroy(gs2);
+    pb_context_destroy(second);
+    teardown(&su);
+}
+
+int main(void)
+{
+    if (!(ctx = test_gpu_context()))
+        return 1;
+    RUN(parts_merge_to_the_whole_bake);
+    RUN(merge_refuses_foreign_missing_duplicated_parts);
+    RUN(shard_parameters_refused);
+    RUN(two_devices_bake_like_one);
+    return test_gpu_finish(ctx);
+}
