@@ -375,7 +375,7 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
         "$pb" inspect "$tmp/part1.probes" --json
     expect render-refuses-shard 1 'part 1 of 3 of a sharded bake: probebake merge joins the parts first' -- \
         "$pb" render "$demo" --volume "$tmp/part1.probes" --size 16x12 -o "$tmp/s.png"
-    expect merge-parts 0 "wrote $tmp/merged.probes: 3 parts, 210 probes \(1 dilated across parts\)" -- \
+    expect merge-parts 0 "wrote $tmp/merged.probes: 3 parts, 210 probes \([0-9]+ dilated across parts\)" -- \
         "$pb" merge "$tmp/merged.probes" "$tmp/part2.probes" "$tmp/part0.probes" "$tmp/part1.probes"
     expect merge-same-bytes 0 '^same$' -- bash -c "$(declare -f same_but_timings); same_but_timings '$tmp/whole.probes' '$tmp/merged.probes'"
     expect bake-two-devices 0 "wrote $tmp/dev.probes: 210 probes" -- \
