@@ -56,4 +56,18 @@ static inline double variant_position_bound(const pb_variant *v, double diag, do
     return 0;
 }
 
+/* The bake of a variant against its original's, probe by probe, in units
+ * of the two bakes' combined standard error, z = |dE| / sqrt(sa^2 + sb^2).
+ * Were the two bakes independent, z would be |N(0, 1)|: mean sqrt(2/pi) =
+ * 0.80, standard deviation 0.60, above 4 with probability 6e-5. Both draw
+ * the same random numbers over surfaces moved by a fraction of a
+ * millimetre, so their differences are smaller (correlated), never larger:
+ * every probe within z <= 4, and the mean over n probes within three
+ * standard errors of the independent mean. Broken decoding (wrong scale,
+ * flipped or missing triangles) lands far above both. */
+static inline double variant_mean_z_bound(uint32_t n)
+{
+    return 0.7979 + 3 * 0.6028 / sqrt((double)(n ? n : 1));
+}
+
 #endif
