@@ -57,17 +57,20 @@ static inline double variant_position_bound(const pb_variant *v, double diag, do
 }
 
 /* The bake of a variant against its original's, probe by probe, in units
- * of the two bakes' combined standard error, z = |dE| / sqrt(sa^2 + sb^2).
- * Were the two bakes independent, z would be |N(0, 1)|: mean sqrt(2/pi) =
- * 0.80, standard deviation 0.60, above 4 with probability 6e-5. Both draw
- * the same random numbers over surfaces moved by a fraction of a
- * millimetre, so their differences are smaller (correlated), never larger:
- * every probe within z <= 4, and the mean over n probes within three
+ * of the two bakes' combined standard error, z = |dE| / sqrt(sa^2 + sb^2),
+ * each standard error estimated from VARIANT_PASSES passes. Were the two
+ * bakes independent, z would follow |t| with 2 (16 - 1) = 30 degrees of
+ * freedom: mean 0.81, standard deviation 0.62, above 5 with probability
+ * 2e-5. Both draw the same random numbers over surfaces moved by a fraction
+ * of a millimetre, so their differences are smaller (correlated), never
+ * larger: every probe within z <= 5, and the mean over n probes within three
  * standard errors of the independent mean. Broken decoding (wrong scale,
  * flipped or missing triangles) lands far above both. */
+#define VARIANT_PASSES 16u
+#define VARIANT_Z_MAX 5.0
 static inline double variant_mean_z_bound(uint32_t n)
 {
-    return 0.7979 + 3 * 0.6028 / sqrt((double)(n ? n : 1));
+    return 0.81 + 3 * 0.62 / sqrt((double)(n ? n : 1));
 }
 
 #endif
