@@ -17,7 +17,7 @@ fi
 
 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPB_SANITIZE=ON -DPB_BUILD_BENCH=OFF >/dev/null
 cmake --build build-asan -j"$jobs"
-echo "== CPU-side tests under AddressSanitizer + UndefinedBehaviorSanitizer (PB_TEST_QUICK: a tenth of the rays)"
+echo "== CPU-side tests under AddressSanitizer + UndefinedBehaviorSanitizer (PB_TEST_QUICK: a tenth of the rays) ($(date +%T))"
 PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan -L cpu --output-on-failure
 
@@ -27,9 +27,9 @@ PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 # input in tests/fuzz/crashers.
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPB_FUZZ=ON -DPB_BUILD_BENCH=OFF >/dev/null
 cmake --build build-fuzz -j"$jobs" --target fuzz_scene_load
-echo "== glTF loader fuzzing, ${PB_FUZZ_SECONDS:-60} s from tests/fuzz/corpus"
+echo "== glTF loader fuzzing, ${PB_FUZZ_SECONDS:-30} s from tests/fuzz/corpus ($(date +%T))"
 scratch=$(mktemp -d)
-ASAN_OPTIONS=detect_leaks=1 build-fuzz/tests/fuzz_scene_load -max_total_time="${PB_FUZZ_SECONDS:-60}" \
+ASAN_OPTIONS=detect_leaks=1 build-fuzz/tests/fuzz_scene_load -max_total_time="${PB_FUZZ_SECONDS:-30}" \
     -max_len=65536 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=tests/fuzz/crashers/ "$scratch" tests/fuzz/corpus \
     >"$scratch.log" 2>&1 || { tail -n 40 "$scratch.log"; echo "fuzzing found a crash: tests/fuzz/crashers"; exit 1; }
 grep -E "^(Done|#[0-9]+ +DONE)" "$scratch.log" | tail -n 1
@@ -37,5 +37,5 @@ rm -rf "$scratch" "$scratch.log"
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$jobs"
-echo "== full suite (validation layer on)"
+echo "== full suite (validation layer on) ($(date +%T))"
 ctest --test-dir build --output-on-failure

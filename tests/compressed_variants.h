@@ -73,4 +73,44 @@ static inline double variant_mean_z_bound(uint32_t n)
     return 0.81 + 3 * 0.62 / sqrt((double)(n ? n : 1));
 }
 
+/* The scenes the variants are made of: the demo scene, and the shared
+ * Cornell box when ../shared/scenes is there. Source i's path and tag; 0
+ * (after a SKIP saying so) when it is absent. */
+#define PB_VARIANT_SOURCES 2
+static inline int variant_source(int i, const char **path, const char **tag)
+{
+    static char cornell[1024];
+    snprintf(cornell, sizeof cornell, "%s/../shared/scenes/cornell/cornellBox.gltf", PB_SOURCE_DIR);
+    *path = i == 0 ? PB_SOURCE_DIR "/tests/scenes/demo.gltf" : cornell;
+    *tag = i == 0 ? "demo" : "cornell";
+    if (!file_exists(*path)) {
+        skip("%s not present: only the demo scene's variants checked", *path);
+        return 0;
+    }
+    return 1;
+}
+
+/* Compares per-probe irradiance E and absolute standard error s of a
+ * variant's bake (b) with its original's (a) by the bound above; prints a
+ * line and CHECKs. Probes with no light or no error estimate are left out.
+ * `identical`: the bake must be bit for bit the original's instead. */
+static inline void variant_check_bake(const char *path, const char *label, const double *ea, const double *sa,
+                                      const double *eb, const double *sb, uint32_t probes)
+{
+    uint32_t n = 0;
+    double z_sum = 0, z_max = 0, rel_max = 0;
+    for (uint32_t p = 0; p < probes; ++p) {
+        double s2 = sqrt(sa[p] * sa[p] + sb[p] * sb[p]);
+        if (!(ea[p] > 0) || !(s2 > 0))
+            continue;
+        double z = fabs(ea[p] - eb[p]) / s2;
+        z_sum += z, z_max = fmax(z_max, z), rel_max = fmax(rel_max, fabs(ea[p] - eb[p]) / ea[p]), ++n;
+    }
+    double z_mean = n ? z_sum / n : 0, z_bound = variant_mean_z_bound(n);
+    printf("  %s: %u probes, |dE| in combined standard errors: mean %.2f (bound %.2f), worst %.2f (bound %.0f); "
+           "worst |dE|/E %.4f\n", label, n, z_mean, z_bound, z_max, VARIANT_Z_MAX, rel_max);
+    CHECKF(n >= probes / 2 && z_max <= VARIANT_Z_MAX && z_mean <= z_bound, "%s: mean z %.2f (bound %.2f), worst %.2f",
+           path, z_mean, z_bound, z_max);
+}
+
 #endif

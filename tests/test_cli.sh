@@ -393,15 +393,15 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect merge-refusals-wrote-nothing 0 '^absent$' -- bash -c "[ -e '$tmp/bad.probes' ] && echo present || echo absent"
     expect merge-output-is-a-part 1 "$tmp/part0.probes" -- \
         "$pb" merge "$tmp/part0.probes" "$tmp/part0.probes" "$tmp/part1.probes" "$tmp/part2.probes"
-    # SIGTERM in a shard: exit 143, no part file, no temporary
-    "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 --shard 1/4 -o "$tmp/termshard.probes" >"$tmp/ts.log" 2>&1 &
-    ts_pid=$!
-    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/ts.log" && break; sleep 0.1; done
+    # Ctrl-C (SIGINT) in a shard: exit 130, no part file, no temporary
+    "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 --shard 1/4 -o "$tmp/intshard.probes" >"$tmp/is.log" 2>&1 &
+    is_pid=$!
+    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/is.log" && break; sleep 0.1; done
     sleep 1
-    kill -TERM "$ts_pid"
-    wait "$ts_pid"
-    ts_rc=$?
-    expect shard-sigterm 0 '^143 0$' -- bash -c "echo $ts_rc \$(ls '$tmp' | grep -c termshard)"
+    kill -INT "$is_pid"
+    wait "$is_pid"
+    is_rc=$?
+    expect shard-interrupted 0 '^130 0$' -- bash -c "echo $is_rc \$(ls '$tmp' | grep -c intshard)"
 fi
 
 echo "$passed passed, $failed failed"

@@ -5,6 +5,7 @@
  * agree with their originals within the bound docs/scene.md states. CPU
  * only, so the CI's sanitizer run covers the decoders and the bake of what
  * they decoded. (test_bake runs the same comparison through the kernels.) */
+#include "bake_reference.h"
 #include "compressed_variants.h"
 #include "test_util.h"
 
@@ -29,18 +30,8 @@ static int cpu_bake(const pb_scene *s, const pb_bake_desc *d, uint32_t passes, d
     float *red = calloc((size_t)P * (40 + 2 * 16), sizeof(float));
     float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
           dz = s->bounds_max[2] - s->bounds_min[2];
-    pb_sf_directions(rpp, dirs);
     for (uint32_t pass = 0; pass < passes; ++pass) {
-        for (uint32_t p = 0; p < P; ++p) {
-            uint32_t id;
-            pb_bake_probe_position(s, d, p, probes + 4 * p, &id);
-            memcpy(&probes[4 * p + 3], &id, 4);
-            float m[9];
-            pb_random_rotation(d->seed, id, pass, m);
-            for (int r = 0; r < 3; ++r)
-                for (int c = 0; c < 4; ++c)
-                    rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
-        }
+        reference_inputs(s, d, P, rpp, pass, probes, rot, dirs);
         pb_bake_pass pp = {0};
         pp.scene = s, pp.bvh = bvh, pp.probes = probes, pp.rotations = rot, pp.directions = dirs;
         pp.probe_count = P, pp.rays_per_probe = rpp, pp.pass_index = pass, pp.seed = d->seed;
@@ -73,19 +64,14 @@ static void mean_se(const double *x, uint32_t n, double *mean, double *se)
 
 static void compressed_scenes_bake_on_the_host_like_originals(void)
 {
-    char cornell[1024];
-    snprintf(cornell, sizeof cornell, "%s/../shared/scenes/cornell/cornellBox.gltf", PB_SOURCE_DIR);
-    const char *srcs[2] = {PB_SOURCE_DIR "/tests/scenes/demo.gltf", cornell};
-    const char *tags[2] = {"demo", "cornell"};
     const uint32_t passes = VARIANT_PASSES, P = 27;
-    for (int si = 0; si < 2; ++si) {
-        if (!file_exists(srcs[si])) {
-            skip("%s not present: only the demo scene baked", srcs[si]);
+    for (int si = 0; si < PB_VARIANT_SOURCES; ++si) {
+        const char *src, *tag;
+        if (!variant_source(si, &src, &tag))
             continue;
-        }
         pb_scene *o = NULL;
         pb_error err;
-        if (pb_scene_load(srcs[si], NULL, &o, &err) != PB_OK) {
+        if (pb_scene_load(src, NULL, &o, &err) != PB_OK) {
             CHECKF(0, "%s", err.message);
             continue;
         }
@@ -108,7 +94,7 @@ static void compressed_scenes_bake_on_the_host_like_originals(void)
             const pb_variant *v = &pb_variants[vi];
             if (strcmp(v->ext, "glb") != 0)
                 continue; /* the .gltf forms decode the same streams (test_scene) */
-            const char *path = compressed_variant(srcs[si], tags[si], v);
+            const char *path = compressed_variant(src, tag, v);
             pb_scene *c = NULL;
             if (!path || pb_scene_load(path, NULL, &c, &err) != PB_OK) {
                 CHECKF(0, "%s", path ? err.message : "no variant");
@@ -118,26 +104,14 @@ static void compressed_scenes_bake_on_the_host_like_originals(void)
             for (int k = 0; k < 3; ++k)
                 dc.grid.origin[k] += (float)(o->origin[k] - c->origin[k]);
             if (cpu_bake(c, &dc, passes, Ec)) {
-                /* z = |dE| / sqrt(sa^2 + sb^2), the difference in units of
-                 * the two bakes' combined standard error */
-                uint32_t n = 0;
-                double z_sum = 0, z_max = 0, rel_max = 0;
+                double ea[27], sa[27], eb[27], sb[27];
                 for (uint32_t p = 0; p < P; ++p) {
-                    double ma, sa, mb, sb;
-                    mean_se(Eo + p * passes, passes, &ma, &sa);
-                    mean_se(Ec + p * passes, passes, &mb, &sb);
-                    double s2 = sqrt(sa * sa + sb * sb);
-                    if (!(ma > 0) || !(s2 > 0))
-                        continue;
-                    double z = fabs(ma - mb) / s2;
-                    z_sum += z, z_max = fmax(z_max, z), rel_max = fmax(rel_max, fabs(ma - mb) / ma), ++n;
+                    mean_se(Eo + p * passes, passes, &ea[p], &sa[p]);
+                    mean_se(Ec + p * passes, passes, &eb[p], &sb[p]);
                 }
-                double z_mean = n ? z_sum / n : 0, z_bound = variant_mean_z_bound(n);
-                printf("  %-7s %-11s: %u probes, |dE| in combined standard errors: mean %.2f (bound %.2f), "
-                       "worst %.2f (bound 5); worst |dE|/E %.4f\n", tags[si], v->mode, n, z_mean, z_bound, z_max,
-                       rel_max);
-                CHECKF(n >= P / 2 && z_max <= VARIANT_Z_MAX && z_mean <= z_bound, "%s: mean z %.2f (bound %.2f), worst %.2f",
-                       path, z_mean, z_bound, z_max);
+                char label[64];
+                snprintf(label, sizeof label, "%-7s %-11s", tag, v->mode);
+                variant_check_bake(path, label, ea, sa, eb, sb, P);
             }
             pb_scene_destroy(c);
         }

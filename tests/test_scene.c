@@ -782,16 +782,11 @@ static uint32_t unmatched(const tri_rec *a, uint32_t na, const tri_rec *b, uint3
  * their own grid's half step. Under ASan in CI, this runs both decoders. */
 static void compressed_variants_match_originals(void)
 {
-    char cornell[1024];
-    snprintf(cornell, sizeof cornell, "%s/../shared/scenes/cornell/cornellBox.gltf", PB_SOURCE_DIR);
-    const char *srcs[2] = {PB_SOURCE_DIR "/tests/scenes/demo.gltf", cornell};
-    const char *tags[2] = {"demo", "cornell"};
-    for (int si = 0; si < 2; ++si) {
-        if (!file_exists(srcs[si])) {
-            skip("%s not present: only the demo scene checked", srcs[si]);
+    for (int si = 0; si < PB_VARIANT_SOURCES; ++si) {
+        const char *src, *tag;
+        if (!variant_source(si, &src, &tag))
             continue;
-        }
-        pb_scene *o = load_ok(srcs[si]);
+        pb_scene *o = load_ok(src);
         if (!o)
             continue;
         double diag = 0, rmax = 0, uvmax = 0;
@@ -806,7 +801,7 @@ static void compressed_variants_match_originals(void)
                 rmax = fmax(rmax, sqrt(pow(ra[t].v[k][0], 2) + pow(ra[t].v[k][1], 2) + pow(ra[t].v[k][2], 2)));
         for (size_t vi = 0; vi < PB_VARIANT_COUNT; ++vi) {
             const pb_variant *v = &pb_variants[vi];
-            const char *path = compressed_variant(srcs[si], tags[si], v);
+            const char *path = compressed_variant(src, tag, v);
             pb_scene *c = path ? load_ok(path) : NULL;
             if (!c)
                 continue;
@@ -827,7 +822,7 @@ static void compressed_variants_match_originals(void)
                     }
                     differ += !same;
                 }
-                CHECKF(!differ, "%s: not identical to %s", path, srcs[si]);
+                CHECKF(!differ, "%s: not identical to %s", path, src);
                 pb_scene_destroy(c);
                 continue;
             }
@@ -843,7 +838,7 @@ static void compressed_variants_match_originals(void)
             CHECKF(miss_ab == 0 && miss_ba == 0 && bad_ab == 0 && bad_ba == 0,
                    "%s: %u/%u triangles of the original/variant without a partner within %.3g m, %u/%u partners with "
                    "normals or texcoords out of bound", path, miss_ab, miss_ba, bound, bad_ab, bad_ba);
-            printf("  %-11s %-4s %s: %u triangles (original %u), position bound %.3g m\n", v->mode, v->ext, tags[si],
+            printf("  %-11s %-4s %s: %u triangles (original %u), position bound %.3g m\n", v->mode, v->ext, tag,
                    c->triangle_count, o->triangle_count, bound);
             free(rb);
             pb_scene_destroy(c);

@@ -136,12 +136,13 @@ static void bin_set_clear(bin_set *s, uint32_t bins)
 static inline uint32_t bin_of(float c, float lo, float scale, uint32_t bins)
 {
     float f = (c - lo) * scale;
-    int b = (int)f;
-    if (b < 0 || f != f)
-        b = 0;
-    if (b >= (int)bins)
-        b = (int)bins - 1;
-    return (uint32_t)b;
+    /* clamped as a float: converting one out of int's range (an infinite
+     * scale on a huge, degenerate or overflowing box) is undefined */
+    if (!(f > 0.f)) /* negative, zero or NaN */
+        return 0;
+    if (f >= (float)bins)
+        return bins - 1;
+    return (uint32_t)f;
 }
 
 static void bin_scales(const builder *bd, const aabb *cbox, float scale[3])
