@@ -38,4 +38,7 @@ rm -rf "$scratch" "$scratch.log"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$jobs"
 echo "== full suite (validation layer on) ($(date +%T))"
-ctest --test-dir build --output-on-failure
+# two at a time: one test's host phases (CPU references, loading, BVH
+# builds) overlap another's device work; test_cli, which times Ctrl-C, runs
+# alone (RUN_SERIAL)
+ctest --test-dir build -j"$jobs" --output-on-failure

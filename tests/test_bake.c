@@ -2,6 +2,7 @@
  * device with validation: uniform sky, a point light, a closed emissive box,
  * and the kernels vs bake_cpu.c on the demo scene. */
 #include "scenes_gen.h"
+#include "bake/dilate.h"
 #include "bake/guide.h"
 #include "bake/light_cells.h"
 #include "bake_reference.h"
@@ -836,6 +837,61 @@ static void vertex_colours_are_albedo(void)
     }
     release(&b);
     pb_scene_destroy(s);
+}
+
+/* Dilation's kernel (dilate.comp) against its CPU reference
+ * (pb_volume_dilate): a 9 x 7 x 6 grid with random SH and a third of its
+ * probes invalid in clumps, and a grid where one valid probe must fill the
+ * rest over the 8 rounds (and not beyond): SH and flags bit for bit. Then
+ * the constants the two share are the floats they claim to be. */
+static void dilation_kernel_matches_cpu_reference(void)
+{
+    CHECK(PB_DILATE_W2 == (float)(1.0 / sqrt(2.0)) && PB_DILATE_W3 == (float)(1.0 / sqrt(3.0)));
+    for (int kind = 0; kind < 2; ++kind) {
+        pb_volume a;
+        memset(&a, 0, sizeof a);
+        a.flags = PB_VOLUME_GRID | PB_VOLUME_IRRADIANCE;
+        a.counts[0] = kind ? 20 : 9, a.counts[1] = kind ? 1 : 7, a.counts[2] = kind ? 1 : 6;
+        a.probe_count = a.counts[0] * a.counts[1] * a.counts[2];
+        a.octmap_res = 2;
+        pb_error err;
+        if (pb_volume_alloc(&a, &err) != PB_OK) {
+            CHECKF(0, "%s", err.message);
+            continue;
+        }
+        uint32_t state = 12345, invalid = 0;
+        for (uint32_t p = 0; p < a.probe_count; ++p) {
+            for (int c = 0; c < 27; ++c) {
+                state = state * 1664525u + 1013904223u;
+                a.sh[27 * p + c] = (float)(state >> 8) / 16777216.f * 4.f - 1.f;
+            }
+            uint32_t x = p % a.counts[0], y = (p / a.counts[0]) % a.counts[1];
+            int valid = kind ? p == 0 : !((x / 3 + y / 2 + p / 63) % 3 == 0);
+            a.probe_flags[p] = valid ? PB_PROBE_VALID : 0u;
+            invalid += !valid;
+        }
+        pb_volume b = a; /* the same values, arrays of its own */
+        b.sh = malloc(27 * sizeof(float) * a.probe_count), b.probe_flags = malloc(4 * a.probe_count);
+        memcpy(b.sh, a.sh, 27 * sizeof(float) * a.probe_count);
+        memcpy(b.probe_flags, a.probe_flags, 4 * a.probe_count);
+        pb_volume_dilate(&a, PB_DILATION_ROUNDS);
+        pb_result r = pb_volume_dilate_gpu(ctx, &b, PB_DILATION_ROUNDS, &err);
+        CHECKF(r == PB_OK, "%s", err.message);
+        uint32_t dilated = 0, still = 0;
+        for (uint32_t p = 0; p < a.probe_count; ++p) {
+            dilated += (a.probe_flags[p] & PB_PROBE_DILATED) != 0;
+            still += !(a.probe_flags[p] & (PB_PROBE_VALID | PB_PROBE_DILATED));
+        }
+        int same = r == PB_OK && !memcmp(a.sh, b.sh, 27 * sizeof(float) * a.probe_count) &&
+                   !memcmp(a.probe_flags, b.probe_flags, 4 * a.probe_count);
+        fprintf(stderr, "  %ux%ux%u grid, %u invalid: %u dilated, %u left; kernel %s the CPU reference\n",
+                a.counts[0], a.counts[1], a.counts[2], invalid, dilated, still, same ? "==" : "!=");
+        CHECK(same && dilated > 0);
+        if (kind) /* one valid probe at x = 0 reaches 8 cells in 8 rounds */
+            CHECK(dilated == 8 && still == 11);
+        free(b.sh), free(b.probe_flags);
+        pb_volume_free(&a);
+    }
 }
 
 /* Light cells, kernel against CPU reference: the same host tables on both
@@ -2168,6 +2224,7 @@ int main(void)
     RUN(multi_bounce_matches_cpu_reference);
     RUN(light_cells_match_cpu_reference);
     RUN(vertex_colours_are_albedo);
+    RUN(dilation_kernel_matches_cpu_reference);
     RUN(environment_kernels_match_cpu);
     RUN(indirect_volume_matches_cpu_reference);
     RUN(relocation_and_dilation);

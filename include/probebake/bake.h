@@ -131,6 +131,9 @@ typedef struct pb_gpu_scene pb_gpu_scene;
  * round after round (Jacobi), up to `rounds`; filled ones get
  * PB_PROBE_DILATED. A grid volume only. */
 void pb_volume_dilate(pb_volume *v, uint32_t rounds);
+/* The same on the device (src/bake/dilate_gpu.c, shaders/comp/dilate.comp):
+ * every round in one submission, the same bytes as pb_volume_dilate. */
+pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, pb_error *err);
 
 /* Joins the parts of a sharded bake (src/bake/merge.c): they must be one
  * bake's (same scene hash, grid or points, settings, seed), disjoint and

@@ -698,8 +698,10 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                 tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / done_p / (unit * unit)));
             }
     }
-    if (!d.points && !d.shard_count) /* a part's neighbours are in other parts: merge dilates */
-        pb_volume_dilate(out, PB_DILATION_ROUNDS); /* points have no grid neighbourhood: invalid ones stay flagged */
+    /* points have no grid neighbourhood (invalid ones stay flagged); a
+     * part's neighbours are in other parts (pb_volume_merge dilates) */
+    if (!d.points && !d.shard_count && (r = pb_volume_dilate_gpu(ctx, out, PB_DILATION_ROUNDS, err)) != PB_OK)
+        goto done;
     out->traversals = run.traversals;
     if (run.long_paths)
         pb_logf(&ctx->desc.log, PB_LOG_WARN,

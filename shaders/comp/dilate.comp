@@ -1,0 +1,68 @@
+#version 460
+// dilate: one round of dilation over a probe grid, one probe per
+// invocation: an empty probe with filled neighbours (3x3x3) takes their
+// weighted mean SH (weights 1/d), in the order and float arithmetic of the
+// CPU reference (src/bake/dilate.c); the weight sum's reciprocal comes from
+// the host's table (src/bake/dilate.h), so no division rounds differently.
+// States: 0 empty, 1 valid, 2 filled by dilation. Jacobi: reads *_in,
+// writes *_out; the host swaps them between rounds.
+#extension GL_GOOGLE_include_directive : require
+#include "address.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer FloatIn { float v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer FloatOut { float v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer UintIn { uint v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer UintOut { uint v[]; };
+
+layout(push_constant) uniform Push {
+    pb_addr sh_in;     // 27 floats per probe
+    pb_addr state_in;  // 1 uint per probe
+    pb_addr sh_out;
+    pb_addr state_out;
+    pb_addr table;     // PB_DILATE_TABLE reciprocals
+    uvec4 counts;      // grid counts x, y, z; w: probes
+} pc;
+
+const float W1 = 1.0, W2 = 0.70710677, W3 = 0.57735026; // (float)(1 / sqrt(d2))
+
+void main()
+{
+    uint p = gl_GlobalInvocationID.x;
+    if (p >= pc.counts.w)
+        return;
+    FloatIn sh = FloatIn(pc.sh_in);
+    UintIn state = UintIn(pc.state_in);
+    FloatOut out_sh = FloatOut(pc.sh_out);
+    uint s = state.v[p];
+    uint nx = pc.counts.x, ny = pc.counts.y, nz = pc.counts.z;
+    precise float sum[27];
+    for (int c = 0; c < 27; ++c)
+        sum[c] = 0.0;
+    ivec4 n = ivec4(0);
+    if (s == 0u) {
+        int x = int(p % nx), y = int((p / nx) % ny), z = int(p / (nx * ny));
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    int qx = x + dx, qy = y + dy, qz = z + dz, d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 == 0 || qx < 0 || qy < 0 || qz < 0 || qx >= int(nx) || qy >= int(ny) || qz >= int(nz))
+                        continue;
+                    uint q = uint(qx) + nx * (uint(qy) + ny * uint(qz));
+                    if (state.v[q] == 0u)
+                        continue;
+                    float w = d2 == 1 ? W1 : d2 == 2 ? W2 : W3;
+                    n[d2]++;
+                    for (int c = 0; c < 27; ++c)
+                        sum[c] = sum[c] + w * sh.v[27u * q + uint(c)];
+                }
+    }
+    bool fill = s == 0u && n[1] + n[2] + n[3] > 0;
+    precise float r = fill ? FloatIn(pc.table).v[(n[1] * 13 + n[2]) * 9 + n[3]] : 0.0;
+    for (int c = 0; c < 27; ++c) {
+        precise float v = fill ? sum[c] * r : sh.v[27u * p + uint(c)];
+        out_sh.v[27u * p + uint(c)] = v;
+    }
+    UintOut(pc.state_out).v[p] = fill ? 2u : s;
+}
