@@ -4,7 +4,8 @@
 # crashes, every volume is finite; the files expected to load do, and the
 # shared corpus's three expected refusals are the only ones.
 # The repository's scenes also go in compressed, as tests/gltf_compress
-# writes them (Draco, meshopt, quantized; issue 15): each must load and bake.
+# writes them (Draco, meshopt, quantized; issue 15), and the demo scene with
+# legacy materials: each must load and bake.
 # Usage: test_corpus.sh SOURCE_DIR PROBEBAKE GLTF_COMPRESS
 set -u
 src=$1
@@ -17,6 +18,28 @@ for f in "$src"/tests/scenes/*.gltf; do
         "$compress" "$mode" "$f" "$tmp/$(basename "$f" .gltf)_$mode.glb" || { echo "[ FAIL ] gltf_compress $mode $f"; exit 1; }
     done
 done
+# ... and as legacy files: the demo scene's materials rewritten as
+# KHR_materials_pbrSpecularGlossiness (diffuse = base colour), one of them
+# KHR_materials_unlit, its texture through KHR_texture_transform, all three
+# required, in .gltf and (compressed) .glb
+python3 - "$src/tests/scenes/demo.gltf" "$tmp/legacy_demo.gltf" <<'PY' || { echo "[ FAIL ] legacy sample"; exit 1; }
+import json, sys
+g = json.load(open(sys.argv[1]))
+for i, m in enumerate(g["materials"]):
+    pbr = m.pop("pbrMetallicRoughness", {})
+    sg = {"diffuseFactor": pbr.get("baseColorFactor", [1, 1, 1, 1]), "glossinessFactor": 0.2}
+    if "baseColorTexture" in pbr:
+        sg["diffuseTexture"] = dict(pbr["baseColorTexture"],
+                                    extensions={"KHR_texture_transform": {"offset": [0.25, 0], "scale": [2, 2]}})
+    m.setdefault("extensions", {})["KHR_materials_pbrSpecularGlossiness"] = sg
+    if i == len(g["materials"]) - 1:
+        m["extensions"]["KHR_materials_unlit"] = {}
+ext = ["KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit", "KHR_texture_transform"]
+g["extensionsUsed"] = sorted(set(g.get("extensionsUsed", []) + ext))
+g["extensionsRequired"] = sorted(set(g.get("extensionsRequired", []) + ext))
+json.dump(g, open(sys.argv[2], "w"))
+PY
+"$compress" draco "$tmp/legacy_demo.gltf" "$tmp/legacy_demo_draco.glb" || { echo "[ FAIL ] gltf_compress legacy"; exit 1; }
 dirs=("$src/tests/scenes" "$tmp")
 shared="$src/../shared/scenes"
 [ -d "$shared" ] && dirs+=("$shared") || echo "  SKIP part: $shared not present"
@@ -34,8 +57,9 @@ unexpected = [r["file"] for r in d["refusals"] if r["file"].rsplit("/", 1)[-1] n
 if unexpected:
     print("  unexpected refusals: %s" % unexpected)
 compressed = [f for f in d["baked_files"] if "_draco." in f or "_meshopt." in f or "_quantize." in f]
-print("  %d compressed files loaded and baked" % len(compressed))
-sys.exit(1 if bad or unexpected or d["files"] < 4 or len(compressed) < 12 else 0)
+legacy = [f for f in d["baked_files"] if "legacy_demo" in f]
+print("  %d compressed files and %d legacy ones loaded and baked" % (len(compressed), len(legacy)))
+sys.exit(1 if bad or unexpected or d["files"] < 4 or len(compressed) < 12 or len(legacy) < 2 else 0)
 '
 check=$?
 if [ "$rc" -eq 0 ] && [ "$check" -eq 0 ]; then
