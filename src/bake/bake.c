@@ -1,10 +1,11 @@
 /* pb_bake: the bake's host loop (include/probebake/bake.h).
  *
- *   validate desc -> size and check buffers -> upload scene shading data
+ *   stages over one bake_job: probe set (and memory budget) -> place ->
+ *   device resources -> relocate -> trace passes -> SH, depth, validity ->
+ *   dilation (a grid's; merge dilates a sharded bake's parts)
  *   per pass:   rotations for every probe
  *     per chunk of probes (at most rays_per_submit rays): one submission of
  *       bake_trace -> bake_sh -> bake_depth, then accumulate on the host
- *   average passes (double) -> irradiance SH, depth tiles with borders, flags
  *
  * Accumulation is in double on the host, one float sum per pass and probe
  * from the GPU: the per-pass sums are over at most rays_per_probe terms, so
@@ -437,41 +438,55 @@ static int scene_emits_light(const pb_scene *s, const pb_bake_desc *d)
 }
 
 /* One bake; feedback: the previous bounce's volume (--indirect volume) or NULL. */
-static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc_in,
-                           const pb_sample_volume *feedback, pb_volume *out, pb_error *err)
+/* The bake context: what its stages share. Per-probe host arrays are
+ * indexed by local probe: i < own is global probe first + i, the rest are
+ * the floor sample's probes of other parts (see stage_probe_set). */
+typedef struct bake_job {
+    pb_context *ctx;
+    const pb_scene *scene;
+    pb_gpu_scene *gs;
+    pb_bake_desc d;                /* checked, defaults filled */
+    uint32_t total, first, own, P; /* the bake's probes; this run's part; traced here (own + samples) */
+    uint32_t stride;               /* of the floor sample (shard.h) */
+    uint32_t rpp, n, chunk;
+    uint64_t reduced_floats;
+    uint32_t *global;              /* per local probe: its global index */
+    uint32_t *floor_list, floor_count; /* local indices of the floor sample */
+    float *probes, *rotations, *directions, *reduced, *offsets, *near;
+    double *sh_sum, *depth_sum, *backfaces, *hits;
+    uint32_t *active, *converged_at;
+    pb_convergence conv;
+    bake_buffers B;
+    bake_run run;
+} bake_job;
+
+/* Stage 1, the probe set and its budget: every probe, or a part's range
+ * followed, under --target-error, by the floor sample's probes outside it
+ * (traced for the 4 passes the floor needs, never written); device and host
+ * memory checked before anything is allocated. */
+static pb_result stage_probe_set(bake_job *j, pb_error *err)
 {
-    pb_error_clear(err);
-    memset(out, 0, sizeof *out);
-    double t_start = pb_now_ms();
-    pb_bake_desc d = *desc_in;
-    pb_result r = check_desc(scene, &d, err);
-    if (r != PB_OK)
-        return r;
-    /* the probes this run traces, by global index: all of them, or a part's
-     * range followed, under --target-error, by the floor sample's probes
-     * outside it (shard.h: traced for the 4 passes the floor needs, never
-     * written). Local index i < own is global probe first + i. */
-    uint32_t total = d.points ? d.points->count : d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
-    uint32_t first = 0, own = total, stride = pb_floor_stride(total), samples = 0;
-    if (d.shard_count && (d.shard_index >= d.shard_count || d.shard_count > total))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "shard %u/%u: need 0 <= I < N <= the %u probes", d.shard_index,
-                       d.shard_count, total);
-    if (d.shard_count)
-        pb_shard_range(total, d.shard_index, d.shard_count, &first, &own);
-    for (uint64_t s = 0; d.target_error > 0.f && s < total; s += stride)
-        samples += d.shard_count && (s < first || s >= (uint64_t)first + own);
-    uint32_t P = own + samples;
-    uint32_t rpp = d.rays_per_probe, n = d.octmap_res, texels = n * n;
-    if (!scene_emits_light(scene, &d))
-        pb_logf(&ctx->desc.log, PB_LOG_WARN,
-                "%s: no lights, no emissive surfaces and a black sky: the volume will be black (give --sky or --env)",
-                scene->path[0] ? scene->path : "scene");
+    const pb_bake_desc *d = &j->d;
+    pb_context *ctx = j->ctx;
+    j->total = d->points ? d->points->count : d->grid.counts[0] * d->grid.counts[1] * d->grid.counts[2];
+    j->first = 0, j->own = j->total, j->stride = pb_floor_stride(j->total);
+    if (d->shard_count && (d->shard_index >= d->shard_count || d->shard_count > j->total))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "shard %u/%u: need 0 <= I < N <= the %u probes",
+                       d->shard_index, d->shard_count, j->total);
+    if (d->shard_count)
+        pb_shard_range(j->total, d->shard_index, d->shard_count, &j->first, &j->own);
+    uint32_t samples = 0;
+    for (uint64_t s = 0; d->target_error > 0.f && s < j->total; s += j->stride)
+        samples += d->shard_count && (s < j->first || s >= (uint64_t)j->first + j->own);
+    uint32_t P = j->P = j->own + samples;
+    uint32_t rpp = j->rpp = d->rays_per_probe, n = j->n = d->octmap_res, texels = n * n;
     uint32_t chunk = ctx->desc.rays_per_submit / rpp;
     chunk = chunk < 1 ? 1 : (chunk > P ? P : chunk);
     if (chunk > ctx->limits.maxComputeWorkGroupCount[1]) /* bake_depth dispatches one row per probe */
         chunk = ctx->limits.maxComputeWorkGroupCount[1];
-    uint64_t reduced_floats = (uint64_t)chunk * (PB_REDUCED_SH_STRIDE + 2u * texels);
-    uint64_t need = (uint64_t)P * (16 + 48) + (uint64_t)rpp * 16 + (uint64_t)chunk * rpp * (d.probe_nee ? 48 : 16) +
+    j->chunk = chunk;
+    uint64_t reduced_floats = j->reduced_floats = (uint64_t)chunk * (PB_REDUCED_SH_STRIDE + 2u * texels);
+    uint64_t need = (uint64_t)P * (16 + 48) + (uint64_t)rpp * 16 + (uint64_t)chunk * rpp * (d->probe_nee ? 48 : 16) +
                     reduced_floats * 4;
     if (ctx->info.device_local_bytes && need > ctx->info.device_local_bytes / 2)
         return pb_fail(err, PB_ERROR_TOO_LARGE,
@@ -491,200 +506,231 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                        "%u probes x %u rays need %.1f MiB of host memory; the budget is half of this machine's %.1f MiB "
                        "(%.1f MiB): use fewer probes or a smaller octahedral map",
                        P, rpp, host_need / 1048576.0, host_have / 1048576.0, host_have / 2097152.0);
+    return PB_OK;
+}
 
-    /* host side: probe positions, direction set, shading data, accumulators */
-    float *probes = calloc((size_t)P * 4, sizeof(float));
-    float *rotations = malloc((size_t)P * 12 * sizeof(float));
-    float *directions = malloc((size_t)rpp * 4 * sizeof(float));
-    double *sh_sum = calloc((size_t)P * 27, sizeof(double));
-    double *depth_sum = calloc((size_t)P * texels * 2, sizeof(double));
-    double *backfaces = calloc(P, sizeof(double)), *hits = calloc(P, sizeof(double));
-    float *reduced = malloc((size_t)reduced_floats * sizeof(float));
-    bake_buffers B;
-    memset(&B, 0, sizeof B);
-    float *offsets = NULL, *near = NULL;
-    uint32_t *active = NULL, *converged_at = calloc(P, sizeof(uint32_t));
-    uint32_t *global = malloc((size_t)P * sizeof *global), *floor_list = malloc(PB_FLOOR_SAMPLE * sizeof *floor_list);
-    uint32_t floor_count = 0;
-    pb_convergence conv;
-    memset(&conv, 0, sizeof conv);
-    if (!probes || !rotations || !directions || !sh_sum || !depth_sum || !backfaces || !hits || !reduced ||
-        !converged_at || !global || !floor_list || pb_sf_directions(rpp, directions) != PB_OK) {
-        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
-        goto done;
-    }
-    for (uint32_t i = 0; i < own; ++i)
-        global[i] = first + i;
-    for (uint64_t s = 0, extra = own; d.target_error > 0.f && s < total; s += stride) {
-        int mine = s >= first && s < (uint64_t)first + own;
+/* Stage 2, place: the host arrays, the local-to-global map, the floor
+ * sample, and every probe's position and id (which keys its random
+ * numbers). */
+static pb_result stage_place(bake_job *j, pb_error *err)
+{
+    uint32_t P = j->P, rpp = j->rpp, texels = j->n * j->n;
+    j->probes = calloc((size_t)P * 4, sizeof(float));
+    j->rotations = malloc((size_t)P * 12 * sizeof(float));
+    j->directions = malloc((size_t)rpp * 4 * sizeof(float));
+    j->sh_sum = calloc((size_t)P * 27, sizeof(double));
+    j->depth_sum = calloc((size_t)P * texels * 2, sizeof(double));
+    j->backfaces = calloc(P, sizeof(double)), j->hits = calloc(P, sizeof(double));
+    j->reduced = malloc((size_t)j->reduced_floats * sizeof(float));
+    j->converged_at = calloc(P, sizeof(uint32_t));
+    j->active = malloc(P * sizeof *j->active);
+    j->offsets = calloc((size_t)P * 3, sizeof(float));
+    j->near = malloc((size_t)P * 8 * sizeof(float));
+    j->global = malloc((size_t)P * sizeof *j->global);
+    j->floor_list = malloc(PB_FLOOR_SAMPLE * sizeof *j->floor_list);
+    if (!j->probes || !j->rotations || !j->directions || !j->sh_sum || !j->depth_sum || !j->backfaces || !j->hits ||
+        !j->reduced || !j->converged_at || !j->active || !j->offsets || !j->near || !j->global || !j->floor_list ||
+        !pb_convergence_init(&j->conv, P) || pb_sf_directions(rpp, j->directions) != PB_OK)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
+    for (uint32_t i = 0; i < j->own; ++i)
+        j->global[i] = j->first + i;
+    for (uint64_t s = 0, extra = j->own; j->d.target_error > 0.f && s < j->total; s += j->stride) {
+        int mine = s >= j->first && s < (uint64_t)j->first + j->own;
         if (!mine)
-            global[extra] = (uint32_t)s;
-        floor_list[floor_count++] = mine ? (uint32_t)s - first : (uint32_t)extra++;
+            j->global[extra] = (uint32_t)s;
+        j->floor_list[j->floor_count++] = mine ? (uint32_t)s - j->first : (uint32_t)extra++;
     }
     for (uint32_t p = 0; p < P; ++p) {
         uint32_t id;
-        pb_bake_probe_position(scene, &d, global[p], probes + 4 * (size_t)p, &id);
-        memcpy(&probes[4 * p + 3], &id, 4); /* probe id: keys its random numbers */
+        pb_bake_probe_position(j->scene, &j->d, j->global[p], j->probes + 4 * (size_t)p, &id);
+        memcpy(&j->probes[4 * p + 3], &id, 4);
     }
+    return PB_OK;
+}
 
-    r = make_buffer(ctx, &B.params, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "bake parameters", NULL, err);
+/* Stage 3, the device side: shading data, the guide and light cells when
+ * on, probe and ray buffers, the three pipelines, the previous volume for
+ * --indirect volume; then the pass runner over them. */
+static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, pb_error *err)
+{
+    pb_context *ctx = j->ctx;
+    const pb_bake_desc *d = &j->d;
+    bake_buffers *B = &j->B;
+    uint32_t P = j->P, rpp = j->rpp, chunk = j->chunk;
+    pb_result r = make_buffer(ctx, &B->params, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "bake parameters", NULL, err);
     if (r == PB_OK)
-        r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, d.max_lights_per_hit, &B.shading, err);
-    if (r == PB_OK && d.guide_paths && d.bounces)
-        r = learn_guide(ctx, scene, gs, &d, &B, err);
-    if (r == PB_OK && d.light_cells)
-        r = learn_light_cells(ctx, scene, gs, &d, &B, err);
+        r = pb_shading_create(ctx, j->scene, j->gs, d->sky, d->environment, d->max_lights_per_hit, &B->shading, err);
+    if (r == PB_OK && d->guide_paths && d->bounces)
+        r = learn_guide(ctx, j->scene, j->gs, d, B, err);
+    if (r == PB_OK && d->light_cells)
+        r = learn_light_cells(ctx, j->scene, j->gs, d, B, err);
     if (r == PB_OK)
-        r = make_buffer(ctx, &B.probes, (uint64_t)P * 16, PB_MEMORY_DEVICE, "probe positions", probes, err);
+        r = make_buffer(ctx, &B->probes, (uint64_t)P * 16, PB_MEMORY_DEVICE, "probe positions", j->probes, err);
     if (r == PB_OK)
-        r = make_buffer(ctx, &B.rotations, (uint64_t)P * 48, PB_MEMORY_DEVICE, "probe rotations", NULL, err);
+        r = make_buffer(ctx, &B->rotations, (uint64_t)P * 48, PB_MEMORY_DEVICE, "probe rotations", NULL, err);
     if (r == PB_OK)
-        r = make_buffer(ctx, &B.directions, (uint64_t)rpp * 16, PB_MEMORY_DEVICE, "ray directions", directions, err);
+        r = make_buffer(ctx, &B->directions, (uint64_t)rpp * 16, PB_MEMORY_DEVICE, "ray directions", j->directions,
+                        err);
     if (r == PB_OK)
-        r = make_buffer(ctx, &B.rays, (uint64_t)chunk * rpp * 16, PB_MEMORY_DEVICE, "probe rays", NULL, err);
-    if (r == PB_OK && d.probe_nee)
-        r = make_buffer(ctx, &B.nee, (uint64_t)chunk * rpp * 32, PB_MEMORY_DEVICE, "probe NEE samples", NULL, err);
+        r = make_buffer(ctx, &B->rays, (uint64_t)chunk * rpp * 16, PB_MEMORY_DEVICE, "probe rays", NULL, err);
+    if (r == PB_OK && d->probe_nee)
+        r = make_buffer(ctx, &B->nee, (uint64_t)chunk * rpp * 32, PB_MEMORY_DEVICE, "probe NEE samples", NULL, err);
     if (r == PB_OK)
-        r = make_buffer(ctx, &B.reduced, reduced_floats * 4, PB_MEMORY_DOWNLOAD, "probe results", NULL, err);
-    uint32_t spec[1] = {gs->stack_size};
+        r = make_buffer(ctx, &B->reduced, j->reduced_floats * 4, PB_MEMORY_DOWNLOAD, "probe results", NULL, err);
+    uint32_t spec[1] = {j->gs->stack_size};
     if (r == PB_OK)
-        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 1, 64,
-                               "bake_trace", &B.trace, err);
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 1, 64, "bake_trace",
+                               &B->trace, err);
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_sh), sizeof(bake_push), spec, 1, 64, "bake_sh",
-                               &B.sh, err);
+                               &B->sh, err);
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 1, 64,
-                               "bake_depth", &B.depth, err);
+                               "bake_depth", &B->depth, err);
     if (r == PB_OK)
-        r = make_buffer(ctx, &B.list, (uint64_t)P * 4, PB_MEMORY_DEVICE, "active probe list", NULL, err);
-    int conv_ok = pb_convergence_init(&conv, P);
-    active = malloc(P * sizeof *active);
-    if (r == PB_OK && (!conv_ok || !active))
-        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
+        r = make_buffer(ctx, &B->list, (uint64_t)P * 4, PB_MEMORY_DEVICE, "active probe list", NULL, err);
     if (r == PB_OK)
-        r = make_buffer(ctx, &B.counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
-    bake_run run = {ctx, &B, gs, &d, scene, P, rpp, n, chunk, 0, probes, rotations, reduced, sh_sum, depth_sum, backfaces,
-                    hits, 0, 0, 0, NULL, 0, 0, {0}, &conv};
+        r = make_buffer(ctx, &B->counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
+    j->run = (bake_run){ctx,          B,         j->gs,        d,         j->scene,  P,      rpp,
+                        j->n,         chunk,     0,            j->probes, j->rotations, j->reduced, j->sh_sum,
+                        j->depth_sum, j->backfaces, j->hits,   0,         0,         0,      j->near,
+                        0,            0,         {0},          &j->conv};
     if (r == PB_OK && feedback) {
-        r = pb_sample_upload(ctx, feedback, &B.feedback, err);
-        run.feedback = B.feedback.refs;
+        r = pb_sample_upload(ctx, feedback, &B->feedback, err);
+        j->run.feedback = B->feedback.refs;
     }
-    /* relocation: probes in geometry move out, probes against a wall move
-     * away; iterations use their own pass numbers (RNG streams), so the bake
-     * passes that follow are the same whatever relocation did */
-    uint32_t relocated_any = 0;
-    offsets = calloc((size_t)P * 3, sizeof(float));
-    near = malloc((size_t)P * 8 * sizeof(float));
-    run.near = near;
-    if (!offsets || !near)
-        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
-    uint32_t iterations = d.skip_relocation || scene->triangle_count == 0 ? 0 : 3;
-    if (d.points && !(d.points->spacing > 0))
+    return r;
+}
+
+/* Stage 4, relocate: probes in geometry move out, probes against a wall
+ * move away; iterations use their own pass numbers (RNG streams), so the
+ * bake passes that follow are the same whatever relocation did. */
+static pb_result stage_relocate(bake_job *j, pb_error *err)
+{
+    const pb_bake_desc *d = &j->d;
+    uint32_t P = j->P, relocated_any = 0;
+    uint32_t iterations = d->skip_relocation || j->scene->triangle_count == 0 ? 0 : 3;
+    if (d->points && !(d->points->spacing > 0))
         iterations = 0; /* no cell to stay in */
+    pb_result r = PB_OK;
     for (uint32_t it = 0; r == PB_OK && it < iterations; ++it) {
-        memset(backfaces, 0, P * sizeof(double));
-        r = run_pass(&run, PB_RELOCATION_PASS + it, 1, NULL, P, err);
+        memset(j->backfaces, 0, P * sizeof(double));
+        r = run_pass(&j->run, PB_RELOCATION_PASS + it, 1, NULL, P, err);
         if (r == PB_OK)
-            relocated_any += relocate(&run, offsets);
+            relocated_any += relocate(&j->run, j->offsets);
         if (r == PB_OK && relocated_any)
-            r = pb_buffer_upload(ctx, &B.probes, 0, probes, (uint64_t)P * 16, err);
+            r = pb_buffer_upload(j->ctx, &j->B.probes, 0, j->probes, (uint64_t)P * 16, err);
     }
-    memset(backfaces, 0, P * sizeof(double));
-    memset(hits, 0, P * sizeof(double));
-    /* bake passes; with a target error, probes whose irradiance estimate has
-     * converged (after at least 4 passes, along every axis the standard
-     * error of the mean is below target x the mean, or x 5 % of the mean
-     * over all probes where that is larger: convergence.h) drop out and the
-     * rest keep going */
-    uint32_t active_count = P;
-    for (uint32_t p = 0; p < P; ++p)
-        active[p] = p;
+    memset(j->backfaces, 0, P * sizeof(double));
+    memset(j->hits, 0, P * sizeof(double));
+    return r;
+}
+
+/* Stage 5, the trace passes; with a target error, probes whose irradiance
+ * estimate has converged (after at least 4 passes, along every axis the
+ * standard error of the mean is below target x the mean, or x the floor
+ * where that is larger: convergence.h) drop out and the rest keep going.
+ * The floor is taken once, after pass 4, over the floor sample, whose
+ * probes of other parts are then done. */
+static pb_result stage_trace_passes(bake_job *j, pb_error *err)
+{
+    const pb_bake_desc *d = &j->d;
+    uint32_t active_count = j->P;
+    for (uint32_t p = 0; p < j->P; ++p)
+        j->active[p] = p;
     double floor = 0.0;
-    for (uint32_t pass = 0; r == PB_OK && pass < d.passes && active_count > 0; ++pass) {
-        r = run_pass(&run, pass, 0, d.target_error > 0.f ? active : NULL, active_count, err);
-        if (r != PB_OK || !(d.target_error > 0.f) || pass + 1 < 4)
+    pb_result r = PB_OK;
+    for (uint32_t pass = 0; r == PB_OK && pass < d->passes && active_count > 0; ++pass) {
+        r = run_pass(&j->run, pass, 0, d->target_error > 0.f ? j->active : NULL, active_count, err);
+        if (r != PB_OK || !(d->target_error > 0.f) || pass + 1 < 4)
             continue;
         uint32_t keep = 0;
-        if (pass + 1 == 4) { /* the floor, once; the sample's probes of other parts are done */
-            floor = pb_convergence_floor(&conv, floor_list, floor_count);
+        if (pass + 1 == 4) {
+            floor = pb_convergence_floor(&j->conv, j->floor_list, j->floor_count);
             for (uint32_t i = 0; i < active_count; ++i)
-                if (active[i] < own)
-                    active[keep++] = active[i];
+                if (j->active[i] < j->own)
+                    j->active[keep++] = j->active[i];
             active_count = keep, keep = 0;
         }
         for (uint32_t i = 0; i < active_count; ++i) {
-            uint32_t p = active[i];
-            if (pb_convergence_reached(&conv, p, d.target_error, floor))
-                converged_at[p] = pass + 1;
+            uint32_t p = j->active[i];
+            if (pb_convergence_reached(&j->conv, p, d->target_error, floor))
+                j->converged_at[p] = pass + 1;
             else
-                active[keep++] = p;
+                j->active[keep++] = p;
         }
         active_count = keep;
     }
-    if (r != PB_OK)
-        goto done;
+    return r;
+}
 
-    /* the volume */
-    out->flags = PB_VOLUME_IRRADIANCE | (d.points ? 0u : PB_VOLUME_GRID) | (d.exclude_direct ? 0u : PB_VOLUME_DIRECT) |
-                 (d.shard_count ? PB_VOLUME_SHARD : 0u);
+/* Stage 6, SH, depth and validity: the passes' means as irradiance SH
+ * (windowed if asked) and depth tiles with borders, each probe's flags,
+ * paths and standard error, into the volume (a part's, for a shard). */
+static pb_result stage_volume(bake_job *j, pb_volume *out, pb_error *err)
+{
+    const pb_bake_desc *d = &j->d;
+    uint32_t own = j->own, rpp = j->rpp, n = j->n, texels = n * n;
+    out->flags = PB_VOLUME_IRRADIANCE | (d->points ? 0u : PB_VOLUME_GRID) | (d->exclude_direct ? 0u : PB_VOLUME_DIRECT) |
+                 (d->shard_count ? PB_VOLUME_SHARD : 0u);
     out->probe_count = own;
-    if (d.shard_count)
-        out->shard = (pb_volume_shard){d.shard_index, d.shard_count, first, total};
-    if (d.points) {
-        out->counts[0] = total, out->counts[1] = out->counts[2] = 1;
+    if (d->shard_count)
+        out->shard = (pb_volume_shard){d->shard_index, d->shard_count, j->first, j->total};
+    if (d->points) {
+        out->counts[0] = j->total, out->counts[1] = out->counts[2] = 1;
     } else {
-        memcpy(out->counts, d.grid.counts, sizeof out->counts);
+        memcpy(out->counts, d->grid.counts, sizeof out->counts);
     }
     out->octmap_res = n;
     for (int k = 0; k < 3; ++k) {
-        out->origin[k] = scene->origin[k] + (d.points ? 0.0 : (double)d.grid.origin[k]);
-        out->spacing[k] = d.points ? 0.0 : d.grid.spacing[k];
+        out->origin[k] = j->scene->origin[k] + (d->points ? 0.0 : (double)d->grid.origin[k]);
+        out->spacing[k] = d->points ? 0.0 : d->grid.spacing[k];
     }
     uint32_t passes_max = 0;
-    const uint32_t *passes_done = conv.passes;
+    const uint32_t *passes_done = j->conv.passes;
     for (uint32_t p = 0; p < own; ++p) {
         passes_max = passes_done[p] > passes_max ? passes_done[p] : passes_max;
         out->rays_traced += (uint64_t)passes_done[p] * rpp;
     }
-    out->settings = (pb_volume_settings){d.seed,           0, rpp, passes_max, d.bounces, 0, d.target_error,
-                                        d.max_distance,   d.sh_window, d.sh_window_width, d.indirect_clamp};
-    out->settings.scene_hash = pb_scene_hash(scene);
-    out->settings.techniques = (d.probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u) |
-                               (B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u) |
-                               (B.light_host.table ? PB_TECHNIQUE_LIGHT_CELLS : 0u);
-    snprintf(out->device, sizeof out->device, "%.127s", ctx->info.name);
-    if ((r = pb_volume_alloc(out, err)) != PB_OK)
-        goto done;
+    out->settings = (pb_volume_settings){d->seed,         0, rpp, passes_max, d->bounces, 0, d->target_error,
+                                        d->max_distance, d->sh_window, d->sh_window_width, d->indirect_clamp};
+    out->settings.scene_hash = pb_scene_hash(j->scene);
+    out->settings.techniques = (d->probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u) |
+                               (j->B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u) |
+                               (j->B.light_host.table ? PB_TECHNIQUE_LIGHT_CELLS : 0u);
+    snprintf(out->device, sizeof out->device, "%.127s", j->ctx->info.name);
+    pb_result r = pb_volume_alloc(out, err);
+    if (r != PB_OK)
+        return r;
     for (uint32_t p = 0; p < own; ++p) {
         uint32_t id;
         float local[3];
-        pb_bake_probe_position(scene, &d, global[p], local, &id);
+        pb_bake_probe_position(j->scene, d, j->global[p], local, &id);
         for (int k = 0; k < 3; ++k) {
             /* relative to the volume origin (the grid's first probe, or the scene origin for points) */
-            out->base[3 * p + k] = d.points ? local[k] : (float)((double)local[k] - (double)d.grid.origin[k]);
-            out->offset[3 * p + k] = offsets[3 * p + k];
+            out->base[3 * p + k] = d->points ? local[k] : (float)((double)local[k] - (double)d->grid.origin[k]);
+            out->offset[3 * p + k] = j->offsets[3 * p + k];
         }
         float c[27];
         uint32_t done_p = passes_done[p] ? passes_done[p] : 1;
         for (int k = 0; k < 27; ++k)
-            c[k] = (float)(sh_sum[27 * (size_t)p + k] / done_p);
+            c[k] = (float)(j->sh_sum[27 * (size_t)p + k] / done_p);
         pb_sh_radiance_to_irradiance(c);
-        pb_sh_apply_window(c, (pb_sh_window_kind)d.sh_window, d.sh_window_width);
+        pb_sh_apply_window(c, (pb_sh_window_kind)d->sh_window, d->sh_window_width);
         memcpy(out->sh + 27 * (size_t)p, c, sizeof c);
         double rays_total = (double)rpp * done_p;
         uint32_t f = 0;
-        if (hits[p] == 0)
+        if (j->hits[p] == 0)
             f |= PB_PROBE_OUTSIDE;
-        if (backfaces[p] / rays_total <= d.invalid_backface_fraction)
+        if (j->backfaces[p] / rays_total <= d->invalid_backface_fraction)
             f |= PB_PROBE_VALID;
-        if (offsets[3 * p] != 0.f || offsets[3 * p + 1] != 0.f || offsets[3 * p + 2] != 0.f)
+        if (j->offsets[3 * p] != 0.f || j->offsets[3 * p + 1] != 0.f || j->offsets[3 * p + 2] != 0.f)
             f |= PB_PROBE_RELOCATED;
-        if (converged_at[p] && converged_at[p] < d.passes)
+        if (j->converged_at[p] && j->converged_at[p] < d->passes)
             f |= PB_PROBE_CONVERGED;
         out->probe_flags[p] = f;
         out->probe_paths[p] = (uint32_t)fmin((double)passes_done[p] * rpp, (double)UINT32_MAX);
-        float rse = pb_convergence_relative_error(&conv, p);
+        float rse = pb_convergence_relative_error(&j->conv, p);
         if (rse >= 0.f)
             out->probe_std_error[p] = rse;
         uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
@@ -693,31 +739,70 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
             for (uint32_t bx = 0; bx < n + 2; ++bx) {
                 uint32_t x, y;
                 pb_oct_border_source(bx, by, n, &x, &y);
-                const double *m = depth_sum + 2 * ((size_t)texels * p + (size_t)y * n + x);
+                const double *m = j->depth_sum + 2 * ((size_t)texels * p + (size_t)y * n + x);
                 tile[2 * (by * (n + 2) + bx)] = pb_half_from_float((float)(m[0] / done_p / unit));
                 tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / done_p / (unit * unit)));
             }
     }
+    return PB_OK;
+}
+
+static void bake_job_free(bake_job *j)
+{
+    release(j->ctx, &j->B);
+    free(j->probes), free(j->rotations), free(j->directions), free(j->sh_sum), free(j->depth_sum);
+    free(j->backfaces), free(j->hits), free(j->reduced), free(j->offsets), free(j->near);
+    free(j->active), free(j->converged_at), free(j->global), free(j->floor_list);
+    pb_convergence_free(&j->conv);
+}
+
+/* One bake as its stages over one context: probe set, place, device
+ * resources, relocate, trace passes, SH / depth / validity, then dilation
+ * (dilate_gpu.c; a grid's, not a part's: merge dilates parts). */
+static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc_in,
+                           const pb_sample_volume *feedback, pb_volume *out, pb_error *err)
+{
+    pb_error_clear(err);
+    memset(out, 0, sizeof *out);
+    double t_start = pb_now_ms();
+    bake_job j;
+    memset(&j, 0, sizeof j);
+    j.ctx = ctx, j.scene = scene, j.gs = gs, j.d = *desc_in;
+    pb_result r = check_desc(scene, &j.d, err);
+    if (r == PB_OK)
+        r = stage_probe_set(&j, err);
+    if (r != PB_OK)
+        return r;
+    if (!scene_emits_light(scene, &j.d))
+        pb_logf(&ctx->desc.log, PB_LOG_WARN,
+                "%s: no lights, no emissive surfaces and a black sky: the volume will be black (give --sky or --env)",
+                scene->path[0] ? scene->path : "scene");
+    r = stage_place(&j, err);
+    if (r == PB_OK)
+        r = stage_resources(&j, feedback, err);
+    if (r == PB_OK)
+        r = stage_relocate(&j, err);
+    if (r == PB_OK)
+        r = stage_trace_passes(&j, err);
+    if (r == PB_OK)
+        r = stage_volume(&j, out, err);
     /* points have no grid neighbourhood (invalid ones stay flagged); a
      * part's neighbours are in other parts (pb_volume_merge dilates) */
-    if (!d.points && !d.shard_count && (r = pb_volume_dilate_gpu(ctx, out, PB_DILATION_ROUNDS, err)) != PB_OK)
-        goto done;
-    out->traversals = run.traversals;
-    if (run.long_paths)
-        pb_logf(&ctx->desc.log, PB_LOG_WARN,
-                   "%llu paths ran over 32768 traversal steps in one invocation; llvmpipe (lavapipe) silently cuts "
-                   "loops past 65535, so on lavapipe such paths may be cut short (fewer lights or bounces help)",
-                   (unsigned long long)run.long_paths);
-    out->timings.trace = run.t_trace;
-    out->timings.sh = run.t_sh;
-    out->timings.octmap = run.t_depth;
-    out->timings.total = pb_now_ms() - t_start;
-done:
-    release(ctx, &B);
-    free(probes), free(rotations), free(directions), free(sh_sum), free(depth_sum);
-    free(backfaces), free(hits), free(reduced), free(offsets), free(near);
-    free(active), free(converged_at), free(global), free(floor_list);
-    pb_convergence_free(&conv);
+    if (r == PB_OK && !j.d.points && !j.d.shard_count)
+        r = pb_volume_dilate_gpu(ctx, out, PB_DILATION_ROUNDS, err);
+    if (r == PB_OK) {
+        out->traversals = j.run.traversals;
+        if (j.run.long_paths)
+            pb_logf(&ctx->desc.log, PB_LOG_WARN,
+                    "%llu paths ran over 32768 traversal steps in one invocation; llvmpipe (lavapipe) silently cuts "
+                    "loops past 65535, so on lavapipe such paths may be cut short (fewer lights or bounces help)",
+                    (unsigned long long)j.run.long_paths);
+        out->timings.trace = j.run.t_trace;
+        out->timings.sh = j.run.t_sh;
+        out->timings.octmap = j.run.t_depth;
+        out->timings.total = pb_now_ms() - t_start;
+    }
+    bake_job_free(&j);
     if (r != PB_OK)
         pb_volume_free(out);
     return r;
