@@ -14,10 +14,12 @@
 
 namespace pb_gltf {
 
-// Largest decoded size the loader accepts per compressed byte. The densest
-// encodings either codec reaches are well below it (bench: an all-zero
-// vertex stream decodes 39x, a triangle list about 24x); a file claiming more
-// is corrupt, and is refused before the claim is allocated.
+// Largest decoded size the loader accepts per compressed byte of an
+// EXT_meshopt_compression view. meshoptimizer 0.18's densest streams stay
+// well below it (measured, 2^20 elements encoded by the library: an
+// all-zero 16-byte vertex stream 64x, a 32-bit triangle list 6x, an index
+// sequence 4x); a view claiming more is corrupt, and is refused before the
+// claim is allocated. (Draco streams size themselves inside libdraco.)
 constexpr size_t max_expansion = 256;
 
 // EXT_meshopt_compression bufferView: `count` elements of `stride` bytes
