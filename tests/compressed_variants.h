@@ -90,6 +90,37 @@ static inline int variant_source(int i, const char **path, const char **tag)
     return 1;
 }
 
+/* Source i loaded (NULL after a SKIP or a CHECK failure saying why). */
+static inline pb_scene *variant_original(int i, const char **path, const char **tag)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    if (!variant_source(i, path, tag))
+        return NULL;
+    CHECKF(pb_scene_load(*path, NULL, &s, &err) == PB_OK, "%s", err.message);
+    return s;
+}
+
+/* Variant v of source `src` written and loaded (NULL after a CHECK
+ * failure); *path gets its file. */
+static inline pb_scene *variant_scene(const char *src, const char *tag, const pb_variant *v, const char **path)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    *path = compressed_variant(src, tag, v);
+    if (*path)
+        CHECKF(pb_scene_load(*path, NULL, &s, &err) == PB_OK, "%s", err.message);
+    return s;
+}
+
+/* A grid placed in the original o's frame, moved into the variant c's
+ * (whose origin, the centre of its bounds, moved with the quantization). */
+static inline void variant_grid_frame(const pb_scene *o, const pb_scene *c, pb_probe_grid *g)
+{
+    for (int k = 0; k < 3; ++k)
+        g->origin[k] += (float)(o->origin[k] - c->origin[k]);
+}
+
 /* Compares per-probe irradiance E and absolute standard error s of a
  * variant's bake (b) with its original's (a) by the bound above; prints a
  * line and CHECKs. Probes with no light or no error estimate are left out.

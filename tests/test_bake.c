@@ -2145,15 +2145,10 @@ static void bad_parameters_refused_before_gpu_work(void)
 static void compressed_scenes_bake_like_originals(void)
 {
     for (int si = 0; si < PB_VARIANT_SOURCES; ++si) {
-        const char *src, *tag;
-        if (!variant_source(si, &src, &tag))
+        const char *src, *tag, *path;
+        pb_scene *o = variant_original(si, &src, &tag);
+        if (!o)
             continue;
-        pb_scene *o = NULL;
-        pb_error err;
-        if (pb_scene_load(src, NULL, &o, &err) != PB_OK) {
-            CHECKF(0, "%s", err.message);
-            continue;
-        }
         pb_bake_desc d = {0};
         /* one grid for all: the variants' bounds move by the quantization */
         pb_probe_grid_fit(o->bounds_min, o->bounds_max, 64, &d.grid);
@@ -2165,15 +2160,11 @@ static void compressed_scenes_bake_like_originals(void)
             const pb_variant *v = &pb_variants[vi];
             if (!strcmp(v->ext, "gltf") && !v->lossless)
                 continue; /* the .glb of the same encoding stands for it */
-            const char *path = compressed_variant(src, tag, v);
-            pb_scene *c = NULL;
-            if (!path || pb_scene_load(path, NULL, &c, &err) != PB_OK) {
-                CHECKF(0, "%s", path ? err.message : "no variant");
+            pb_scene *c = variant_scene(src, tag, v, &path);
+            if (!c)
                 continue;
-            }
-            pb_bake_desc dc = d; /* the grid in the variant's frame (its origin moved with its bounds) */
-            for (int k = 0; k < 3; ++k)
-                dc.grid.origin[k] += (float)(o->origin[k] - c->origin[k]);
+            pb_bake_desc dc = d;
+            variant_grid_frame(o, c, &dc.grid);
             baked b = bake(c, &dc);
             if (b.ok && b.vol.probe_count == ref.vol.probe_count) {
                 /* bit-identical where the scene is; meshopt's index codec

@@ -9,6 +9,7 @@
 #include "compressed_variants.h"
 #include "test_util.h"
 
+#include "bake/convergence.h"
 #include "common/common.h"
 
 /* The irradiance luminance (DC) of each probe of d's grid, per pass:
@@ -52,29 +53,14 @@ static int cpu_bake(const pb_scene *s, const pb_bake_desc *d, uint32_t passes, d
     return 1;
 }
 
-/* Mean and standard error of the mean of n values. */
-static void mean_se(const double *x, uint32_t n, double *mean, double *se)
-{
-    double s = 0, q = 0;
-    for (uint32_t i = 0; i < n; ++i)
-        s += x[i], q += x[i] * x[i];
-    *mean = s / n;
-    *se = n > 1 ? sqrt(fmax(0.0, (q - n * *mean * *mean) / (n - 1)) / n) : 0.0;
-}
-
 static void compressed_scenes_bake_on_the_host_like_originals(void)
 {
     const uint32_t passes = VARIANT_PASSES, P = 27;
     for (int si = 0; si < PB_VARIANT_SOURCES; ++si) {
-        const char *src, *tag;
-        if (!variant_source(si, &src, &tag))
+        const char *src, *tag, *path;
+        pb_scene *o = variant_original(si, &src, &tag);
+        if (!o)
             continue;
-        pb_scene *o = NULL;
-        pb_error err;
-        if (pb_scene_load(src, NULL, &o, &err) != PB_OK) {
-            CHECKF(0, "%s", err.message);
-            continue;
-        }
         /* 3 x 3 x 3 probes in the middle of the bounds, at fractions that are
          * no round coordinate of these scenes: a probe lying on a surface
          * (the demo's boxes end at round numbers) is inside or outside by
@@ -94,20 +80,21 @@ static void compressed_scenes_bake_on_the_host_like_originals(void)
             const pb_variant *v = &pb_variants[vi];
             if (strcmp(v->ext, "glb") != 0)
                 continue; /* the .gltf forms decode the same streams (test_scene) */
-            const char *path = compressed_variant(src, tag, v);
-            pb_scene *c = NULL;
-            if (!path || pb_scene_load(path, NULL, &c, &err) != PB_OK) {
-                CHECKF(0, "%s", path ? err.message : "no variant");
+            pb_scene *c = variant_scene(src, tag, v, &path);
+            if (!c)
                 continue;
-            }
             pb_bake_desc dc = d;
-            for (int k = 0; k < 3; ++k)
-                dc.grid.origin[k] += (float)(o->origin[k] - c->origin[k]);
+            variant_grid_frame(o, c, &dc.grid);
             if (cpu_bake(c, &dc, passes, Ec)) {
                 double ea[27], sa[27], eb[27], sb[27];
                 for (uint32_t p = 0; p < P; ++p) {
-                    mean_se(Eo + p * passes, passes, &ea[p], &sa[p]);
-                    mean_se(Ec + p * passes, passes, &eb[p], &sb[p]);
+                    double so = 0, qo = 0, sc = 0, qc = 0;
+                    for (uint32_t k = 0; k < passes; ++k) {
+                        so += Eo[p * passes + k], qo += Eo[p * passes + k] * Eo[p * passes + k];
+                        sc += Ec[p * passes + k], qc += Ec[p * passes + k] * Ec[p * passes + k];
+                    }
+                    sa[p] = pb_pass_std_error(passes, so, qo, &ea[p]);
+                    sb[p] = pb_pass_std_error(passes, sc, qc, &eb[p]);
                 }
                 char label[64];
                 snprintf(label, sizeof label, "%-7s %-11s", tag, v->mode);

@@ -784,9 +784,7 @@ static void compressed_variants_match_originals(void)
 {
     for (int si = 0; si < PB_VARIANT_SOURCES; ++si) {
         const char *src, *tag;
-        if (!variant_source(si, &src, &tag))
-            continue;
-        pb_scene *o = load_ok(src);
+        pb_scene *o = variant_original(si, &src, &tag);
         if (!o)
             continue;
         double diag = 0, rmax = 0, uvmax = 0;
@@ -801,8 +799,8 @@ static void compressed_variants_match_originals(void)
                 rmax = fmax(rmax, sqrt(pow(ra[t].v[k][0], 2) + pow(ra[t].v[k][1], 2) + pow(ra[t].v[k][2], 2)));
         for (size_t vi = 0; vi < PB_VARIANT_COUNT; ++vi) {
             const pb_variant *v = &pb_variants[vi];
-            const char *path = compressed_variant(src, tag, v);
-            pb_scene *c = path ? load_ok(path) : NULL;
+            const char *path;
+            pb_scene *c = variant_scene(src, tag, v, &path);
             if (!c)
                 continue;
             if (v->lossless) { /* the same triangles in the same order, bit for bit; meshopt's
