@@ -146,9 +146,26 @@ float pb_chebyshev(vec2 m, float r)
     return c * c * c;
 }
 
+#ifdef PB_SPARSE
+int pb_brick_probe(int brick, int local);
+#endif
+
+// Probe at cage corner ijk: in a grid its index, in a brick (brick >= 0)
+// the probe the brick names there.
+int pb_cage_probe(PbVolumeGrid g, int brick, ivec3 ijk)
+{
+    int local = ijk.x + g.counts.x * (ijk.y + g.counts.y * ijk.z);
+#ifdef PB_SPARSE
+    if (brick >= 0)
+        return pb_brick_probe(brick, local);
+#endif
+    return local;
+}
+
 // Irradiance at point p with unit normal n, seen from unit direction v
-// (from p towards the viewer; pass n where there is no viewer).
-vec3 pb_sample_irradiance(PbVolumeGrid g, vec3 p, vec3 n, vec3 v)
+// (from p towards the viewer; pass n where there is no viewer), from the
+// cage of grid g (brick < 0) or of brick number brick, a 4 x 4 x 4 grid g.
+vec3 pb_sample_cage(PbVolumeGrid g, int brick, vec3 p, vec3 n, vec3 v)
 {
     float smin = 1e30;
     for (int k = 0; k < 3; ++k)
@@ -167,7 +184,7 @@ vec3 pb_sample_irradiance(PbVolumeGrid g, vec3 p, vec3 n, vec3 v)
     for (int i = 0; i < 8; ++i) {
         ivec3 off = ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
         ivec3 ijk = min(base + off, g.counts - 1);
-        int probe = ijk.x + g.counts.x * (ijk.y + g.counts.y * ijk.z);
+        int probe = pb_cage_probe(g, brick, ijk);
         vec3 tri3 = mix(1.0 - alpha, alpha, vec3(off));
         float wt = tri3.x * tri3.y * tri3.z;
         vec3 e = pb_sh_irradiance(probe, n);
@@ -198,6 +215,65 @@ vec3 pb_sample_irradiance(PbVolumeGrid g, vec3 p, vec3 n, vec3 v)
     vec3 e = wsum > 0.0 ? sum / wsum : (wsum_tri > 0.0 ? sum_tri / wsum_tri : vec3(0.0));
     return max(e, vec3(0.0)); // SH ringing can go negative; light cannot
 }
+
+// Irradiance from a grid volume (pb_sample_cage over the whole grid).
+vec3 pb_sample_irradiance(PbVolumeGrid g, vec3 p, vec3 n, vec3 v)
+{
+    return pb_sample_cage(g, -1, p, n, v);
+}
+
+#ifdef PB_SPARSE
+// Sparse volumes (docs/sparse.md): the includer defines
+//   uint pb_sparse_word(int i)   word i of the layout tables: four offsets
+//                                (indirection, chunks, bricks, brick probes),
+//                                then the tables (src/sample/probe_sample.c)
+#define PB_SPARSE_EMPTY 0x0fffffffu
+
+int pb_brick_probe(int brick, int local)
+{
+    return int(pb_sparse_word(int(pb_sparse_word(3)) + 64 * brick + local));
+}
+
+// The finest brick whose cell covers u (in coarsest-cell units from the
+// lattice origin, clamped into the cells), or -1.
+int pb_sparse_brick_at(vec3 u, ivec3 cells)
+{
+    vec3 c = clamp(floor(u), vec3(0.0), vec3(cells) - 1.0);
+    vec3 f = clamp(u - c, vec3(0.0), vec3(1.0));
+    ivec3 ci = ivec3(c);
+    uint e = pb_sparse_word(int(pb_sparse_word(0)) + ci.x + cells.x * (ci.y + cells.y * ci.z));
+    uint d = e >> 28u;
+    uint b = e & PB_SPARSE_EMPTY;
+    if (d != 0u) {
+        int m = d == 1u ? 3 : 9;
+        ivec3 s = clamp(ivec3(floor(f * float(m))), ivec3(0), ivec3(m - 1));
+        b = pb_sparse_word(int(pb_sparse_word(1)) + int(b) + s.x + m * (s.y + m * s.z));
+    }
+    return b == PB_SPARSE_EMPTY ? -1 : int(b);
+}
+
+// Irradiance from a sparse volume: g.origin is the lattice origin, g.spacing
+// the finest level's, g.counts the cells; levels is 1 to 3. The brick
+// serving p (finest available) is sampled as a 4 x 4 x 4 grid; no brick
+// (solid or outside): black.
+vec3 pb_sample_sparse(PbVolumeGrid g, int levels, vec3 p, vec3 n, vec3 v)
+{
+    int span = levels == 1 ? 3 : (levels == 2 ? 9 : 27); // finest cells per coarsest brick
+    vec3 cell = g.spacing * float(span);
+    int b = pb_sparse_brick_at((p - g.origin) / cell, g.counts);
+    if (b < 0)
+        return vec3(0.0);
+    int at = int(pb_sparse_word(2)) + 4 * b;
+    int level = int(pb_sparse_word(at + 3));
+    int step = levels - 1 - level == 0 ? 1 : (levels - 1 - level == 1 ? 3 : 9);
+    ivec3 coord = ivec3(int(pb_sparse_word(at)), int(pb_sparse_word(at + 1)), int(pb_sparse_word(at + 2)));
+    PbVolumeGrid bg = g;
+    bg.origin = g.origin + vec3(3 * step * coord) * g.spacing;
+    bg.spacing = g.spacing * float(step);
+    bg.counts = ivec3(4);
+    return pb_sample_cage(bg, b, p, n, v);
+}
+#endif
 
 #endif
 

@@ -23,8 +23,47 @@ static int bake(const pb_scene *s, const pb_bake_desc *d, pb_volume *v)
     return ok;
 }
 
-/* Random queries over the demo scene's volume: points in the bounds (and a
- * margin outside, where the cage clamps), random normals and views. */
+/* Random queries over the scene's bounds (and a margin outside, where the
+ * cage clamps), random normals and views: the kernel against
+ * pb_sample_cpu. Returns the queries beyond 1e-4 relative. */
+static uint32_t gpu_against_cpu(const pb_scene *s, const pb_sample_volume *sv, uint32_t n, double *scale_out)
+{
+    pb_error err;
+    float *p = malloc(n * 16), *nn = malloc(n * 16), *vw = malloc(n * 16), *g = malloc(n * 16);
+    test_rng r = {3};
+    for (uint32_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            float lo = s->bounds_min[k] - 0.3f, hi = s->bounds_max[k] + 0.3f;
+            p[4 * i + k] = lo + (hi - lo) * (float)rng_uniform(&r);
+        }
+        rng_direction(&r, nn + 4 * i);
+        rng_direction(&r, vw + 4 * i);
+        p[4 * i + 3] = nn[4 * i + 3] = vw[4 * i + 3] = 0.f;
+    }
+    uint32_t bad = n;
+    double worst = 0, scale = 0;
+    if (pb_sample_gpu(ctx, sv, p, nn, vw, n, g, &err) != PB_OK) {
+        fprintf(stderr, "  pb_sample_gpu: %s\n", err.message);
+    } else {
+        bad = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            float c[3];
+            pb_sample_cpu(sv, p + 4 * i, nn + 4 * i, vw + 4 * i, c);
+            for (int k = 0; k < 3; ++k) {
+                double diff = fabs(c[k] - g[4 * i + k]);
+                worst = fmax(worst, diff);
+                scale = fmax(scale, fabs(c[k]));
+                bad += diff > 1e-4 * fmax(1.0, fabs(c[k])) || !isfinite(g[4 * i + k]);
+            }
+        }
+        fprintf(stderr, "  %u queries: largest |GPU - CPU| %.2e (values up to %.2f), %u beyond 1e-4 relative\n", n,
+                worst, scale, bad);
+    }
+    *scale_out = scale;
+    free(p), free(nn), free(vw), free(g);
+    return bad;
+}
+
 static void shader_matches_c_reference(void)
 {
     pb_scene *s = load_demo();
@@ -41,38 +80,52 @@ static void shader_matches_c_reference(void)
     if (bake(s, &d, &v)) {
         pb_sample_volume sv;
         CHECK(pb_sample_volume_build(&v, s->origin, 0.f, 0.f, &sv, &err) == PB_OK);
-        uint32_t n = 20000;
-        float *p = malloc(n * 16), *nn = malloc(n * 16), *vw = malloc(n * 16), *g = malloc(n * 16);
-        test_rng r = {3};
-        for (uint32_t i = 0; i < n; ++i) {
-            for (int k = 0; k < 3; ++k) {
-                float lo = s->bounds_min[k] - 0.3f, hi = s->bounds_max[k] + 0.3f;
-                p[4 * i + k] = lo + (hi - lo) * (float)rng_uniform(&r);
-            }
-            rng_direction(&r, nn + 4 * i);
-            rng_direction(&r, vw + 4 * i);
-            p[4 * i + 3] = nn[4 * i + 3] = vw[4 * i + 3] = 0.f;
-        }
-        CHECKF(pb_sample_gpu(ctx, &sv, p, nn, vw, n, g, &err) == PB_OK, "%s", err.message);
-        double worst = 0, scale = 0;
-        uint32_t bad = 0;
-        for (uint32_t i = 0; i < n; ++i) {
-            float c[3];
-            pb_sample_cpu(&sv, p + 4 * i, nn + 4 * i, vw + 4 * i, c);
-            for (int k = 0; k < 3; ++k) {
-                double diff = fabs(c[k] - g[4 * i + k]);
-                worst = fmax(worst, diff);
-                scale = fmax(scale, fabs(c[k]));
-                bad += diff > 1e-4 * fmax(1.0, fabs(c[k])) || !isfinite(g[4 * i + k]);
-            }
-        }
-        fprintf(stderr, "  %u queries: largest |GPU - CPU| %.2e (values up to %.2f), %u beyond 1e-4 relative\n", n,
-                worst, scale, bad);
-        CHECK(scale > 0 && bad == 0);
-        free(p), free(nn), free(vw), free(g);
+        double scale;
+        CHECK(gpu_against_cpu(s, &sv, 20000, &scale) == 0 && scale > 0);
         pb_sample_volume_free(&sv);
         pb_volume_free(&v);
     }
+    pb_scene_destroy(s);
+}
+
+/* The sparse lookup (indirection, chunks, bricks) in the kernel against
+ * pb_sample_cpu, on a sparse bake of the demo scene refined to all three
+ * levels, so every path of the lookup runs: a cell of depth 0, and chunks
+ * of depth 1 and 2 naming bricks of each level. */
+static void sparse_shader_matches_c_reference(void)
+{
+    pb_scene *s = load_demo();
+    pb_error err;
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 4000, &d.grid);
+    d.rays_per_probe = 32;
+    d.passes = 1;
+    d.bounces = 1;
+    d.octmap_res = 4;
+    pb_sparse_desc sd = {3, 0.05f};
+    pb_sparse_stats st;
+    pb_volume v;
+    pb_bvh *bvh = NULL;
+    pb_gpu_scene *gs = NULL;
+    int ok = pb_bvh_build(s, NULL, &bvh, &err) == PB_OK && pb_gpu_scene_create(ctx, s, bvh, &gs, &err) == PB_OK &&
+             pb_bake_sparse(ctx, s, gs, &d, &sd, &v, &st, &err) == PB_OK;
+    CHECKF(ok, "%s", err.message);
+    if (ok) {
+        fprintf(stderr, "  bricks per level %u %u %u, %u probes\n", st.bricks[0], st.bricks[1], st.bricks[2],
+                v.probe_count);
+        CHECK(st.bricks[0] > 0 && st.bricks[1] > 0 && st.bricks[2] > 0);
+        pb_sample_volume sv;
+        CHECK(pb_sample_volume_build(&v, s->origin, 0.f, 0.f, &sv, &err) == PB_OK);
+        CHECK(sv.levels == 3);
+        double scale;
+        CHECK(gpu_against_cpu(s, &sv, 20000, &scale) == 0 && scale > 0);
+        pb_sample_volume_free(&sv);
+        pb_volume_free(&v);
+    }
+    pb_gpu_scene_destroy(gs);
+    pb_bvh_destroy(bvh);
     pb_scene_destroy(s);
 }
 
@@ -334,6 +387,7 @@ int main(void)
     if (!(ctx = test_gpu_context()))
         return 1;
     RUN(shader_matches_c_reference);
+    RUN(sparse_shader_matches_c_reference);
     RUN(constant_sky_constant_irradiance);
     RUN(thin_wall_visibility);
     RUN(thin_wall_between_rooms);

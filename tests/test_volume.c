@@ -124,7 +124,7 @@ static void file_round_trip(void)
     CHECK(memcmp(w.probe_flags, v.probe_flags, 24 * 4) == 0 && memcmp(w.sh, v.sh, 24 * 27 * 4) == 0);
     CHECK(memcmp(w.depth, v.depth, 24 * pb_volume_tile_halves(16) * 2) == 0);
     CHECK(memcmp(w.probe_paths, v.probe_paths, 24 * 4) == 0 && memcmp(w.probe_std_error, v.probe_std_error, 24 * 4) == 0);
-    CHECK(w.file_version == PB_VOLUME_VERSION && PB_VOLUME_VERSION == 3);
+    CHECK(w.file_version == PB_VOLUME_VERSION && PB_VOLUME_VERSION == 4);
     double p[3];
     pb_volume_probe_position(&w, 1, p);
     CHECK(fabs(p[0] - (1e7 + 0.25 + 0.5 + w.offset[3])) < 1e-9);

@@ -175,6 +175,40 @@ void pb_bake_probe_position(const pb_scene *scene, const pb_bake_desc *desc, uin
 pb_result pb_bake_check_light(const pb_scene *scene, const float sky[3], const pb_environment *environment,
                               pb_error *err);
 
+/* --- The sparse layout (src/bake/sparse_bake.c, docs/sparse.md) --- */
+
+/* Zero fields mean the defaults listed on each line. */
+typedef struct pb_sparse_desc {
+    uint32_t levels;              /* default 3 (bake --max-level 2): spacings F, 3F, 9F */
+    float refine_error;           /* default 0.1: a cell of a brick is subdivided where the coarser level's
+                                     prediction of a probe baked inside it misses by more than this
+                                     fraction of the predicted irradiance (and by 3 of its standard errors) */
+} pb_sparse_desc;
+
+/* What the refinement did, per level. */
+typedef struct pb_sparse_stats {
+    uint32_t bricks[3];           /* bricks kept at each level */
+    uint32_t probes[3];           /* probes first baked for each level (shared probes counted once) */
+    uint32_t dropped[3];          /* bricks dropped: every probe inside solid geometry */
+    uint32_t tested[3];           /* cells of each level tested for subdivision (a probe baked inside) */
+    uint32_t skipped[3];          /* cells not tested: no surface within two cells of its corners */
+    uint32_t refined[3];          /* cells subdivided into a brick of the next level */
+    uint32_t bakes;               /* pb_bake calls */
+} pb_sparse_stats;
+
+/* A sparse bake: desc->grid's origin is the lattice origin, its spacing the
+ * finest level's and its counts the extent; desc->points, shards and
+ * --indirect volume are refused. Coarsest bricks cover the extent; each
+ * level's cells near surfaces get a probe baked inside, and where the
+ * coarser level mispredicts it (sd->refine_error) the cell becomes a brick
+ * of the next level. Bricks whose probes are all inside geometry are
+ * dropped. Probes on the faces of a finer brick next to a coarser one take
+ * the coarser brick's interpolated SH, so the interpolant does not jump
+ * there. Invalid probes are not dilated (the sampler gives them no weight).
+ * stats may be NULL. */
+pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
+                         const pb_sparse_desc *sd, pb_volume *out, pb_sparse_stats *stats, pb_error *err);
+
 /* Bakes into *out (arrays allocated; pb_volume_free releases them).
  * Returns PB_ERROR_INVALID_ARGUMENT before any GPU work for bad descs,
  * PB_ERROR_TOO_LARGE when the grid does not fit the device, and

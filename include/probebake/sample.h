@@ -32,21 +32,26 @@ typedef struct pb_sample_volume {
     float normal_bias, view_bias;
     float depth_unit;           /* metres per stored depth unit (the volume's) */
     uint32_t probe_count;
+    uint32_t levels;            /* 0: a grid; 1-3: sparse (origin: lattice origin, spacing: the finest level's,
+                                   counts: coarsest cells per axis) */
+    uint32_t *sparse_words;     /* sparse: the layout tables as the shaders read them (pb_sparse_word) */
+    uint32_t sparse_word_count;
     float *probes;              /* 4 per probe: relocated position in the frame, w = PB_PROBE_* flags (uint bits) */
     float *sh;                  /* 27 per probe: irradiance SH, coefficient major, RGB */
     uint32_t *depth;            /* (n+2)^2 per probe: halves (mean, mean squared) in depth units, as in the file */
 } pb_sample_volume;
 
-/* Lays out volume v for sampling in the frame whose origin is frame_origin
- * (original coordinates). Biases <= 0 take the defaults. Returns
- * PB_ERROR_INVALID_ARGUMENT for a point-set volume (no grid to interpolate
- * in) and PB_ERROR_OUT_OF_HOST_MEMORY. */
+/* Lays out volume v (a grid or sparse) for sampling in the frame whose
+ * origin is frame_origin (original coordinates). Biases <= 0 take the
+ * defaults. Returns PB_ERROR_INVALID_ARGUMENT for a point-set volume (no
+ * grid to interpolate in) and PB_ERROR_OUT_OF_HOST_MEMORY. */
 pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3], float normal_bias,
                                  float view_bias, pb_sample_volume *out, pb_error *err);
 void pb_sample_volume_free(pb_sample_volume *s);
 
 /* Irradiance at p (frame coordinates) with unit normal n, seen from unit
- * direction view (from p towards the viewer). */
+ * direction view (from p towards the viewer). Sparse volumes: from the
+ * finest brick whose cell covers p; black where there is none. */
 void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3]);
 
 /* The Chebyshev visibility weight pb_sample_cpu gives probe `probe` for the

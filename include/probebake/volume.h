@@ -17,20 +17,24 @@
 
 #include "probebake/base.h"
 #include "probebake/files.h"
+#include "probebake/sparse.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 /* Version 2: depth texels in units of depth_unit (version 1 stored metres,
- * whose squares overflow float16 past 256 m; the reader converts). */
-#define PB_VOLUME_VERSION 3
+ * whose squares overflow float16 past 256 m; the reader converts).
+ * Version 3: per-probe accounting. Version 4: the sparse layout section. */
+#define PB_VOLUME_VERSION 4
 
 enum {
     PB_VOLUME_IRRADIANCE = 1u << 0,     /* SH holds irradiance (else radiance) */
     PB_VOLUME_DIRECT = 1u << 1,         /* direct light included */
     PB_VOLUME_GRID = 1u << 2,           /* probes form counts[0] x counts[1] x counts[2], x fastest */
-    PB_VOLUME_SHARD = 1u << 3           /* a part of a bake (pb_volume_shard), for probebake merge */
+    PB_VOLUME_SHARD = 1u << 3,          /* a part of a bake (pb_volume_shard), for probebake merge */
+    PB_VOLUME_SPARSE = 1u << 4          /* probes in bricks (pb_volume.sparse, sparse.h); origin is the lattice
+                                           origin, spacing the finest level's, counts (P, 1, 1) */
 };
 
 /* The part of a bake a shard file holds (bake --shard I/N): probes
@@ -100,6 +104,7 @@ typedef struct pb_volume {
     uint16_t *depth;                    /* (n+2)^2 texels x 2 halves per probe, tile after tile, in depth_unit */
     uint32_t *probe_paths;              /* paths (probe rays) traced for each probe over all its passes */
     float *probe_std_error;             /* relative standard error of its irradiance, or PB_STD_ERROR_UNKNOWN */
+    pb_sparse_layout *sparse;           /* with PB_VOLUME_SPARSE: the bricks (owned; pb_volume_free frees it) */
 } pb_volume;
 
 /* probe_std_error where it cannot be estimated: one pass, a version 1-2

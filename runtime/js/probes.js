@@ -6,12 +6,12 @@
 //   import { parseProbes } from './probes.js';
 //   const volume = parseProbes(await (await fetch('scene.probes')).arrayBuffer());
 
-export const PROBES_VERSION = 3;
+export const PROBES_VERSION = 4;
 
 const HEADER_BYTES = 512;
 const MAX_PROBES = 1 << 28;
 const DEPTH_FORMAT_F16_METRES = 1; // version 1
-const DEPTH_FORMAT_F16_UNITS = 2;  // versions 2 and 3
+const DEPTH_FORMAT_F16_UNITS = 2;  // versions 2 to 4
 const SH_FORMAT_F32 = 1;
 const STD_ERROR_UNKNOWN = -1;
 
@@ -116,6 +116,8 @@ export function parseProbes(buffer, name = 'volume') {
         fail('unknown SH or depth format');
     if (version >= 2 && !(f32(180) > 0 && Number.isFinite(f32(180)))) fail('depth unit not a positive finite number');
     if ((flags & 4) && counts[0] * counts[1] * counts[2] !== P) fail('grid counts do not match the probe count');
+    // version 4's sparse layout (flag bit 4) is not read here yet: say so rather than misread it
+    if (flags & 16) fail('sparse volume (bricks): this reader reads grid and point volumes only');
     const l = layoutOf(P, n, version);
     const at = [l.base, l.offset, l.flags, l.sh, l.depth];
     for (let k = 0; k < 5; ++k)

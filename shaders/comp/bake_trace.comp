@@ -32,7 +32,7 @@ void main()
     PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, state);
     if (!addr_null(P.volume.probes) && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
         pb_volume = P.volume;
-        pr.L += pr.albedo / PB_PI * pb_sample_irradiance(pb_volume_grid(pb_volume), pr.x, pr.ng, -d);
+        pr.L += pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.ng, -d);
     }
     if (!addr_null(P.nee)) { // probe NEE: one light sample from the probe per ray
         vec4 nr[2] = vec4[2](vec4(0.0), vec4(0.0, 1.0, 0.0, 0.0));

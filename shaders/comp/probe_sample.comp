@@ -13,9 +13,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer Q
 
 layout(push_constant) uniform Push {
     PbVolumeRefs volume;
-    pb_addr points;
-    pb_addr normals;
-    pb_addr views;
+    pb_addr queries;   // 3 vec4 per query: point, normal, view
     pb_addr out_rgb;
     uint count;
 } pc;
@@ -26,8 +24,8 @@ void main()
     if (i >= pc.count)
         return;
     pb_volume = pc.volume;
-    vec3 p = PbVec4Buf(pc.points).v[i].xyz;
-    vec3 n = PbVec4Buf(pc.normals).v[i].xyz;
-    vec3 v = PbVec4Buf(pc.views).v[i].xyz;
-    QueryOut(pc.out_rgb).v[i] = vec4(pb_sample_irradiance(pb_volume_grid(pb_volume), p, n, v), 0.0);
+    vec3 p = PbVec4Buf(pc.queries).v[3 * i].xyz;
+    vec3 n = PbVec4Buf(pc.queries).v[3 * i + 1].xyz;
+    vec3 v = PbVec4Buf(pc.queries).v[3 * i + 2].xyz;
+    QueryOut(pc.out_rgb).v[i] = vec4(pb_volume_irradiance(pb_volume, p, n, v), 0.0);
 }

@@ -1,6 +1,6 @@
 // Run-time sampling, Vulkan GLSL: probe data in buffers reached by device
 // address. Set pb_volume (a private global) before calling
-// pb_sample_irradiance; the sampling itself is probe_sample_core.glsl.
+// pb_volume_irradiance; the sampling itself is probe_sample_core.glsl.
 // Layout (src/bake/probe_sample.c, pb_sample_volume): per probe a vec4
 // (position, flags as uint bits), 27 floats of irradiance SH (coefficient
 // major, RGB), and (n+2)^2 uints per depth tile, each two halves
@@ -19,10 +19,12 @@ struct PbVolumeRefs {
     pb_addr sh;        // 27 floats per probe
     pb_addr depth;     // (n+2)^2 uints per probe
     float depth_unit;   // metres per depth unit of the tiles
-    float pad;
-    vec4 origin_nbias;  // grid origin, normal bias
-    vec4 spacing_vbias; // grid spacing, view bias
-    ivec4 counts_res;   // probes per axis, octmap_res
+    uint levels;        // 0: a grid; 1-3: a sparse volume of that many levels
+    vec4 origin_nbias;  // grid (or lattice) origin, normal bias
+    vec4 spacing_vbias; // grid spacing (sparse: the finest level's), view bias
+    ivec4 counts_res;   // probes per axis (sparse: coarsest cells per axis), octmap_res
+    pb_addr sparse;    // sparse: the layout tables (uint words, pb_sparse_word)
+    uint pad0, pad1;
 };
 
 PbVolumeRefs pb_volume;
@@ -50,12 +52,25 @@ vec2 pb_probe_depth(int probe, ivec2 texel)
     return unpackHalf2x16(PbUintBuf(pb_volume.depth).v[side * side * probe + side * texel.y + texel.x]);
 }
 
+uint pb_sparse_word(int i)
+{
+    return PbUintBuf(pb_volume.sparse).v[i];
+}
+
+#define PB_SPARSE
 #include "probe_sample_core.glsl"
 
 PbVolumeGrid pb_volume_grid(PbVolumeRefs r)
 {
     return PbVolumeGrid(r.origin_nbias.xyz, r.spacing_vbias.xyz, r.counts_res.xyz, r.counts_res.w, r.origin_nbias.w,
                         r.spacing_vbias.w, r.depth_unit);
+}
+
+// Irradiance at p from the volume r, grid or sparse.
+vec3 pb_volume_irradiance(PbVolumeRefs r, vec3 p, vec3 n, vec3 v)
+{
+    PbVolumeGrid g = pb_volume_grid(r);
+    return r.levels == 0u ? pb_sample_irradiance(g, p, n, v) : pb_sample_sparse(g, int(r.levels), p, n, v);
 }
 
 #endif

@@ -44,9 +44,9 @@ typedef struct gpu_bake_params {
     uint64_t pad;
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
-_Static_assert(offsetof(gpu_bake_params, guide_origin) == 352, "BakeParams layout");
-_Static_assert(offsetof(gpu_bake_params, light_cells) == 416, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 464, "BakeParams layout");
+_Static_assert(offsetof(gpu_bake_params, guide_origin) == 368, "BakeParams layout");
+_Static_assert(offsetof(gpu_bake_params, light_cells) == 432, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 480, "BakeParams layout");
 _Static_assert(sizeof(pb_env_texel) == 32, "EnvTexel layout");
 
 typedef struct gpu_emitter {

@@ -44,6 +44,11 @@ typedef struct options {
     /* bake on several machines or devices */
     uint32_t shard_index, shard_count; /* --shard I/N; count 0: the whole bake */
     const char *devices;               /* --devices all|LIST */
+    /* --layout sparse (docs/sparse.md) */
+    int sparse;
+    uint32_t max_level;                /* finest level, 0-2 (default 2) */
+    int has_max_level;
+    float refine_error;                /* 0: the default */
     /* merge: OUT is `scene`, the parts follow */
     char **parts;
     uint32_t part_count;

@@ -102,6 +102,8 @@ int cmd_bake(const options *o)
     pb_context *ctx = NULL;
     pb_gpu_scene *gs = NULL;
     pb_volume vol;
+    pb_sparse_stats sparse_stats;
+    memset(&sparse_stats, 0, sizeof sparse_stats);
     memset(&vol, 0, sizeof vol);
     pb_points pts;
     memset(&pts, 0, sizeof pts);
@@ -220,6 +222,16 @@ int cmd_bake(const options *o)
                 d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
                 d.indirect_clamp > 0.f ? (snprintf(clamp_text, sizeof clamp_text, "%g", d.indirect_clamp), clamp_text) : "",
                 d.sh_window == 1 ? " SH Hanning window" : d.sh_window == 2 ? " SH Lanczos window" : "");
+    if (!o->sparse && (o->has_max_level || o->refine_error > 0.f)) {
+        snprintf(err.message, sizeof err.message, "--max-level and --refine-error shape a sparse layout: add --layout sparse");
+        goto out;
+    }
+    if (o->sparse && (o->points || o->shard_count || o->devices || d.indirect_volume)) {
+        snprintf(err.message, sizeof err.message,
+                 "--layout sparse places its own probes on one device: not with %s",
+                 o->points ? "--points" : o->shard_count ? "--shard" : o->devices ? "--devices" : "--indirect volume");
+        goto out;
+    }
     if (o->devices && (o->device || o->shard_count)) {
         snprintf(err.message, sizeof err.message, "--devices splits the bake by device: drop %s",
                  o->device ? "--device" : "--shard");
@@ -239,7 +251,13 @@ int cmd_bake(const options *o)
         if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
             goto out;
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
-        r = pb_bake(ctx, s, gs, &d, &vol, &err);
+        if (o->sparse) {
+            pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error};
+            r = pb_bake_sparse(ctx, s, gs, &d, &sd, &vol, &sparse_stats, &err);
+            probes = vol.probe_count;
+        } else {
+            r = pb_bake(ctx, s, gs, &d, &vol, &err);
+        }
     }
     if (ps.show)
         fprintf(stderr, "\n");
@@ -264,6 +282,18 @@ int cmd_bake(const options *o)
         converged += (vol.probe_flags[i] & PB_PROBE_CONVERGED) != 0;
     }
     double rays = (double)vol.rays_traced;
+    if (o->sparse) {
+        const pb_sparse_stats *st = &sparse_stats;
+        fprintf(report, "sparse: %u levels, bricks", vol.sparse->levels);
+        for (uint32_t l = 0; l < vol.sparse->levels; ++l)
+            fprintf(report, " %u", st->bricks[l]);
+        fprintf(report, " (%u dropped inside geometry), probes baked per level", st->dropped[0] + st->dropped[1] + st->dropped[2]);
+        for (uint32_t l = 0; l < vol.sparse->levels; ++l)
+            fprintf(report, " %u", st->probes[l]);
+        fprintf(report, "; cells tested %u, refined %u, far from surfaces %u; %u bakes\n",
+                st->tested[0] + st->tested[1], st->refined[0] + st->refined[1], st->skipped[0] + st->skipped[1],
+                st->bakes);
+    }
     if (o->shard_count)
         fprintf(report, "wrote %s: part %u of %u, %u of %llu probes, undilated (probebake merge joins the parts) (%u "
                 "valid, %u relocated, %u invalid, %u outside", o->output, o->shard_index, o->shard_count,

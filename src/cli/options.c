@@ -74,6 +74,11 @@ void cli_print_help(void)
            "                                 probebake merge (scripts/slurm/submit.sh queues it on Slurm)\n"
            "  --devices all|LIST             bake on several devices at once (indices or names, comma-separated;\n"
            "                                 a part each, merged in memory)\n"
+           "  --layout grid|sparse           sparse: 4x4x4-probe bricks at up to 3 spacings (the grid's spacing\n"
+           "                                 is the finest), refined where interpolation errs (docs/sparse.md)\n"
+           "  --max-level L                  sparse: finest level 0-2 (default 2: spacings 9x, 3x, 1x)\n"
+           "  --refine-error E               sparse: subdivide where the coarser level mispredicts a probe\n"
+           "                                 baked inside by more than E of its irradiance (default 0.1)\n"
            "render options:\n"
            "  --mode probes|reference|direct|indirect|diff   (default probes with --volume, else reference)\n"
            "  --camera I | --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]   (default: glTF camera 0)\n"
@@ -150,7 +155,10 @@ static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
     X(OPT_RAYS, "rays", required_argument) \
     X(OPT_SEED, "seed", required_argument) \
     X(OPT_SHARD, "shard", required_argument) \
-    X(OPT_DEVICES, "devices", required_argument)
+    X(OPT_DEVICES, "devices", required_argument) \
+    X(OPT_LAYOUT, "layout", required_argument) \
+    X(OPT_MAX_LEVEL, "max-level", required_argument) \
+    X(OPT_REFINE_ERROR, "refine-error", required_argument)
 
 enum {
     OPT_FIRST = 256,
@@ -394,6 +402,25 @@ static int apply(options *o, const char *a, const char *next)
             return 2;
         }
         o->shard_index = i, o->shard_count = n;
+    } else if (!strcmp(a, "--layout")) {
+        if (!next || (strcmp(next, "grid") && strcmp(next, "sparse")))
+            return cli_usage_error("--layout '%s' is not grid or sparse", next ? next : "");
+        o->sparse = !strcmp(next, "sparse");
+    } else if (!strcmp(a, "--max-level")) {
+        if (!next || !parse_u32(next, 0, PB_SPARSE_MAX_LEVELS - 1, &o->max_level)) {
+            fprintf(stderr, "probebake: error: --max-level '%s' is not an integer in [0, %u]\n", next ? next : "",
+                    PB_SPARSE_MAX_LEVELS - 1);
+            return 2;
+        }
+        o->has_max_level = 1;
+    } else if (!strcmp(a, "--refine-error")) {
+        char *end = NULL;
+        o->refine_error = next ? strtof(next, &end) : -1.f;
+        if (!next || *end || !(o->refine_error > 0.f && o->refine_error < 100.f)) {
+            fprintf(stderr, "probebake: error: --refine-error '%s' is not a relative error in (0, 100)\n",
+                    next ? next : "");
+            return 2;
+        }
     } else if (!strcmp(a, "--devices")) {
         if (!next)
             return cli_usage_error("%s needs all or a comma-separated list of device indices or names", a);

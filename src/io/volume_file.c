@@ -32,8 +32,19 @@ static uint64_t align16(uint64_t x)
 }
 
 typedef struct layout {
-    uint64_t base, offset, flags, sh, depth, accounting, end;
+    uint64_t base, offset, flags, sh, depth, accounting, sparse, end;
 } layout;
+
+/* The sparse layout section (version 4, flag PB_VOLUME_SPARSE): a 32-byte
+ * head (u32 levels, cells[3], brick count, chunk count, 2 reserved), then
+ * per brick u32 coord[3], level; per brick 64 u32 probe indices; one u32
+ * per cell (indirection); the chunk entries. */
+#define SPARSE_HEAD 32u
+
+static uint64_t sparse_bytes(uint64_t cells, uint64_t bricks, uint64_t chunks)
+{
+    return SPARSE_HEAD + bricks * 16u + bricks * PB_SPARSE_BRICK_PROBES * 4u + cells * 4u + chunks * 4u;
+}
 
 /* Sections of a file of `version`: the per-probe accounting (8 bytes per
  * probe: u32 paths, f32 relative standard error) exists from version 3. */
@@ -51,12 +62,26 @@ static layout layout_of(uint32_t probes, uint32_t n, uint32_t version)
         l.accounting = align16(l.end);
         l.end = l.accounting + (uint64_t)probes * 8u;
     }
+    l.sparse = 0;
+    return l;
+}
+
+/* Appends the sparse section of sp (NULL: none) to l. */
+static layout with_sparse(layout l, const pb_sparse_layout *sp)
+{
+    if (sp) {
+        l.sparse = align16(l.end);
+        uint64_t cells = (uint64_t)sp->cells[0] * sp->cells[1] * sp->cells[2];
+        l.end = l.sparse + sparse_bytes(cells, sp->brick_count, sp->chunk_count);
+    }
     return l;
 }
 
 uint64_t pb_volume_file_bytes(const pb_volume *v)
 {
-    return layout_of(v->probe_count, v->octmap_res, PB_VOLUME_VERSION).end;
+    return with_sparse(layout_of(v->probe_count, v->octmap_res, PB_VOLUME_VERSION),
+                       (v->flags & PB_VOLUME_SPARSE) ? v->sparse : NULL)
+        .end;
 }
 
 float pb_volume_depth_unit(float max_distance)
@@ -108,6 +133,10 @@ void pb_volume_free(pb_volume *v)
     free(v->depth);
     free(v->probe_paths);
     free(v->probe_std_error);
+    if (v->sparse)
+        pb_sparse_layout_free(v->sparse);
+    free(v->sparse);
+    v->sparse = NULL;
     v->probe_paths = NULL;
     v->probe_std_error = NULL;
     v->base = v->offset = v->sh = NULL;
@@ -185,7 +214,8 @@ static double get_f64(const unsigned char *p)
  * hundred MB; one buffer keeps the writer simple and the write atomic). */
 static unsigned char *encode(const pb_volume *v, uint64_t *size)
 {
-    layout l = layout_of(v->probe_count, v->octmap_res, PB_VOLUME_VERSION);
+    const pb_sparse_layout *sp = (v->flags & PB_VOLUME_SPARSE) ? v->sparse : NULL;
+    layout l = with_sparse(layout_of(v->probe_count, v->octmap_res, PB_VOLUME_VERSION), sp);
     unsigned char *b = calloc(1, (size_t)l.end);
     if (!b)
         return NULL;
@@ -251,6 +281,28 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
         put_u32(b + l.accounting + 8 * i, v->probe_paths[i]);
         put_f32(b + l.accounting + 8 * i + 4, v->probe_std_error[i]);
     }
+    if (sp) {
+        put_u64(b + 416, l.sparse);
+        unsigned char *q = b + l.sparse;
+        put_u32(q, sp->levels);
+        for (int k = 0; k < 3; ++k)
+            put_u32(q + 4 + 4 * k, sp->cells[k]);
+        put_u32(q + 16, sp->brick_count);
+        put_u32(q + 20, sp->chunk_count);
+        q += SPARSE_HEAD;
+        for (uint32_t i = 0; i < sp->brick_count; ++i, q += 16) {
+            for (int k = 0; k < 3; ++k)
+                put_u32(q + 4 * k, sp->bricks[i].coord[k]);
+            put_u32(q + 12, sp->bricks[i].level);
+        }
+        for (uint64_t i = 0; i < (uint64_t)sp->brick_count * PB_SPARSE_BRICK_PROBES; ++i, q += 4)
+            put_u32(q, sp->brick_probes[i]);
+        uint64_t cells = (uint64_t)sp->cells[0] * sp->cells[1] * sp->cells[2];
+        for (uint64_t i = 0; i < cells; ++i, q += 4)
+            put_u32(q, sp->indirection[i]);
+        for (uint32_t i = 0; i < sp->chunk_count; ++i, q += 4)
+            put_u32(q, sp->chunks[i]);
+    }
     *size = l.end;
     return b;
 }
@@ -305,6 +357,13 @@ pb_result pb_volume_write_ex(const char *path, const pb_volume *v, pb_cancel_fn 
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: volume has no probe data to write", path);
     uint32_t bad_probe;
     const char *bad = first_nonfinite(v, &bad_probe);
+    if ((v->flags & PB_VOLUME_SPARSE) && !v->sparse)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: sparse volume without its layout", path);
+    if (v->flags & PB_VOLUME_SPARSE) {
+        pb_result lr = pb_sparse_layout_validate(v->sparse, v->probe_count, err);
+        if (lr != PB_OK)
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: not written: %s", path, err->message);
+    }
     if (bad && bad_probe == UINT32_MAX) /* the grid origin or spacing, the depth unit */
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "%s: not written: %s is NaN or infinite (no volume file holds one)", path, bad);
@@ -344,6 +403,43 @@ static void convert_v1_depth(pb_volume *v)
         v->depth[2 * t] = pb_half_from_float(m1 / u);
         v->depth[2 * t + 1] = pb_half_from_float(m2 / u / u);
     }
+}
+
+/* The sparse section at q (its size already checked against the file). */
+static pb_result read_sparse(const unsigned char *q, pb_volume *v, pb_error *err)
+{
+    pb_sparse_layout *sp = calloc(1, sizeof *sp);
+    if (!sp)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
+    v->sparse = sp;
+    sp->levels = get_u32(q);
+    for (int k = 0; k < 3; ++k)
+        sp->cells[k] = get_u32(q + 4 + 4 * k);
+    sp->brick_count = get_u32(q + 16);
+    sp->chunk_count = get_u32(q + 20);
+    uint64_t cells = (uint64_t)sp->cells[0] * sp->cells[1] * sp->cells[2];
+    if (cells == 0 || cells > (1u << 24) || sp->brick_count == 0 || sp->brick_count > (1u << 22))
+        return pb_fail(err, PB_ERROR_PARSE, "sparse layout with %llu cells and %u bricks", (unsigned long long)cells,
+                       sp->brick_count);
+    sp->bricks = malloc((size_t)sp->brick_count * sizeof *sp->bricks);
+    sp->brick_probes = malloc((size_t)sp->brick_count * PB_SPARSE_BRICK_PROBES * sizeof(uint32_t));
+    sp->indirection = malloc((size_t)cells * sizeof(uint32_t));
+    sp->chunks = malloc((sp->chunk_count ? sp->chunk_count : 1) * sizeof(uint32_t));
+    if (!sp->bricks || !sp->brick_probes || !sp->indirection || !sp->chunks)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse layout");
+    q += SPARSE_HEAD;
+    for (uint32_t i = 0; i < sp->brick_count; ++i, q += 16) {
+        for (int k = 0; k < 3; ++k)
+            sp->bricks[i].coord[k] = get_u32(q + 4 * k);
+        sp->bricks[i].level = get_u32(q + 12);
+    }
+    for (uint64_t i = 0; i < (uint64_t)sp->brick_count * PB_SPARSE_BRICK_PROBES; ++i, q += 4)
+        sp->brick_probes[i] = get_u32(q);
+    for (uint64_t i = 0; i < cells; ++i, q += 4)
+        sp->indirection[i] = get_u32(q);
+    for (uint32_t i = 0; i < sp->chunk_count; ++i, q += 4)
+        sp->chunks[i] = get_u32(q);
+    return pb_sparse_layout_validate(sp, v->probe_count, err);
 }
 
 pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
@@ -420,7 +516,28 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         bad = "shard part out of range";
     else if ((v->flags & PB_VOLUME_GRID) && (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != grid_probes)
         bad = "grid counts do not match the probe count";
+    else if ((v->flags & PB_VOLUME_SPARSE) && (version < 4 || (v->flags & (PB_VOLUME_GRID | PB_VOLUME_SHARD))))
+        bad = "sparse flag in a grid, a part or a file older than version 4";
     layout l = layout_of(v->probe_count, v->octmap_res, version);
+    /* the sparse section's size is in its head: read that first */
+    unsigned char sh_head[SPARSE_HEAD];
+    if (!bad && (v->flags & PB_VOLUME_SPARSE)) {
+        uint64_t at = align16(l.end);
+        if (get_u64(h + 416) != at)
+            bad = "section offsets do not match the sizes";
+        else if (file_bytes < at + SPARSE_HEAD || fseek(f, (long)at, SEEK_SET) != 0 ||
+                 fread(sh_head, 1, SPARSE_HEAD, f) != SPARSE_HEAD)
+            bad = "truncated sparse layout";
+        else if (get_u32(sh_head + 4) >= (1u << 20) || get_u32(sh_head + 8) >= (1u << 20) ||
+                 get_u32(sh_head + 12) >= (1u << 20))
+            bad = "sparse layout with too many cells";
+        else {
+            uint64_t cells = (uint64_t)get_u32(sh_head + 4) * get_u32(sh_head + 8) * get_u32(sh_head + 12);
+            l.sparse = at;
+            l.end = at + sparse_bytes(cells, get_u32(sh_head + 16), get_u32(sh_head + 20));
+        }
+    } else if (!bad && version >= 4 && get_u64(h + 416) != 0)
+        bad = "sparse layout offset in a volume without the sparse flag";
     if (!bad && (get_u64(h + 136) != l.base || get_u64(h + 144) != l.offset || get_u64(h + 152) != l.flags ||
                  get_u64(h + 160) != l.sh || get_u64(h + 168) != l.depth ||
                  (version >= 3 && get_u64(h + 392) != l.accounting)))
@@ -456,6 +573,14 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     uint64_t halves = n * pb_volume_tile_halves(v->octmap_res);
     for (uint64_t i = 0; i < halves; ++i)
         v->depth[i] = (uint16_t)(b[l.depth + 2 * i] | b[l.depth + 2 * i + 1] << 8);
+    if (l.sparse) {
+        r = read_sparse(b + l.sparse, v, err);
+        if (r != PB_OK) {
+            free(b);
+            pb_volume_free(v);
+            return pb_fail(err, PB_ERROR_PARSE, "%s: %s", path, err->message);
+        }
+    }
     /* before version 3 a probe's paths are what the header says every probe
      * got (an upper bound under --target-error) and its error is unknown */
     uint32_t bad_probe = UINT32_MAX;

@@ -13,7 +13,7 @@ typedef struct gpu_render_params {
     uint32_t volume_direct, first_sample, sample_count, show_probes;
 } gpu_render_params;
 _Static_assert(offsetof(gpu_render_params, volume) == 64, "RenderParams layout");
-_Static_assert(sizeof(gpu_render_params) == 208, "RenderParams layout");
+_Static_assert(sizeof(gpu_render_params) == 224, "RenderParams layout");
 
 /* The camera basis both sides use: forward unit, right and up scaled by the
  * half-field of view (and the aspect ratio for right). */

@@ -9,6 +9,35 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The layout tables as pb_sparse_word reads them: four word offsets
+ * (indirection, chunks, bricks, brick probes), then those tables; a brick
+ * is four words (coord x, y, z, level). */
+static pb_result build_sparse_words(const pb_sparse_layout *sp, pb_sample_volume *out)
+{
+    uint64_t cells = (uint64_t)sp->cells[0] * sp->cells[1] * sp->cells[2];
+    uint64_t at_ind = 4, at_chunks = at_ind + cells, at_bricks = at_chunks + sp->chunk_count;
+    uint64_t at_probes = at_bricks + 4ull * sp->brick_count;
+    uint64_t total = at_probes + (uint64_t)PB_SPARSE_BRICK_PROBES * sp->brick_count;
+    if (total > UINT32_MAX)
+        return PB_ERROR_OUT_OF_HOST_MEMORY;
+    uint32_t *w = malloc((size_t)total * sizeof *w);
+    if (!w)
+        return PB_ERROR_OUT_OF_HOST_MEMORY;
+    w[0] = (uint32_t)at_ind, w[1] = (uint32_t)at_chunks, w[2] = (uint32_t)at_bricks, w[3] = (uint32_t)at_probes;
+    memcpy(w + at_ind, sp->indirection, (size_t)cells * 4);
+    memcpy(w + at_chunks, sp->chunks, (size_t)sp->chunk_count * 4);
+    for (uint32_t b = 0; b < sp->brick_count; ++b) {
+        uint32_t *q = w + at_bricks + 4 * (size_t)b;
+        q[0] = sp->bricks[b].coord[0], q[1] = sp->bricks[b].coord[1], q[2] = sp->bricks[b].coord[2];
+        q[3] = sp->bricks[b].level;
+    }
+    memcpy(w + at_probes, sp->brick_probes, (size_t)PB_SPARSE_BRICK_PROBES * sp->brick_count * 4);
+    out->sparse_words = w;
+    out->sparse_word_count = (uint32_t)total;
+    out->levels = sp->levels;
+    return PB_OK;
+}
+
 pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3], float normal_bias,
                                  float view_bias, pb_sample_volume *out, pb_error *err)
 {
@@ -17,7 +46,8 @@ pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "the volume is part %u of %u of a sharded bake: probebake merge joins the parts first",
                        v->shard.index, v->shard.count);
-    if (!(v->flags & PB_VOLUME_GRID))
+    int sparse = (v->flags & PB_VOLUME_SPARSE) && v->sparse;
+    if (!(v->flags & PB_VOLUME_GRID) && !sparse)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "the volume is a point set: run-time sampling interpolates in a grid");
     uint32_t P = v->probe_count, side = v->octmap_res + 2;
@@ -31,7 +61,11 @@ pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3
     for (int k = 0; k < 3; ++k) {
         out->origin[k] = (float)(v->origin[k] - frame_origin[k]);
         out->spacing[k] = (float)v->spacing[k];
-        out->counts[k] = (int32_t)v->counts[k];
+        out->counts[k] = (int32_t)(sparse ? v->sparse->cells[k] : v->counts[k]);
+    }
+    if (sparse && build_sparse_words(v->sparse, out) != PB_OK) {
+        pb_sample_volume_free(out);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse layout");
     }
     out->octmap_res = (int32_t)v->octmap_res;
     out->normal_bias = normal_bias > 0.f ? normal_bias : PB_SAMPLE_NORMAL_BIAS;
@@ -53,7 +87,7 @@ pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3
 
 void pb_sample_volume_free(pb_sample_volume *s)
 {
-    free(s->probes), free(s->sh), free(s->depth);
+    free(s->probes), free(s->sh), free(s->depth), free(s->sparse_words);
     memset(s, 0, sizeof *s);
 }
 
@@ -131,20 +165,36 @@ float pb_sample_visibility_cpu(const pb_sample_volume *s, int probe, const float
     return chebyshev(m, ru);
 }
 
-void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3])
+/* The grid a cage is taken from: the whole grid, or one 4 x 4 x 4 brick. */
+typedef struct cage_grid {
+    float origin[3], spacing[3];
+    int counts[3];
+    int brick; /* -1: a grid volume */
+} cage_grid;
+
+static int cage_probe(const pb_sample_volume *s, const cage_grid *g, const int ijk[3])
+{
+    int local = ijk[0] + g->counts[0] * (ijk[1] + g->counts[1] * ijk[2]);
+    if (g->brick < 0)
+        return local;
+    return (int)s->sparse_words[s->sparse_words[3] + PB_SPARSE_BRICK_PROBES * (uint32_t)g->brick + (uint32_t)local];
+}
+
+static void sample_cage(const pb_sample_volume *s, const cage_grid *g, const float p[3], const float n[3],
+                        const float view[3], float rgb[3])
 {
     float smin = 1e30f;
     for (int k = 0; k < 3; ++k)
-        if (s->counts[k] > 1)
-            smin = fminf(smin, s->spacing[k]);
+        if (g->counts[k] > 1)
+            smin = fminf(smin, g->spacing[k]);
     if (smin >= 1e30f)
         smin = 0.f;
     float biased[3], rel[3], alpha[3];
     int base[3];
     for (int k = 0; k < 3; ++k) {
         biased[k] = p[k] + (n[k] * s->normal_bias + view[k] * s->view_bias) * smin;
-        rel[k] = s->counts[k] > 1 ? (biased[k] - s->origin[k]) / s->spacing[k] : 0.f;
-        int hi = s->counts[k] - 2 > 0 ? s->counts[k] - 2 : 0;
+        rel[k] = g->counts[k] > 1 ? (biased[k] - g->origin[k]) / g->spacing[k] : 0.f;
+        int hi = g->counts[k] - 2 > 0 ? g->counts[k] - 2 : 0;
         int b = (int)floorf(rel[k]);
         base[k] = b < 0 ? 0 : (b > hi ? hi : b);
         alpha[k] = clampf(rel[k] - (float)base[k], 0.f, 1.f);
@@ -154,10 +204,10 @@ void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3]
         int off[3] = {i & 1, (i >> 1) & 1, (i >> 2) & 1}, ijk[3];
         float wt = 1.f;
         for (int k = 0; k < 3; ++k) {
-            ijk[k] = base[k] + off[k] < s->counts[k] - 1 ? base[k] + off[k] : s->counts[k] - 1;
+            ijk[k] = base[k] + off[k] < g->counts[k] - 1 ? base[k] + off[k] : g->counts[k] - 1;
             wt *= off[k] ? alpha[k] : 1.f - alpha[k];
         }
-        int probe = ijk[0] + s->counts[0] * (ijk[1] + s->counts[1] * ijk[2]);
+        int probe = cage_probe(s, g, ijk);
         float e[3];
         pb_sh_eval(s->sh + 27 * (size_t)probe, n, e);
         for (int k = 0; k < 3; ++k)
@@ -185,4 +235,60 @@ void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3]
         float e = wsum > 0.f ? sum[k] / wsum : (wsum_tri > 0.f ? sum_tri[k] / wsum_tri : 0.f);
         rgb[k] = fmaxf(e, 0.f);
     }
+}
+
+/* pb_sample_sparse_brick of probe_sample_core.glsl: the brick serving p. */
+static int sparse_brick_at(const pb_sample_volume *s, const float u[3])
+{
+    const uint32_t *w = s->sparse_words;
+    float f[3];
+    int ci[3];
+    for (int k = 0; k < 3; ++k) {
+        float c = clampf(floorf(u[k]), 0.f, (float)s->counts[k] - 1.f);
+        f[k] = clampf(u[k] - c, 0.f, 1.f);
+        ci[k] = (int)c;
+    }
+    uint32_t e = w[w[0] + (uint32_t)(ci[0] + s->counts[0] * (ci[1] + s->counts[1] * ci[2]))];
+    uint32_t d = e >> PB_SPARSE_DEPTH_SHIFT, b = e & PB_SPARSE_EMPTY;
+    if (d != 0) {
+        int m = d == 1 ? 3 : 9, q[3];
+        for (int k = 0; k < 3; ++k) {
+            int t = (int)floorf(f[k] * (float)m);
+            q[k] = t < 0 ? 0 : (t > m - 1 ? m - 1 : t);
+        }
+        b = w[w[1] + b + (uint32_t)(q[0] + m * (q[1] + m * q[2]))];
+    }
+    return b == PB_SPARSE_EMPTY ? -1 : (int)b;
+}
+
+void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3])
+{
+    cage_grid g = {{s->origin[0], s->origin[1], s->origin[2]},
+                   {s->spacing[0], s->spacing[1], s->spacing[2]},
+                   {s->counts[0], s->counts[1], s->counts[2]},
+                   -1};
+    if (s->levels == 0) {
+        sample_cage(s, &g, p, n, view, rgb);
+        return;
+    }
+    int levels = (int)s->levels, span = levels == 1 ? 3 : (levels == 2 ? 9 : 27);
+    float u[3];
+    for (int k = 0; k < 3; ++k) {
+        float cell = s->spacing[k] * (float)span;
+        u[k] = (p[k] - s->origin[k]) / cell;
+    }
+    int b = sparse_brick_at(s, u);
+    if (b < 0) {
+        rgb[0] = rgb[1] = rgb[2] = 0.f;
+        return;
+    }
+    const uint32_t *br = s->sparse_words + s->sparse_words[2] + 4 * (size_t)b;
+    int up = levels - 1 - (int)br[3], step = up == 0 ? 1 : (up == 1 ? 3 : 9);
+    for (int k = 0; k < 3; ++k) {
+        g.origin[k] = s->origin[k] + (float)(3 * step * (int)br[k]) * s->spacing[k];
+        g.spacing[k] = s->spacing[k] * (float)step;
+        g.counts[k] = 4;
+    }
+    g.brick = b;
+    sample_cage(s, &g, p, n, view, rgb);
 }

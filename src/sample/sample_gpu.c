@@ -23,12 +23,20 @@ pb_result pb_sample_upload(pb_context *ctx, const pb_sample_volume *s, pb_sample
         r = pb_buffer_create(ctx, P * side * side * 4, PB_MEMORY_DEVICE, "volume depth", &out->depth, err);
     if (r == PB_OK)
         r = pb_buffer_upload(ctx, &out->depth, 0, s->depth, P * side * side * 4, err);
+    if (r == PB_OK && s->levels) {
+        uint64_t bytes = (uint64_t)s->sparse_word_count * 4;
+        r = pb_buffer_create(ctx, bytes, PB_MEMORY_DEVICE, "volume sparse layout", &out->sparse, err);
+        if (r == PB_OK)
+            r = pb_buffer_upload(ctx, &out->sparse, 0, s->sparse_words, bytes, err);
+    }
     if (r != PB_OK) {
         pb_sample_release(ctx, out);
         return r;
     }
     gpu_volume_refs *g = &out->refs;
     g->probes = out->probes.address, g->sh = out->sh.address, g->depth = out->depth.address;
+    g->levels = s->levels;
+    g->sparse = s->levels ? out->sparse.address : 0;
     for (int k = 0; k < 3; ++k) {
         g->origin_nbias[k] = s->origin[k];
         g->spacing_vbias[k] = s->spacing[k];
@@ -46,14 +54,16 @@ void pb_sample_release(pb_context *ctx, pb_sample_buffers *b)
     pb_buffer_destroy(ctx, &b->probes);
     pb_buffer_destroy(ctx, &b->sh);
     pb_buffer_destroy(ctx, &b->depth);
+    pb_buffer_destroy(ctx, &b->sparse);
     memset(b, 0, sizeof *b);
 }
 
 typedef struct sample_push {
     gpu_volume_refs volume;
-    uint64_t points, normals, views, out;
+    uint64_t queries, out; /* 3 vec4 per query: point, normal, view */
     uint32_t count, pad;
 } sample_push;
+_Static_assert(sizeof(sample_push) <= 128, "push constants within Vulkan's guaranteed 128 bytes");
 
 pb_result pb_sample_gpu(pb_context *ctx, const pb_sample_volume *s, const float *p4, const float *n4,
                         const float *view4, uint32_t count, float *rgb4, pb_error *err)
@@ -63,15 +73,22 @@ pb_result pb_sample_gpu(pb_context *ctx, const pb_sample_volume *s, const float 
         return PB_OK;
     uint64_t bytes = (uint64_t)count * 16;
     pb_sample_buffers vb;
-    pb_buffer q[3] = {{0}}, out = {0};
+    pb_buffer q = {0}, out = {0};
     pb_pipeline pipe = {0};
-    pb_result r = pb_sample_upload(ctx, s, &vb, err);
-    const float *src[3] = {p4, n4, view4};
-    for (int i = 0; i < 3 && r == PB_OK; ++i) {
-        r = pb_buffer_create(ctx, bytes, PB_MEMORY_DEVICE, "sample queries", &q[i], err);
-        if (r == PB_OK)
-            r = pb_buffer_upload(ctx, &q[i], 0, src[i], bytes, err);
+    float *interleaved = malloc((size_t)bytes * 3);
+    if (!interleaved)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u queries", count);
+    for (uint32_t i = 0; i < count; ++i) {
+        memcpy(interleaved + 12 * (size_t)i, p4 + 4 * (size_t)i, 16);
+        memcpy(interleaved + 12 * (size_t)i + 4, n4 + 4 * (size_t)i, 16);
+        memcpy(interleaved + 12 * (size_t)i + 8, view4 + 4 * (size_t)i, 16);
     }
+    pb_result r = pb_sample_upload(ctx, s, &vb, err);
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, 3 * bytes, PB_MEMORY_DEVICE, "sample queries", &q, err);
+    if (r == PB_OK)
+        r = pb_buffer_upload(ctx, &q, 0, interleaved, 3 * bytes, err);
+    free(interleaved);
     if (r == PB_OK)
         r = pb_buffer_create(ctx, bytes, PB_MEMORY_DOWNLOAD, "sample results", &out, err);
     if (r == PB_OK)
@@ -80,7 +97,7 @@ pb_result pb_sample_gpu(pb_context *ctx, const pb_sample_volume *s, const float 
     if (r == PB_OK)
         r = pb_cmd_begin(ctx, err);
     if (r == PB_OK) {
-        sample_push push = {vb.refs, q[0].address, q[1].address, q[2].address, out.address, count, 0};
+        sample_push push = {vb.refs, q.address, out.address, count, 0};
         pb_cmd_dispatch(ctx, &pipe, &push, (count + 63) / 64);
         pb_cmd_barrier_to_host(ctx);
         r = pb_cmd_submit_wait(ctx, NULL, err);
@@ -88,8 +105,7 @@ pb_result pb_sample_gpu(pb_context *ctx, const pb_sample_volume *s, const float 
     if (r == PB_OK)
         memcpy(rgb4, out.mapped, (size_t)bytes);
     pb_pipeline_destroy(ctx, &pipe);
-    for (int i = 0; i < 3; ++i)
-        pb_buffer_destroy(ctx, &q[i]);
+    pb_buffer_destroy(ctx, &q);
     pb_buffer_destroy(ctx, &out);
     pb_sample_release(ctx, &vb);
     return r;

@@ -11,17 +11,21 @@
 
 typedef struct gpu_volume_refs {
     uint64_t probes, sh, depth;
-    float depth_unit, pad;
+    float depth_unit;
+    uint32_t levels; /* 0: grid; 1-3: sparse */
     float origin_nbias[4];
     float spacing_vbias[4];
     int32_t counts_res[4];
+    uint64_t sparse; /* layout tables (pb_sample_volume.sparse_words) */
+    uint32_t pad[2];
 } gpu_volume_refs;
-_Static_assert(sizeof(gpu_volume_refs) == 80, "PbVolumeRefs layout");
-_Static_assert(offsetof(gpu_volume_refs, depth_unit) == 24 && offsetof(gpu_volume_refs, origin_nbias) == 32,
+_Static_assert(sizeof(gpu_volume_refs) == 96, "PbVolumeRefs layout");
+_Static_assert(offsetof(gpu_volume_refs, depth_unit) == 24 && offsetof(gpu_volume_refs, origin_nbias) == 32 &&
+                   offsetof(gpu_volume_refs, sparse) == 80,
                "PbVolumeRefs layout");
 
 typedef struct pb_sample_buffers {
-    pb_buffer probes, sh, depth;
+    pb_buffer probes, sh, depth, sparse;
     gpu_volume_refs refs;
 } pb_sample_buffers;
 

@@ -1,0 +1,552 @@
+/* The sparse bake (docs/sparse.md): bricks placed by the error that
+ * interpolation makes, level by level.
+ *
+ *   1. coarsest bricks over the whole extent; bake their probes;
+ *   2. per level, each cell of a brick with a surface near its corners gets
+ *      one probe baked inside (a point of the next level's lattice, so it
+ *      is reused if the cell is refined); where the level's own sampler
+ *      mispredicts that probe, the cell becomes a brick of the next level;
+ *   3. bricks with every probe inside geometry are dropped;
+ *   4. probes on a finer brick's faces that a coarser neighbour does not
+ *      have take that neighbour's trilinear SH (no jump across the face).
+ *
+ * Every probe is keyed by its index on the finest lattice and baked once
+ * (pb_bake over points, so relocation, validity and convergence are the
+ * grid bake's), whatever brick or level asks for it first. */
+#include "common/common.h"
+#include "common/key_map.h"
+#include "probebake/bake.h"
+#include "probebake/sh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Baked probes by finest-lattice key. */
+typedef struct probe_store {
+    uint32_t count, cap, halves;
+    uint32_t *keys;     /* 3 per probe */
+    float *offset;      /* 3 per probe */
+    uint32_t *flags, *paths;
+    float *sh, *std_error;
+    uint16_t *depth;
+    pb_key_map index;
+} probe_store;
+
+typedef struct sparse_job {
+    pb_context *ctx;
+    const pb_scene *scene;
+    pb_gpu_scene *gs;
+    pb_bake_desc d;
+    uint32_t levels, cells[3];
+    double F[3];                /* finest spacing per axis */
+    uint64_t X, Y;              /* finest lattice points per axis (x, y), for keys */
+    probe_store ps;
+    pb_sparse_brick *bricks;
+    uint32_t brick_count, brick_cap;
+    pb_volume first;            /* the first bake's header: settings, device, depth unit (no probes) */
+    pb_volume_timings timings;
+    uint64_t rays, traversals;
+    uint32_t passes_max;
+    pb_sparse_stats stats;
+} sparse_job;
+
+static uint32_t pow3u(uint32_t e)
+{
+    uint32_t p = 1;
+    while (e--)
+        p *= 3;
+    return p;
+}
+
+static uint64_t lattice_key(const sparse_job *j, const uint32_t k[3])
+{
+    return k[0] + j->X * (k[1] + j->Y * (uint64_t)k[2]);
+}
+
+static uint32_t store_find(const sparse_job *j, const uint32_t k[3])
+{
+    return pb_key_map_get(&j->ps.index, lattice_key(j, k));
+}
+
+static int store_reserve(probe_store *s, uint32_t more)
+{
+    if (s->count + more <= s->cap)
+        return 1;
+    uint32_t cap = s->cap ? s->cap : 1024;
+    while (cap < s->count + more)
+        cap *= 2;
+#define GROW(field, per)                                                                                              \
+    do {                                                                                                           \
+        void *p_ = realloc(s->field, (size_t)cap * (per) * sizeof *s->field);                                      \
+        if (!p_)                                                                                                   \
+            return 0;                                                                                              \
+        s->field = p_;                                                                                             \
+    } while (0)
+    GROW(keys, 3);
+    GROW(offset, 3);
+    GROW(flags, 1);
+    GROW(paths, 1);
+    GROW(sh, 27);
+    GROW(std_error, 1);
+    GROW(depth, s->halves);
+#undef GROW
+    s->cap = cap;
+    return 1;
+}
+
+static void store_free(probe_store *s)
+{
+    free(s->keys), free(s->offset), free(s->flags), free(s->paths), free(s->sh), free(s->std_error), free(s->depth);
+    pb_key_map_free(&s->index);
+}
+
+/* Random-number id of a lattice point (pb_points.ids): a mix of its key. */
+static uint32_t key_id(uint64_t key)
+{
+    key ^= key >> 33;
+    key *= 0xff51afd7ed558ccdull;
+    key ^= key >> 33;
+    return (uint32_t)key;
+}
+
+/* Bakes the lattice points `keys` (3 per point) not baked yet, as probes of
+ * `level` (relocation bound: 45 % of that level's spacing). */
+static pb_result bake_points(sparse_job *j, const uint32_t *keys, uint32_t count, uint32_t level, pb_error *err)
+{
+    uint32_t *todo = malloc(((size_t)count + 1) * 3 * sizeof *todo);
+    pb_key_map seen;
+    if (!todo || !pb_key_map_init(&seen, count)) {
+        free(todo);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u sparse probes", count);
+    }
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        const uint32_t *k = keys + 3 * (size_t)i;
+        uint64_t key = lattice_key(j, k);
+        if (store_find(j, k) != PB_KEY_MAP_MISSING || pb_key_map_get(&seen, key) != PB_KEY_MAP_MISSING)
+            continue;
+        if (!pb_key_map_put(&seen, key, n))
+            break;
+        memcpy(todo + 3 * (size_t)n++, k, 3 * sizeof *k);
+    }
+    pb_key_map_free(&seen);
+    if (n == 0) {
+        free(todo);
+        return PB_OK;
+    }
+    pb_points pts = {n, malloc((size_t)n * 3 * sizeof(double)), malloc((size_t)n * sizeof(uint32_t)), 0.0};
+    pb_result r = PB_OK;
+    if (!pts.positions || !pts.ids || !store_reserve(&j->ps, n))
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u sparse probes", n);
+    uint32_t step = pb_sparse_step(j->levels, level);
+    pts.spacing = fmin(j->F[0], fmin(j->F[1], j->F[2])) * step;
+    for (uint32_t i = 0; r == PB_OK && i < n; ++i) {
+        for (int k = 0; k < 3; ++k)
+            pts.positions[3 * (size_t)i + k] = j->scene->origin[k] + ((double)j->d.grid.origin[k] +
+                                                                      (double)todo[3 * (size_t)i + k] * j->F[k]);
+        pts.ids[i] = key_id(lattice_key(j, todo + 3 * (size_t)i));
+    }
+    pb_volume v;
+    memset(&v, 0, sizeof v);
+    if (r == PB_OK) {
+        pb_bake_desc d = j->d;
+        d.points = &pts;
+        r = pb_bake(j->ctx, j->scene, j->gs, &d, &v, err);
+        j->stats.bakes++;
+    }
+    if (r == PB_OK) {
+        probe_store *s = &j->ps;
+        for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
+            uint32_t at = s->count++;
+            memcpy(s->keys + 3 * (size_t)at, todo + 3 * (size_t)i, 3 * sizeof(uint32_t));
+            memcpy(s->offset + 3 * (size_t)at, v.offset + 3 * (size_t)i, 3 * sizeof(float));
+            s->flags[at] = v.probe_flags[i];
+            s->paths[at] = v.probe_paths[i];
+            s->std_error[at] = v.probe_std_error[i];
+            memcpy(s->sh + 27 * (size_t)at, v.sh + 27 * (size_t)i, 27 * sizeof(float));
+            memcpy(s->depth + (size_t)s->halves * at, v.depth + (size_t)s->halves * i, s->halves * sizeof(uint16_t));
+            if (!pb_key_map_put(&s->index, lattice_key(j, todo + 3 * (size_t)i), at))
+                r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse probes");
+        }
+        j->stats.probes[level] += n;
+        j->rays += v.rays_traced;
+        j->traversals += v.traversals;
+        if (v.settings.passes > j->passes_max)
+            j->passes_max = v.settings.passes;
+        double *t = &j->timings.load;
+        const double *tv = &v.timings.load;
+        for (int i = 0; i < 8; ++i)
+            t[i] += tv[i];
+        if (j->stats.bakes == 1) { /* the header every part shares; the arrays stay v's */
+            j->first = v;
+            j->first.base = j->first.offset = j->first.sh = j->first.probe_std_error = NULL;
+            j->first.probe_flags = j->first.probe_paths = NULL;
+            j->first.depth = NULL;
+            j->first.sparse = NULL;
+        } else if (v.depth_unit != j->first.depth_unit) {
+            r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: depth units differ between levels (%g, %g)",
+                        (double)j->first.depth_unit, (double)v.depth_unit);
+        }
+    }
+    pb_volume_free(&v);
+    free(todo), free(pts.positions), free(pts.ids);
+    return r;
+}
+
+/* The finest-lattice keys of brick b's 64 probes. */
+static void brick_keys(const sparse_job *j, const pb_sparse_brick *b, uint32_t keys[64 * 3])
+{
+    uint32_t step = pb_sparse_step(j->levels, b->level);
+    for (uint32_t i = 0; i < PB_SPARSE_BRICK_PROBES; ++i) {
+        uint32_t off[3] = {i & 3u, (i >> 2) & 3u, i >> 4};
+        for (int k = 0; k < 3; ++k)
+            keys[3 * i + k] = (3 * b->coord[k] + off[k]) * step;
+    }
+}
+
+/* Bakes the probes of `count` candidate bricks, then keeps those with a
+ * valid probe (appended to j->bricks). */
+static pb_result add_bricks(sparse_job *j, const pb_sparse_brick *cand, uint32_t count, uint32_t level, pb_error *err)
+{
+    if (count == 0)
+        return PB_OK;
+    uint32_t *keys = malloc((size_t)count * 64 * 3 * sizeof *keys);
+    if (!keys)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u bricks", count);
+    for (uint32_t b = 0; b < count; ++b)
+        brick_keys(j, &cand[b], keys + (size_t)b * 64 * 3);
+    pb_result r = bake_points(j, keys, count * 64, level, err);
+    if (r == PB_OK && j->brick_count + count > j->brick_cap) {
+        uint32_t cap = j->brick_cap ? j->brick_cap : 64;
+        while (cap < j->brick_count + count)
+            cap *= 2;
+        pb_sparse_brick *nb = realloc(j->bricks, (size_t)cap * sizeof *nb);
+        if (!nb)
+            r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u bricks", cap);
+        else
+            j->bricks = nb, j->brick_cap = cap;
+    }
+    for (uint32_t b = 0; r == PB_OK && b < count; ++b) {
+        int valid = 0;
+        for (uint32_t i = 0; i < 64 && !valid; ++i)
+            valid = (j->ps.flags[store_find(j, keys + ((size_t)b * 64 + i) * 3)] & PB_PROBE_VALID) != 0;
+        if (valid) {
+            j->bricks[j->brick_count++] = cand[b];
+            j->stats.bricks[level]++;
+        } else {
+            j->stats.dropped[level]++;
+        }
+    }
+    free(keys);
+    return r;
+}
+
+/* The sparse volume of the current bricks (probes in layout order). */
+static pb_result assemble(sparse_job *j, pb_volume *out, pb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (j->brick_count == 0)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "%s: every probe of the sparse bake is inside geometry: nothing to sample",
+                       j->scene->path[0] ? j->scene->path : "scene");
+    pb_sparse_layout *sp = calloc(1, sizeof *sp);
+    uint32_t P = 0, *keys = NULL;
+    pb_result r = sp ? pb_sparse_layout_build(j->levels, j->cells, j->bricks, j->brick_count, sp, &P, &keys, err)
+                     : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
+    if (r != PB_OK) {
+        free(sp);
+        return r;
+    }
+    *out = j->first;
+    out->flags = (j->first.flags & ~(PB_VOLUME_GRID | PB_VOLUME_SHARD)) | PB_VOLUME_SPARSE;
+    out->probe_count = P;
+    out->counts[0] = P, out->counts[1] = out->counts[2] = 1;
+    for (int k = 0; k < 3; ++k) {
+        out->origin[k] = j->scene->origin[k] + (double)j->d.grid.origin[k];
+        out->spacing[k] = j->F[k];
+    }
+    out->settings.passes = j->passes_max;
+    out->timings = j->timings;
+    out->rays_traced = j->rays;
+    out->traversals = j->traversals;
+    r = pb_volume_alloc(out, err);
+    if (r != PB_OK) {
+        pb_sparse_layout_free(sp);
+        free(sp), free(keys);
+        return r;
+    }
+    out->sparse = sp;
+    uint32_t halves = j->ps.halves;
+    for (uint32_t p = 0; p < P; ++p) {
+        uint32_t s = store_find(j, keys + 3 * (size_t)p);
+        for (int k = 0; k < 3; ++k) {
+            out->base[3 * (size_t)p + k] = (float)((double)keys[3 * (size_t)p + k] * j->F[k]);
+            out->offset[3 * (size_t)p + k] = j->ps.offset[3 * (size_t)s + k];
+        }
+        out->probe_flags[p] = j->ps.flags[s];
+        out->probe_paths[p] = j->ps.paths[s];
+        out->probe_std_error[p] = j->ps.std_error[s];
+        memcpy(out->sh + 27 * (size_t)p, j->ps.sh + 27 * (size_t)s, 27 * sizeof(float));
+        memcpy(out->depth + (size_t)halves * p, j->ps.depth + (size_t)halves * s, halves * sizeof(uint16_t));
+    }
+    free(keys);
+    return PB_OK;
+}
+
+/* Nearest surface seen by probe s, metres: the smallest mean depth of its tile. */
+static float nearest_surface(const sparse_job *j, uint32_t s)
+{
+    const uint16_t *t = j->ps.depth + (size_t)j->ps.halves * s;
+    float m = INFINITY;
+    for (uint32_t i = 0; i < j->ps.halves; i += 2)
+        m = fminf(m, pb_half_to_float(t[i]));
+    return m * j->first.depth_unit;
+}
+
+static float irradiance_lum(const float sh[27], const float n[3])
+{
+    float e[3];
+    pb_sh_eval(sh, n, e);
+    return pb_luminance(e);
+}
+
+/* Refines the bricks of `level` into the next: test probes, predictions,
+ * new bricks. */
+static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t level, pb_error *err)
+{
+    pb_volume cur;
+    pb_result r = assemble(j, &cur, err);
+    if (r != PB_OK)
+        return r;
+    pb_sample_volume sv;
+    r = pb_sample_volume_build(&cur, j->scene->origin, 0.f, 0.f, &sv, err);
+    pb_volume_free(&cur);
+    if (r != PB_OK)
+        return r;
+    double s_l = fmax(j->F[0], fmax(j->F[1], j->F[2])) * pb_sparse_step(j->levels, level);
+    uint32_t fine_step = pb_sparse_step(j->levels, level + 1);
+    uint32_t nb = j->brick_count, tests = 0;
+    uint32_t *test_keys = malloc((size_t)nb * 27 * 3 * sizeof *test_keys);
+    pb_sparse_brick *test_cell = malloc((size_t)nb * 27 * sizeof *test_cell);
+    pb_sparse_brick *cand = malloc((size_t)nb * 27 * sizeof *cand);
+    if (!test_keys || !test_cell || !cand) {
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse refinement");
+        goto done;
+    }
+    uint32_t step = pb_sparse_step(j->levels, level);
+    for (uint32_t b = 0; b < nb; ++b) {
+        const pb_sparse_brick *br = &j->bricks[b];
+        if (br->level != level)
+            continue;
+        for (uint32_t c = 0; c < 27; ++c) {
+            uint32_t cc[3] = {c % 3, (c / 3) % 3, c / 9};
+            /* a surface within two cells of a corner probe, or a corner inside geometry */
+            int near = 0;
+            for (uint32_t i = 0; i < 8 && !near; ++i) {
+                uint32_t k3[3];
+                for (int k = 0; k < 3; ++k)
+                    k3[k] = (3 * br->coord[k] + cc[k] + ((i >> k) & 1u)) * step;
+                uint32_t s = store_find(j, k3);
+                near = !(j->ps.flags[s] & PB_PROBE_VALID) || nearest_surface(j, s) < 2.0 * s_l;
+            }
+            if (!near) {
+                j->stats.skipped[level]++;
+                continue;
+            }
+            for (int k = 0; k < 3; ++k) {
+                test_keys[3 * (size_t)tests + k] = (3 * (3 * br->coord[k] + cc[k]) + 1) * fine_step;
+                test_cell[tests].coord[k] = 3 * br->coord[k] + cc[k];
+            }
+            test_cell[tests].level = level + 1;
+            tests++;
+        }
+    }
+    j->stats.tested[level] += tests;
+    r = bake_points(j, test_keys, tests, level + 1, err);
+    uint32_t nc = 0;
+    static const float axes[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (uint32_t t = 0; r == PB_OK && t < tests; ++t) {
+        uint32_t s = store_find(j, test_keys + 3 * (size_t)t);
+        int refine;
+        if (!(j->ps.flags[s] & PB_PROBE_VALID)) {
+            refine = 1; /* geometry inside the cell */
+        } else {
+            float p[3];
+            for (int k = 0; k < 3; ++k)
+                p[k] = (float)((double)j->d.grid.origin[k] + (double)test_keys[3 * (size_t)t + k] * j->F[k]) +
+                       j->ps.offset[3 * (size_t)s + k];
+            float pred[6], baked[6], mean = 0.f, worst = 0.f;
+            for (int a = 0; a < 6; ++a) {
+                float rgb[3];
+                pb_sample_cpu(&sv, p, axes[a], axes[a], rgb);
+                pred[a] = pb_luminance(rgb);
+                baked[a] = irradiance_lum(j->ps.sh + 27 * (size_t)s, axes[a]);
+                mean += pred[a] / 6.f;
+            }
+            for (int a = 0; a < 6; ++a)
+                worst = fmaxf(worst, fabsf(baked[a] - pred[a]));
+            float rel = mean > 0.f ? worst / mean : (worst > 0.f ? INFINITY : 0.f);
+            float noise = j->ps.std_error[s] > 0.f ? 3.f * j->ps.std_error[s] : 0.f;
+            refine = rel > fmaxf(sd->refine_error, noise);
+        }
+        if (refine) {
+            cand[nc++] = test_cell[t];
+            j->stats.refined[level]++;
+        }
+    }
+    if (r == PB_OK)
+        r = add_bricks(j, cand, nc, level + 1, err);
+done:
+    pb_sample_volume_free(&sv);
+    free(test_keys), free(test_cell), free(cand);
+    return r;
+}
+
+/* Trilinear SH of brick b (no visibility) at lattice point k3 (finest units). */
+static void brick_trilinear(const sparse_job *j, const pb_sparse_brick *b, const uint32_t k3[3], float sh[27])
+{
+    uint32_t step = pb_sparse_step(j->levels, b->level);
+    int base[3];
+    float a[3];
+    for (int k = 0; k < 3; ++k) {
+        double rel = (double)k3[k] / step - 3.0 * b->coord[k]; /* in [0, 3] */
+        int i = (int)floor(rel);
+        base[k] = i < 0 ? 0 : (i > 2 ? 2 : i);
+        a[k] = (float)(rel - base[k]);
+    }
+    memset(sh, 0, 27 * sizeof(float));
+    for (int c = 0; c < 8; ++c) {
+        uint32_t q[3];
+        float w = 1.f;
+        for (int k = 0; k < 3; ++k) {
+            int o = (c >> k) & 1;
+            q[k] = (3 * b->coord[k] + (uint32_t)(base[k] + o)) * step;
+            w *= o ? a[k] : 1.f - a[k];
+        }
+        const float *src = j->ps.sh + 27 * (size_t)store_find(j, q);
+        for (int i = 0; i < 27; ++i)
+            sh[i] += w * src[i];
+    }
+}
+
+/* Stage 4: a probe of a level-l brick next to a region served by a coarser
+ * brick that does not have it takes that brick's trilinear SH; levels in
+ * ascending order, so a coarser brick's own stitched probes come first. */
+static void stitch(sparse_job *j, const pb_sparse_layout *sp)
+{
+    float span[3];
+    for (int k = 0; k < 3; ++k)
+        span[k] = (float)pow3u(j->levels); /* finest steps per cell */
+    for (uint32_t level = 1; level < j->levels; ++level)
+        for (uint32_t b = 0; b < j->brick_count; ++b) {
+            const pb_sparse_brick *br = &j->bricks[b];
+            if (br->level != level)
+                continue;
+            uint32_t keys[64 * 3];
+            brick_keys(j, br, keys);
+            uint32_t step = pb_sparse_step(j->levels, level);
+            for (uint32_t i = 0; i < 64; ++i) {
+                uint32_t off[3] = {i & 3u, (i >> 2) & 3u, i >> 4};
+                if (off[0] % 3 && off[1] % 3 && off[2] % 3)
+                    continue; /* inside the brick */
+                const uint32_t *k3 = keys + 3 * i;
+                const pb_sparse_brick *coarse = NULL;
+                for (uint32_t c = 0; c < 8; ++c) { /* the eight cells of this level around the probe */
+                    float u[3];
+                    int outside = 0;
+                    for (int k = 0; k < 3; ++k) {
+                        double cell = (double)k3[k] + (((c >> k) & 1u) ? 0.5 : -0.5) * step;
+                        outside |= cell < 0.0 || cell > (double)j->cells[k] * span[k];
+                        u[k] = (float)(cell / span[k]);
+                    }
+                    if (outside)
+                        continue;
+                    uint32_t nbk = pb_sparse_find(sp, u);
+                    if (nbk == PB_SPARSE_EMPTY)
+                        continue;
+                    const pb_sparse_brick *o = &sp->bricks[nbk];
+                    uint32_t ostep = pb_sparse_step(j->levels, o->level);
+                    if (o->level < level && (k3[0] % ostep || k3[1] % ostep || k3[2] % ostep) &&
+                        (!coarse || o->level < coarse->level))
+                        coarse = o;
+                }
+                if (coarse)
+                    brick_trilinear(j, coarse, k3, j->ps.sh + 27 * (size_t)store_find(j, k3));
+            }
+        }
+}
+
+pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
+                         const pb_sparse_desc *sd_in, pb_volume *out, pb_sparse_stats *stats, pb_error *err)
+{
+    pb_error_clear(err);
+    memset(out, 0, sizeof *out);
+    pb_sparse_desc sd = *sd_in;
+    if (sd.levels == 0)
+        sd.levels = 3;
+    if (sd.refine_error == 0.f)
+        sd.refine_error = 0.1f;
+    if (sd.levels > PB_SPARSE_MAX_LEVELS)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--max-level %u: the sparse layout has at most %u levels (0-%u)",
+                       sd.levels - 1, PB_SPARSE_MAX_LEVELS, PB_SPARSE_MAX_LEVELS - 1);
+    if (!(sd.refine_error > 0.f) || !isfinite(sd.refine_error))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--refine-error %g: must be a positive number",
+                       (double)sd.refine_error);
+    if (desc->points || desc->shard_count || desc->indirect_volume)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "--layout sparse places its own probes: not with --points, --shard or --indirect volume");
+    sparse_job j;
+    memset(&j, 0, sizeof j);
+    j.ctx = ctx, j.scene = scene, j.gs = gs, j.d = *desc, j.levels = sd.levels;
+    j.d.progress = desc->progress;
+    uint32_t span = pow3u(sd.levels);
+    for (int k = 0; k < 3; ++k) {
+        if (desc->grid.counts[k] == 0 || !(desc->grid.spacing[k] > 0.f) || !isfinite(desc->grid.spacing[k]))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: grid spacing and counts must be positive");
+        j.F[k] = desc->grid.spacing[k];
+        j.cells[k] = (desc->grid.counts[k] - 1 + span - 1) / span;
+        j.cells[k] = j.cells[k] ? j.cells[k] : 1;
+        if ((uint64_t)j.cells[k] * span >= (1u << 20))
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: %u finest probes on axis %d is too many",
+                           desc->grid.counts[k], k);
+    }
+    j.X = (uint64_t)j.cells[0] * span + 1, j.Y = (uint64_t)j.cells[1] * span + 1;
+    uint32_t n = desc->octmap_res ? desc->octmap_res : 16;
+    j.ps.halves = (uint32_t)pb_volume_tile_halves(n);
+    pb_sparse_brick *cand = NULL;
+    pb_result r = pb_key_map_init(&j.ps.index, 4096) ? PB_OK
+                                                      : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
+    /* level 0: every cell */
+    uint64_t C = (uint64_t)j.cells[0] * j.cells[1] * j.cells[2];
+    if (r == PB_OK && C > (1u << 22))
+        r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: %llu coarsest bricks is too many (raise the spacing)",
+                    (unsigned long long)C);
+    if (r == PB_OK && !(cand = malloc((size_t)C * sizeof *cand)))
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %llu bricks", (unsigned long long)C);
+    if (r == PB_OK) {
+        for (uint64_t c = 0; c < C; ++c)
+            cand[c] = (pb_sparse_brick){0, {(uint32_t)(c % j.cells[0]), (uint32_t)((c / j.cells[0]) % j.cells[1]),
+                                            (uint32_t)(c / ((uint64_t)j.cells[0] * j.cells[1]))}};
+        r = add_bricks(&j, cand, (uint32_t)C, 0, err);
+    }
+    free(cand);
+    for (uint32_t level = 0; r == PB_OK && level + 1 < j.levels; ++level)
+        r = refine_level(&j, &sd, level, err);
+    if (r == PB_OK) {
+        pb_sparse_layout sp;
+        uint32_t P;
+        r = pb_sparse_layout_build(j.levels, j.cells, j.bricks, j.brick_count, &sp, &P, NULL, err);
+        if (r == PB_OK) {
+            stitch(&j, &sp);
+            pb_sparse_layout_free(&sp);
+        }
+    }
+    if (r == PB_OK)
+        r = assemble(&j, out, err);
+    if (stats)
+        *stats = j.stats;
+    store_free(&j.ps);
+    free(j.bricks);
+    return r;
+}
