@@ -230,6 +230,126 @@ static void malformed_files_get_clear_errors(void)
     pb_volume_free(&v);
 }
 
+/* A hand-made sparse layout over 2 x 1 x 1 cells of three levels: a level-0
+ * brick in cell 0 with a level-1 brick inside and a level-2 brick inside
+ * that; in cell 1 only a level-1 brick (the rest of cell 1 is empty). */
+static const pb_sparse_brick test_bricks[4] = {{0, {0, 0, 0}}, {1, {1, 1, 1}}, {2, {4, 4, 4}}, {1, {4, 0, 0}}};
+static const uint32_t test_cells[3] = {2, 1, 1};
+
+/* pb_sparse_find names, for random points, the finest brick whose region
+ * holds the point (found by testing every brick), or none; probes are
+ * shared: a probe of the level-1 brick on a level-0 lattice point is the
+ * level-0 brick's. */
+static void sparse_lookup_finds_the_finest_brick(void)
+{
+    pb_sparse_layout l;
+    uint32_t P = 0, *keys = NULL;
+    pb_error err;
+    CHECKF(pb_sparse_layout_build(3, test_cells, test_bricks, 4, &l, &P, &keys, &err) == PB_OK, "%s", err.message);
+    CHECK(pb_sparse_layout_validate(&l, P, &err) == PB_OK);
+    /* the three bricks of cell 0 share lattice points: fewer than 4 x 64 probes */
+    fprintf(stderr, "  %u bricks, %u probes, %u chunk entries\n", l.brick_count, P, l.chunk_count);
+    CHECK(P < 4 * 64 && l.chunk_count == 729 + 27);
+    uint32_t shared = 0;
+    for (uint32_t i = 0; i < 64; ++i)
+        for (uint32_t j = 0; j < 64; ++j)
+            shared += l.brick_probes[i] == l.brick_probes[64 + j];
+    CHECK(shared == 8); /* level-1 brick (1,1,1) spans lattice 3..6 of level 1: 3 and 6 are level-0 points */
+    test_rng r = {11};
+    uint32_t wrong = 0, empty = 0;
+    for (int i = 0; i < 100000; ++i) {
+        float u[3] = {(float)(2.0 * rng_uniform(&r)), (float)rng_uniform(&r), (float)rng_uniform(&r)};
+        uint32_t want = PB_SPARSE_EMPTY, want_level = 0;
+        for (uint32_t b = 0; b < 4; ++b) {
+            const pb_sparse_brick *br = &test_bricks[b];
+            double n = br->level == 0 ? 1 : br->level == 1 ? 3 : 9;
+            int inside = 1;
+            for (int k = 0; k < 3; ++k)
+                inside &= floor((double)u[k] * n) == br->coord[k];
+            if (inside && (want == PB_SPARSE_EMPTY || br->level > want_level))
+                want = b, want_level = br->level;
+        }
+        uint32_t got = pb_sparse_find(&l, u);
+        wrong += got != want;
+        empty += got == PB_SPARSE_EMPTY;
+    }
+    fprintf(stderr, "  100000 points: %u wrong, %u in no brick\n", wrong, empty);
+    CHECK(wrong == 0 && empty > 0);
+    /* points past the cells clamp to the nearest cell */
+    float far[3] = {-5.f, 0.5f, 0.5f};
+    CHECK(pb_sparse_find(&l, far) == 0);
+    pb_sparse_brick dup[2] = {{1, {1, 1, 1}}, {1, {1, 1, 1}}}, out[1] = {{1, {6, 0, 0}}};
+    pb_sparse_layout bad;
+    CHECK(pb_sparse_layout_build(3, test_cells, dup, 2, &bad, &P, NULL, &err) == PB_ERROR_INVALID_ARGUMENT);
+    CHECK(pb_sparse_layout_build(3, test_cells, out, 1, &bad, &P, NULL, &err) == PB_ERROR_INVALID_ARGUMENT);
+    free(keys);
+    pb_sparse_layout_free(&l);
+}
+
+/* A sparse volume survives a write and a read; damaged layouts are refused
+ * with the file named and nothing allocated (ASan watches). */
+static void sparse_files_round_trip_and_refuse_damage(void)
+{
+    pb_sparse_layout *l = calloc(1, sizeof *l);
+    uint32_t P = 0;
+    pb_error err;
+    CHECK(pb_sparse_layout_build(3, test_cells, test_bricks, 4, l, &P, NULL, &err) == PB_OK);
+    pb_volume v, w;
+    fill(&v, P, 1, 1, 4);
+    v.flags = PB_VOLUME_SPARSE | PB_VOLUME_IRRADIANCE;
+    v.sparse = l;
+    char path[512];
+    snprintf(path, sizeof path, "%s/sparse.probes", temp_dir());
+    CHECKF(pb_volume_write(path, &v, &err) == PB_OK, "%s", err.message);
+    CHECKF(pb_volume_read(path, &w, &err) == PB_OK, "%s", err.message);
+    CHECK(w.file_version == 4 && (w.flags & PB_VOLUME_SPARSE) && w.sparse && w.probe_count == P);
+    if (w.sparse) {
+        CHECK(w.sparse->levels == 3 && w.sparse->brick_count == 4 && w.sparse->chunk_count == l->chunk_count);
+        CHECK(memcmp(w.sparse->bricks, l->bricks, 4 * sizeof *l->bricks) == 0);
+        CHECK(memcmp(w.sparse->brick_probes, l->brick_probes, 4 * 64 * 4) == 0);
+        CHECK(memcmp(w.sparse->indirection, l->indirection, 2 * 4) == 0);
+        CHECK(memcmp(w.sparse->chunks, l->chunks, (size_t)l->chunk_count * 4) == 0);
+    }
+    CHECK(memcmp(w.sh, v.sh, (size_t)P * 27 * 4) == 0);
+    pb_volume_free(&w);
+    uint64_t size = pb_volume_file_bytes(&v);
+    char *bytes = malloc(size);
+    FILE *f = fopen(path, "rb");
+    CHECK(fread(bytes, 1, size, f) == size);
+    fclose(f);
+    uint64_t at = 0;
+    memcpy(&at, bytes + 416, 8);
+    uint64_t chunks = at + 32 + 4 * 16 + 4 * 64 * 4 + 2 * 4;
+    struct {
+        const char *name;
+        uint64_t offset;
+        uint32_t value;
+        const char *needle;
+    } cases[] = {
+        {"sparse-levels.probes", at, 4, "levels"},
+        {"sparse-brick-level.probes", at + 32 + 12, 3, "level 3"},
+        {"sparse-brick-probe.probes", at + 32 + 64, P, "names probe"},
+        {"sparse-chunk-elsewhere.probes", chunks, 3, "elsewhere"},
+        {"sparse-chunk-range.probes", chunks, 77, "names brick 77"},
+        {"sparse-depth.probes", at + 32 + 4 * 16 + 4 * 64 * 4, 3u << 28, "depth 3"},
+        {"sparse-cells.probes", at + 4, 1u << 21, "too many cells"},
+        {"sparse-offset.probes", 416, 8, "section offsets"},
+        {"sparse-flag-v3.probes", 8, 3, "sparse flag"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char *copy = malloc(size);
+        memcpy(copy, bytes, size);
+        memcpy(copy + cases[i].offset, &cases[i].value, 4);
+        const char *p = write_file(cases[i].name, copy, size);
+        pb_result r = pb_volume_read(p, &w, &err);
+        CHECKF(r == PB_ERROR_PARSE && strstr(err.message, p) && strstr(err.message, cases[i].needle),
+               "%s: %s '%s'", cases[i].name, pb_result_name(r), err.message);
+        free(copy);
+    }
+    free(bytes);
+    pb_volume_free(&v);
+}
+
 /* The depth unit: a power of two u with max distance / u in (64, 128], so
  * mean squares stay <= 16384 in float16 at any scale from 1e-6 m to 1e30 m. */
 static void depth_unit_bounds_the_reach(void)
@@ -547,5 +667,7 @@ int main(void)
     RUN(version2_files_read);
     RUN(outputs_never_replace_what_they_are_not);
     RUN(cancelled_write_replaces_nothing);
+    RUN(sparse_lookup_finds_the_finest_brick);
+    RUN(sparse_files_round_trip_and_refuse_damage);
     return test_summary();
 }

@@ -59,14 +59,15 @@ bool probe_spheres(vec3 o, vec3 d, float t_scene, out vec3 color)
         if (g.counts[k] > 1)
             smin = min(smin, g.spacing[k]);
     float r = smin < 1e30 ? 0.08 * smin : 0.05;
-    int count = g.counts.x * g.counts.y * g.counts.z;
+    // a sparse volume's probes have no grid home: no relocation marker
+    int count = pb_volume.levels == 0u ? g.counts.x * g.counts.y * g.counts.z : int(pb_volume.probe_count);
     float best = t_scene;
     bool hit = false;
     color = vec3(0.0);
     for (int p = 0; p < count; ++p) {
         ivec3 ijk = ivec3(p % g.counts.x, (p / g.counts.x) % g.counts.y, p / (g.counts.x * g.counts.y));
-        vec3 home = g.origin + vec3(ijk) * g.spacing;
         vec3 c = pb_probe_position(p).xyz;
+        vec3 home = pb_volume.levels == 0u ? g.origin + vec3(ijk) * g.spacing : c;
         for (int s = 0; s < 2; ++s) {
             vec3 cs = s == 0 ? c : home;
             float rs = s == 0 ? r : 0.5 * r;

@@ -24,7 +24,8 @@ struct PbVolumeRefs {
     vec4 spacing_vbias; // grid spacing (sparse: the finest level's), view bias
     ivec4 counts_res;   // probes per axis (sparse: coarsest cells per axis), octmap_res
     pb_addr sparse;    // sparse: the layout tables (uint words, pb_sparse_word)
-    uint pad0, pad1;
+    uint probe_count;   // sparse: probes (the grid's are its counts)
+    uint pad;
 };
 
 PbVolumeRefs pb_volume;

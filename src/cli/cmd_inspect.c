@@ -21,6 +21,27 @@ static void print_flags(uint32_t f)
     printf("]");
 }
 
+/* Bricks per level, and probes per level of the brick that first names them. */
+typedef struct sparse_census {
+    uint32_t bricks[3], probes[3];
+} sparse_census;
+
+static sparse_census census(const pb_volume *v)
+{
+    sparse_census c = {{0}, {0}};
+    const pb_sparse_layout *sp = v->sparse;
+    uint32_t seen = 0;
+    for (uint32_t b = 0; b < sp->brick_count; ++b) {
+        c.bricks[sp->bricks[b].level]++;
+        for (uint32_t i = 0; i < PB_SPARSE_BRICK_PROBES; ++i)
+            if (sp->brick_probes[PB_SPARSE_BRICK_PROBES * b + i] == seen) { /* probes are numbered by first use */
+                c.probes[sp->bricks[b].level]++;
+                seen++;
+            }
+    }
+    return c;
+}
+
 static void print_probe_json(const pb_volume *v, uint32_t i, int last)
 {
     double p[3];
@@ -117,6 +138,14 @@ int cmd_inspect(const options *o)
         if (v.flags & PB_VOLUME_SHARD)
             printf(",\n  \"shard\": {\"index\": %u, \"count\": %u, \"first\": %u, \"total\": %u}", v.shard.index,
                    v.shard.count, v.shard.first, v.shard.total);
+        if (v.sparse) {
+            sparse_census c = census(&v);
+            printf(",\n  \"sparse\": {\"levels\": %u, \"cells\": [%u, %u, %u], \"bricks\": [%u, %u, %u], "
+                   "\"probes\": [%u, %u, %u], \"chunk_entries\": %u, \"bytes\": %llu}",
+                   v.sparse->levels, v.sparse->cells[0], v.sparse->cells[1], v.sparse->cells[2], c.bricks[0],
+                   c.bricks[1], c.bricks[2], c.probes[0], c.probes[1], c.probes[2], v.sparse->chunk_count,
+                   (unsigned long long)pb_volume_file_bytes(&v));
+        }
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
         if (o->has_probe)
@@ -146,7 +175,17 @@ int cmd_inspect(const options *o)
         if (v.flags & PB_VOLUME_GRID)
             printf("probes      %u = %u x %u x %u, spacing (%g, %g, %g) m\n", v.probe_count, v.counts[0],
                    v.counts[1], v.counts[2], v.spacing[0], v.spacing[1], v.spacing[2]);
-        else
+        else if (v.sparse) {
+            sparse_census c = census(&v);
+            printf("probes      %u in %u bricks (sparse, %u levels, finest spacing (%g, %g, %g) m, %u x %u x %u "
+                   "coarsest cells)\n", v.probe_count, v.sparse->brick_count, v.sparse->levels, v.spacing[0],
+                   v.spacing[1], v.spacing[2], v.sparse->cells[0], v.sparse->cells[1], v.sparse->cells[2]);
+            for (uint32_t l = 0; l < v.sparse->levels; ++l)
+                printf("level %u     spacing %g m: %u bricks, %u probes first used there\n", l,
+                       v.spacing[0] * pb_sparse_step(v.sparse->levels, l), c.bricks[l], c.probes[l]);
+            printf("bytes       %llu (%u chunk entries)\n", (unsigned long long)pb_volume_file_bytes(&v),
+                   v.sparse->chunk_count);
+        } else
             printf("probes      %u placed points\n", v.probe_count);
         if (v.flags & PB_VOLUME_SHARD)
             printf("part        %u of %u: probes %u..%u of %u, undilated (probebake merge joins the parts)\n",

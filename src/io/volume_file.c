@@ -360,9 +360,9 @@ pb_result pb_volume_write_ex(const char *path, const pb_volume *v, pb_cancel_fn 
     if ((v->flags & PB_VOLUME_SPARSE) && !v->sparse)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: sparse volume without its layout", path);
     if (v->flags & PB_VOLUME_SPARSE) {
-        pb_result lr = pb_sparse_layout_validate(v->sparse, v->probe_count, err);
-        if (lr != PB_OK)
-            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: not written: %s", path, err->message);
+        pb_error why;
+        if (pb_sparse_layout_validate(v->sparse, v->probe_count, &why) != PB_OK)
+            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: not written: %s", path, why.message);
     }
     if (bad && bad_probe == UINT32_MAX) /* the grid origin or spacing, the depth unit */
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
@@ -574,11 +574,12 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     for (uint64_t i = 0; i < halves; ++i)
         v->depth[i] = (uint16_t)(b[l.depth + 2 * i] | b[l.depth + 2 * i + 1] << 8);
     if (l.sparse) {
-        r = read_sparse(b + l.sparse, v, err);
+        pb_error why;
+        r = read_sparse(b + l.sparse, v, &why);
         if (r != PB_OK) {
             free(b);
             pb_volume_free(v);
-            return pb_fail(err, PB_ERROR_PARSE, "%s: %s", path, err->message);
+            return pb_fail(err, r == PB_ERROR_OUT_OF_HOST_MEMORY ? r : PB_ERROR_PARSE, "%s: %s", path, why.message);
         }
     }
     /* before version 3 a probe's paths are what the header says every probe

@@ -30,13 +30,15 @@ static int probe_spheres(const pb_sample_volume *v, const float o[3], const floa
         if (v->counts[k] > 1)
             smin = fminf(smin, v->spacing[k]);
     float r = smin < 1e30f ? 0.08f * smin : 0.05f, best = t_scene;
-    int count = v->counts[0] * v->counts[1] * v->counts[2], hit = 0;
+    /* a sparse volume's probes have no grid home: no relocation marker */
+    int count = v->levels ? (int)v->probe_count : v->counts[0] * v->counts[1] * v->counts[2], hit = 0;
     color[0] = color[1] = color[2] = 0.f;
     for (int p = 0; p < count; ++p) {
         int ijk[3] = {p % v->counts[0], (p / v->counts[0]) % v->counts[1], p / (v->counts[0] * v->counts[1])};
         float home[3], c[3];
         for (int k = 0; k < 3; ++k)
-            home[k] = v->origin[k] + (float)ijk[k] * v->spacing[k], c[k] = v->probes[4 * (size_t)p + k];
+            c[k] = v->probes[4 * (size_t)p + k],
+            home[k] = v->levels ? c[k] : v->origin[k] + (float)ijk[k] * v->spacing[k];
         for (int s = 0; s < 2; ++s) {
             const float *cs = s == 0 ? c : home;
             float rs = s == 0 ? r : 0.5f * r;

@@ -36,6 +36,7 @@ pb_result pb_sample_upload(pb_context *ctx, const pb_sample_volume *s, pb_sample
     gpu_volume_refs *g = &out->refs;
     g->probes = out->probes.address, g->sh = out->sh.address, g->depth = out->depth.address;
     g->levels = s->levels;
+    g->probe_count = s->probe_count;
     g->sparse = s->levels ? out->sparse.address : 0;
     for (int k = 0; k < 3; ++k) {
         g->origin_nbias[k] = s->origin[k];

@@ -17,7 +17,7 @@ typedef struct gpu_volume_refs {
     float spacing_vbias[4];
     int32_t counts_res[4];
     uint64_t sparse; /* layout tables (pb_sample_volume.sparse_words) */
-    uint32_t pad[2];
+    uint32_t probe_count, pad;
 } gpu_volume_refs;
 _Static_assert(sizeof(gpu_volume_refs) == 96, "PbVolumeRefs layout");
 _Static_assert(offsetof(gpu_volume_refs, depth_unit) == 24 && offsetof(gpu_volume_refs, origin_nbias) == 32 &&
