@@ -70,6 +70,13 @@ expect merge-needs-parts 2 'merge needs OUT.probes and the parts' -- "$pb" merge
 expect merge-missing-part-file 1 "error: $tmp/nope.probes: " -- "$pb" merge "$tmp/m.probes" "$tmp/nope.probes"
 expect devices-and-device 1 '--devices splits the bake by device: drop --device' -- \
     "$pb" bake "$demo" --devices 0,0 --device 0 -o "$tmp/x.probes"
+expect layout-garbage 2 "--layout 'octree' is not grid or sparse" -- "$pb" bake "$demo" --layout octree -o "$tmp/x.probes"
+expect max-level-range 2 "--max-level '3' is not an integer in \[0, 2\]" -- "$pb" bake "$demo" --max-level 3 -o "$tmp/x.probes"
+expect refine-error-garbage 2 "--refine-error '-1' is not a relative error" -- "$pb" bake "$demo" --refine-error -1 -o "$tmp/x.probes"
+expect max-level-needs-sparse 1 '--max-level and --refine-error shape a sparse layout: add --layout sparse' -- \
+    "$pb" bake "$demo" --max-level 1 -o "$tmp/x.probes"
+expect sparse-and-shard 1 '--layout sparse places its own probes on one device: not with --shard' -- \
+    "$pb" bake "$demo" --layout sparse --shard 0/2 -o "$tmp/x.probes"
 
 # inspect: a fixture volume (tests/make_test_volume.c)
 "$make_volume" "$tmp/v.probes"
@@ -224,6 +231,12 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-tiny 0 "wrote $tmp/a.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --validation -o "$tmp/a.probes"
     expect bake-inspect 0 '"probes": 8,' -- "$pb" inspect "$tmp/a.probes" --json
+    expect bake-sparse 0 '^sparse: 2 levels, bricks 1 [0-9]+ ' -- \
+        "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 1 --rays 32 --passes 2 --octmap-res 4 --validation \
+        -o "$tmp/s.probes"
+    expect inspect-sparse 0 '^level 1     spacing 1 m: [0-9]+ bricks' -- "$pb" inspect "$tmp/s.probes"
+    expect render-sparse 0 "wrote $tmp/s.png: 32x24, probes" -- \
+        "$pb" render "$demo" --volume "$tmp/s.probes" --size 32x24 --validation -o "$tmp/s.png"
     "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 -o "$tmp/b.probes" --quiet >/dev/null
     "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --seed 9 -o "$tmp/c.probes" --quiet >/dev/null
     # same seed: identical bytes except the timings block (offsets 184..247, docs/format.md)
