@@ -341,16 +341,19 @@ static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t 
             continue;
         for (uint32_t c = 0; c < 27; ++c) {
             uint32_t cc[3] = {c % 3, (c / 3) % 3, c / 9};
-            /* a surface within two cells of a corner probe, or a corner inside geometry */
-            int near = 0;
-            for (uint32_t i = 0; i < 8 && !near; ++i) {
+            /* a surface within two cells of a corner probe, or a corner inside geometry;
+             * a cell with no valid corner is solid: nothing there to light */
+            int near = 0, open = 0;
+            for (uint32_t i = 0; i < 8; ++i) {
                 uint32_t k3[3];
                 for (int k = 0; k < 3; ++k)
                     k3[k] = (3 * br->coord[k] + cc[k] + ((i >> k) & 1u)) * step;
                 uint32_t s = store_find(j, k3);
-                near = !(j->ps.flags[s] & PB_PROBE_VALID) || nearest_surface(j, s) < 2.0 * s_l;
+                int valid = (j->ps.flags[s] & PB_PROBE_VALID) != 0;
+                open |= valid;
+                near |= !valid || nearest_surface(j, s) < 2.0 * s_l;
             }
-            if (!near) {
+            if (!near || !open) {
                 j->stats.skipped[level]++;
                 continue;
             }
@@ -370,7 +373,7 @@ static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t 
         uint32_t s = store_find(j, test_keys + 3 * (size_t)t);
         int refine;
         if (!(j->ps.flags[s] & PB_PROBE_VALID)) {
-            refine = 1; /* geometry inside the cell */
+            refine = 1; /* geometry crosses the cell: a valid corner, an invalid probe inside */
         } else {
             float p[3];
             for (int k = 0; k < 3; ++k)

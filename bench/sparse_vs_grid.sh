@@ -1,0 +1,131 @@
+#!/usr/bin/env bash
+# Sparse bricks against uniform grids (issue 14): for each layout, probes,
+# file bytes and bake wall time against the image error of probe-lit renders
+# compared with path-traced references (render --mode diff:
+# relative_rmse_surfaces and p95_relative_error, averaged over the views).
+# Grids at several spacings, sparse layouts at several refinement errors, all
+# in the same run; ratios are against the finest grid (the peer). Prints a
+# table, writes CSV and JSON.
+#
+#   bench/sparse_vs_grid.sh [--probebake P] [--out DIR] [--size WxH] [--spp N]
+#                           [--grid "S1 S2 ..."] [--finest F] [--sparse "E1 E2 ..."] [--max-level L]
+#                           [--view "RENDER ARGS"]... SCENE [bake options...]
+#
+# Defaults: grids at 1, 0.5 and 0.25 m; sparse with the finest spacing
+# --finest (default the smallest grid spacing) at errors 0.3, 0.1 and 0.03;
+# 160x120 at the diff's default 16 spp (reference 16x that); the view
+# "--camera 0"; bake options --rays 256 --passes 4; into
+# bench/results/sparse_vs_grid/.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+pb=$root/build/probebake
+out=$root/bench/results/sparse_vs_grid
+size=160x120
+spp=""
+grids="1 0.5 0.25"
+finest=""
+errors="0.3 0.1 0.03"
+max_level=2
+views=()
+while [ $# -gt 0 ]; do
+    case $1 in
+        --probebake) pb=$2; shift 2 ;;
+        --out) out=$2; shift 2 ;;
+        --size) size=$2; shift 2 ;;
+        --spp) spp=$2; shift 2 ;;
+        --grid) grids=$2; shift 2 ;;
+        --finest) finest=$2; shift 2 ;;
+        --sparse) errors=$2; shift 2 ;;
+        --max-level) max_level=$2; shift 2 ;;
+        --view) views+=("$2"); shift 2 ;;
+        *) break ;;
+    esac
+done
+[ $# -ge 1 ] || { echo "usage: $0 [options] SCENE [bake options...]" >&2; exit 2; }
+scene=$1
+shift
+args=("$@")
+[ ${#args[@]} -gt 0 ] || args=(--rays 256 --passes 4)
+[ ${#views[@]} -gt 0 ] || views=("--camera 0")
+if [ -z "$finest" ]; then
+    finest=$(for s in $grids; do echo "$s"; done | sort -g | head -n 1)
+fi
+mkdir -p "$out"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+now_ms() { echo $(($(date +%s%N) / 1000000)); }
+json_num() { sed -n "s/.*\"$1\": \\([-0-9.eE+]*\\).*/\\1/p" | head -n 1; }
+
+device=$("$pb" devices --json | sed -n 's/.*"index": 0, "name": "\([^"]*\)".*/\1/p' | head -n 1)
+echo "sparse_vs_grid: $scene ${args[*]}; grids $grids m; sparse finest $finest m, max level $max_level, errors $errors;"
+echo "  ${#views[@]} view(s) at $size; $(nproc) cores; device: $device"
+
+rows=()
+measure() { # name param [bake options...]: one layout, baked and rendered
+    local name=$1 param=$2
+    shift 2
+    local vol=$tmp/$name-$param.probes t ms probes bytes rmse=0 p95=0 v=0
+    t=$(now_ms)
+    "$pb" bake "$scene" "${args[@]}" "$@" --quiet -o "$vol" >"$tmp/bake.txt"
+    ms=$(($(now_ms) - t))
+    probes=$("$pb" inspect "$vol" --json | json_num probes)
+    bytes=$(stat -c %s "$vol")
+    for view in "${views[@]}"; do
+        # shellcheck disable=SC2086 # a view is render arguments
+        "$pb" render "$scene" --volume "$vol" --mode diff --json --size "$size" ${spp:+--spp $spp} $view \
+            -o "$tmp/diff.png" 2>/dev/null >"$tmp/diff.json"
+        rmse=$(awk -v a="$rmse" -v b="$(json_num relative_rmse_surfaces <"$tmp/diff.json")" 'BEGIN { print a + b }')
+        p95=$(awk -v a="$p95" -v b="$(json_num p95_relative_error <"$tmp/diff.json")" 'BEGIN { print a + b }')
+        v=$((v + 1))
+    done
+    rmse=$(awk -v a="$rmse" -v n="$v" 'BEGIN { printf "%.4f", a / n }')
+    p95=$(awk -v a="$p95" -v n="$v" 'BEGIN { printf "%.4f", a / n }')
+    rows+=("$name $param $probes $bytes $ms $rmse $p95")
+}
+
+for s in $grids; do
+    measure grid "$s" --spacing "$s"
+done
+for e in $errors; do
+    measure sparse "$e" --spacing "$finest" --layout sparse --max-level "$max_level" --refine-error "$e"
+done
+
+# the peer: the finest grid
+peer=""
+for r in "${rows[@]}"; do
+    set -- $r
+    [ "$1" = grid ] && [ "$(awk -v a="$2" -v b="$finest" 'BEGIN { print (a == b) }')" = 1 ] && peer=$r
+done
+[ -n "$peer" ] || peer=${rows[0]}
+set -- $peer
+peer_probes=$3 peer_bytes=$4 peer_ms=$5
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", (b > 0 ? a / b : 0) }'; }
+
+stem=$out/$(basename "$scene" | sed 's/\.[^.]*$//')
+printf '\n%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s\n' layout param probes "vs grid" bytes "vs grid" "bake ms" "vs grid" \
+    rmse_surf p95_rel
+echo "layout,param,probes,probes_ratio,bytes,bytes_ratio,bake_ms,bake_ratio,relative_rmse_surfaces,p95_relative_error" \
+    >"$stem.csv"
+json="{\"scene\": \"$(basename "$scene")\", \"args\": \"${args[*]}\", \"size\": \"$size\", \"views\": ${#views[@]},"
+json+=" \"cores\": $(nproc), \"device\": \"$device\", \"peer\": \"grid $finest m\", \"rows\": ["
+sep=""
+for r in "${rows[@]}"; do
+    set -- $r
+    printf '%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s\n' "$1" "$2" "$3" "$(ratio "$3" "$peer_probes")" "$4" \
+        "$(ratio "$4" "$peer_bytes")" "$5" "$(ratio "$5" "$peer_ms")" "$6" "$7"
+    echo "$1,$2,$3,$(ratio "$3" "$peer_probes"),$4,$(ratio "$4" "$peer_bytes"),$5,$(ratio "$5" "$peer_ms"),$6,$7" \
+        >>"$stem.csv"
+    json+="$sep{\"layout\": \"$1\", \"param\": $2, \"probes\": $3, \"bytes\": $4, \"bake_ms\": $5,"
+    json+=" \"relative_rmse_surfaces\": $6, \"p95_relative_error\": $7}"
+    sep=", "
+done
+echo "$json]}" >"$stem.json"
+echo
+echo "param: grid spacing (m), or the sparse layout's --refine-error (finest spacing $finest m)"
+echo "wrote $stem.csv and $stem.json"
+# every row measured: probes and bytes > 0, both errors numbers
+for r in "${rows[@]}"; do
+    set -- $r
+    awk -v p="$3" -v b="$4" -v e="$6" -v q="$7" 'BEGIN { exit !(p > 0 && b > 0 && e ~ /^[0-9.]+$/ && q ~ /^[0-9.]+$/) }' ||
+        { echo "sparse_vs_grid: row '$r' is incomplete" >&2; exit 1; }
+done
