@@ -126,8 +126,11 @@ static pb_result bake_points(sparse_job *j, const uint32_t *keys, uint32_t count
         uint64_t key = lattice_key(j, k);
         if (store_find(j, k) != PB_KEY_MAP_MISSING || pb_key_map_get(&seen, key) != PB_KEY_MAP_MISSING)
             continue;
-        if (!pb_key_map_put(&seen, key, n))
-            break;
+        if (!pb_key_map_put(&seen, key, n)) {
+            pb_key_map_free(&seen);
+            free(todo);
+            return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u sparse probes", count);
+        }
         memcpy(todo + 3 * (size_t)n++, k, 3 * sizeof *k);
     }
     pb_key_map_free(&seen);
@@ -502,7 +505,6 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
     sparse_job j;
     memset(&j, 0, sizeof j);
     j.ctx = ctx, j.scene = scene, j.gs = gs, j.d = *desc, j.levels = sd.levels;
-    j.d.progress = desc->progress;
     uint32_t span = pow3u(sd.levels);
     for (int k = 0; k < 3; ++k) {
         if (desc->grid.counts[k] == 0 || !(desc->grid.spacing[k] > 0.f) || !isfinite(desc->grid.spacing[k]))

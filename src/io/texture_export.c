@@ -39,6 +39,10 @@ pb_result pb_volume_export_textures(const pb_volume *v, const char *dir, pb_erro
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "%s: the volume is part %u of %u of a sharded bake: probebake merge joins the parts first", dir,
                        v->shard.index, v->shard.count);
+    if (v->flags & PB_VOLUME_SPARSE)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "%s: the volume is sparse (%u probes in bricks); the texture export and the WebGL sampler "
+                       "take grid volumes only so far (docs/sparse.md)", dir, v->probe_count);
     if (!(v->flags & PB_VOLUME_GRID))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "%s: the textures are for a grid volume (the sampler interpolates a grid); this one has "

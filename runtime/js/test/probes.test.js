@@ -79,6 +79,8 @@ test('malformed files throw errors that say what is wrong', () => {
         ['std-error-nan', size - 4, 0x7fc00000, 0, 'standard error'],
         ['header', 0, 0, 100, 'truncated header'],
         ['empty', 0, 0, -1, 'not a probebake volume'],
+        // version 4's sparse flag: this reader says it does not read bricks (the C reader: not on a grid)
+        ['sparse', 16, new DataView(u8(bytes).buffer).getUint32(16, true) | 16, 0, 'sparse volume (bricks)'],
     ];
     for (const [name, offset, value, keep, needle] of cases) {
         let copy = u8(bytes);
