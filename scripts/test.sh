@@ -34,6 +34,17 @@ ASAN_OPTIONS=detect_leaks=1 build-fuzz/tests/fuzz_scene_load -max_total_time="${
     >"$scratch.log" 2>&1 || { tail -n 40 "$scratch.log"; echo "fuzzing found a crash: tests/fuzz/crashers"; exit 1; }
 grep -E "^(Done|#[0-9]+ +DONE)" "$scratch.log" | tail -n 1
 rm -rf "$scratch" "$scratch.log"
+# and of the volume reader (the sparse layout's tables index each other); a
+# crash leaves its input in tests/fuzz/volume_corpus, which test_fuzz_corpus reads
+cmake --build build-fuzz -j"$jobs" --target fuzz_volume_read
+echo "== volume reader fuzzing, ${PB_FUZZ_VOLUME_SECONDS:-15} s from tests/fuzz/volume_corpus ($(date +%T))"
+scratch=$(mktemp -d)
+ASAN_OPTIONS=detect_leaks=1 build-fuzz/tests/fuzz_volume_read -max_total_time="${PB_FUZZ_VOLUME_SECONDS:-15}" \
+    -max_len=131072 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=tests/fuzz/volume_corpus/crash- "$scratch" \
+    tests/fuzz/volume_corpus >"$scratch.log" 2>&1 ||
+    { tail -n 40 "$scratch.log"; echo "fuzzing found a crash: tests/fuzz/volume_corpus/crash-*"; exit 1; }
+grep -E "^(Done|#[0-9]+ +DONE)" "$scratch.log" | tail -n 1
+rm -rf "$scratch" "$scratch.log"
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$jobs"

@@ -159,10 +159,11 @@ printf '{"points": [[0, 1, 0], [1e39, 0, 0]]}' >"$tmp/far.json"
 expect points-overflow 1 "error: $tmp/far.json: point 1 at \(1e\+39, 0, 0\): coordinates must be within \+-1e\+15 m" -- \
     "$pb" bake "$demo" --points "$tmp/far.json" -o "$tmp/x.probes"
 expect refusals-left-no-file 0 '^absent$' -- bash -c "[ -e '$tmp/x.probes' ] && echo present || echo absent"
-# a file holding NaN (written by hand: the writer refuses them) prints JSON null, never nan
+# a file holding NaN (written by hand: the writer refuses them) is refused by the reader too
 cp "$tmp/v.probes" "$tmp/nan.probes"
 printf '\x00\x00\xc0\x7f' | dd of="$tmp/nan.probes" bs=1 seek=704 conv=notrunc status=none # SH[0] of probe 0
-expect inspect-json-nan-null 0 '"index": 0, .*"sh": \[null, 0.00999999978' -- "$pb" inspect "$tmp/nan.probes" --json
+expect inspect-nan-refused 1 "error: $tmp/nan.probes: probe 0 has a NaN or infinite value in an SH coefficient" -- \
+    "$pb" inspect "$tmp/nan.probes" --json
 expect inspect-json-no-nan 0 '^clean$' -- \
     bash -c "'$pb' inspect '$tmp/nan.probes' --json | grep -Eqi '(: |\\[|, )-?(nan|inf)' && echo dirty || echo clean"
 expect inspect-json-depth-unit 0 '"depth_unit": 0.25,' -- "$pb" inspect "$tmp/v.probes" --json

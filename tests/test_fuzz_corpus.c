@@ -78,9 +78,55 @@ static void crashers(void)
     load_all("tests/fuzz/crashers");
 }
 
+/* The volume reader's inputs (tests/fuzz/volume_corpus, the seeds and
+ * what fuzz_volume_read found): read, laid out for sampling and sampled as
+ * the harness does; the seeds (a grid and two sparse layouts) must read. */
+static void volume_corpus(void)
+{
+    const char *dir = source_path("tests/fuzz/volume_corpus");
+    DIR *d = opendir(dir);
+    if (!d) {
+        skip("tests/fuzz/volume_corpus absent");
+        return;
+    }
+    uint32_t files = 0, read = 0, sparse = 0, unnamed = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (e->d_name[0] == '.')
+            continue;
+        char path[2048];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        ++files;
+        pb_volume v;
+        pb_error err;
+        if (pb_volume_read(path, &v, &err) != PB_OK) {
+            unnamed += !err.message[0];
+            continue;
+        }
+        ++read;
+        sparse += v.sparse != NULL;
+        pb_sample_volume sv;
+        double o[3] = {0, 0, 0};
+        if (pb_sample_volume_build(&v, o, 0.f, 0.f, &sv, &err) == PB_OK) {
+            for (int i = 0; i < 8; ++i) {
+                float p[3], n[3] = {0.f, 1.f, 0.f}, rgb[3];
+                for (int k = 0; k < 3; ++k)
+                    p[k] = (float)(v.origin[k] + (i >> k & 1) * 10.0 * v.spacing[k]);
+                pb_sample_cpu(&sv, p, n, n, rgb);
+            }
+            pb_sample_volume_free(&sv);
+        }
+        pb_volume_free(&v);
+    }
+    closedir(d);
+    fprintf(stderr, "  %u volumes, %u read (%u sparse), the rest refused with a message\n", files, read, sparse);
+    CHECK(unnamed == 0 && sparse >= 2 && read >= 3);
+}
+
 int main(void)
 {
     RUN(corpus);
     RUN(crashers);
+    RUN(volume_corpus);
     return test_summary();
 }

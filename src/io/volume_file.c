@@ -607,5 +607,18 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         convert_v1_depth(v);
     else
         v->depth_unit = get_f32(h + 180);
+    /* what the writer refuses the reader refuses too (version 1's infinite
+     * texels are converted above) */
+    uint32_t nf_probe;
+    const char *nf = first_nonfinite(v, &nf_probe);
+    if (nf) {
+        char what[160];
+        if (nf_probe == UINT32_MAX)
+            snprintf(what, sizeof what, "%s is NaN or infinite", nf);
+        else
+            snprintf(what, sizeof what, "probe %u has a NaN or infinite value in %s", nf_probe, nf);
+        pb_volume_free(v);
+        return pb_fail(err, PB_ERROR_PARSE, "%s: %s", path, what);
+    }
     return PB_OK;
 }

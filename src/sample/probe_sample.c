@@ -91,9 +91,11 @@ void pb_sample_volume_free(pb_sample_volume *s)
     memset(s, 0, sizeof *s);
 }
 
+/* x clamped to [lo, hi]; NaN gives lo (the GLSL leaves NaN to the driver;
+ * here a NaN from a damaged file must not reach an int conversion) */
 static float clampf(float x, float lo, float hi)
 {
-    return x < lo ? lo : (x > hi ? hi : x);
+    return x >= lo ? (x > hi ? hi : x) : lo;
 }
 
 static void oct_encode(const float d[3], float uv[2])
@@ -195,8 +197,7 @@ static void sample_cage(const pb_sample_volume *s, const cage_grid *g, const flo
         biased[k] = p[k] + (n[k] * s->normal_bias + view[k] * s->view_bias) * smin;
         rel[k] = g->counts[k] > 1 ? (biased[k] - g->origin[k]) / g->spacing[k] : 0.f;
         int hi = g->counts[k] - 2 > 0 ? g->counts[k] - 2 : 0;
-        int b = (int)floorf(rel[k]);
-        base[k] = b < 0 ? 0 : (b > hi ? hi : b);
+        base[k] = (int)clampf(floorf(rel[k]), 0.f, (float)hi); /* in float: rel may be huge or NaN */
         alpha[k] = clampf(rel[k] - (float)base[k], 0.f, 1.f);
     }
     float sum[3] = {0, 0, 0}, sum_tri[3] = {0, 0, 0}, wsum = 0.f, wsum_tri = 0.f;

@@ -264,9 +264,11 @@ pb_result pb_sparse_layout_validate(const pb_sparse_layout *l, uint32_t probe_co
     return PB_OK;
 }
 
+/* x clamped to [lo, hi]; NaN gives lo (the GLSL leaves NaN to the driver;
+ * here a NaN from a damaged file must not reach an int conversion) */
 static float clampf(float x, float lo, float hi)
 {
-    return x < lo ? lo : (x > hi ? hi : x);
+    return x >= lo ? (x > hi ? hi : x) : lo;
 }
 
 uint32_t pb_sparse_find(const pb_sparse_layout *l, const float u[3])
