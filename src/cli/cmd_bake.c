@@ -191,6 +191,11 @@ int cmd_bake(const options *o)
     char where[160];
     if (o->points)
         snprintf(where, sizeof where, "%u points from %.100s", pts.count, o->points);
+    else if (o->sparse)
+        snprintf(where, sizeof where, "sparse bricks over %u x %u x %u finest lattice points, spacing %.3g m, "
+                 "max level %u, refine error %g", d.grid.counts[0], d.grid.counts[1], d.grid.counts[2],
+                 d.grid.spacing[0], o->has_max_level ? o->max_level : PB_SPARSE_MAX_LEVELS - 1,
+                 o->refine_error > 0.f ? o->refine_error : 0.1);
     else
         snprintf(where, sizeof where, "%u x %u x %u = %llu probes, spacing %.3g m", d.grid.counts[0], d.grid.counts[1],
                  d.grid.counts[2], (unsigned long long)probes, d.grid.spacing[0]);
