@@ -78,7 +78,7 @@ static void crashers(void)
     load_all("tests/fuzz/crashers");
 }
 
-/* The volume reader's inputs (tests/fuzz/volume_corpus, the seeds and
+/* The volume reader's inputs (tests/fuzz/volume_corpus: seed-* and
  * what fuzz_volume_read found): read, laid out for sampling and sampled as
  * the harness does; the seeds (a grid and two sparse layouts) must read. */
 static void volume_corpus(void)
