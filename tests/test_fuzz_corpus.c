@@ -4,6 +4,7 @@
  * runs under ASan/UBSan in CI), and every failure must carry a message. */
 #define _POSIX_C_SOURCE 200809L
 #include "test_util.h"
+#include "fuzz/volume_exercise.h"
 
 #include <dirent.h>
 
@@ -97,26 +98,10 @@ static void volume_corpus(void)
         char path[2048];
         snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
         ++files;
-        pb_volume v;
-        pb_error err;
-        if (pb_volume_read(path, &v, &err) != PB_OK) {
-            unnamed += !err.message[0];
-            continue;
-        }
-        ++read;
-        sparse += v.sparse != NULL;
-        pb_sample_volume sv;
-        double o[3] = {0, 0, 0};
-        if (pb_sample_volume_build(&v, o, 0.f, 0.f, &sv, &err) == PB_OK) {
-            for (int i = 0; i < 8; ++i) {
-                float p[3], n[3] = {0.f, 1.f, 0.f}, rgb[3];
-                for (int k = 0; k < 3; ++k)
-                    p[k] = (float)(v.origin[k] + (i >> k & 1) * 10.0 * v.spacing[k]);
-                pb_sample_cpu(&sv, p, n, n, rgb);
-            }
-            pb_sample_volume_free(&sv);
-        }
-        pb_volume_free(&v);
+        int is_sparse, r = pb_fuzz_volume_exercise(path, &is_sparse);
+        unnamed += r < 0;
+        read += r > 0;
+        sparse += r > 0 && is_sparse;
     }
     closedir(d);
     fprintf(stderr, "  %u volumes, %u read (%u sparse), the rest refused with a message\n", files, read, sparse);

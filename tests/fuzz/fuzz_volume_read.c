@@ -5,7 +5,7 @@
  * fine, a crash, leak or sanitizer report is not, and a failure must say
  * what failed. Seeds: tests/fuzz/volume_corpus. */
 #define _POSIX_C_SOURCE 200809L
-#include "probebake/probebake.h"
+#include "volume_exercise.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -22,25 +22,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         return 0;
     fwrite(data, 1, size, f);
     fclose(f);
-    pb_volume v;
-    pb_error err;
-    if (pb_volume_read(path, &v, &err) == PB_OK) {
-        pb_sample_volume sv;
-        double o[3] = {0, 0, 0};
-        if (pb_sample_volume_build(&v, o, 0.f, 0.f, &sv, &err) == PB_OK) {
-            /* a few points across the volume's extent */
-            for (int i = 0; i < 8; ++i) {
-                float p[3], n[3] = {0.f, 1.f, 0.f}, rgb[3];
-                for (int k = 0; k < 3; ++k)
-                    p[k] = (float)(v.origin[k] + (i >> k & 1) * 10.0 * v.spacing[k]);
-                pb_sample_cpu(&sv, p, n, n, rgb);
-            }
-            pb_sample_volume_free(&sv);
-        }
-        pb_volume_free(&v);
-    } else if (!err.message[0]) {
+    int sparse;
+    if (pb_fuzz_volume_exercise(path, &sparse) < 0)
         abort();
-    }
     remove(path);
     return 0;
 }
