@@ -13,19 +13,27 @@ typedef struct prepared {
     pb_sample_volume sv;
 } prepared;
 
-static int prepare(pb_scene *s, const pb_bake_desc *bd, prepared *p)
+/* The scene on the device and, with bd, a volume baked from it: a grid, or
+ * with sd a sparse layout. */
+static int prepare_layout(pb_scene *s, const pb_bake_desc *bd, const pb_sparse_desc *sd, prepared *p)
 {
     memset(p, 0, sizeof *p);
     p->s = s;
     pb_error err;
     if (pb_bvh_build(s, NULL, &p->bvh, &err) != PB_OK || pb_gpu_scene_create(ctx, s, p->bvh, &p->gs, &err) != PB_OK ||
-        (bd && (pb_bake(ctx, s, p->gs, bd, &p->vol, &err) != PB_OK ||
+        (bd && ((sd ? pb_bake_sparse(ctx, s, p->gs, bd, sd, &p->vol, NULL, &err)
+                    : pb_bake(ctx, s, p->gs, bd, &p->vol, &err)) != PB_OK ||
                 pb_sample_volume_build(&p->vol, s->origin, 0.f, 0.f, &p->sv, &err) != PB_OK))) {
         fprintf(stderr, "  prepare: %s\n", err.message);
         t_failures++;
         return 0;
     }
     return 1;
+}
+
+static int prepare(pb_scene *s, const pb_bake_desc *bd, prepared *p)
+{
+    return prepare_layout(s, bd, NULL, p);
 }
 
 static void release(prepared *p)
@@ -44,21 +52,23 @@ static float lum(const float *c)
 
 /* Every mode on the demo scene, GPU against CPU: pixel by pixel for the
  * modes whose randomness stops at the first hit (rounding of sin/cos can
- * still flip a rare shadow ray), image means for the reference. */
-static void kernel_matches_cpu_reference(void)
+ * still flip a rare shadow ray), image means for the reference. With sd, the
+ * volume is a sparse layout (the sparse lookup and sphere view in
+ * render.comp against render_cpu.c). */
+static void render_matches_cpu(const pb_sparse_desc *sd)
 {
     pb_scene *s = load_demo();
     pb_error err;
     if (!s)
         return;
     pb_bake_desc bd = {0};
-    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 60, &bd.grid);
-    bd.rays_per_probe = 64;
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, sd ? 500 : 60, &bd.grid);
+    bd.rays_per_probe = sd ? 32 : 64;
     bd.passes = 1;
     bd.bounces = 1;
     bd.octmap_res = 8;
     prepared p;
-    if (!prepare(s, &bd, &p)) {
+    if (!prepare_layout(s, &bd, sd, &p)) {
         release(&p);
         return;
     }
@@ -107,8 +117,21 @@ static void kernel_matches_cpu_reference(void)
         else
             CHECK(differ <= n / 200);
     }
+    if (sd) /* refined: chunks and bricks of both levels were looked up */
+        CHECK(p.sv.levels == sd->levels && p.vol.sparse && p.vol.sparse->brick_count > 1);
     free(g), free(c), free(gd), free(cd), free(plain);
     release(&p);
+}
+
+static void kernel_matches_cpu_reference(void)
+{
+    render_matches_cpu(NULL);
+}
+
+static void sparse_kernel_matches_cpu_reference(void)
+{
+    pb_sparse_desc sd = {2, 0.05f};
+    render_matches_cpu(&sd);
 }
 
 /* A floor of albedo 0.5 under a constant sky L, its volume baked with the
@@ -338,6 +361,7 @@ int main(void)
     RUN(image_metric);
     RUN(bad_parameters_refused);
     RUN(kernel_matches_cpu_reference);
+    RUN(sparse_kernel_matches_cpu_reference);
     RUN(constant_sky_lights_floor_evenly);
     RUN(reference_converges);
     return test_gpu_finish(ctx);
