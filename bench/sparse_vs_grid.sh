@@ -9,19 +9,26 @@
 #
 #   bench/sparse_vs_grid.sh [--probebake P] [--out DIR] [--size WxH] [--spp N]
 #                           [--grid "S1 S2 ..."] [--finest F] [--sparse "E1 E2 ..."] [--max-level L]
-#                           [--view "RENDER ARGS"]... SCENE [bake options...]
+#                           [--view "RENDER ARGS"]... [--ref-spp N] SCENE [bake options...]
 #
 # Defaults: grids at 1, 0.5 and 0.25 m; sparse with the finest spacing
 # --finest (default the smallest grid spacing) at errors 0.3, 0.1 and 0.03;
-# 160x120 at the diff's default 16 spp (reference 16x that); the view
-# "--camera 0"; bake options --rays 256 --passes 4; into
-# bench/results/sparse_vs_grid/.
+# 160x120, probe images at 64 spp; the view "--camera 0"; bake options
+# --rays 256 --passes 4; into bench/results/sparse_vs_grid/.
+#
+# The reference of each view is path traced once at --ref-spp (default 4096)
+# and every layout is compared with that same image (render --reference), so
+# the reference's own noise is small and equal for all rows. --ref-spp 0:
+# each diff traces its own 16x-spp reference instead (the old, noisier way).
+# References are kept in $out/references/ (keyed by scene, view, size and
+# spp; not committed) and reused by later runs.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 pb=$root/build/probebake
 out=$root/bench/results/sparse_vs_grid
 size=160x120
-spp=""
+spp=64
+ref_spp=4096
 grids="1 0.5 0.25"
 finest=""
 errors="0.3 0.1 0.03"
@@ -33,6 +40,7 @@ while [ $# -gt 0 ]; do
         --out) out=$2; shift 2 ;;
         --size) size=$2; shift 2 ;;
         --spp) spp=$2; shift 2 ;;
+        --ref-spp) ref_spp=$2; shift 2 ;;
         --grid) grids=$2; shift 2 ;;
         --finest) finest=$2; shift 2 ;;
         --sparse) errors=$2; shift 2 ;;
@@ -58,7 +66,26 @@ json_num() { sed -n "s/.*\"$1\": \\([-0-9.eE+]*\\).*/\\1/p" | head -n 1; }
 
 device=$("$pb" devices --json | sed -n 's/.*"index": 0, "name": "\([^"]*\)".*/\1/p' | head -n 1)
 echo "sparse_vs_grid: $scene ${args[*]}; grids $grids m; sparse finest $finest m, max level $max_level, errors $errors;"
-echo "  ${#views[@]} view(s) at $size; $(nproc) cores; device: $device"
+echo "  ${#views[@]} view(s) at $size, probe images $spp spp, references $ref_spp spp; $(nproc) cores; device: $device"
+
+# one converged reference per view (cached: the slow part of the bench)
+refs=()
+if [ "$ref_spp" != 0 ]; then
+    mkdir -p "$out/references"
+    for view in "${views[@]}"; do
+        key=$( (basename "$scene"; cksum <"$scene"; echo "$view $size $ref_spp") | cksum | cut -d' ' -f1)
+        ref=$out/references/$(basename "$scene" | sed 's/\.[^.]*$//')-$key.png
+        if [ ! -s "${ref%.png}.pfm" ]; then
+            echo "  reference for view '$view': $ref_spp spp ..."
+            t=$(now_ms)
+            # shellcheck disable=SC2086 # a view is render arguments
+            "$pb" render "$scene" --mode reference --spp "$ref_spp" --size "$size" $view --pfm -o "$ref" --quiet \
+                >/dev/null
+            echo "    $(($(now_ms) - t)) ms"
+        fi
+        refs+=("${ref%.png}.pfm")
+    done
+fi
 
 rows=()
 measure() { # name param [bake options...]: one layout, baked and rendered
@@ -70,10 +97,11 @@ measure() { # name param [bake options...]: one layout, baked and rendered
     ms=$(($(now_ms) - t))
     probes=$("$pb" inspect "$vol" --json | json_num probes)
     bytes=$(stat -c %s "$vol")
-    for view in "${views[@]}"; do
+    for i in "${!views[@]}"; do
+        view=${views[$i]}
         # shellcheck disable=SC2086 # a view is render arguments
         "$pb" render "$scene" --volume "$vol" --mode diff --json --size "$size" ${spp:+--spp $spp} $view \
-            -o "$tmp/diff.png" 2>/dev/null >"$tmp/diff.json"
+            ${refs[$i]:+--reference ${refs[$i]}} -o "$tmp/diff.png" 2>/dev/null >"$tmp/diff.json"
         rmse=$(awk -v a="$rmse" -v b="$(json_num relative_rmse_surfaces <"$tmp/diff.json")" 'BEGIN { print a + b }')
         p95=$(awk -v a="$p95" -v b="$(json_num p95_relative_error <"$tmp/diff.json")" 'BEGIN { print a + b }')
         v=$((v + 1))
@@ -107,6 +135,7 @@ printf '\n%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s\n' layout param probes "
 echo "layout,param,probes,probes_ratio,bytes,bytes_ratio,bake_ms,bake_ratio,relative_rmse_surfaces,p95_relative_error" \
     >"$stem.csv"
 json="{\"scene\": \"$(basename "$scene")\", \"args\": \"${args[*]}\", \"size\": \"$size\", \"views\": ${#views[@]},"
+json+=" \"probe_spp\": $spp, \"reference_spp\": $ref_spp,"
 json+=" \"cores\": $(nproc), \"device\": \"$device\", \"peer\": \"grid $finest m\", \"rows\": ["
 sep=""
 for r in "${rows[@]}"; do

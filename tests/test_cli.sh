@@ -354,6 +354,29 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect render-png-pfm 0 '^PNG PF$' -- bash -c "printf '%s %s\n' \$(head -c 4 '$tmp/r.png' | tail -c 3) \$(head -c 2 '$tmp/r.pfm')"
     expect render-diff-json 0 '"relative_rmse": [0-9.]+, "relative_rmse_indirect": [0-9.]+' -- \
         "$pb" render "$demo" --volume "$tmp/a.probes" --mode diff --size 16x12 --spp 1 --json -o "$tmp/d.png"
+    # a diff against a given reference (bench/sparse_vs_grid.sh): the same image
+    # as the one a diff traces itself gives the same metrics
+    expect render-reference-pfm 0 "wrote $tmp/ref16.png: 16x12, reference, 16 spp" -- \
+        "$pb" render "$demo" --mode reference --size 16x12 --spp 16 --bounces 3 --pfm -o "$tmp/ref16.png"
+    diff_metrics() { "$pb" render "$demo" --volume "$tmp/a.probes" --mode diff --size 16x12 --spp 1 --bounces 3 --json \
+        -o "$tmp/d2.png" "$@" | sed 's/.*"relative_rmse_surfaces": \([0-9.]*\), "p95_relative_error": \([0-9.]*\).*/\1 \2/'; }
+    m_own=$(diff_metrics)
+    m_given=$(diff_metrics --reference "$tmp/ref16.pfm")
+    expect render-diff-given-reference 0 '^same [0-9.]+ [0-9.]+$' -- \
+        bash -c "[ '$m_own' = '$m_given' ] && echo same $m_own || echo 'different: $m_own / $m_given'"
+    expect render-diff-reference-json 0 '"reference": ".*ref16.pfm", "relative_rmse": [0-9.]+, "relative_rmse_indirect": null' -- \
+        "$pb" render "$demo" --volume "$tmp/a.probes" --mode diff --size 16x12 --spp 1 --json --reference "$tmp/ref16.pfm" \
+        -o "$tmp/d3.png"
+    expect render-reference-size 1 "ref16.pfm: the reference is 16x12, the render 32x24 \(--size\)" -- \
+        "$pb" render "$demo" --volume "$tmp/a.probes" --mode diff --size 32x24 --reference "$tmp/ref16.pfm" -o "$tmp/d4.png"
+    expect render-reference-not-pfm 1 "ref16.png: not a colour PFM image" -- \
+        "$pb" render "$demo" --volume "$tmp/a.probes" --mode diff --size 16x12 --reference "$tmp/ref16.png" -o "$tmp/d4.png"
+    head -c 100 "$tmp/ref16.pfm" >"$tmp/short.pfm"
+    expect render-reference-truncated 1 "short.pfm: PFM of 16x12 needs [0-9]+ bytes, has 100" -- \
+        "$pb" render "$demo" --volume "$tmp/a.probes" --mode diff --size 16x12 --reference "$tmp/short.pfm" -o "$tmp/d4.png"
+    expect render-reference-not-diff 2 "--reference REF.pfm is for --mode diff" -- \
+        "$pb" render "$demo" --volume "$tmp/a.probes" --reference "$tmp/ref16.pfm" -o "$tmp/d4.png"
+    expect render-reference-no-partial 0 '^absent$' -- bash -c "[ -e '$tmp/d4.png' ] && echo present || echo absent"
     expect render-reference-eye 0 "wrote $tmp/ref.png: 16x12, reference, 4 spp" -- \
         "$pb" render "$demo" --eye 0,1.5,2 --target 0,1,0 --fov 60 --size 16x12 --spp 4 --exposure 1 -o "$tmp/ref.png"
     expect bake-too-large 1 'need [0-9.]+ MiB of (device|host) memory; the budget is half of .* MiB \([0-9.]+ MiB\)' -- \

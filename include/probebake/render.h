@@ -101,6 +101,10 @@ void pb_image_surface_metrics(const float *a, const float *b, const uint8_t *cls
  * bottom row first as PFM says), atomically. PB_ERROR_IO naming the path. */
 pb_result pb_write_png(const char *path, const unsigned char *rgb8, uint32_t width, uint32_t height, pb_error *err);
 pb_result pb_write_pfm(const char *path, const float *rgba, uint32_t width, uint32_t height, pb_error *err);
+/* Reads a colour PFM (either byte order) into a malloc'd RGBA image, top
+ * row first, alpha 1. PB_ERROR_IO naming the path for anything else: wrong
+ * magic, truncated pixels, non-finite values. */
+pb_result pb_read_pfm(const char *path, float **rgba, uint32_t *width, uint32_t *height, pb_error *err);
 
 /* --- debug views of a volume (probebake inspect --atlas / --sh-view) --- */
 

@@ -36,7 +36,7 @@ typedef struct options {
     uint32_t probes, rays, seed, probe;
     cli_log log;
     /* render */
-    const char *volume, *mode, *atlas, *sh_view;
+    const char *volume, *mode, *atlas, *sh_view, *reference;
     float eye[3], target[3], up[3], fov_deg, exposure;
     int has_eye, has_target, has_up, has_camera, has_exposure, pfm, show_probes;
     uint32_t camera, width, height, spp;

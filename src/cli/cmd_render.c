@@ -61,6 +61,8 @@ int cmd_render(const options *o)
         return cli_usage_error("%s: --eye and --target go together", "render");
     if (o->pfm && !strcmp(o->output, "-"))
         return cli_usage_error("%s: --pfm writes beside -o FILE; -o - has no file to write beside", "render");
+    if (o->reference && !diff)
+        return cli_usage_error("%s: --reference REF.pfm is for --mode diff", "render");
     char pfm[1100];
     sibling(o->output, ".pfm", pfm, sizeof pfm);
     pb_log log = {cli_log_to_stderr, (void *)&o->log};
@@ -81,11 +83,22 @@ int cmd_render(const options *o)
     unsigned char *rgb8 = NULL;
     int rc = 1;
     /* outputs checked before any work: not a directory, writable, no input */
-    const char *inputs[3] = {o->scene, o->env, o->volume};
-    if (pb_output_check(o->output, inputs, 3, &err) != PB_OK || (o->pfm && pb_output_check(pfm, inputs, 3, &err) != PB_OK))
+    const char *inputs[4] = {o->scene, o->env, o->volume, o->reference};
+    if (pb_output_check(o->output, inputs, 4, &err) != PB_OK || (o->pfm && pb_output_check(pfm, inputs, 4, &err) != PB_OK))
         goto out;
     if (o->volume && pb_volume_read(o->volume, &vol, &err) != PB_OK)
         goto out;
+    if (o->reference) { /* a converged reference, read and checked before any device work */
+        uint32_t rw = 0, rh = 0;
+        if (pb_read_pfm(o->reference, &ref, &rw, &rh, &err) != PB_OK)
+            goto out;
+        if (rw != (o->width ? o->width : 640) || rh != (o->height ? o->height : 480)) {
+            snprintf(err.message, sizeof err.message, "%s: the reference is %ux%u, the render %ux%u (--size)",
+                     o->reference, rw, rh, o->width ? o->width : 640, o->height ? o->height : 480);
+            err.code = PB_ERROR_INVALID_ARGUMENT;
+            goto out;
+        }
+    }
     if (cli_environment(o, &env, &err) != PB_OK)
         goto out;
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK ||
@@ -166,8 +179,10 @@ int cmd_render(const options *o)
         goto out;
     uint64_t pixels = (uint64_t)d.width * d.height;
     img = malloc(pixels * 16), img_direct = malloc(pixels * 16), rgb8 = malloc(pixels * 3);
+    if (diff && !ref)
+        ref = malloc(pixels * 16);
     if (diff)
-        ref = malloc(pixels * 16), ref_direct = malloc(pixels * 16);
+        ref_direct = malloc(pixels * 16);
     if (!img || !img_direct || !rgb8 || (diff && (!ref || !ref_direct))) {
         snprintf(err.message, sizeof err.message, "out of host memory for a %ux%u image", d.width, d.height);
         goto out;
@@ -191,8 +206,11 @@ int cmd_render(const options *o)
         pb_render_desc dr = d;
         dr.mode = PB_RENDER_REFERENCE;
         dr.spp = o->has_spp ? o->spp * 16 : 256;
-        if (pb_render(ctx, s, gs, &dr, ref, ref_direct, &ms_ref, &err) != PB_OK)
+        if (!o->reference && pb_render(ctx, s, gs, &dr, ref, ref_direct, &ms_ref, &err) != PB_OK)
             goto out;
+        if (o->reference) /* coverage is the camera's: the probe image's (a PFM has no alpha) */
+            for (uint64_t i = 0; i < pixels; ++i)
+                ref[4 * i + 3] = img[4 * i + 3];
         pb_render_desc dd = d;
         dd.mode = PB_RENDER_DIRECT;
         float *direct_img = malloc(pixels * 16);
@@ -217,7 +235,8 @@ int cmd_render(const options *o)
             }
         for (uint64_t i = 0; i < pixels; ++i)
             img_direct[4 * i + 3] = img[4 * i + 3], ref_direct[4 * i + 3] = ref[4 * i + 3];
-        rmse_indirect = pb_image_relative_rmse(img_direct, ref_direct, d.width, d.height);
+        /* a given reference comes without its direct part: no indirect metric */
+        rmse_indirect = o->reference ? NAN : pb_image_relative_rmse(img_direct, ref_direct, d.width, d.height);
         free(direct_img);
         pb_error_heatmap(img, ref, d.width, d.height, 0.5f, rgb8);
     } else {
@@ -242,16 +261,27 @@ int cmd_render(const options *o)
     if (o->json) {
         fprintf(report, "{\"image\": \"%s\", \"mode\": \"%s\", \"width\": %u, \"height\": %u, \"spp\": %u, \"gpu_ms\": %.3f",
                o->output, mode_name, d.width, d.height, spp, ms);
-        if (diff)
-            fprintf(report, ", \"reference_spp\": %u, \"reference_gpu_ms\": %.3f, \"relative_rmse\": %.6f, "
-                   "\"relative_rmse_indirect\": %.6f, \"relative_rmse_surfaces\": %.6f, \"p95_relative_error\": %.6f, "
-                   "\"surface_pixels\": %llu",
-                   o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect, surf.relative_rmse, surf.p95_relative,
-                   (unsigned long long)surf.pixels);
+        if (diff) {
+            char ind[32] = "null";
+            if (!o->reference)
+                snprintf(ind, sizeof ind, "%.6f", rmse_indirect);
+            if (o->reference)
+                fprintf(report, ", \"reference\": \"%s\"", o->reference);
+            else
+                fprintf(report, ", \"reference_spp\": %u, \"reference_gpu_ms\": %.3f", o->has_spp ? o->spp * 16 : 256,
+                        ms_ref);
+            fprintf(report, ", \"relative_rmse\": %.6f, \"relative_rmse_indirect\": %s, \"relative_rmse_surfaces\": %.6f, "
+                   "\"p95_relative_error\": %.6f, \"surface_pixels\": %llu",
+                   rmse, ind, surf.relative_rmse, surf.p95_relative, (unsigned long long)surf.pixels);
+        }
         fprintf(report, "}\n");
     } else {
         fprintf(report, "wrote %s: %ux%u, %s, %u spp, GPU %.0f ms\n", o->output, d.width, d.height, mode_name, spp, ms);
-        if (diff)
+        if (diff && o->reference)
+            fprintf(report, "probes vs %s: relative RMSE %.4f of the image; non-emissive surfaces (%llu pixels): "
+                   "relative RMSE %.4f, p95 per-pixel error %.4f; heat map: black 0, red >= 50 %%\n",
+                   o->reference, rmse, (unsigned long long)surf.pixels, surf.relative_rmse, surf.p95_relative);
+        else if (diff)
             fprintf(report, "probes vs reference (%u spp, GPU %.0f ms): relative RMSE %.4f of the image, %.4f of the indirect "
                    "light; non-emissive surfaces (%llu pixels): relative RMSE %.4f, p95 per-pixel error %.4f; heat map: "
                    "black 0, red >= 50 %%\n",

@@ -137,3 +137,62 @@ pb_result pb_write_pfm(const char *path, const float *rgba, uint32_t width, uint
     free(b);
     return r;
 }
+
+/* The PFM reader for what pb_write_pfm writes (and any colour PFM): "PF",
+ * width, height, a scale whose sign is the byte order, then rows bottom to
+ * top. Alpha 1 everywhere (a PFM has none); the caller sets coverage. */
+pb_result pb_read_pfm(const char *path, float **rgba, uint32_t *width, uint32_t *height, pb_error *err)
+{
+    *rgba = NULL;
+    *width = *height = 0;
+    unsigned char *b = NULL;
+    uint64_t size = 0;
+    pb_result r = pb_input_read(path, (uint64_t)1 << 32, &b, &size, err);
+    if (r != PB_OK)
+        return r;
+    /* header: three whitespace-separated tokens after "PF" and one whitespace byte */
+    char magic[3] = {0};
+    unsigned w = 0, h = 0;
+    double scale = 0;
+    int used = 0;
+    if (sscanf((const char *)b, "%2s %u %u %lf%n", magic, &w, &h, &scale, &used) != 4 || strcmp(magic, "PF") ||
+        used <= 0 || (uint64_t)used >= size || !(b[used] == '\n' || b[used] == ' ' || b[used] == '\r')) {
+        free(b);
+        return pb_fail(err, PB_ERROR_IO, "%s: not a colour PFM image (expected \"PF\", width, height, scale)", path);
+    }
+    uint64_t need = (uint64_t)used + 1 + (uint64_t)w * h * 12;
+    if (w == 0 || h == 0 || w > 65536 || h > 65536 || scale == 0.0 || !isfinite(scale) || size < need) {
+        free(b);
+        return pb_fail(err, PB_ERROR_IO, "%s: PFM of %ux%u needs %llu bytes, has %llu (or a bad size or scale)", path,
+                       w, h, (unsigned long long)need, (unsigned long long)size);
+    }
+    float *img = malloc((size_t)w * h * 16);
+    if (!img) {
+        free(b);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory for a %ux%u image", path, w, h);
+    }
+    const unsigned char *px = b + used + 1;
+    const uint16_t probe = 1;
+    int host_little = *(const unsigned char *)&probe == 1, file_little = scale < 0.0;
+    for (uint32_t y = 0; y < h; ++y)
+        for (uint32_t x = 0; x < w; ++x) {
+            float *dst = img + 4 * ((size_t)w * (h - 1 - y) + x);
+            for (int c = 0; c < 3; ++c) {
+                unsigned char q[4];
+                memcpy(q, px + 12 * ((size_t)w * y + x) + 4 * c, 4);
+                if (host_little != file_little) {
+                    unsigned char t = q[0];
+                    q[0] = q[3], q[3] = t, t = q[1], q[1] = q[2], q[2] = t;
+                }
+                memcpy(&dst[c], q, 4);
+            }
+            dst[3] = 1.f;
+            if (!isfinite(dst[0]) || !isfinite(dst[1]) || !isfinite(dst[2])) {
+                free(img), free(b);
+                return pb_fail(err, PB_ERROR_IO, "%s: pixel (%u, %u) is not finite", path, x, h - 1 - y);
+            }
+        }
+    free(b);
+    *rgba = img, *width = w, *height = h;
+    return PB_OK;
+}
