@@ -53,6 +53,11 @@ void pb_sample_volume_free(pb_sample_volume *s);
  * direction view (from p towards the viewer). Sparse volumes: from the
  * finest brick whose cell covers p; black where there is none. */
 void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3]);
+/* pb_sample_cpu, also naming the eight probes of the cage it used and the
+ * normalised weight each got (probes -1 and weights 0 where no brick serves
+ * p): what tests check "no probe inside geometry is sampled" with. */
+void pb_sample_cage_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3],
+                        float rgb[3], int probes[8], float weights[8]);
 
 /* The Chebyshev visibility weight pb_sample_cpu gives probe `probe` for the
  * (already biased) point q, in [0, 1]: the part of the weight that the depth

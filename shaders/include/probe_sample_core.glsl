@@ -205,6 +205,10 @@ vec3 pb_sample_sparse(PbVolumeGrid g, int levels, vec3 p, vec3 n, vec3 v)
     bg.origin = g.origin + vec3(3 * step * coord) * g.spacing;
     bg.spacing = g.spacing * float(step);
     bg.counts = ivec3(4);
+    // the bias stays a fraction of the finest spacing: scaled by a coarse
+    // brick's it would carry the point through walls (leaks)
+    bg.normal_bias = g.normal_bias / float(step);
+    bg.view_bias = g.view_bias / float(step);
     return pb_sample_cage(bg, b, p, n, v);
 }
 #endif

@@ -344,6 +344,17 @@ static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t 
             continue;
         for (uint32_t c = 0; c < 27; ++c) {
             uint32_t cc[3] = {c % 3, (c / 3) % 3, c / 9};
+            /* the coarsest bricks overshoot the bounds (a whole number of 27-cell
+             * spans); a cell wholly beyond them is not the user's volume */
+            int beyond = 0;
+            for (int k = 0; k < 3; ++k) {
+                uint32_t last = j->d.grid.counts[k] > 1 ? j->d.grid.counts[k] - 1 : 1;
+                beyond |= (3 * br->coord[k] + cc[k]) * step >= last;
+            }
+            if (beyond) {
+                j->stats.beyond[level]++;
+                continue;
+            }
             /* a surface within two cells of a corner probe, or a corner inside geometry;
              * a cell with no valid corner is solid: nothing there to light */
             int near = 0, open = 0;

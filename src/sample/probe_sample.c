@@ -172,6 +172,7 @@ typedef struct cage_grid {
     float origin[3], spacing[3];
     int counts[3];
     int brick; /* -1: a grid volume */
+    float normal_bias, view_bias; /* x the cage's smallest spacing */
 } cage_grid;
 
 static int cage_probe(const pb_sample_volume *s, const cage_grid *g, const int ijk[3])
@@ -182,8 +183,10 @@ static int cage_probe(const pb_sample_volume *s, const cage_grid *g, const int i
     return (int)s->sparse_words[s->sparse_words[3] + PB_SPARSE_BRICK_PROBES * (uint32_t)g->brick + (uint32_t)local];
 }
 
+/* rgb: the irradiance; probes/weights (may be NULL): the eight cage probes
+ * and the normalised weight each got in it. */
 static void sample_cage(const pb_sample_volume *s, const cage_grid *g, const float p[3], const float n[3],
-                        const float view[3], float rgb[3])
+                        const float view[3], float rgb[3], int probes[8], float weights[8])
 {
     float smin = 1e30f;
     for (int k = 0; k < 3; ++k)
@@ -194,13 +197,14 @@ static void sample_cage(const pb_sample_volume *s, const cage_grid *g, const flo
     float biased[3], rel[3], alpha[3];
     int base[3];
     for (int k = 0; k < 3; ++k) {
-        biased[k] = p[k] + (n[k] * s->normal_bias + view[k] * s->view_bias) * smin;
+        biased[k] = p[k] + (n[k] * g->normal_bias + view[k] * g->view_bias) * smin;
         rel[k] = g->counts[k] > 1 ? (biased[k] - g->origin[k]) / g->spacing[k] : 0.f;
         int hi = g->counts[k] - 2 > 0 ? g->counts[k] - 2 : 0;
         base[k] = (int)clampf(floorf(rel[k]), 0.f, (float)hi); /* in float: rel may be huge or NaN */
         alpha[k] = clampf(rel[k] - (float)base[k], 0.f, 1.f);
     }
-    float sum[3] = {0, 0, 0}, sum_tri[3] = {0, 0, 0}, wsum = 0.f, wsum_tri = 0.f;
+    float sum[3] = {0, 0, 0}, sum_tri[3] = {0, 0, 0}, wsum = 0.f, wsum_tri = 0.f, wi[8] = {0}, wti[8];
+    int pi[8];
     for (int i = 0; i < 8; ++i) {
         int off[3] = {i & 1, (i >> 1) & 1, (i >> 2) & 1}, ijk[3];
         float wt = 1.f;
@@ -209,6 +213,7 @@ static void sample_cage(const pb_sample_volume *s, const cage_grid *g, const flo
             wt *= off[k] ? alpha[k] : 1.f - alpha[k];
         }
         int probe = cage_probe(s, g, ijk);
+        pi[i] = probe, wti[i] = wt;
         float e[3];
         pb_sh_eval(s->sh + 27 * (size_t)probe, n, e);
         for (int k = 0; k < 3; ++k)
@@ -228,9 +233,14 @@ static void sample_cage(const pb_sample_volume *s, const cage_grid *g, const flo
         if (w < 0.2f)
             w *= w * w * 25.f;
         w *= wt;
+        wi[i] = w;
         for (int k = 0; k < 3; ++k)
             sum[k] += w * e[k];
         wsum += w;
+    }
+    for (int i = 0; probes && i < 8; ++i) {
+        probes[i] = pi[i];
+        weights[i] = wsum > 0.f ? wi[i] / wsum : (wsum_tri > 0.f ? wti[i] / wsum_tri : 0.f);
     }
     for (int k = 0; k < 3; ++k) {
         float e = wsum > 0.f ? sum[k] / wsum : (wsum_tri > 0.f ? sum_tri[k] / wsum_tri : 0.f);
@@ -262,14 +272,20 @@ static int sparse_brick_at(const pb_sample_volume *s, const float u[3])
     return b == PB_SPARSE_EMPTY ? -1 : (int)b;
 }
 
-void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3])
+void pb_sample_cage_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3],
+                        float rgb[3], int probes[8], float weights[8])
 {
     cage_grid g = {{s->origin[0], s->origin[1], s->origin[2]},
                    {s->spacing[0], s->spacing[1], s->spacing[2]},
                    {s->counts[0], s->counts[1], s->counts[2]},
-                   -1};
+                   -1,
+                   s->normal_bias,
+                   s->view_bias};
+    if (probes)
+        for (int i = 0; i < 8; ++i)
+            probes[i] = -1, weights[i] = 0.f;
     if (s->levels == 0) {
-        sample_cage(s, &g, p, n, view, rgb);
+        sample_cage(s, &g, p, n, view, rgb, probes, weights);
         return;
     }
     int levels = (int)s->levels, span = levels == 1 ? 3 : (levels == 2 ? 9 : 27);
@@ -291,5 +307,14 @@ void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3]
         g.counts[k] = 4;
     }
     g.brick = b;
-    sample_cage(s, &g, p, n, view, rgb);
+    /* the bias stays a fraction of the finest spacing: scaled by a coarse
+     * brick's it would carry the point through walls (leaks) */
+    g.normal_bias = s->normal_bias / (float)step;
+    g.view_bias = s->view_bias / (float)step;
+    sample_cage(s, &g, p, n, view, rgb, probes, weights);
+}
+
+void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3], float rgb[3])
+{
+    pb_sample_cage_cpu(s, p, n, view, rgb, NULL, NULL);
 }
