@@ -260,7 +260,12 @@ vec3 pb_sample_sparse(PbVolumeGrid g, int levels, vec3 p, vec3 n, vec3 v)
 {
     int span = levels == 1 ? 3 : (levels == 2 ? 9 : 27); // finest cells per coarsest brick
     vec3 cell = g.spacing * float(span);
-    int b = pb_sparse_brick_at((p - g.origin) / cell, g.counts);
+    // the brick is looked up where its cage is interpolated, at the biased
+    // point: looked up at p, a point near a brick face would be served by a
+    // cage it lies outside of (clamped), a seam across level boundaries
+    float fmin = min(g.spacing.x, min(g.spacing.y, g.spacing.z));
+    vec3 pb = p + (n * g.normal_bias + v * g.view_bias) * fmin;
+    int b = pb_sparse_brick_at((pb - g.origin) / cell, g.counts);
     if (b < 0)
         return vec3(0.0);
     int at = int(pb_sparse_word(2)) + 4 * b;

@@ -5,6 +5,7 @@
  * air, and the cells it crosses must be subdivided. Also: a sparse volume
  * written and read back samples identically. */
 #include "scenes_gen.h"
+#include "common/common.h"
 
 static pb_context *ctx;
 
@@ -248,6 +249,128 @@ static void solid_probes_are_never_sampled(void)
     pb_scene_destroy(s);
 }
 
+/* Trilinear irradiance (no visibility) at q from the cage `probe` of
+ * pb_sample_cage_cpu: corner i is offset (i&1, i>>1&1, i>>2&1); their base
+ * (lattice) positions give the cage's origin and spacing. Evaluated where the
+ * sampler interpolates: q moved along n by `bias` (view = n). */
+static float cage_trilinear(const pb_volume *v, const pb_scene *s, const int probe[8], const float q[3],
+                            const float n[3], float bias, float *spacing)
+{
+    const float *b0 = v->base + 3 * (size_t)probe[0], *b7 = v->base + 3 * (size_t)probe[7];
+    float a[3], e = 0.f;
+    for (int k = 0; k < 3; ++k)
+        a[k] = (float)(((double)(q[k] + n[k] * bias) + s->origin[k] - v->origin[k] - b0[k]) / (b7[k] - b0[k]));
+    *spacing = b7[0] - b0[0];
+    for (int i = 0; i < 8; ++i) {
+        float w = 1.f, rgb[3];
+        for (int k = 0; k < 3; ++k)
+            w *= ((i >> k) & 1) ? a[k] : 1.f - a[k];
+        pb_sh_eval(v->sh + 27 * (size_t)probe[i], n, rgb);
+        e += w * pb_luminance(rgb);
+    }
+    return e;
+}
+
+/* Seams where a finer brick meets a coarser one (docs/sparse.md, "Seams").
+ * The bound derived: stitching gives the finer side's hanging face probes
+ * the coarser brick's trilinear SH, and bilinear interpolation reproduces a
+ * bilinear function on a refinement of it, so the trilinear (SH) part of the
+ * interpolant is continuous across the face: its jump 2e-6 m either side
+ * must be float noise, 1e-4 of the cages' mean (band-0) irradiance. What remains is the visibility weighting;
+ * each side is a convex combination of its own cage's probes, so the jump of
+ * the full sampler is bounded by the spread (max - min) of the irradiance
+ * over the two cages' valid probes; measured here against that bound. */
+static void level_seams_are_bounded(void)
+{
+    pb_scene *s = floor_scene(1);
+    if (!s)
+        return;
+    pb_bake_desc d = sparse_desc(s);
+    d.sky[0] = d.sky[1] = d.sky[2] = 0.05f;
+    d.rays_per_probe = 256;
+    d.passes = 1;
+    pb_sparse_desc sd = {2, 0.1f};
+    pb_sparse_stats st;
+    pb_volume v;
+    if (sparse_bake(s, &d, &sd, &v, &st)) {
+        pb_sample_volume sv;
+        pb_error err;
+        CHECK(pb_sample_volume_build(&v, s->origin, 0.f, 0.f, &sv, &err) == PB_OK);
+        test_rng r = {5};
+        uint32_t seams = 0, over = 0;
+        float bias = (sv.normal_bias + sv.view_bias) * 0.5f; /* view = n; finest spacing 0.5 m */
+        double worst_tri = 0.0, worst_full = 0.0, sum_full = 0.0;
+        for (uint32_t b = 0; b < v.sparse->brick_count; ++b) {
+            const pb_sparse_brick *br = &v.sparse->bricks[b];
+            if (br->level != 1)
+                continue;
+            for (int face = 0; face < 6; ++face)
+                for (int t = 0; t < 64; ++t) {
+                    /* a point on this fine brick's face (1.5 m cube at 1.5 m steps), and just either side */
+                    int ax = face >> 1;
+                    float q[3], qi[3], qo[3], n[3];
+                    for (int k = 0; k < 3; ++k) {
+                        double lo = 1.5 * br->coord[k];
+                        q[k] = (float)(lo + (k == ax ? 1.5 * (face & 1) : 1.5 * rng_uniform(&r)) - s->origin[k]);
+                    }
+                    if ((double)q[1] + s->origin[1] < FLOOR_Y + 0.2)
+                        continue; /* below the floor: not free space */
+                    rng_direction(&r, n);
+                    /* the sampler interpolates at q + bias n: start there less it, 2e-5 m either side */
+                    for (int k = 0; k < 3; ++k)
+                        q[k] -= n[k] * bias;
+                    memcpy(qi, q, sizeof q), memcpy(qo, q, sizeof q);
+                    qi[ax] += (face & 1) ? -2e-6f : 2e-6f;
+                    qo[ax] += (face & 1) ? 2e-6f : -2e-6f;
+                    int pi[8], po[8];
+                    float wi[8], wo[8], ei[3], eo[3], si, so;
+                    pb_sample_cage_cpu(&sv, qi, n, n, ei, pi, wi);
+                    pb_sample_cage_cpu(&sv, qo, n, n, eo, po, wo);
+                    if (pi[0] < 0 || po[0] < 0)
+                        continue;
+                    float ti = cage_trilinear(&v, s, pi, qi, n, bias, &si),
+                          to = cage_trilinear(&v, s, po, qo, n, bias, &so);
+                    if (!(so > si * 2.f))
+                        continue; /* not a level boundary: the neighbour is as fine */
+                    seams++;
+                    float lo = 1e30f, hi = -1e30f, scale = 1e-3f;
+                    for (int i = 0; i < 16; ++i) {
+                        int p = i < 8 ? pi[i] : po[i - 8];
+                        float rgb[3];
+                        pb_sh_eval(v.sh + 27 * (size_t)p, n, rgb);
+                        float l = fmaxf(pb_luminance(rgb), 0.f);
+                        /* scale: the probe's irradiance averaged over directions (its SH band 0); the
+                         * value along n can be far smaller (facing away from the sun), where a
+                         * relative measure would be rounding of the larger coefficients */
+                        scale = fmaxf(scale, fabsf(pb_luminance(v.sh + 27 * (size_t)p)) * 0.2820948f);
+                        if (!(v.probe_flags[p] & PB_PROBE_VALID))
+                            continue;
+                        lo = fminf(lo, l), hi = fmaxf(hi, l);
+                    }
+                    if (fabsf(ti - to) / scale > 1e-4f && getenv("PB_DEBUG_SEAMS"))
+                        fprintf(stderr, "    seam at %.4f %.4f %.4f face %d: fine %.6f coarse %.6f scale %.4f spacings %.2f %.2f\n",
+                                (double)q[0] + s->origin[0], (double)q[1] + s->origin[1], (double)q[2] + s->origin[2],
+                                face, ti, to, scale, si, so);
+                    worst_tri = fmax(worst_tri, fabsf(ti - to) / scale);
+                    float jump = fabsf(pb_luminance(ei) - pb_luminance(eo));
+                    over += jump > (hi - lo) + 1e-5f * scale;
+                    float rel = jump / fmaxf(hi - lo, 1e-6f);
+                    worst_full = fmax(worst_full, rel);
+                    sum_full += rel;
+                }
+        }
+        fprintf(stderr, "  %u points on fine/coarse brick faces: trilinear jump at most %.2g of the mean irradiance; "
+                "full sampler's jump %.3f (mean) and %.3f (worst) of its bound, %u over it\n", seams, worst_tri,
+                seams ? sum_full / seams : 0.0, worst_full, over);
+        CHECK(seams > 100);
+        CHECKF(worst_tri < 1e-4, "trilinear jump %.3g across a level boundary", worst_tri);
+        CHECKF(over == 0, "%u jumps beyond the bound", over);
+        pb_sample_volume_free(&sv);
+        pb_volume_free(&v);
+    }
+    pb_scene_destroy(s);
+}
+
 /* A sparse bake written and read back: same layout, same samples. */
 static void sparse_file_round_trip(void)
 {
@@ -307,5 +430,6 @@ int main(void)
     RUN(shadow_boundary_is_refined);
     RUN(sparse_file_round_trip);
     RUN(solid_probes_are_never_sampled);
+    RUN(level_seams_are_bounded);
     return test_gpu_finish(ctx);
 }

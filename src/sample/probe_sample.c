@@ -289,10 +289,14 @@ void pb_sample_cage_cpu(const pb_sample_volume *s, const float p[3], const float
         return;
     }
     int levels = (int)s->levels, span = levels == 1 ? 3 : (levels == 2 ? 9 : 27);
-    float u[3];
+    /* the brick is looked up where its cage is interpolated, at the biased
+     * point: looked up at p, a point near a brick face would be served by a
+     * cage it lies outside of (clamped), a seam across level boundaries */
+    float fmin = fminf(s->spacing[0], fminf(s->spacing[1], s->spacing[2])), u[3];
     for (int k = 0; k < 3; ++k) {
         float cell = s->spacing[k] * (float)span;
-        u[k] = (p[k] - s->origin[k]) / cell;
+        float pb = p[k] + (n[k] * s->normal_bias + view[k] * s->view_bias) * fmin;
+        u[k] = (pb - s->origin[k]) / cell;
     }
     int b = sparse_brick_at(s, u);
     if (b < 0) {
