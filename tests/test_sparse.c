@@ -271,15 +271,16 @@ static float cage_trilinear(const pb_volume *v, const pb_scene *s, const int pro
     return e;
 }
 
-/* Seams where a finer brick meets a coarser one (docs/sparse.md, "Seams").
+/* Seams where a finer brick meets a coarser one (docs/sparse.md, Tests).
  * The bound derived: stitching gives the finer side's hanging face probes
  * the coarser brick's trilinear SH, and bilinear interpolation reproduces a
  * bilinear function on a refinement of it, so the trilinear (SH) part of the
  * interpolant is continuous across the face: its jump 2e-6 m either side
- * must be float noise, 1e-4 of the cages' mean (band-0) irradiance. What remains is the visibility weighting;
- * each side is a convex combination of its own cage's probes, so the jump of
- * the full sampler is bounded by the spread (max - min) of the irradiance
- * over the two cages' valid probes; measured here against that bound. */
+ * must be float noise, 1e-4 of the cages' mean (band-0) irradiance. What
+ * remains is the visibility weighting; each side is a convex combination of
+ * its own cage's probes, so the jump of the full sampler is bounded by the
+ * spread (max - min) of the irradiance over the two cages' valid probes;
+ * measured here against that bound. */
 static void level_seams_are_bounded(void)
 {
     pb_scene *s = floor_scene(1);
