@@ -238,6 +238,12 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect export-sparse 1 'the volume is sparse \([0-9]+ probes in bricks\); the texture export' -- \
         "$pb" export "$tmp/s.probes" --textures "$tmp/s-textures"
     expect inspect-sparse 0 '^level 1     spacing 1 m: [0-9]+ bricks' -- "$pb" inspect "$tmp/s.probes"
+    # the debug views of a sparse file: one tile per probe, in layout order
+    sparse_probes=$("$pb" inspect "$tmp/s.probes" --json | sed -n 's/.*"probes": \([0-9]*\),.*/\1/p' | head -n 1)
+    expect inspect-sparse-atlas 0 "depth atlas of $sparse_probes probes" -- \
+        "$pb" inspect "$tmp/s.probes" --atlas "$tmp/s-atlas.png"
+    expect inspect-sparse-sh-view 0 "wrote $tmp/s-sh.png: [0-9]+x[0-9]+, .*$sparse_probes probes" -- \
+        "$pb" inspect "$tmp/s.probes" --sh-view "$tmp/s-sh.png"
     expect render-sparse 0 "wrote $tmp/s.png: 32x24, probes" -- \
         "$pb" render "$demo" --volume "$tmp/s.probes" --size 32x24 --validation -o "$tmp/s.png"
     "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 -o "$tmp/b.probes" --quiet >/dev/null
