@@ -36,6 +36,7 @@ typedef struct options {
     int scene_count;
     int validation;           /* --validation: fail on any Vulkan validation message */
     int portable;             /* --portable: the kernels without 64-bit types */
+    int shuffle;              /* --shuffle: rays in a random order (what incoherence costs) */
 } options;
 
 typedef struct result {
@@ -150,6 +151,15 @@ static int bench_scene(pb_context *ctx, RTCDevice edev, const char *path, const 
     pb_hit *hits = malloc((size_t)n * sizeof *hits);
     float *et = malloc((size_t)n * sizeof *et);
     pb_probe_rays(&grid, 0, probes, o->rays, 1, rays);
+    if (o->shuffle) { /* Fisher-Yates with a fixed xorshift stream: the same order every run */
+        uint64_t x = 0x9e3779b97f4a7c15ull;
+        for (uint32_t i = n - 1; i > 0; --i) {
+            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+            uint32_t j = (uint32_t)(x % (i + 1));
+            pb_ray t = rays[i];
+            rays[i] = rays[j], rays[j] = t;
+        }
+    }
 
     double *kt = malloc(sizeof(double) * o->repeat), *wt = malloc(sizeof(double) * o->repeat);
     pb_trace_stats st;
@@ -224,6 +234,8 @@ int main(int argc, char **argv)
             o.validation = 1;
         else if (!strcmp(a, "--portable"))
             o.portable = 1;
+        else if (!strcmp(a, "--shuffle"))
+            o.shuffle = 1;
         else if (!strcmp(a, "--json") && v)
             o.json = argv[++i];
         else if (a[0] == '-') {
