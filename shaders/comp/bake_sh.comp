@@ -47,7 +47,7 @@ void main()
             c[3 * k + 1] += w * o.g * y[k];
             c[3 * k + 2] += w * o.b * y[k];
         }
-        if (!addr_null(P.nee)) { // probe NEE: the light sample drawn with this ray
+        if (bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee)) { // probe NEE: the light sample drawn with this ray
             Vec4Buf nee = Vec4Buf(P.nee);
             uint j = 2u * (local * P.rays_per_probe + r);
             vec3 L = nee.v[j].rgb;
@@ -68,7 +68,7 @@ void main()
             front_d = d;
         }
     }
-    if (P.direct != 0u) {
+    if (bake_feature(PB_FEATURE_LIGHTS) && P.direct != 0u) {
         vec3 x = Vec4Buf(P.probes).v[probe].xyz;
         LightBuf lights = LightBuf(P.lights);
         for (uint k = 0u; k < P.light_count; ++k) {

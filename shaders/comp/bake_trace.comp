@@ -30,13 +30,13 @@ void main()
     vec3 origin = Vec4Buf(P.probes).v[probe].xyz;
     uint state = rng_seed(P.seed, probe_id(P, probe), P.pass_index, ray);
     PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, state);
-    if (!addr_null(P.volume.probes) && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
+    if (bake_feature(PB_FEATURE_VOLUME) && !addr_null(P.volume.probes) && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
         pb_volume = P.volume;
         pr.L += pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.ng, -d);
     }
-    if (!addr_null(P.nee)) { // probe NEE: one light sample from the probe per ray
+    if (bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee)) { // probe NEE: one light sample from the probe per ray
         vec4 nr[2] = vec4[2](vec4(0.0), vec4(0.0, 1.0, 0.0, 0.0));
-        if (P.direct != 0u && (P.emitter_count > 0u || P.env_count > 0u))
+        if (P.direct != 0u && (bake_emitters(P) || bake_env(P).count > 0u))
             nr = probe_light_nee(P, origin, state);
         Vec4RW(P.nee).v[2u * i] = nr[0];
         Vec4RW(P.nee).v[2u * i + 1u] = nr[1];

@@ -91,11 +91,35 @@ struct BakeParams {
     pb_addr light_clusters; // 2 uint per cluster: first member, member count
     pb_addr light_members;  // Emitter[] in cluster order, alias local to the cluster
     pb_addr light_cluster_of; // uint per leaf-ordered triangle: its cluster
+    pb_addr depth_lists;    // the depth filter's ray lists per query cell (src/bake/depth_lists.h)
 };
+
+// The estimators and scene features a pipeline is built for (host:
+// pb_bake_features in src/bake/bake_features.c). Specialised to a bake's
+// mask, the code of what is off is compiled out: lavapipe then neither
+// compiles it (each inlined traversal costs pipeline time) nor keeps its
+// registers live. The runtime checks stay; the mask only removes code that
+// they would skip. Default all on: render.comp and the tests' kernels.
+layout(constant_id = 2) const uint PB_BAKE_FEATURES = 0xffffffffu;
+#define PB_FEATURE_PROBE_NEE 1u
+#define PB_FEATURE_GUIDE 2u
+#define PB_FEATURE_LIGHT_CELLS 4u
+#define PB_FEATURE_VOLUME 8u
+#define PB_FEATURE_LIGHT_SELECT 16u
+#define PB_FEATURE_EMITTERS 32u
+#define PB_FEATURE_ENVIRONMENT 64u
+#define PB_FEATURE_LIGHTS 128u
+#define PB_FEATURE_VERTEX_COLORS 256u
+
+bool bake_feature(uint f)
+{
+    return (PB_BAKE_FEATURES & f) != 0u;
+}
 
 Env bake_env(BakeParams P)
 {
-    return Env(P.env, P.env_width, P.env_height, P.env_count, P.env_rotation.x, P.env_rotation.y);
+    return Env(P.env, P.env_width, P.env_height, bake_feature(PB_FEATURE_ENVIRONMENT) ? P.env_count : 0u,
+               P.env_rotation.x, P.env_rotation.y);
 }
 
 struct Emitter {

@@ -40,7 +40,7 @@ uint guide_bin(vec3 dir)
 // The learned slot for a point and its normal, or -1.
 int guide_entry(BakeParams P, vec3 x, vec3 n)
 {
-    if (addr_null(P.guide))
+    if (!bake_feature(PB_FEATURE_GUIDE) || addr_null(P.guide))
         return -1;
     vec3 a = abs(n);
     uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);

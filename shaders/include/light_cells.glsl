@@ -9,7 +9,7 @@
 // The table slot of the cell holding x, or -1 (draw by power).
 int light_cell(BakeParams P, vec3 x)
 {
-    if (addr_null(P.light_cells))
+    if (!bake_feature(PB_FEATURE_LIGHT_CELLS) || addr_null(P.light_cells))
         return -1;
     uint slot = UintBuf(P.light_cell_slots).v[grid_cell(x, P.light_origin, P.light_dims.xyz)];
     return slot == 0xffffffffu ? -1 : int(slot);

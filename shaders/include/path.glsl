@@ -15,6 +15,12 @@
 
 // Multiple importance sampling, power heuristic: the weight of a sample
 // drawn with density a when density b could also have drawn it.
+// Emissive triangles to sample (alias table over them); false where compiled out.
+bool bake_emitters(BakeParams P)
+{
+    return bake_feature(PB_FEATURE_EMITTERS) && P.emitter_count > 0u;
+}
+
 float power_heuristic(float a, float b)
 {
     return a * a / (a * a + b * b);
@@ -113,7 +119,7 @@ vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, int ge, inout uint state)
 // like a probe ray (4pi / rays).
 float probe_emitter_share(BakeParams P)
 {
-    return P.emitter_count > 0u ? (P.env_count > 0u ? 0.5 : 1.0) : 0.0;
+    return bake_emitters(P) ? (bake_env(P).count > 0u ? 0.5 : 1.0) : 0.0;
 }
 
 vec4[2] probe_light_nee(BakeParams P, vec3 x, inout uint state)
@@ -226,7 +232,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                 float w = 1.0;
                 // the density of the ray that found it: its bounce's, or for a probe
                 // ray under probe NEE the uniform sphere's (else 0: weight 1)
-                bool probe_nee = bounce == 0u && !addr_null(P.nee);
+                bool probe_nee = bounce == 0u && bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee);
                 float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
                 if (found_pdf > 0.0 && env.count > 0u) { // the environment could also have been sampled: MIS
                     float pe = env_pdf(env, dir) * (probe_nee ? 1.0 - probe_emitter_share(P) : 1.0);
@@ -256,8 +262,8 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         if ((bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
             float w = 1.0;
             // the density with which NEE at the ray's origin draws this point
-            float pa = P.emitter_count > 0u ? emit_pdf.v[tr.tri] * light_cell_ratio(P, light_cell(P, o), tr.tri) : 0.0;
-            bool probe_nee = bounce == 0u && !addr_null(P.nee);
+            float pa = bake_emitters(P) ? emit_pdf.v[tr.tri] * light_cell_ratio(P, light_cell(P, o), tr.tri) : 0.0;
+            bool probe_nee = bounce == 0u && bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee);
             float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
             if (found_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
                 float pl = pa * tr.t * tr.t / abs(dot(ng, dir)) * (probe_nee ? probe_emitter_share(P) : 1.0);
@@ -269,7 +275,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         if (bounce > bounces)
             break; // the terminal ray: it only gathers emission (see below)
         vec3 albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * (1.0 - m.emissive_metallic.w);
-        if ((s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
+        if (bake_feature(PB_FEATURE_VERTEX_COLORS) && (s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
             albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
         vec3 x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);
         if (bounce == 0u) {
@@ -279,7 +285,9 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
             res.albedo = albedo;
         }
         vec3 E = vec3(0.0);
-        if (P.light_select != 0u) {
+        if (!bake_feature(PB_FEATURE_LIGHTS)) {
+            // no punctual lights: compiled out
+        } else if (bake_feature(PB_FEATURE_LIGHT_SELECT) && P.light_select != 0u) {
             // many lights: one, drawn in proportion to its power, over its probability
             EmitterBuf table = EmitterBuf(P.light_table);
             float xl = rng_next(state) * float(P.light_count);
@@ -294,7 +302,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         }
         vec3 c = throughput * albedo * (E / PB_PI);
         int ge = guide_entry(P, x, ng);
-        if (P.emitter_count > 0u && albedo != vec3(0.0))
+        if (bake_emitters(P) && albedo != vec3(0.0))
             c += throughput * albedo * emitter_nee(P, x, ng, ge, state);
         if (env.count > 0u && albedo != vec3(0.0))
             c += throughput * albedo * env_nee(P, env, s, x, ng, ge, state);
@@ -306,7 +314,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         // emission and environment the light samples above are MIS-weighted
         // against; without it their weights would miss the bounce share (a
         // bias), and weight 1 instead gives fireflies near emitters.
-        if (bounce >= bounces && P.emitter_count == 0u && env.count == 0u)
+        if (bounce >= bounces && !bake_emitters(P) && env.count == 0u)
             break;
         if (bounce >= 1u) { // Russian roulette from the second reflection on
             float q = min(0.95, max(albedo.r, max(albedo.g, albedo.b)));

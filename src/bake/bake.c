@@ -14,6 +14,8 @@
 #include "bake/convergence.h"
 #include "bake/shard.h"
 #include "bake/gpu_scene.h"
+#include "bake/bake_features.h"
+#include "bake/depth_lists.h"
 #include "bake/guide.h"
 #include "bake/light_cells.h"
 #include "bake/shading.h"
@@ -36,6 +38,7 @@
 
 typedef struct bake_buffers {
     pb_buffer params, probes, rotations, directions, rays, reduced, list, counters;
+    pb_buffer depth_lists;         /* bake_depth's ray lists per query cell (depth_lists.h) */
     pb_buffer nee;                 /* probe NEE: 2 vec4 per ray of a submission (unallocated when off) */
     pb_buffer guide, guide_slots;  /* path guiding's table and entry index (unallocated when off) */
     pb_guide guide_host;           /* its host copy and grid */
@@ -44,14 +47,16 @@ typedef struct bake_buffers {
     pb_shading shading;
     pb_sample_buffers feedback;
     pb_pipeline trace, sh, depth;
+    uint32_t features;             /* PB_FEATURE_*: the code the pipelines were specialised to keep */
 } bake_buffers;
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[16] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
+    pb_buffer *bufs[17] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
                            &b->list, &b->counters, &b->nee, &b->guide, &b->guide_slots, &b->light_cells,
-                           &b->light_cell_slots, &b->light_clusters, &b->light_members, &b->light_cluster_of};
-    for (int i = 0; i < 16; ++i)
+                           &b->light_cell_slots, &b->light_clusters, &b->light_members, &b->light_cluster_of,
+                           &b->depth_lists};
+    for (int i = 0; i < 17; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_guide_free(&b->guide_host);
     pb_light_cells_free(&b->light_host);
@@ -231,6 +236,51 @@ typedef struct bake_run {
     pb_convergence *conv;          /* per probe: passes done and the spread of their estimates */
 } bake_run;
 
+/* The parameters of a pass, all but its submission's probe range: the one
+ * place they are made, so the pipelines' feature mask (stage_resources) and
+ * every pass's agree. */
+static void pass_params(const bake_run *run, uint32_t pass, int relocating, const uint32_t *list,
+                        gpu_bake_params *prm)
+{
+    const bake_buffers *B = run->B;
+    const pb_bake_desc *d = run->d;
+    memset(prm, 0, sizeof *prm);
+    prm->scene = run->gs->refs;
+    pb_shading_params(&B->shading, prm);
+    prm->probes = B->probes.address;
+    prm->rotations = B->rotations.address, prm->directions = B->directions.address, prm->rays = B->rays.address;
+    prm->reduced = B->reduced.address;
+    prm->depth_lists = B->depth_lists.address;
+    prm->probe_list = list ? B->list.address : 0;
+    prm->counters = B->counters.address;
+    prm->indirect_clamp = d->indirect_clamp;
+    if (!relocating) {
+        prm->volume = run->feedback;
+        prm->nee = B->nee.address; /* 0 unless probe NEE is on */
+        if (B->guide_host.table) {
+            const pb_guide *g = &B->guide_host;
+            prm->guide = B->guide.address, prm->guide_slots = B->guide_slots.address;
+            memcpy(prm->guide_origin, g->grid.origin, sizeof g->grid.origin);
+            prm->guide_origin[3] = g->grid.inv_cell;
+            memcpy(prm->guide_dims, g->grid.dims, sizeof g->grid.dims);
+        }
+        if (B->light_host.table) {
+            const pb_light_cells *lc = &B->light_host;
+            memcpy(prm->light_origin, lc->grid.origin, sizeof lc->grid.origin);
+            prm->light_origin[3] = lc->grid.inv_cell;
+            memcpy(prm->light_dims, lc->grid.dims, sizeof lc->grid.dims);
+            prm->light_dims[3] = lc->clusters;
+            prm->light_cells = B->light_cells.address, prm->light_cell_slots = B->light_cell_slots.address;
+            prm->light_clusters = B->light_clusters.address, prm->light_members = B->light_members.address;
+            prm->light_cluster_of = B->light_cluster_of.address;
+        }
+    }
+    prm->rays_per_probe = run->rpp, prm->pass_index = pass;
+    prm->seed = d->seed, prm->bounces = relocating ? 0 : d->bounces;
+    prm->octmap_res = run->n, prm->max_distance = d->max_distance, prm->lobe_power = d->lobe_power;
+    prm->direct = !d->exclude_direct, prm->lobe_cutoff = pb_depth_lobe_cutoff(d->lobe_power);
+}
+
 /* One pass over every probe, in bounded submissions. A relocation pass
  * (relocating = 1) skips the depth filter and only records back faces and
  * the nearest hits; a bake pass accumulates SH, depth, back faces and hits. */
@@ -254,41 +304,12 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         count = total - first < run->chunk_now ? total - first : run->chunk_now;
         double t_submit = pb_now_ms();
         gpu_bake_params prm;
-        memset(&prm, 0, sizeof prm);
-        prm.scene = run->gs->refs;
-        pb_shading_params(&B->shading, &prm);
-        prm.probes = B->probes.address;
-        prm.rotations = B->rotations.address, prm.directions = B->directions.address, prm.rays = B->rays.address;
-        prm.reduced = B->reduced.address;
-        prm.probe_list = list ? B->list.address : 0;
-        prm.counters = B->counters.address;
-        prm.indirect_clamp = d->indirect_clamp;
-        if (!relocating) {
-            prm.volume = run->feedback;
-            prm.nee = B->nee.address; /* 0 unless probe NEE is on */
-            if (B->guide_host.table) {
-                const pb_guide *g = &B->guide_host;
-                prm.guide = B->guide.address, prm.guide_slots = B->guide_slots.address;
-                memcpy(prm.guide_origin, g->grid.origin, sizeof g->grid.origin);
-                prm.guide_origin[3] = g->grid.inv_cell;
-                memcpy(prm.guide_dims, g->grid.dims, sizeof g->grid.dims);
-            }
-            if (B->light_host.table) {
-                const pb_light_cells *lc = &B->light_host;
-                memcpy(prm.light_origin, lc->grid.origin, sizeof lc->grid.origin);
-                prm.light_origin[3] = lc->grid.inv_cell;
-                memcpy(prm.light_dims, lc->grid.dims, sizeof lc->grid.dims);
-                prm.light_dims[3] = lc->clusters;
-                prm.light_cells = B->light_cells.address, prm.light_cell_slots = B->light_cell_slots.address;
-                prm.light_clusters = B->light_clusters.address, prm.light_members = B->light_members.address;
-                prm.light_cluster_of = B->light_cluster_of.address;
-            }
-        }
+        pass_params(run, pass, relocating, list, &prm);
+        prm.first_probe = first, prm.probe_count = count;
+        if (pb_bake_features(&prm) & ~B->features) /* the pipelines were made without code this pass needs */
+            return pb_fail(err, PB_ERROR_UNSUPPORTED, "bake pass %u needs kernel features 0x%x, the pipelines have 0x%x",
+                           pass, pb_bake_features(&prm), B->features);
         memset(B->counters.mapped, 0, 8);
-        prm.first_probe = first, prm.probe_count = count, prm.rays_per_probe = rpp, prm.pass_index = pass;
-        prm.seed = d->seed, prm.bounces = relocating ? 0 : d->bounces;
-        prm.octmap_res = n, prm.max_distance = d->max_distance, prm.lobe_power = d->lobe_power;
-        prm.direct = !d->exclude_direct, prm.lobe_cutoff = pb_depth_lobe_cutoff(d->lobe_power);
         memcpy(B->params.mapped, &prm, sizeof prm);
         if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
             break;
@@ -571,22 +592,24 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
     if (r == PB_OK)
         r = make_buffer(ctx, &B->directions, (uint64_t)rpp * 16, PB_MEMORY_DEVICE, "ray directions", j->directions,
                         err);
+    if (r == PB_OK) {
+        pb_depth_lists dl;
+        r = pb_depth_lists_build(j->directions, rpp, pb_depth_lobe_cutoff(d->lobe_power), PB_DEPTH_QUERY_RES, &dl,
+                                 err);
+        if (r == PB_OK) {
+            pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "depth filter: %.1f of %u rays per texel on average, at most %u",
+                    dl.mean, rpp, dl.longest);
+            r = make_buffer(ctx, &B->depth_lists, (uint64_t)dl.word_count * 4, PB_MEMORY_DEVICE,
+                            "depth filter ray lists", dl.words, err);
+        }
+        pb_depth_lists_free(&dl);
+    }
     if (r == PB_OK)
         r = make_buffer(ctx, &B->rays, (uint64_t)chunk * rpp * 16, PB_MEMORY_DEVICE, "probe rays", NULL, err);
     if (r == PB_OK && d->probe_nee)
         r = make_buffer(ctx, &B->nee, (uint64_t)chunk * rpp * 32, PB_MEMORY_DEVICE, "probe NEE samples", NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B->reduced, j->reduced_floats * 4, PB_MEMORY_DOWNLOAD, "probe results", NULL, err);
-    uint32_t spec[1] = {j->gs->stack_size};
-    if (r == PB_OK)
-        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 1, 64, "bake_trace",
-                               &B->trace, err);
-    if (r == PB_OK)
-        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_sh), sizeof(bake_push), spec, 1, 64, "bake_sh",
-                               &B->sh, err);
-    if (r == PB_OK)
-        r = pb_pipeline_create(ctx, pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 1, 64,
-                               "bake_depth", &B->depth, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B->list, (uint64_t)P * 4, PB_MEMORY_DEVICE, "active probe list", NULL, err);
     if (r == PB_OK)
@@ -599,6 +622,24 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
         r = pb_sample_upload(ctx, feedback, &B->feedback, err);
         j->run.feedback = B->feedback.refs;
     }
+    /* the kernels keep only the code some pass of this bake runs */
+    gpu_bake_params relocation, bake;
+    pass_params(&j->run, PB_RELOCATION_PASS, 1, NULL, &relocation);
+    pass_params(&j->run, 0, 0, NULL, &bake);
+    B->features = pb_bake_features(&relocation) | pb_bake_features(&bake);
+    char names[160];
+    pb_bake_features_name(B->features, names, sizeof names);
+    pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "bake kernels specialised to: %s", names);
+    uint32_t spec[3] = {j->gs->stack_size, 0, B->features};
+    if (r == PB_OK)
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 3, 64, "bake_trace",
+                               &B->trace, err);
+    if (r == PB_OK)
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_sh), sizeof(bake_push), spec, 3, 64, "bake_sh",
+                               &B->sh, err);
+    if (r == PB_OK)
+        r = pb_pipeline_create(ctx, pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 3, 64,
+                               "bake_depth", &B->depth, err);
     return r;
 }
 

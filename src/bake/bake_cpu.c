@@ -6,6 +6,7 @@
  * bounce-0 rays one by one and multi-bounce results statistically. */
 #include "bake/alias.h"
 #include "bake/bake_data.h"
+#include "bake/depth_lists.h"
 #include "bake/guide.h"
 #include "bake/light_cells.h"
 #include "bake/path_cpu.h"
@@ -614,13 +615,15 @@ void pb_bake_depth_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
     for (uint64_t i = 0; i < (uint64_t)p->probe_count * texels; ++i) {
         uint32_t local = (uint32_t)(i / texels), texel = (uint32_t)(i % texels);
         uint32_t probe = slot_of(p, local);
-        float td[3];
+        float td[3], tl[3];
         pb_oct_texel_direction(texel % n, texel / n, n, td);
+        /* the lobe test in the probe's unrotated frame, where the kernel's ray
+         * lists live (depth_lists.h): the texel turned back, the rays as stored */
+        pb_depth_unrotate(p->rotations + 12 * (size_t)probe, td, tl);
         float wsum = 0.f, m1 = 0.f, m2 = 0.f;
         for (uint32_t r = 0; r < p->rays_per_probe; ++r) {
-            float d[3];
-            probe_ray_direction(p, probe, r, d);
-            float c = (td[0] * d[0] + td[1] * d[1]) + td[2] * d[2];
+            const float *d = p->directions + 4 * (size_t)r;
+            float c = (tl[0] * d[0] + tl[1] * d[1]) + tl[2] * d[2];
             if (c <= cutoff)
                 continue;
             float w = powf(c, p->lobe_power);

@@ -41,7 +41,7 @@ typedef struct gpu_bake_params {
     float light_origin[4];
     uint32_t light_dims[4];
     uint64_t light_cells, light_cell_slots, light_clusters, light_members, light_cluster_of;
-    uint64_t pad;
+    uint64_t depth_lists; /* bake_depth's ray lists (depth_lists.h) */
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
 _Static_assert(offsetof(gpu_bake_params, guide_origin) == 368, "BakeParams layout");
