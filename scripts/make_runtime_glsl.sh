@@ -21,8 +21,13 @@ out_js=${2:-$root/runtime/js/probe_sample_glsl.js}
 // Irradiance at p (volume frame) with unit normal n, seen from unit direction v.
 vec3 pb_volume_irradiance(vec3 p, vec3 n, vec3 v)
 {
-    return pb_sample_irradiance(PbVolumeGrid(pb_grid_origin, pb_grid_spacing, pb_grid_counts, pb_octmap_res,
-                                             pb_normal_bias, pb_view_bias, pb_depth_unit), p, n, v);
+    PbVolumeGrid g = PbVolumeGrid(pb_grid_origin, pb_grid_spacing, pb_grid_counts, pb_octmap_res, pb_normal_bias,
+                                  pb_view_bias, pb_depth_unit);
+#ifdef PB_SPARSE
+    return pb_sample_sparse(g, pb_levels, p, n, v);
+#else
+    return pb_sample_irradiance(g, p, n, v);
+#endif
 }
 GLSL
 } >"$out"

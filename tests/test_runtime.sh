@@ -19,13 +19,19 @@ for f in probe_sample.glsl js/probe_sample_glsl.js; do
         failed=1
     fi
 done
-awk -v f="$src/runtime/probe_sample.glsl" '/@PROBE_SAMPLE@/ { while ((getline l < f) > 0) print l; next } { print }' \
-    "$src/runtime/example.frag" >"$tmp/example.frag"
-if out=$("$glslang" "$tmp/example.frag" 2>&1); then
-    echo "[  OK  ] runtime/example.frag with the sampler compiles as GLSL ES 3.00"
-else
-    echo "[ FAIL ] GLSL ES 3.00 compile:"
-    sed 's/^/    /' <<<"$out" | head -20
-    failed=1
-fi
+# as pasted for a grid volume, and for a sparse one (#define PB_SPARSE first)
+for variant in grid sparse; do
+    define=""
+    [ "$variant" = sparse ] && define="#define PB_SPARSE"
+    awk -v f="$src/runtime/probe_sample.glsl" -v d="$define" \
+        '/@PROBE_SAMPLE@/ { if (d != "") print d; while ((getline l < f) > 0) print l; next } { print }' \
+        "$src/runtime/example.frag" >"$tmp/example-$variant.frag"
+    if out=$("$glslang" "$tmp/example-$variant.frag" 2>&1); then
+        echo "[  OK  ] runtime/example.frag with the sampler compiles as GLSL ES 3.00 ($variant volume)"
+    else
+        echo "[ FAIL ] GLSL ES 3.00 compile ($variant volume):"
+        sed 's/^/    /' <<<"$out" | head -20
+        failed=1
+    fi
+done
 [ "$failed" -eq 0 ]

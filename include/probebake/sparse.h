@@ -70,6 +70,13 @@ void pb_sparse_layout_free(pb_sparse_layout *l);
  * covering its sub-cell. Returns PB_ERROR_PARSE with the first problem. */
 pb_result pb_sparse_layout_validate(const pb_sparse_layout *l, uint32_t probe_count, pb_error *err);
 
+/* The layout as the run-time samplers read it (pb_sparse_word in
+ * shaders/include/probe_sample_core.glsl; the texture export's sparse.ktx2):
+ * four word offsets (indirection, chunks, bricks, brick probes), then those
+ * tables, a brick as four words (coordinates x, y, z, level). *words is
+ * malloc'd. PB_ERROR_OUT_OF_HOST_MEMORY (also past 2^32 words). */
+pb_result pb_sparse_layout_words(const pb_sparse_layout *l, uint32_t **words, uint32_t *count);
+
 /* The brick serving point u, given in units of cells relative to the
  * lattice origin (clamped into the grid of cells): the finest brick whose
  * cell covers it, or PB_SPARSE_EMPTY. */

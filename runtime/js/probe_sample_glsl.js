@@ -14,6 +14,12 @@ export const probeSampleGLSL = `// probebake run-time sampling for WebGL2 / GLSL
 //              tiles per row; texel = (mean, mean squared) distance in
 //              units of pb_depth_unit metres (the file's depth unit)
 // Texel i of pb_probes and pb_sh is at (i % pb_tex_width, i / pb_tex_width).
+// A sparse volume (bricks, docs/sparse.md): #define PB_SPARSE before this file
+// and bind, besides the three above,
+//   pb_sparse  R32UI:   the layout tables (pb_sparse_word), word i at texel i
+//              as above; pb_levels the volume's levels (1 to 3); the grid
+//              uniforms then hold the lattice origin, the finest spacing and
+//              the coarsest cells per axis.
 precision highp float;
 precision highp int;
 
@@ -64,6 +70,16 @@ vec2 pb_probe_depth(int probe, ivec2 texel)
     ivec2 tile = ivec2(probe % pb_depth_tiles_per_row, probe / pb_depth_tiles_per_row);
     return texelFetch(pb_depth, tile * side + texel, 0).rg;
 }
+
+#ifdef PB_SPARSE
+uniform highp usampler2D pb_sparse;
+uniform int pb_levels;
+
+uint pb_sparse_word(int i)
+{
+    return texelFetch(pb_sparse, pb_texel_2d(i), 0).r;
+}
+#endif
 
 // ---- probe_sample_core.glsl follows (inlined) ----
 // Run-time sampling of a probebake volume: irradiance at a shading point
@@ -291,7 +307,12 @@ vec3 pb_sample_sparse(PbVolumeGrid g, int levels, vec3 p, vec3 n, vec3 v)
 // Irradiance at p (volume frame) with unit normal n, seen from unit direction v.
 vec3 pb_volume_irradiance(vec3 p, vec3 n, vec3 v)
 {
-    return pb_sample_irradiance(PbVolumeGrid(pb_grid_origin, pb_grid_spacing, pb_grid_counts, pb_octmap_res,
-                                             pb_normal_bias, pb_view_bias, pb_depth_unit), p, n, v);
+    PbVolumeGrid g = PbVolumeGrid(pb_grid_origin, pb_grid_spacing, pb_grid_counts, pb_octmap_res, pb_normal_bias,
+                                  pb_view_bias, pb_depth_unit);
+#ifdef PB_SPARSE
+    return pb_sample_sparse(g, pb_levels, p, n, v);
+#else
+    return pb_sample_irradiance(g, p, n, v);
+#endif
 }
 `;

@@ -14,6 +14,7 @@ const DEPTH_FORMAT_F16_METRES = 1; // version 1
 const DEPTH_FORMAT_F16_UNITS = 2;  // versions 2 to 4
 const SH_FORMAT_F32 = 1;
 const STD_ERROR_UNKNOWN = -1;
+const SPARSE_HEAD = 32, SPARSE_BRICK_PROBES = 64, SPARSE_MAX_LEVELS = 3, SPARSE_EMPTY = 0x0fffffff;
 
 /** Probe flag bits (docs/format.md, "flags"). */
 export const PROBE_VALID = 1, PROBE_RELOCATED = 2, PROBE_DILATED = 4, PROBE_OUTSIDE = 8, PROBE_CONVERGED = 16;
@@ -87,7 +88,9 @@ export function depthUnit(maxDistance) {
  *    relocation applied), sh: Float32Array (P x 27, as in the file),
  *    depth: Uint16Array (half floats, the atlas as stored: tile p at p x tile^2
  *    texels, 2 halves each, in depth units), depthUnit, maxDistance,
- *    irradiance, directIncluded, grid, paths: Uint32Array, stdError:
+ *    irradiance, directIncluded, grid, sparse (null, or the bricks: see
+ *    readSparse; origin is then the lattice origin and spacing the finest
+ *    level's), paths: Uint32Array, stdError:
  *    Float32Array (-1 unknown), probeCount, seed, sceneHash (hex), techniques,
  *    device}
  * and throws an Error naming the problem for a bad magic, a newer version, a
@@ -116,9 +119,22 @@ export function parseProbes(buffer, name = 'volume') {
         fail('unknown SH or depth format');
     if (version >= 2 && !(f32(180) > 0 && Number.isFinite(f32(180)))) fail('depth unit not a positive finite number');
     if ((flags & 4) && counts[0] * counts[1] * counts[2] !== P) fail('grid counts do not match the probe count');
-    // version 4's sparse layout (flag bit 4) is not read here yet: say so rather than misread it
-    if (flags & 16) fail('sparse volume (bricks): this reader reads grid and point volumes only');
+    const sparseFlag = (flags & 16) !== 0;
+    if (sparseFlag && (version < 4 || (flags & (4 | 8))))
+        fail('sparse flag in a grid, a part or a file older than version 4');
     const l = layoutOf(P, n, version);
+    if (sparseFlag) { // the sparse section's size is in its head (sparse_bytes in volume_file.c)
+        const at = align16(l.end);
+        if (u64(416) !== BigInt(at)) fail('section offsets do not match the sizes');
+        if (bytes.length < at + SPARSE_HEAD) fail('truncated sparse layout');
+        if (u32(at + 4) >= 1 << 20 || u32(at + 8) >= 1 << 20 || u32(at + 12) >= 1 << 20)
+            fail('sparse layout with too many cells');
+        const cells = u32(at + 4) * u32(at + 8) * u32(at + 12), bricks = u32(at + 16), chunks = u32(at + 20);
+        l.sparse = at;
+        l.end = at + SPARSE_HEAD + bricks * 16 + bricks * SPARSE_BRICK_PROBES * 4 + cells * 4 + chunks * 4;
+    } else if (version >= 4 && u64(416) !== 0n) {
+        fail('sparse layout offset in a volume without the sparse flag');
+    }
     const at = [l.base, l.offset, l.flags, l.sh, l.depth];
     for (let k = 0; k < 5; ++k)
         if (u64(136 + 8 * k) !== BigInt(at[k])) fail('section offsets do not match the sizes');
@@ -167,11 +183,90 @@ export function parseProbes(buffer, name = 'volume') {
         unit = f32(180);
     }
     const device = new TextDecoder().decode(bytes.subarray(248, 376)).replace(/\0.*$/s, '');
+    const sparse = sparseFlag ? readSparse(dv, l.sparse, P, fail) : null;
     return {
         version, probeCount: P, counts, origin, spacing, n, tile: n + 2,
         flags: probeFlags, positions, sh, depth, depthUnit: unit, maxDistance,
         irradiance: (flags & 1) !== 0, directIncluded: (flags & 2) !== 0, grid: (flags & 4) !== 0,
-        paths, stdError, seed: u64(88), sceneHash: u64(96).toString(16).padStart(16, '0'),
+        sparse, paths, stdError, seed: u64(88), sceneHash: u64(96).toString(16).padStart(16, '0'),
         rays: u32(104), passes: u32(108), bounces: u32(112), techniques: u32(388), device,
     };
+}
+
+const pow3 = (d) => 3 ** d;
+
+/**
+ * The sparse layout section at `at` (docs/format.md "Sparse layout"), checked
+ * as the C reader checks it (pb_sparse_layout_validate, same messages):
+ *   {levels, cells:[x,y,z], brickCount, chunkCount, bricks: Uint32Array
+ *    (4 per brick: coordinates at its level, level), brickProbes:
+ *    Uint32Array (64 per brick, x fastest), indirection: Uint32Array (per
+ *    coarsest cell, depth << 28 | index), chunks: Uint32Array}
+ */
+function readSparse(dv, at, P, fail) {
+    const u32 = (o) => dv.getUint32(o, true);
+    const levels = u32(at), cells = [u32(at + 4), u32(at + 8), u32(at + 12)];
+    const B = u32(at + 16), K = u32(at + 20), C = cells[0] * cells[1] * cells[2];
+    if (C === 0 || C > 1 << 24 || B === 0 || B > 1 << 22) fail(`sparse layout with ${C} cells and ${B} bricks`);
+    const words = (o, count) => {
+        const out = new Uint32Array(count);
+        for (let i = 0; i < count; ++i) out[i] = u32(o + 4 * i);
+        return out;
+    };
+    let q = at + SPARSE_HEAD;
+    const bricks = words(q, 4 * B); q += 16 * B;
+    const brickProbes = words(q, SPARSE_BRICK_PROBES * B); q += 4 * SPARSE_BRICK_PROBES * B;
+    const indirection = words(q, C); q += 4 * C;
+    const chunks = words(q, K);
+    if (levels < 1 || levels > SPARSE_MAX_LEVELS) fail(`sparse layout with ${levels} levels (1 to ${SPARSE_MAX_LEVELS})`);
+    for (let k = 0; k < 3; ++k)
+        if (cells[k] * pow3(levels) >= 1 << 20) fail(`sparse layout with ${cells[k]} cells on axis ${k}`);
+    for (let b = 0; b < B; ++b) {
+        const level = bricks[4 * b + 3];
+        if (level >= levels) fail(`sparse brick ${b} has level ${level} of ${levels}`);
+        for (let k = 0; k < 3; ++k)
+            if (bricks[4 * b + k] >= cells[k] * pow3(level)) fail(`sparse brick ${b} lies outside the cells`);
+        for (let i = 0; i < SPARSE_BRICK_PROBES; ++i)
+            if (brickProbes[SPARSE_BRICK_PROBES * b + i] >= P)
+                fail(`sparse brick ${b} names probe ${brickProbes[SPARSE_BRICK_PROBES * b + i]} of ${P}`);
+    }
+    for (let z = 0; z < cells[2]; ++z)
+        for (let y = 0; y < cells[1]; ++y)
+            for (let x = 0; x < cells[0]; ++x) {
+                const c = x + cells[0] * (y + cells[1] * z), e = indirection[c];
+                const d = e >>> 28, off = e & SPARSE_EMPTY, cell = [x, y, z];
+                if (d >= levels) fail(`sparse cell ${c} has depth ${d}`);
+                const m = pow3(d);
+                if (d > 0 && off + m * m * m > K) fail(`sparse cell ${c} points past the chunks`);
+                for (let s = 0; s < m * m * m; ++s) {
+                    const b = d ? chunks[off + s] : off;
+                    if (b === SPARSE_EMPTY) continue;
+                    if (b >= B) fail(`sparse cell ${c} names brick ${b} of ${B}`);
+                    const level = bricks[4 * b + 3];
+                    if (level > d) fail(`sparse cell ${c} names a brick finer than its depth`);
+                    const sub = [s % m, Math.floor(s / m) % m, Math.floor(s / (m * m))], div = pow3(d - level);
+                    for (let k = 0; k < 3; ++k)
+                        if (bricks[4 * b + k] !== cell[k] * pow3(level) + Math.floor(sub[k] / div))
+                            fail(`sparse cell ${c} names brick ${b} elsewhere`);
+                }
+            }
+    return { levels, cells, brickCount: B, chunkCount: K, bricks, brickProbes, indirection, chunks };
+}
+
+/**
+ * The layout tables as the sampler reads them (pb_sparse_word in
+ * runtime/probe_sample.glsl; build_sparse_words in src/sample/probe_sample.c):
+ * four word offsets (indirection, chunks, bricks, brick probes), then those
+ * tables, a brick as four words (coordinates, level).
+ */
+export function sparseSamplerWords(sp) {
+    const C = sp.indirection.length, atInd = 4, atChunks = atInd + C, atBricks = atChunks + sp.chunkCount;
+    const atProbes = atBricks + 4 * sp.brickCount;
+    const w = new Uint32Array(atProbes + SPARSE_BRICK_PROBES * sp.brickCount);
+    w.set([atInd, atChunks, atBricks, atProbes]);
+    w.set(sp.indirection, atInd);
+    w.set(sp.chunks, atChunks);
+    w.set(sp.bricks, atBricks);
+    w.set(sp.brickProbes, atProbes);
+    return w;
 }

@@ -11,6 +11,7 @@
 //   scene.traverse((o) => { if (o.isMesh) volume.applyTo(o.material); });
 import * as THREE from 'three';
 import { probeSampleGLSL } from './probe_sample_glsl.js';
+import { sparseSamplerWords } from './probes.js';
 
 const TEXELS_PER_ROW = 2048; // WebGL2 guarantees 2048 per side
 
@@ -24,13 +25,17 @@ function dataTexture(data, width, height, format, type) {
     return t;
 }
 
-/** The textures and uniforms of one grid volume (parseProbes' result). */
+/** The textures and uniforms of one volume (parseProbes' result): a grid,
+ *  or sparse bricks (then the sampler is compiled with PB_SPARSE). */
 export class ProbeVolume {
     constructor(v) {
-        if (!v.grid) throw new Error('the volume has placed points, not a grid: the sampler interpolates a grid');
+        if (!v.grid && !v.sparse)
+            throw new Error('the volume has placed points, not a grid or bricks: the sampler interpolates a grid');
         if (!v.irradiance) throw new Error('the volume holds radiance SH; the sampler reads irradiance');
         const P = v.probeCount, tile = v.tile;
-        const W = Math.min(7 * P, TEXELS_PER_ROW);
+        const words = v.sparse ? sparseSamplerWords(v.sparse) : null;
+        // one width for every texture indexed by pb_texel_2d
+        const W = Math.min(Math.max(7 * P, words ? words.length : 0), TEXELS_PER_ROW);
         const probes = new Float32Array(W * Math.ceil(P / W) * 4);
         const sh = new Float32Array(W * Math.ceil(7 * P / W) * 4);
         const T = Math.ceil(Math.sqrt(P)), rows = Math.ceil(P / T);
@@ -51,6 +56,13 @@ export class ProbeVolume {
             sh: dataTexture(sh, W, Math.ceil(7 * P / W), THREE.RGBAFormat, THREE.FloatType),
             depth: dataTexture(depth, T * tile, rows * tile, THREE.RGFormat, THREE.HalfFloatType),
         };
+        if (words) { // R32UI, word i at texel i: the layout tables pb_sparse_word reads
+            const padded = new Uint32Array(W * Math.ceil(words.length / W));
+            padded.set(words);
+            const t = dataTexture(padded, W, padded.length / W, THREE.RedIntegerFormat, THREE.UnsignedIntType);
+            t.internalFormat = 'R32UI';
+            this.textures.sparse = t;
+        }
         // shared by every patched material: change .value to retune them all
         this.uniforms = {
             pb_probes: { value: this.textures.probes },
@@ -60,7 +72,8 @@ export class ProbeVolume {
             pb_depth_tiles_per_row: { value: T },
             pb_grid_origin: { value: new THREE.Vector3(0, 0, 0) },
             pb_grid_spacing: { value: new THREE.Vector3(...v.spacing) },
-            pb_grid_counts: { value: Int32Array.from(v.counts) }, // ivec3: three sets int vectors from arrays
+            // a sparse volume: the coarsest cells per axis (origin and spacing are the lattice's, the finest level's)
+            pb_grid_counts: { value: Int32Array.from(v.sparse ? v.sparse.cells : v.counts) }, // ivec3: three sets int vectors from arrays
             pb_octmap_res: { value: v.n },
             pb_normal_bias: { value: 0.1 },
             pb_view_bias: { value: 0.1 },
@@ -69,6 +82,10 @@ export class ProbeVolume {
             pb_frame_origin: { value: new THREE.Vector3(...v.origin) },
             pb_intensity: { value: 1.0 },
         };
+        if (words) {
+            this.uniforms.pb_sparse = { value: this.textures.sparse };
+            this.uniforms.pb_levels = { value: v.sparse.levels };
+        }
     }
 
     /** Patches a MeshStandardMaterial or MeshPhysicalMaterial (in place) so
@@ -98,7 +115,7 @@ export class ProbeVolume {
                 .replace('void main() {', `in vec3 pb_world_position;
 uniform vec3 pb_frame_origin;
 uniform float pb_intensity;
-${probeSampleGLSL}
+${this.volume.sparse ? '#define PB_SPARSE\n' : ''}${probeSampleGLSL}
 void main() {`)
                 .replace('#include <lights_fragment_maps>', `#include <lights_fragment_maps>
     {
@@ -108,7 +125,7 @@ void main() {`)
         irradiance += pb_intensity * pb_volume_irradiance(pb_world_position - pb_frame_origin, pb_n, pb_v);
     }`);
         };
-        material.customProgramCacheKey = () => 'probebake-volume';
+        material.customProgramCacheKey = () => (this.volume.sparse ? 'probebake-volume-sparse' : 'probebake-volume');
         material.needsUpdate = true;
         return material;
     }

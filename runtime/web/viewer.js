@@ -35,7 +35,8 @@ async function fetchBytes(url) {
 }
 
 function probeSpheres(v) {
-    const s = Math.min(...v.spacing.filter((x, k) => v.counts[k] > 1), Infinity);
+    // a sparse volume's spacing is its finest level's
+    const s = v.sparse ? Math.min(...v.spacing) : Math.min(...v.spacing.filter((x, k) => v.counts[k] > 1), Infinity);
     const r = Number.isFinite(s) ? 0.08 * s : 0.05;
     const mesh = new THREE.InstancedMesh(new THREE.SphereGeometry(r, 16, 8), new THREE.MeshBasicMaterial(),
         v.probeCount);
@@ -147,7 +148,7 @@ async function main() {
         volume.uniforms.pb_intensity.value = mode === 'direct' ? 0 : 1;
         for (const [m, e] of emissive) m.emissive.copy(mode === 'indirect' ? new THREE.Color(0, 0, 0) : e);
         document.getElementById('info').textContent =
-            `${v.probeCount} probes (${v.counts.join(' x ')}), direct light ${v.directIncluded ? 'in the volume' : 'from three.js lights'}`;
+            `${v.probeCount} probes (${v.sparse ? `${v.sparse.brickCount} bricks, ${v.sparse.levels} levels` : v.counts.join(' x ')}), direct light ${v.directIncluded ? 'in the volume' : 'from three.js lights'}`;
     }
     const mode = params.get('mode') || 'full';
     for (const input of document.querySelectorAll('input[name=mode]')) {

@@ -24,6 +24,8 @@ unsigned char *pb_ktx2_encode(const pb_ktx2_image *img, uint64_t *size)
         channels = 4, bits = 32;
     else if (img->vk_format == PB_VK_FORMAT_R16G16_SFLOAT)
         channels = 2, bits = 16;
+    else if (img->vk_format == PB_VK_FORMAT_R32_UINT)
+        channels = 1, bits = 32;
     else
         return NULL;
     uint32_t texel = channels * bits / 8, dfd_bytes = 4 + 24 + 16 * channels;
@@ -51,15 +53,16 @@ unsigned char *pb_ktx2_encode(const pb_ktx2_image *img, uint64_t *size)
     put_u32(d + 20, texel);                              /* bytes in plane 0 */
     put_u32(d + 24, 0);
     static const uint32_t channel_id[4] = {0, 1, 2, 15}; /* R, G, B, A */
+    int integer = img->vk_format == PB_VK_FORMAT_R32_UINT;
     for (uint32_t c = 0; c < channels; ++c) {
         unsigned char *s = d + 28 + 16 * c;
-        /* bit offset, bit length - 1, channel with the FLOAT and SIGNED qualifiers */
-        put_u32(s, c * bits | (bits - 1u) << 16 | (channel_id[c] | 0x80u | 0x40u) << 24);
+        /* bit offset, bit length - 1, channel with the FLOAT and SIGNED qualifiers (none for unsigned integers) */
+        put_u32(s, c * bits | (bits - 1u) << 16 | (channel_id[c] | (integer ? 0u : 0x80u | 0x40u)) << 24);
         put_u32(s + 4, 0);                               /* sample position */
-        put_u32(s + 8, 0xBF800000u);                     /* lower: -1.0f */
-        put_u32(s + 12, 0x3F800000u);                    /* upper: 1.0f */
+        put_u32(s + 8, integer ? 0u : 0xBF800000u);      /* lower: 0, or -1.0f */
+        put_u32(s + 12, integer ? 0xFFFFFFFFu : 0x3F800000u); /* upper: the largest value, or 1.0f */
     }
-    /* components little-endian whatever the host: floats (R32G32B32A32) or halves (R16G16) */
+    /* components little-endian whatever the host: floats or uint32 (32 bits) or halves (R16G16) */
     uint64_t components = (uint64_t)img->width * img->height * channels;
     for (uint64_t i = 0; i < components; ++i) {
         if (bits == 32) {

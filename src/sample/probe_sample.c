@@ -9,35 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The layout tables as pb_sparse_word reads them: four word offsets
- * (indirection, chunks, bricks, brick probes), then those tables; a brick
- * is four words (coord x, y, z, level). */
-static pb_result build_sparse_words(const pb_sparse_layout *sp, pb_sample_volume *out)
-{
-    uint64_t cells = (uint64_t)sp->cells[0] * sp->cells[1] * sp->cells[2];
-    uint64_t at_ind = 4, at_chunks = at_ind + cells, at_bricks = at_chunks + sp->chunk_count;
-    uint64_t at_probes = at_bricks + 4ull * sp->brick_count;
-    uint64_t total = at_probes + (uint64_t)PB_SPARSE_BRICK_PROBES * sp->brick_count;
-    if (total > UINT32_MAX)
-        return PB_ERROR_OUT_OF_HOST_MEMORY;
-    uint32_t *w = malloc((size_t)total * sizeof *w);
-    if (!w)
-        return PB_ERROR_OUT_OF_HOST_MEMORY;
-    w[0] = (uint32_t)at_ind, w[1] = (uint32_t)at_chunks, w[2] = (uint32_t)at_bricks, w[3] = (uint32_t)at_probes;
-    memcpy(w + at_ind, sp->indirection, (size_t)cells * 4);
-    memcpy(w + at_chunks, sp->chunks, (size_t)sp->chunk_count * 4);
-    for (uint32_t b = 0; b < sp->brick_count; ++b) {
-        uint32_t *q = w + at_bricks + 4 * (size_t)b;
-        q[0] = sp->bricks[b].coord[0], q[1] = sp->bricks[b].coord[1], q[2] = sp->bricks[b].coord[2];
-        q[3] = sp->bricks[b].level;
-    }
-    memcpy(w + at_probes, sp->brick_probes, (size_t)PB_SPARSE_BRICK_PROBES * sp->brick_count * 4);
-    out->sparse_words = w;
-    out->sparse_word_count = (uint32_t)total;
-    out->levels = sp->levels;
-    return PB_OK;
-}
-
 pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3], float normal_bias,
                                  float view_bias, pb_sample_volume *out, pb_error *err)
 {
@@ -63,10 +34,11 @@ pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3
         out->spacing[k] = (float)v->spacing[k];
         out->counts[k] = (int32_t)(sparse ? v->sparse->cells[k] : v->counts[k]);
     }
-    if (sparse && build_sparse_words(v->sparse, out) != PB_OK) {
+    if (sparse && pb_sparse_layout_words(v->sparse, &out->sparse_words, &out->sparse_word_count) != PB_OK) {
         pb_sample_volume_free(out);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse layout");
     }
+    out->levels = sparse ? v->sparse->levels : 0;
     out->octmap_res = (int32_t)v->octmap_res;
     out->normal_bias = normal_bias > 0.f ? normal_bias : PB_SAMPLE_NORMAL_BIAS;
     out->view_bias = view_bias > 0.f ? view_bias : PB_SAMPLE_VIEW_BIAS;

@@ -264,6 +264,32 @@ pb_result pb_sparse_layout_validate(const pb_sparse_layout *l, uint32_t probe_co
     return PB_OK;
 }
 
+pb_result pb_sparse_layout_words(const pb_sparse_layout *sp, uint32_t **words, uint32_t *count)
+{
+    *words = NULL, *count = 0;
+    uint64_t cells = cell_count(sp->cells);
+    uint64_t at_ind = 4, at_chunks = at_ind + cells, at_bricks = at_chunks + sp->chunk_count;
+    uint64_t at_probes = at_bricks + 4ull * sp->brick_count;
+    uint64_t total = at_probes + (uint64_t)PB_SPARSE_BRICK_PROBES * sp->brick_count;
+    if (total > UINT32_MAX)
+        return PB_ERROR_OUT_OF_HOST_MEMORY;
+    uint32_t *w = malloc((size_t)total * sizeof *w);
+    if (!w)
+        return PB_ERROR_OUT_OF_HOST_MEMORY;
+    w[0] = (uint32_t)at_ind, w[1] = (uint32_t)at_chunks, w[2] = (uint32_t)at_bricks, w[3] = (uint32_t)at_probes;
+    memcpy(w + at_ind, sp->indirection, (size_t)cells * 4);
+    memcpy(w + at_chunks, sp->chunks, (size_t)sp->chunk_count * 4);
+    for (uint32_t b = 0; b < sp->brick_count; ++b) {
+        uint32_t *q = w + at_bricks + 4 * (size_t)b;
+        q[0] = sp->bricks[b].coord[0], q[1] = sp->bricks[b].coord[1], q[2] = sp->bricks[b].coord[2];
+        q[3] = sp->bricks[b].level;
+    }
+    memcpy(w + at_probes, sp->brick_probes, (size_t)PB_SPARSE_BRICK_PROBES * sp->brick_count * 4);
+    *words = w;
+    *count = (uint32_t)total;
+    return PB_OK;
+}
+
 /* x clamped to [lo, hi]; NaN gives lo (the GLSL leaves NaN to the driver;
  * here a NaN from a damaged file must not reach an int conversion) */
 static float clampf(float x, float lo, float hi)

@@ -78,22 +78,11 @@ function readPFM(path) {
     return { w, h, rgb };
 }
 
-test('the page lights the demo scene as the C renderer does', async () => {
-    assert.ok(probebake, 'PB_PROBEBAKE names the probebake binary');
-    const scene = join(root, 'tests/scenes/demo.gltf');
-    execFileSync(probebake, ['bake', scene, '--spacing', '0.5', '--rays', '128', '--passes', '2', '--quiet',
-        '-o', join(dir, 'demo.probes')]);
-    execFileSync(probebake, ['render', scene, '--volume', join(dir, 'demo.probes'), '--mode', 'indirect',
-        '--size', `${W}x${H}`, '--spp', '1', ...camera, '--pfm', '--quiet', '-o', join(dir, 'c.png')]);
-    // the reader on a real bake: every probe's SH as `inspect --json` prints it
-    const v = parseProbes(new Uint8Array(readFileSync(join(dir, 'demo.probes'))), 'demo.probes');
-    const j = JSON.parse(execFileSync(probebake, ['inspect', join(dir, 'demo.probes'), '--json'],
-        { maxBuffer: 1 << 28 }).toString());
-    assert.equal(j.probe_list.length, v.probeCount);
-    for (const p of j.probe_list)
-        for (let k = 0; k < 27; ++k) assert.equal(v.sh[27 * p.index + k], Math.fround(p.sh[k]), `probe ${p.index}`);
-    const c = readPFM(join(dir, 'c.pfm'));
-    const q = `scene=/tests/scenes/demo.gltf&probes=/t/demo.probes&mode=indirect&test=1&w=${W}&h=${H}` +
+// The page's indirect-only image of the demo scene lit by /t/PROBES against
+// the C renderer's PFM: surface pixels, the metric of `render --mode diff`.
+async function pageMatchesC(probes, pfm) {
+    const c = readPFM(join(dir, pfm));
+    const q = `scene=/tests/scenes/demo.gltf&probes=/t/${probes}&mode=indirect&test=1&w=${W}&h=${H}` +
         `&eye=0,1.5,2.3&target=0,1.2,0&fov=60`;
     const r = await pageResult(q);
     assert.equal(r.error, undefined, r.error);
@@ -129,6 +118,40 @@ test('the page lights the demo scene as the C renderer does', async () => {
     // test_sample allows between the Vulkan sampler and its C reference per
     // query; pixels at silhouettes (the other surface) are few and count in it.
     assert.ok(rrmse < 1e-3, `relative RMSE ${rrmse}`);
+}
+
+test('the page lights the demo scene as the C renderer does', async () => {
+    assert.ok(probebake, 'PB_PROBEBAKE names the probebake binary');
+    const scene = join(root, 'tests/scenes/demo.gltf');
+    execFileSync(probebake, ['bake', scene, '--spacing', '0.5', '--rays', '128', '--passes', '2', '--quiet',
+        '-o', join(dir, 'demo.probes')]);
+    execFileSync(probebake, ['render', scene, '--volume', join(dir, 'demo.probes'), '--mode', 'indirect',
+        '--size', `${W}x${H}`, '--spp', '1', ...camera, '--pfm', '--quiet', '-o', join(dir, 'c.png')]);
+    // the reader on a real bake: every probe's SH as `inspect --json` prints it
+    const v = parseProbes(new Uint8Array(readFileSync(join(dir, 'demo.probes'))), 'demo.probes');
+    const j = JSON.parse(execFileSync(probebake, ['inspect', join(dir, 'demo.probes'), '--json'],
+        { maxBuffer: 1 << 28 }).toString());
+    assert.equal(j.probe_list.length, v.probeCount);
+    for (const p of j.probe_list)
+        for (let k = 0; k < 27; ++k) assert.equal(v.sh[27 * p.index + k], Math.fround(p.sh[k]), `probe ${p.index}`);
+    await pageMatchesC('demo.probes', 'c.pfm');
+});
+
+test('the page lights the demo scene from sparse bricks as the C renderer does', async () => {
+    // three levels refined where the probes disagree: cages at every level and
+    // lookups that cross level boundaries, through the R32UI layout texture
+    const scene = join(root, 'tests/scenes/demo.gltf');
+    const out = execFileSync(probebake, ['bake', scene, '--layout', 'sparse', '--spacing', '0.5', '--max-level', '2',
+        '--refine-error', '0.3', '--rays', '64', '--passes', '2', '-o', join(dir, 'sparse.probes')],
+        { stdio: ['ignore', 'pipe', 'pipe'] }).toString();
+    const v = parseProbes(new Uint8Array(readFileSync(join(dir, 'sparse.probes'))), 'sparse.probes');
+    assert.ok(v.sparse && v.sparse.levels === 3, 'a sparse volume of 3 levels');
+    const perLevel = [0, 0, 0];
+    for (let b = 0; b < v.sparse.brickCount; ++b) ++perLevel[v.sparse.bricks[4 * b + 3]];
+    assert.ok(perLevel.every((n) => n > 0), `bricks at every level: ${perLevel} (${out.trim()})`);
+    execFileSync(probebake, ['render', scene, '--volume', join(dir, 'sparse.probes'), '--mode', 'indirect',
+        '--size', `${W}x${H}`, '--spp', '1', ...camera, '--pfm', '--quiet', '-o', join(dir, 'c-sparse.png')]);
+    await pageMatchesC('sparse.probes', 'c-sparse.pfm');
 });
 
 test('a malformed volume gives a visible error, not a blank canvas', async () => {

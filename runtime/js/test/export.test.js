@@ -7,20 +7,22 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { join } from 'node:path';
+import { join, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
 import { read as readKTX2 } from 'three/examples/jsm/libs/ktx-parse.module.js';
-import { parseProbes, tileHalves } from '../probes.js';
+import { parseProbes, tileHalves, sparseSamplerWords } from '../probes.js';
 
 const probebake = process.env.PB_PROBEBAKE, maker = process.env.PB_MAKE_TEST_VOLUME;
 const dir = mkdtempSync(join(tmpdir(), 'pb-export-'));
 process.on('exit', () => rmSync(dir, { recursive: true, force: true }));
 
-const VK_FORMAT_R16G16_SFLOAT = 83, VK_FORMAT_R32G32B32A32_SFLOAT = 109;
+const VK_FORMAT_R16G16_SFLOAT = 83, VK_FORMAT_R32_UINT = 98, VK_FORMAT_R32G32B32A32_SFLOAT = 109;
 
 function ktx(path) {
     const k = readKTX2(new Uint8Array(readFileSync(path)));
     const level = k.levels[0].levelData;
-    return { k, bytes: level, f32: new Float32Array(level.slice().buffer), u16: new Uint16Array(level.slice().buffer) };
+    return { k, bytes: level, f32: new Float32Array(level.slice().buffer), u16: new Uint16Array(level.slice().buffer),
+        u32: new Uint32Array(level.slice().buffer) };
 }
 
 test('exported textures hold the volume as the contract says', () => {
@@ -91,6 +93,40 @@ test('ProbeVolume lays the textures out as the export does', async () => {
         assert.equal(pv.uniforms[name].value, m.uniforms[name], name);
     assert.deepEqual(Array.from(pv.uniforms.pb_grid_counts.value), m.uniforms.pb_grid_counts);
     const pairs = [['probes', 'pb_probes', 'f32'], ['sh', 'pb_sh', 'f32'], ['depth', 'pb_depth', 'u16']];
+    for (const [tex, key, kind] of pairs) {
+        const t = pv.textures[tex].image, k = ktx(join(out, m.textures[key].file));
+        assert.equal(t.width, k.k.pixelWidth, `${key} width`);
+        assert.equal(t.height, k.k.pixelHeight, `${key} height`);
+        assert.deepEqual(Array.from(t.data), Array.from(k[kind]), `${key} texels`);
+    }
+});
+
+// A sparse volume (the fuzz seed tests/fuzz/volume_corpus/seed-sparse2, a
+// two-level bake): the export adds the layout as an R32UI texture, its
+// levels and PB_SPARSE, and ProbeVolume builds the same four textures.
+test('a sparse volume exports its layout texture as ProbeVolume builds it', async () => {
+    const { ProbeVolume } = await import('../three-probes.js');
+    const src = join(dirname(fileURLToPath(import.meta.url)), '../../../tests/fuzz/volume_corpus/seed-sparse2');
+    const out = join(dir, 'sparse-tex');
+    execFileSync(probebake, ['export', src, '--textures', out]);
+    const v = parseProbes(new Uint8Array(readFileSync(src)), src);
+    const m = JSON.parse(readFileSync(join(out, 'manifest.json')));
+    assert.equal(m.define, 'PB_SPARSE');
+    assert.equal(m.uniforms.pb_levels, v.sparse.levels);
+    assert.deepEqual(m.uniforms.pb_grid_counts, v.sparse.cells);
+    assert.deepEqual(m.uniforms.pb_grid_spacing, v.spacing);
+    const sparse = ktx(join(out, m.textures.pb_sparse.file));
+    assert.equal(sparse.k.vkFormat, VK_FORMAT_R32_UINT);
+    assert.equal(sparse.k.dataFormatDescriptor[0].samples.length, 1);
+    assert.equal(sparse.k.pixelWidth, m.uniforms.pb_tex_width);
+    const words = sparseSamplerWords(v.sparse);
+    assert.deepEqual(Array.from(sparse.u32.subarray(0, words.length)), Array.from(words));
+    const pv = new ProbeVolume(v);
+    for (const name of ['pb_tex_width', 'pb_depth_tiles_per_row', 'pb_octmap_res', 'pb_depth_unit', 'pb_levels'])
+        assert.equal(pv.uniforms[name].value, m.uniforms[name], name);
+    assert.deepEqual(Array.from(pv.uniforms.pb_grid_counts.value), m.uniforms.pb_grid_counts);
+    const pairs = [['probes', 'pb_probes', 'f32'], ['sh', 'pb_sh', 'f32'], ['depth', 'pb_depth', 'u16'],
+        ['sparse', 'pb_sparse', 'u32']];
     for (const [tex, key, kind] of pairs) {
         const t = pv.textures[tex].image, k = ktx(join(out, m.textures[key].file));
         assert.equal(t.width, k.k.pixelWidth, `${key} width`);

@@ -8,9 +8,10 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, writeFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { join } from 'node:path';
-import { parseProbes, halfToFloat, floatToHalf, depthUnit, tileHalves, PROBE_RELOCATED, PROBE_DILATED }
-    from '../probes.js';
+import { join, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { parseProbes, halfToFloat, floatToHalf, depthUnit, tileHalves, sparseSamplerWords, PROBE_RELOCATED,
+    PROBE_DILATED } from '../probes.js';
 
 const probebake = process.env.PB_PROBEBAKE, maker = process.env.PB_MAKE_TEST_VOLUME;
 const dir = mkdtempSync(join(tmpdir(), 'pb-js-'));
@@ -79,8 +80,8 @@ test('malformed files throw errors that say what is wrong', () => {
         ['std-error-nan', size - 4, 0x7fc00000, 0, 'standard error'],
         ['header', 0, 0, 100, 'truncated header'],
         ['empty', 0, 0, -1, 'not a probebake volume'],
-        // version 4's sparse flag: this reader says it does not read bricks (the C reader: not on a grid)
-        ['sparse', 16, new DataView(u8(bytes).buffer).getUint32(16, true) | 16, 0, 'sparse volume (bricks)'],
+        // version 4's sparse flag belongs to point lists with a layout section, never to a grid
+        ['sparse', 16, new DataView(u8(bytes).buffer).getUint32(16, true) | 16, 0, 'sparse flag in a grid'],
     ];
     for (const [name, offset, value, keep, needle] of cases) {
         let copy = u8(bytes);
@@ -97,6 +98,63 @@ test('malformed files throw errors that say what is wrong', () => {
             assert.throws(() => execFileSync(probebake, ['inspect', p], { stdio: 'pipe' }), `${name}: C reader`);
         }
     }
+});
+
+// A sparse volume (two levels, 1 + 7 bricks, 27 chunk entries; the fuzz
+// seed tests/fuzz/volume_corpus/seed-sparse2, a real bake): what inspect
+// --json reports, the sampler's tables, and the C reader's refusals.
+test('reads sparse bricks as inspect --json does, and refuses damaged layouts', () => {
+    assert.ok(probebake, 'PB_PROBEBAKE names the probebake binary');
+    const path = join(dirname(fileURLToPath(import.meta.url)), '../../../tests/fuzz/volume_corpus/seed-sparse2');
+    const bytes = readFileSync(path);
+    const v = parseProbes(u8(bytes), 'seed-sparse2');
+    const j = JSON.parse(execFileSync(probebake, ['inspect', path, '--json']).toString());
+    assert.equal(v.grid, false);
+    assert.equal(v.probeCount, j.probes);
+    assert.equal(v.sparse.levels, j.sparse.levels);
+    assert.deepEqual(v.sparse.cells, j.sparse.cells);
+    assert.equal(v.sparse.chunkCount, j.sparse.chunk_entries);
+    const perLevel = [0, 0, 0];
+    for (let b = 0; b < v.sparse.brickCount; ++b) ++perLevel[v.sparse.bricks[4 * b + 3]];
+    assert.deepEqual(perLevel, j.sparse.bricks);
+    for (const p of j.probe_list)
+        for (let c = 0; c < 27; ++c) assert.equal(v.sh[27 * p.index + c], Math.fround(p.sh[c]), `probe ${p.index}`);
+    // the sampler's words: offsets, then the tables in order
+    const w = sparseSamplerWords(v.sparse), B = v.sparse.brickCount;
+    assert.deepEqual(Array.from(w.subarray(0, 4)), [4, 5, 5 + 27, 5 + 27 + 4 * B]);
+    assert.equal(w.length, 5 + 27 + 4 * B + 64 * B);
+    assert.equal(w[w[2] + 4 * 1 + 3], v.sparse.bricks[4 * 1 + 3]);
+    assert.equal(w[w[3] + 64 * B - 1], v.sparse.brickProbes[64 * B - 1]);
+    // damaged layouts: one word changed, both readers refuse, with the C reader's words
+    const dv = new DataView(u8(bytes).buffer), at = Number(dv.getBigUint64(416, true));
+    const head = 32, bricksAt = at + head, probesAt = bricksAt + 16 * B, cellsAt = probesAt + 256 * B;
+    const chunksAt = cellsAt + 4;
+    // two chunk entries naming different fine bricks: swapping in the other puts it elsewhere
+    const named = [...v.sparse.chunks.keys()].filter((s) => v.sparse.chunks[s] !== 0x0fffffff &&
+        v.sparse.bricks[4 * v.sparse.chunks[s] + 3] === 1);
+    const s0 = named[0], other = v.sparse.chunks[named.find((s) => v.sparse.chunks[s] !== v.sparse.chunks[s0])];
+    const cases = [
+        ['levels', at, 5, 'levels (1 to 3)'],
+        ['brick-level', bricksAt + 12, 2, 'has level 2 of 2'],
+        ['brick-outside', bricksAt + 16 + 0, 99, 'lies outside the cells'],
+        ['brick-probe', probesAt + 4 * 10, 100000, 'names probe 100000'],
+        ['cell-depth', cellsAt, (3 << 28) >>> 0, 'has depth 3'],
+        ['cell-chunks', cellsAt, ((1 << 28) | 5) >>> 0, 'points past the chunks'],
+        ['chunk-brick', chunksAt, 200, 'names brick 200'],
+        ['chunk-elsewhere', chunksAt + 4 * s0, other, `names brick ${other} elsewhere`],
+        ['layout-offset', 416, at + 16, 'section offsets'],
+    ];
+    for (const [name, offset, value, needle] of cases) {
+        const copy = u8(bytes);
+        new DataView(copy.buffer).setUint32(offset, value >>> 0, true);
+        assert.throws(() => parseProbes(copy.buffer, `${name}.probes`),
+            (e) => e instanceof Error && e.message.startsWith(`${name}.probes: `) && e.message.includes(needle),
+            `${name}: wants "${needle}"`);
+        const p = join(dir, `${name}.probes`);
+        writeFileSync(p, copy);
+        assert.throws(() => execFileSync(probebake, ['inspect', p], { stdio: 'pipe' }), `${name}: C reader`);
+    }
+    assert.throws(() => parseProbes(u8(bytes).slice(0, bytes.length - 4).buffer, 'cut.probes'), /truncated/);
 });
 
 // Version 2 (no accounting section) and version 1 (float16 metres, converted on
