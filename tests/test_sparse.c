@@ -5,6 +5,7 @@
  * air, and the cells it crosses must be subdivided. Also: a sparse volume
  * written and read back samples identically. */
 #include "scenes_gen.h"
+#include "bake/dilate.h"
 #include "common/common.h"
 
 static pb_context *ctx;
@@ -423,6 +424,76 @@ static void sparse_file_round_trip(void)
     pb_scene_destroy(s);
 }
 
+/* Dilation of a sparse volume (a real two-level bake, the fuzz seed
+ * tests/fuzz/volume_corpus/seed-sparse2, with random SH and a third of its
+ * probes invalid): the kernel equals pb_volume_dilate bit for bit, and each
+ * probe's neighbours are one step of its finest level away on the lattice,
+ * in the slot of their offset. */
+static void sparse_dilation_kernel_matches_cpu_reference(void)
+{
+    pb_volume a, b;
+    pb_error err;
+    if (pb_volume_read(source_path("tests/fuzz/volume_corpus/seed-sparse2"), &a, &err) != PB_OK) {
+        CHECKF(0, "%s", err.message);
+        return;
+    }
+    uint32_t P = a.probe_count, state = 99, invalid = 0;
+    for (uint32_t p = 0; p < P; ++p) {
+        for (int c = 0; c < 27; ++c) {
+            state = state * 1664525u + 1013904223u;
+            a.sh[27 * p + c] = (float)(state >> 8) / 16777216.f * 4.f - 1.f;
+        }
+        state = state * 1664525u + 1013904223u;
+        int valid = (state >> 16) % 3 != 0;
+        a.probe_flags[p] = valid ? PB_PROBE_VALID : 0u;
+        invalid += !valid;
+    }
+    CHECK(pb_volume_read(source_path("tests/fuzz/volume_corpus/seed-sparse2"), &b, &err) == PB_OK);
+    memcpy(b.sh, a.sh, 27 * sizeof(float) * P);
+    memcpy(b.probe_flags, a.probe_flags, 4 * P);
+    /* the neighbour table's geometry */
+    uint32_t *nb = pb_dilate_sparse_neighbours(a.sparse, P), finest[1024] = {0}, misplaced = 0, links = 0, full = 0;
+    CHECK(nb && P <= 1024);
+    for (uint32_t br = 0; br < a.sparse->brick_count; ++br)
+        for (uint32_t i = 0; i < 64; ++i) {
+            uint32_t p = a.sparse->brick_probes[64 * br + i];
+            finest[p] = a.sparse->bricks[br].level > finest[p] ? a.sparse->bricks[br].level : finest[p];
+        }
+    for (uint32_t p = 0; nb && p < P; ++p) {
+        uint32_t step = pb_sparse_step(a.sparse->levels, finest[p]), k = 0, have = 0;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    if (!dx && !dy && !dz)
+                        continue;
+                    uint32_t q = nb[26 * p + k++];
+                    if (q == PB_DILATE_NONE)
+                        continue;
+                    ++links, ++have;
+                    int d[3] = {dx, dy, dz};
+                    for (int c = 0; c < 3; ++c) {
+                        double want = d[c] * (double)step * a.spacing[c];
+                        misplaced += fabs((double)a.base[3 * q + c] - a.base[3 * p + c] - want) > 1e-4 * a.spacing[c];
+                    }
+                }
+        full += have == 26;
+    }
+    pb_volume_dilate(&a, PB_DILATION_ROUNDS);
+    pb_result r = pb_volume_dilate_gpu(ctx, &b, PB_DILATION_ROUNDS, &err);
+    CHECKF(r == PB_OK, "%s", err.message);
+    uint32_t dilated = 0;
+    for (uint32_t p = 0; p < P; ++p)
+        dilated += (a.probe_flags[p] & PB_PROBE_DILATED) != 0;
+    int same = r == PB_OK && !memcmp(a.sh, b.sh, 27 * sizeof(float) * P) && !memcmp(a.probe_flags, b.probe_flags, 4 * P);
+    fprintf(stderr, "  %u probes in %u bricks (%u levels), %u invalid: %u dilated; %u neighbour links (%u probes with "
+            "all 26), %u off the lattice; kernel %s the CPU reference\n", P, a.sparse->brick_count, a.sparse->levels,
+            invalid, dilated, links, full, misplaced, same ? "==" : "!=");
+    CHECK(same && dilated == invalid && misplaced == 0 && full > 0);
+    free(nb);
+    pb_volume_free(&a);
+    pb_volume_free(&b);
+}
+
 int main(void)
 {
     if (!(ctx = test_gpu_context()))
@@ -432,5 +503,6 @@ int main(void)
     RUN(sparse_file_round_trip);
     RUN(solid_probes_are_never_sampled);
     RUN(level_seams_are_bounded);
+    RUN(sparse_dilation_kernel_matches_cpu_reference);
     return test_gpu_finish(ctx);
 }

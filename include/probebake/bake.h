@@ -126,10 +126,12 @@ typedef struct pb_gpu_scene pb_gpu_scene;
 /* Rounds of dilation a grid bake runs (its last stage). */
 #define PB_DILATION_ROUNDS 8u
 
-/* Dilation (src/bake/dilate.c): each invalid grid probe takes the
+/* Dilation (src/bake/dilate.c): each invalid probe takes the
  * distance-weighted mean SH of its valid (or already filled) neighbours,
  * round after round (Jacobi), up to `rounds`; filled ones get
- * PB_PROBE_DILATED. A grid volume only. */
+ * PB_PROBE_DILATED. Grid volumes (3x3x3 cells) and sparse ones (the
+ * neighbours on the probe's finest level, pb_dilate_sparse_neighbours);
+ * placed points are left as they are (the GPU version refuses them). */
 void pb_volume_dilate(pb_volume *v, uint32_t rounds);
 /* The same on the device (src/bake/dilate_gpu.c, shaders/comp/dilate.comp):
  * every round in one submission, the same bytes as pb_volume_dilate. */

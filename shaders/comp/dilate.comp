@@ -1,6 +1,7 @@
 #version 460
-// dilate: one round of dilation over a probe grid, one probe per
-// invocation: an empty probe with filled neighbours (3x3x3) takes their
+// dilate: one round of dilation over a probe grid or sparse bricks, one
+// probe per invocation: an empty probe with filled neighbours (a grid's
+// 3x3x3 cells, or a sparse volume's neighbour table, src/bake/dilate.h) takes their
 // weighted mean SH (weights 1/d), in the order and float arithmetic of the
 // CPU reference (src/bake/dilate.c); the weight sum's reciprocal comes from
 // the host's table (src/bake/dilate.h), so no division rounds differently.
@@ -22,6 +23,7 @@ layout(push_constant) uniform Push {
     pb_addr sh_out;
     pb_addr state_out;
     pb_addr table;     // PB_DILATE_TABLE reciprocals
+    pb_addr neighbours; // sparse: 26 probe indices per probe (~0: none), slot order of the loop below; 0: a grid
     uvec4 counts;      // grid counts x, y, z; w: probes
 } pc;
 
@@ -41,15 +43,27 @@ void main()
     for (int c = 0; c < 27; ++c)
         sum[c] = 0.0;
     ivec4 n = ivec4(0);
+    bool sparse = !addr_null(pc.neighbours);
     if (s == 0u) {
         int x = int(p % nx), y = int((p / nx) % ny), z = int(p / (nx * ny));
+        uint slot = 0u;
         for (int dz = -1; dz <= 1; ++dz)
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
-                    int qx = x + dx, qy = y + dy, qz = z + dz, d2 = dx * dx + dy * dy + dz * dz;
-                    if (d2 == 0 || qx < 0 || qy < 0 || qz < 0 || qx >= int(nx) || qy >= int(ny) || qz >= int(nz))
+                    int d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 == 0)
                         continue;
-                    uint q = uint(qx) + nx * (uint(qy) + ny * uint(qz));
+                    uint q;
+                    if (sparse) {
+                        q = UintIn(pc.neighbours).v[26u * p + slot++];
+                        if (q == 0xffffffffu)
+                            continue;
+                    } else {
+                        int qx = x + dx, qy = y + dy, qz = z + dz;
+                        if (qx < 0 || qy < 0 || qz < 0 || qx >= int(nx) || qy >= int(ny) || qz >= int(nz))
+                            continue;
+                        q = uint(qx) + nx * (uint(qy) + ny * uint(qz));
+                    }
                     if (state.v[q] == 0u)
                         continue;
                     float w = d2 == 1 ? W1 : d2 == 2 ? W2 : W3;

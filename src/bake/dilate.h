@@ -7,6 +7,8 @@
 #ifndef PB_BAKE_DILATE_H
 #define PB_BAKE_DILATE_H
 
+#include "probebake/sparse.h"
+
 #include <stdint.h>
 
 /* A neighbour's weight by its squared distance in cells (1, 2, 3): 1 / d. */
@@ -22,5 +24,18 @@ void pb_dilate_reciprocals(float table[PB_DILATE_TABLE]);
 
 /* Probe states between rounds: not filled, valid, filled by dilation. */
 enum { PB_DILATE_EMPTY = 0, PB_DILATE_VALID = 1, PB_DILATE_FILLED = 2 };
+
+/* Neighbours are visited in one order everywhere: offsets (dx, dy, dz) in
+ * {-1, 0, 1}^3 without (0, 0, 0), dz slowest, dx fastest; slot k of the 26. */
+#define PB_DILATE_NEIGHBOURS 26u
+#define PB_DILATE_NONE 0xffffffffu
+
+/* A sparse volume's neighbour table: 26 probe indices per probe (slot order
+ * above; PB_DILATE_NONE where there is none). A probe's neighbours are those
+ * of its finest level: the probes one step of that level away in the bricks
+ * of that level that hold it (bricks share probes on the finest lattice, so
+ * several bricks name the same neighbour). malloc'd; NULL when out of
+ * memory. */
+uint32_t *pb_dilate_sparse_neighbours(const pb_sparse_layout *l, uint32_t probe_count);
 
 #endif

@@ -13,19 +13,31 @@
 #include <stdlib.h>
 #include <string.h>
 
+static pb_result make_neighbours(pb_context *ctx, const uint32_t *neighbours, uint32_t P, pb_buffer *out,
+                                 pb_error *err)
+{
+    uint64_t bytes = (uint64_t)P * PB_DILATE_NEIGHBOURS * 4;
+    pb_result r = pb_buffer_create(ctx, bytes, PB_MEMORY_DEVICE, "dilation neighbours", out, err);
+    return r == PB_OK ? pb_buffer_upload(ctx, out, 0, neighbours, bytes, err) : r;
+}
+
 pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, pb_error *err)
 {
     pb_error_clear(err);
-    if (!(v->flags & PB_VOLUME_GRID))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "dilation needs a grid volume");
+    const pb_sparse_layout *sp = (v->flags & PB_VOLUME_SPARSE) ? v->sparse : NULL;
+    if (!(v->flags & PB_VOLUME_GRID) && !sp)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "dilation needs a grid or sparse volume");
     uint32_t P = v->probe_count;
     uint64_t sh_bytes = (uint64_t)P * 27 * 4, state_bytes = (uint64_t)P * 4;
-    pb_buffer sh[2] = {{0}}, state[2] = {{0}}, table = {0}, down = {0};
+    pb_buffer sh[2] = {{0}}, state[2] = {{0}}, table = {0}, down = {0}, nbrs = {0};
     pb_pipeline pipe = {0};
     uint32_t *st = malloc((size_t)state_bytes);
+    uint32_t *neighbours = sp ? pb_dilate_sparse_neighbours(sp, P) : NULL;
     float recip[PB_DILATE_TABLE];
-    if (!st)
+    if (!st || (sp && !neighbours)) {
+        free(st), free(neighbours);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for dilation");
+    }
     pb_dilate_reciprocals(recip);
     for (uint32_t p = 0; p < P; ++p)
         st[p] = (v->probe_flags[p] & PB_PROBE_VALID) ? PB_DILATE_VALID : PB_DILATE_EMPTY;
@@ -43,6 +55,8 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
         r = pb_buffer_upload(ctx, &state[0], 0, st, state_bytes, err);
     if (r == PB_OK)
         r = pb_buffer_upload(ctx, &table, 0, recip, sizeof recip, err);
+    if (r == PB_OK && neighbours)
+        r = make_neighbours(ctx, neighbours, P, &nbrs, err);
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, pb_spv_dilate, sizeof pb_spv_dilate, sizeof(dilate_push), NULL, 0, 64, "dilate",
                                &pipe, err);
@@ -54,8 +68,8 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
     if (r == PB_OK) {
         for (uint32_t k = 0; k < rounds; ++k) {
             uint32_t a = k % 2, b = 1 - a;
-            dilate_push push = {sh[a].address, state[a].address, sh[b].address, state[b].address, table.address, 0,
-                                {v->counts[0], v->counts[1], v->counts[2], P}};
+            dilate_push push = {sh[a].address, state[a].address, sh[b].address, state[b].address, table.address,
+                                nbrs.address, {v->counts[0], v->counts[1], v->counts[2], P}};
             pb_cmd_dispatch(ctx, &pipe, &push, (P + 63) / 64);
             pb_cmd_barrier(ctx);
         }
@@ -82,6 +96,7 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
     }
     pb_buffer_destroy(ctx, &table);
     pb_buffer_destroy(ctx, &down);
-    free(st);
+    pb_buffer_destroy(ctx, &nbrs);
+    free(st), free(neighbours);
     return r;
 }

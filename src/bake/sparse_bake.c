@@ -420,9 +420,12 @@ done:
     return r;
 }
 
-/* Trilinear SH of brick b (no visibility) at lattice point k3 (finest units). */
-static void brick_trilinear(const sparse_job *j, const pb_sparse_brick *b, const uint32_t k3[3], float sh[27])
+/* Trilinear SH of brick o of the volume's layout (no visibility) at lattice
+ * point k3 (finest units): its probes' SH, as the volume holds it. */
+static void brick_trilinear(const sparse_job *j, const pb_volume *v, uint32_t o, const uint32_t k3[3], float sh[27])
 {
+    const pb_sparse_brick *b = &v->sparse->bricks[o];
+    const uint32_t *probes = v->sparse->brick_probes + PB_SPARSE_BRICK_PROBES * (size_t)o;
     uint32_t step = pb_sparse_step(j->levels, b->level);
     int base[3];
     float a[3];
@@ -434,30 +437,32 @@ static void brick_trilinear(const sparse_job *j, const pb_sparse_brick *b, const
     }
     memset(sh, 0, 27 * sizeof(float));
     for (int c = 0; c < 8; ++c) {
-        uint32_t q[3];
+        int q[3];
         float w = 1.f;
         for (int k = 0; k < 3; ++k) {
-            int o = (c >> k) & 1;
-            q[k] = (3 * b->coord[k] + (uint32_t)(base[k] + o)) * step;
-            w *= o ? a[k] : 1.f - a[k];
+            int off = (c >> k) & 1;
+            q[k] = base[k] + off;
+            w *= off ? a[k] : 1.f - a[k];
         }
-        const float *src = j->ps.sh + 27 * (size_t)store_find(j, q);
+        const float *src = v->sh + 27 * (size_t)probes[q[0] + 4 * (q[1] + 4 * q[2])];
         for (int i = 0; i < 27; ++i)
             sh[i] += w * src[i];
     }
 }
 
-/* Stage 4: a probe of a level-l brick next to a region served by a coarser
- * brick that does not have it takes that brick's trilinear SH; levels in
- * ascending order, so a coarser brick's own stitched probes come first. */
-static void stitch(sparse_job *j, const pb_sparse_layout *sp)
+/* Stage 5, after dilation (so no cage reads an undilated probe in rock): a
+ * probe of a level-l brick next to a region served by a coarser brick that
+ * does not have it takes that brick's trilinear SH; levels in ascending
+ * order, so a coarser brick's own stitched probes come first. */
+static void stitch(const sparse_job *j, pb_volume *v)
 {
+    const pb_sparse_layout *sp = v->sparse;
     float span[3];
     for (int k = 0; k < 3; ++k)
         span[k] = (float)pow3u(j->levels); /* finest steps per cell */
     for (uint32_t level = 1; level < j->levels; ++level)
-        for (uint32_t b = 0; b < j->brick_count; ++b) {
-            const pb_sparse_brick *br = &j->bricks[b];
+        for (uint32_t b = 0; b < sp->brick_count; ++b) {
+            const pb_sparse_brick *br = &sp->bricks[b];
             if (br->level != level)
                 continue;
             uint32_t keys[64 * 3];
@@ -468,7 +473,7 @@ static void stitch(sparse_job *j, const pb_sparse_layout *sp)
                 if (off[0] % 3 && off[1] % 3 && off[2] % 3)
                     continue; /* inside the brick */
                 const uint32_t *k3 = keys + 3 * i;
-                const pb_sparse_brick *coarse = NULL;
+                uint32_t coarse = PB_SPARSE_EMPTY;
                 for (uint32_t c = 0; c < 8; ++c) { /* the eight cells of this level around the probe */
                     float u[3];
                     int outside = 0;
@@ -485,11 +490,11 @@ static void stitch(sparse_job *j, const pb_sparse_layout *sp)
                     const pb_sparse_brick *o = &sp->bricks[nbk];
                     uint32_t ostep = pb_sparse_step(j->levels, o->level);
                     if (o->level < level && (k3[0] % ostep || k3[1] % ostep || k3[2] % ostep) &&
-                        (!coarse || o->level < coarse->level))
-                        coarse = o;
+                        (coarse == PB_SPARSE_EMPTY || o->level < sp->bricks[coarse].level))
+                        coarse = nbk;
                 }
-                if (coarse)
-                    brick_trilinear(j, coarse, k3, j->ps.sh + 27 * (size_t)store_find(j, k3));
+                if (coarse != PB_SPARSE_EMPTY)
+                    brick_trilinear(j, v, coarse, k3, v->sh + 27 * (size_t)sp->brick_probes[64 * (size_t)b + i]);
             }
         }
 }
@@ -549,17 +554,14 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
     free(cand);
     for (uint32_t level = 0; r == PB_OK && level + 1 < j.levels; ++level)
         r = refine_level(&j, &sd, level, err);
-    if (r == PB_OK) {
-        pb_sparse_layout sp;
-        uint32_t P;
-        r = pb_sparse_layout_build(j.levels, j.cells, j.bricks, j.brick_count, &sp, &P, NULL, err);
-        if (r == PB_OK) {
-            stitch(&j, &sp);
-            pb_sparse_layout_free(&sp);
-        }
-    }
     if (r == PB_OK)
         r = assemble(&j, out, err);
+    /* invalid probes (in rock, inside kept bricks) take their neighbours'
+     * light on the device, as a grid's do; then the level seams are stitched */
+    if (r == PB_OK && (r = pb_volume_dilate_gpu(ctx, out, PB_DILATION_ROUNDS, err)) != PB_OK)
+        pb_volume_free(out);
+    if (r == PB_OK)
+        stitch(&j, out);
     if (stats)
         *stats = j.stats;
     store_free(&j.ps);
