@@ -2,7 +2,9 @@
 # Sparse bricks against uniform grids (issue 14): for each layout, probes,
 # file bytes and bake wall time against the image error of probe-lit renders
 # compared with path-traced references (render --mode diff:
-# relative_rmse_surfaces and p95_relative_error, averaged over the views).
+# relative_rmse_surfaces and p95_relative_error, averaged over the views;
+# for sparse layouts also the same two where its levels meet and elsewhere,
+# render's seam metrics).
 # Grids at several spacings, sparse layouts at several refinement errors, all
 # in the same run; ratios are against the finest grid (the peer). Prints a
 # table, writes CSV and JSON.
@@ -91,7 +93,7 @@ rows=()
 measure() { # name param [bake options...]: one layout, baked and rendered
     local name=$1 param=$2
     shift 2
-    local vol=$tmp/$name-$param.probes t ms probes bytes rmse=0 p95=0 v=0
+    local vol=$tmp/$name-$param.probes t ms probes bytes rmse=0 p95=0 v=0 seam=(0 0 0 0) k key
     t=$(now_ms)
     "$pb" bake "$scene" "${args[@]}" "$@" --quiet -o "$vol" >"$tmp/bake.txt"
     ms=$(($(now_ms) - t))
@@ -104,11 +106,21 @@ measure() { # name param [bake options...]: one layout, baked and rendered
             ${refs[$i]:+--reference ${refs[$i]}} -o "$tmp/diff.png" 2>/dev/null >"$tmp/diff.json"
         rmse=$(awk -v a="$rmse" -v b="$(json_num relative_rmse_surfaces <"$tmp/diff.json")" 'BEGIN { print a + b }')
         p95=$(awk -v a="$p95" -v b="$(json_num p95_relative_error <"$tmp/diff.json")" 'BEGIN { print a + b }')
+        k=0
+        for key in relative_rmse_seams p95_relative_error_seams relative_rmse_off_seams p95_relative_error_off_seams; do
+            seam[k]=$(awk -v a="${seam[k]}" -v b="$(json_num $key <"$tmp/diff.json")" 'BEGIN { print a + b }')
+            k=$((k + 1))
+        done
         v=$((v + 1))
     done
     rmse=$(awk -v a="$rmse" -v n="$v" 'BEGIN { printf "%.4f", a / n }')
     p95=$(awk -v a="$p95" -v n="$v" 'BEGIN { printf "%.4f", a / n }')
-    rows+=("$name $param $probes $bytes $ms $rmse $p95")
+    local seams="- - - -"
+    if [ "$name" = sparse ]; then
+        seams=""
+        for k in 0 1 2 3; do seams+="$(awk -v a="${seam[k]}" -v n="$v" 'BEGIN { printf "%.4f", a / n }') "; done
+    fi
+    rows+=("$name $param $probes $bytes $ms $rmse $p95 $seams")
 }
 
 for s in $grids; do
@@ -130,22 +142,27 @@ peer_probes=$3 peer_bytes=$4 peer_ms=$5
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", (b > 0 ? a / b : 0) }'; }
 
 stem=$out/$(basename "$scene" | sed 's/\.[^.]*$//')
-printf '\n%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s\n' layout param probes "vs grid" bytes "vs grid" "bake ms" "vs grid" \
-    rmse_surf p95_rel
-echo "layout,param,probes,probes_ratio,bytes,bytes_ratio,bake_ms,bake_ratio,relative_rmse_surfaces,p95_relative_error" \
-    >"$stem.csv"
+printf '\n%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s\n' layout param probes "vs grid" bytes \
+    "vs grid" "bake ms" "vs grid" rmse_surf p95_rel rmse_seam p95_seam rmse_off p95_off
+echo "layout,param,probes,probes_ratio,bytes,bytes_ratio,bake_ms,bake_ratio,relative_rmse_surfaces,p95_relative_error,\
+relative_rmse_seams,p95_relative_error_seams,relative_rmse_off_seams,p95_relative_error_off_seams" >"$stem.csv"
 json="{\"scene\": \"$(basename "$scene")\", \"args\": \"${args[*]}\", \"size\": \"$size\", \"views\": ${#views[@]},"
 json+=" \"probe_spp\": $spp, \"reference_spp\": $ref_spp,"
 json+=" \"cores\": $(nproc), \"device\": \"$device\", \"peer\": \"grid $finest m\", \"rows\": ["
 sep=""
 for r in "${rows[@]}"; do
     set -- $r
-    printf '%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s\n' "$1" "$2" "$3" "$(ratio "$3" "$peer_probes")" "$4" \
-        "$(ratio "$4" "$peer_bytes")" "$5" "$(ratio "$5" "$peer_ms")" "$6" "$7"
-    echo "$1,$2,$3,$(ratio "$3" "$peer_probes"),$4,$(ratio "$4" "$peer_bytes"),$5,$(ratio "$5" "$peer_ms"),$6,$7" \
+    printf '%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s\n' "$1" "$2" "$3" \
+        "$(ratio "$3" "$peer_probes")" "$4" "$(ratio "$4" "$peer_bytes")" "$5" "$(ratio "$5" "$peer_ms")" "$6" "$7" \
+        "$8" "$9" "${10}" "${11}"
+    csv_seams="$8,$9,${10},${11}" json_seams="$8, $9, ${10}, ${11}"
+    [ "$8" = - ] && csv_seams=",,," json_seams="null, null, null, null"
+    echo "$1,$2,$3,$(ratio "$3" "$peer_probes"),$4,$(ratio "$4" "$peer_bytes"),$5,$(ratio "$5" "$peer_ms"),$6,$7,$csv_seams" \
         >>"$stem.csv"
+    IFS=, read -r s1 s2 s3 s4 <<<"${json_seams// /}"
     json+="$sep{\"layout\": \"$1\", \"param\": $2, \"probes\": $3, \"bytes\": $4, \"bake_ms\": $5,"
-    json+=" \"relative_rmse_surfaces\": $6, \"p95_relative_error\": $7}"
+    json+=" \"relative_rmse_surfaces\": $6, \"p95_relative_error\": $7, \"relative_rmse_seams\": $s1,"
+    json+=" \"p95_relative_error_seams\": $s2, \"relative_rmse_off_seams\": $s3, \"p95_relative_error_off_seams\": $s4}"
     sep=", "
 done
 echo "$json]}" >"$stem.json"
@@ -157,4 +174,6 @@ for r in "${rows[@]}"; do
     set -- $r
     awk -v p="$3" -v b="$4" -v e="$6" -v q="$7" 'BEGIN { exit !(p > 0 && b > 0 && e ~ /^[0-9.]+$/ && q ~ /^[0-9.]+$/) }' ||
         { echo "sparse_vs_grid: row '$r' is incomplete" >&2; exit 1; }
+    [ "$1" != sparse ] || awk -v a="$8" -v c="${10}" 'BEGIN { exit !(a ~ /^[0-9.]+$/ && c ~ /^[0-9.]+$/) }' ||
+        { echo "sparse_vs_grid: sparse row '$r' has no seam metrics" >&2; exit 1; }
 done

@@ -240,12 +240,16 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect inspect-sparse 0 '^level 1     spacing 1 m: [0-9]+ bricks' -- "$pb" inspect "$tmp/s.probes"
     # the debug views of a sparse file: one tile per probe, in layout order
     sparse_probes=$("$pb" inspect "$tmp/s.probes" --json | sed -n 's/.*"probes": \([0-9]*\),.*/\1/p' | head -n 1)
-    expect inspect-sparse-atlas 0 "depth atlas of $sparse_probes probes" -- \
+    expect inspect-sparse-atlas 0 "depth atlas of $sparse_probes probes; tile frames by finest level" -- \
         "$pb" inspect "$tmp/s.probes" --atlas "$tmp/s-atlas.png"
     expect inspect-sparse-sh-view 0 "wrote $tmp/s-sh.png: [0-9]+x[0-9]+, .*$sparse_probes probes" -- \
         "$pb" inspect "$tmp/s.probes" --sh-view "$tmp/s-sh.png"
     expect render-sparse 0 "wrote $tmp/s.png: 32x24, probes" -- \
         "$pb" render "$demo" --volume "$tmp/s.probes" --size 32x24 --validation -o "$tmp/s.png"
+    # a sparse volume's diff also reports the error where its levels meet and elsewhere
+    expect render-sparse-seams 0 '"seam_pixels": [1-9][0-9]*, "relative_rmse_seams": [0-9.]+, .*"p95_relative_error_off_seams": [0-9.]+, "unserved_pixels": 0' -- \
+        "$pb" render "$demo" --volume "$tmp/s.probes" --mode diff --json --size 64x48 --spp 2 --eye 0,1.5,2.3 \
+        --target 0,1.2,0 -o "$tmp/s-diff.png"
     "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 -o "$tmp/b.probes" --quiet >/dev/null
     "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --seed 9 -o "$tmp/c.probes" --quiet >/dev/null
     # same seed: identical bytes except the timings block (offsets 184..247, docs/format.md)

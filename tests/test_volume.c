@@ -654,6 +654,56 @@ static void cancelled_write_replaces_nothing(void)
     pb_volume_free(&v);
 }
 
+/* The debug views of a sparse volume mark levels: the gap pixel above and
+ * left of each tile is its finest level's colour (level 0 blue, 1 green),
+ * full or half bright by its first brick's parity (a real two-level file,
+ * the fuzz seed tests/fuzz/volume_corpus/seed-sparse2). */
+static void sparse_atlas_marks_levels(void)
+{
+    pb_volume v;
+    pb_error err;
+    if (pb_volume_read(source_path("tests/fuzz/volume_corpus/seed-sparse2"), &v, &err) != PB_OK) {
+        CHECKF(0, "%s", err.message);
+        return;
+    }
+    uint32_t P = v.probe_count, level[1024] = {0}, first[1024];
+    CHECK(P <= 1024);
+    for (uint32_t p = 0; p < P && p < 1024; ++p)
+        first[p] = UINT32_MAX;
+    for (uint32_t b = 0; b < v.sparse->brick_count; ++b)
+        for (uint32_t i = 0; i < 64; ++i) {
+            uint32_t p = v.sparse->brick_probes[64 * b + i];
+            if (p >= 1024)
+                continue;
+            if (v.sparse->bricks[b].level > level[p])
+                level[p] = v.sparse->bricks[b].level;
+            if (first[p] == UINT32_MAX)
+                first[p] = b;
+        }
+    const unsigned char want[2][3] = {{40, 90, 255}, {40, 220, 60}};
+    for (int view = 0; view < 2; ++view) {
+        unsigned char *img = NULL;
+        uint32_t w = 0, h = 0, columns, tile = view == 0 ? v.octmap_res + 2 : 16, wrong = 0, per_level[2] = {0, 0};
+        pb_result r = view == 0 ? pb_volume_depth_atlas(&v, &img, &w, &h, &err)
+                                : pb_volume_sh_atlas(&v, tile, &img, &w, &h, &err);
+        CHECKF(r == PB_OK, "%s", err.message);
+        pb_atlas_layout(P, tile, &columns, &w, &h);
+        for (uint32_t p = 0; r == PB_OK && p < P && p < 1024; ++p) {
+            uint32_t x = (p % columns) * (tile + 1), y = (p / columns) * (tile + 1); /* the gap corner */
+            const unsigned char *px = img + 3 * ((size_t)y * w + x), *c = want[level[p] ? 1 : 0];
+            int dim = first[p] % 2;
+            for (int k = 0; k < 3; ++k)
+                wrong += px[k] != (dim ? c[k] / 2 : c[k]);
+            per_level[level[p] ? 1 : 0]++;
+        }
+        fprintf(stderr, "  %s: %u tiles of level 0, %u of level 1; %u wrong frame channels\n",
+                view == 0 ? "depth atlas" : "SH view", per_level[0], per_level[1], wrong);
+        CHECK(wrong == 0 && per_level[0] > 0 && per_level[1] > 0);
+        free(img);
+    }
+    pb_volume_free(&v);
+}
+
 int main(void)
 {
     RUN(half_round_trip_exhaustive);
@@ -669,5 +719,6 @@ int main(void)
     RUN(cancelled_write_replaces_nothing);
     RUN(sparse_lookup_finds_the_finest_brick);
     RUN(sparse_files_round_trip_and_refuse_damage);
+    RUN(sparse_atlas_marks_levels);
     return test_summary();
 }

@@ -96,6 +96,23 @@ typedef struct pb_image_metrics {
 } pb_image_metrics;
 void pb_image_surface_metrics(const float *a, const float *b, const uint8_t *cls, uint32_t width, uint32_t height,
                               pb_image_metrics *out);
+/* The same over the surface pixels whose mask entry equals `want`. */
+void pb_image_surface_metrics_where(const float *a, const float *b, const uint8_t *cls, const uint8_t *mask,
+                                    uint8_t want, uint32_t width, uint32_t height, pb_image_metrics *out);
+
+/* Where a sparse volume's levels meet, per surface pixel of desc's camera
+ * (cls from pb_render_pixel_classes): the sampler looks its brick up at the
+ * biased shading point; PB_SEAM_LEVELS where a brick of another level
+ * serves a point half a finest cell away along an axis (the band where a
+ * seam between levels would show), PB_SEAM_UNSERVED where no brick serves
+ * the point (black), else PB_SEAM_NONE. sv: the volume as sampled (frame =
+ * the scene's local frame); layout: its bricks. */
+enum { PB_SEAM_NONE = 0, PB_SEAM_LEVELS = 1, PB_SEAM_UNSERVED = 2 };
+struct pb_sample_volume;
+struct pb_sparse_layout;
+void pb_render_seam_pixels(const pb_scene *scene, const pb_bvh *bvh, const pb_render_desc *desc,
+                           const struct pb_sample_volume *sv, const struct pb_sparse_layout *layout,
+                           const uint8_t *cls, uint8_t *seam);
 
 /* Writes 8-bit RGB PNG (stb_image_write) or linear PFM (little-endian,
  * bottom row first as PFM says), atomically. PB_ERROR_IO naming the path. */

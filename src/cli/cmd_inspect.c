@@ -108,8 +108,9 @@ int cmd_inspect(const options *o)
             return cli_fail(&err);
         }
         if (!o->json)
-            printf("wrote %s: %ux%u, %s of %u probes\n", views[k], w, h, k == 0 ? "depth atlas" : "SH irradiance view",
-                   v.probe_count);
+            printf("wrote %s: %ux%u, %s of %u probes%s\n", views[k], w, h,
+                   k == 0 ? "depth atlas" : "SH irradiance view", v.probe_count,
+                   v.sparse ? "; tile frames by finest level (0 blue, 1 green, 2 red), dim on odd bricks" : "");
     }
     uint32_t counts[5] = {0};
     for (uint32_t i = 0; i < v.probe_count; ++i)

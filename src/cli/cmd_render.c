@@ -199,8 +199,12 @@ int cmd_render(const options *o)
     if (rr != PB_OK)
         goto out;
     double rmse = 0, rmse_indirect = 0;
-    pb_image_metrics surf;
+    pb_image_metrics surf, seams, off_seams;
     memset(&surf, 0, sizeof surf);
+    memset(&seams, 0, sizeof seams);
+    memset(&off_seams, 0, sizeof off_seams);
+    uint64_t unserved = 0;
+    int sparse = o->volume && sv.levels > 0 && vol.sparse;
     if (diff) {
         /* the reference (path traced), and the direct image the probe image's indirect part is measured against */
         pb_render_desc dr = d;
@@ -227,6 +231,15 @@ int cmd_render(const options *o)
         }
         pb_render_pixel_classes(s, bvh, &d, cls);
         pb_image_surface_metrics(img, ref, cls, d.width, d.height, &surf);
+        uint8_t *seam = sparse ? malloc(pixels) : NULL;
+        if (seam) { /* a sparse volume: the error where its levels meet, and elsewhere */
+            pb_render_seam_pixels(s, bvh, &d, &sv, vol.sparse, cls, seam);
+            pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_LEVELS, d.width, d.height, &seams);
+            pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_NONE, d.width, d.height, &off_seams);
+            for (uint64_t i = 0; i < pixels; ++i)
+                unserved += seam[i] == PB_SEAM_UNSERVED;
+        }
+        free(seam);
         free(cls);
         for (uint64_t i = 0; i < pixels; ++i)
             for (int c = 0; c < 3; ++c) {
@@ -273,6 +286,11 @@ int cmd_render(const options *o)
             fprintf(report, ", \"relative_rmse\": %.6f, \"relative_rmse_indirect\": %s, \"relative_rmse_surfaces\": %.6f, "
                    "\"p95_relative_error\": %.6f, \"surface_pixels\": %llu",
                    rmse, ind, surf.relative_rmse, surf.p95_relative, (unsigned long long)surf.pixels);
+            if (sparse)
+                fprintf(report, ", \"seam_pixels\": %llu, \"relative_rmse_seams\": %.6f, \"p95_relative_error_seams\": %.6f, "
+                        "\"relative_rmse_off_seams\": %.6f, \"p95_relative_error_off_seams\": %.6f, \"unserved_pixels\": %llu",
+                        (unsigned long long)seams.pixels, seams.relative_rmse, seams.p95_relative,
+                        off_seams.relative_rmse, off_seams.p95_relative, (unsigned long long)unserved);
         }
         fprintf(report, "}\n");
     } else {
@@ -287,6 +305,11 @@ int cmd_render(const options *o)
                    "black 0, red >= 50 %%\n",
                    o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect, (unsigned long long)surf.pixels,
                    surf.relative_rmse, surf.p95_relative);
+        if (diff && sparse)
+            fprintf(report, "where levels meet (%llu pixels): relative RMSE %.4f, p95 %.4f; elsewhere (%llu): %.4f, p95 "
+                    "%.4f; %llu surface pixels served by no brick\n", (unsigned long long)seams.pixels,
+                    seams.relative_rmse, seams.p95_relative, (unsigned long long)off_seams.pixels,
+                    off_seams.relative_rmse, off_seams.p95_relative, (unsigned long long)unserved);
     }
     rc = 0;
 out:

@@ -1,10 +1,14 @@
 /* Debug images of a volume: its depth octmap atlas and its per-probe SH
  * irradiance, each probe a square tile (octahedral, +Z in the centre),
- * tiles row by row in probe order, a 1-pixel dark gap between them. */
+ * tiles row by row in probe order, a 1-pixel dark gap between them. In a
+ * sparse volume each tile's top and left gap lines carry its finest level's
+ * colour (PB_ATLAS_LEVEL_COLOURS), bright or dim by the parity of the first
+ * brick that names the probe, so levels and bricks show. */
 #include "common/common.h"
 #include "probebake/octahedral.h"
 #include "probebake/render.h"
 #include "probebake/sh.h"
+#include "probebake/volume.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -25,6 +29,44 @@ static unsigned char *tile_px(unsigned char *rgb8, uint32_t width, uint32_t colu
 {
     uint32_t tx = p % columns, ty = p / columns;
     return rgb8 + 3 * ((size_t)(1 + ty * (tile + 1) + y) * width + 1 + tx * (tile + 1) + x);
+}
+
+/* Level colours of a sparse volume's tiles: level 0 (coarsest) blue, 1 green, 2 red. */
+static const unsigned char level_colour[3][3] = {{40, 90, 255}, {40, 220, 60}, {255, 50, 40}};
+
+static void mark_sparse(const pb_volume *v, unsigned char *rgb8, uint32_t width, uint32_t columns, uint32_t tile)
+{
+    const pb_sparse_layout *l = (v->flags & PB_VOLUME_SPARSE) ? v->sparse : NULL;
+    if (!l)
+        return;
+    uint32_t P = v->probe_count;
+    uint8_t *level = calloc(P ? P : 1, 1);
+    uint32_t *first = malloc((P ? P : 1) * sizeof *first);
+    if (!level || !first) {
+        free(level), free(first);
+        return;
+    }
+    for (uint32_t p = 0; p < P; ++p)
+        first[p] = UINT32_MAX;
+    for (uint32_t b = 0; b < l->brick_count; ++b)
+        for (uint32_t i = 0; i < PB_SPARSE_BRICK_PROBES; ++i) {
+            uint32_t p = l->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)b + i];
+            level[p] = l->bricks[b].level > level[p] ? (uint8_t)l->bricks[b].level : level[p];
+            first[p] = first[p] == UINT32_MAX ? b : first[p];
+        }
+    for (uint32_t p = 0; p < P; ++p) {
+        const unsigned char *c = level_colour[level[p] < 3 ? level[p] : 2];
+        int dim = first[p] % 2; /* neighbouring bricks alternate */
+        for (uint32_t k = 0; k <= tile; ++k) {
+            /* the gap pixels above and left of the tile: (k - 1, -1) and (-1, k - 1) */
+            unsigned char *top = tile_px(rgb8, width, columns, tile, p, 0, 0) - 3 * (size_t)width - 3 + 3 * (size_t)k;
+            unsigned char *left = tile_px(rgb8, width, columns, tile, p, 0, 0) - 3 * (size_t)width - 3 +
+                                  3 * (size_t)k * width;
+            for (int ch = 0; ch < 3; ++ch)
+                top[ch] = left[ch] = (unsigned char)(dim ? c[ch] / 2 : c[ch]);
+        }
+    }
+    free(level), free(first);
 }
 
 pb_result pb_volume_depth_atlas(const pb_volume *v, unsigned char **rgb8, uint32_t *width, uint32_t *height,
@@ -50,6 +92,7 @@ pb_result pb_volume_depth_atlas(const pb_volume *v, unsigned char **rgb8, uint32
                 px[0] = (unsigned char)(255.f * fmaxf(g, r) + 0.5f);
                 px[1] = px[2] = (unsigned char)(255.f * g + 0.5f);
             }
+    mark_sparse(v, *rgb8, *width, columns, side);
     return PB_OK;
 }
 
@@ -85,6 +128,7 @@ pb_result pb_volume_sh_atlas(const pb_volume *v, uint32_t tile, unsigned char **
     for (uint32_t p = 0; p < v->probe_count; ++p)
         for (uint32_t t = 0; t < tile * tile; ++t)
             memcpy(tile_px(*rgb8, *width, columns, tile, p, t % tile, t / tile), tmp + 3 * ((size_t)p * tile * tile + t), 3);
+    mark_sparse(v, *rgb8, *width, columns, tile);
     free(tmp), free(lin);
     return PB_OK;
 }
