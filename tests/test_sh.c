@@ -289,6 +289,19 @@ static void ringing_and_windows(void)
     free(tex_l), free(tex_d), free(tex_w);
 }
 
+/* Ray r's term of the depth filter's sums at unrotated texel direction tl
+ * (a made-up distance per ray); 1 if it passed the cutoff. */
+static int lobe_add(const float tl[3], const float *dirs, uint32_t r, float cutoff, float power, float acc[3])
+{
+    const float *d = dirs + 4 * (size_t)r;
+    float cs = (tl[0] * d[0] + tl[1] * d[1]) + tl[2] * d[2];
+    if (cs <= cutoff)
+        return 0;
+    float w = powf(cs, power), dist = 1.f + (float)(r % 17);
+    acc[0] += w, acc[1] += w * dist, acc[2] += w * dist * dist;
+    return 1;
+}
+
 /* The depth filter's ray lists (bake_depth.comp) leave out no ray that
  * passes the lobe cutoff: for random probe rotations, every texel of 8x8,
  * 16x16 and 32x32 maps and several ray counts and lobe powers, the sums over
@@ -323,25 +336,11 @@ static void depth_lists_miss_no_ray(void)
                         pb_oct_texel_direction(t % res, t / res, res, td);
                         pb_depth_unrotate(rot, td, tl);
                         float all[3] = {0}, listed[3] = {0};
-                        for (uint32_t r = 0; r < n; ++r) {
-                            const float *d = dirs + 4 * (size_t)r;
-                            float cs = (tl[0] * d[0] + tl[1] * d[1]) + tl[2] * d[2];
-                            if (cs <= cutoff)
-                                continue;
-                            float w = powf(cs, powers[b]), dist = 1.f + (float)(r % 17);
-                            all[0] += w, all[1] += w * dist, all[2] += w * dist * dist;
-                            ++passing;
-                        }
+                        for (uint32_t r = 0; r < n; ++r)
+                            passing += lobe_add(tl, dirs, r, cutoff, powers[b], all);
                         uint32_t q = pb_depth_query_cell(tl, dl.res);
-                        for (uint32_t k = dl.words[1 + q]; k < dl.words[2 + q]; ++k) {
-                            uint32_t r = index[k];
-                            const float *d = dirs + 4 * (size_t)r;
-                            float cs = (tl[0] * d[0] + tl[1] * d[1]) + tl[2] * d[2];
-                            if (cs <= cutoff)
-                                continue;
-                            float w = powf(cs, powers[b]), dist = 1.f + (float)(r % 17);
-                            listed[0] += w, listed[1] += w * dist, listed[2] += w * dist * dist;
-                        }
+                        for (uint32_t k = dl.words[1 + q]; k < dl.words[2 + q]; ++k)
+                            lobe_add(tl, dirs, index[k], cutoff, powers[b], listed);
                         differ += memcmp(all, listed, sizeof all) != 0;
                         ++texels;
                     }
