@@ -4,7 +4,8 @@
 # compared with path-traced references (render --mode diff:
 # relative_rmse_surfaces and p95_relative_error, averaged over the views;
 # for sparse layouts also the same two where its levels meet and elsewhere,
-# render's seam metrics).
+# render's seam metrics, each the mean over views weighted by the view's
+# pixels in that class, and the fraction of surface pixels on a seam).
 # Grids at several spacings, sparse layouts at several refinement errors, all
 # in the same run; ratios are against the finest grid (the peer). Prints a
 # table, writes CSV and JSON.
@@ -93,7 +94,7 @@ rows=()
 measure() { # name param [bake options...]: one layout, baked and rendered
     local name=$1 param=$2
     shift 2
-    local vol=$tmp/$name-$param.probes t ms probes bytes rmse=0 p95=0 v=0 seam=(0 0 0 0) k key
+    local vol=$tmp/$name-$param.probes t ms probes bytes rmse=0 p95=0 v=0 seam=(0 0 0 0) px=(0 0 0) k key n
     t=$(now_ms)
     "$pb" bake "$scene" "${args[@]}" "$@" --quiet -o "$vol" >"$tmp/bake.txt"
     ms=$(($(now_ms) - t))
@@ -106,19 +107,32 @@ measure() { # name param [bake options...]: one layout, baked and rendered
             ${refs[$i]:+--reference ${refs[$i]}} -o "$tmp/diff.png" 2>/dev/null >"$tmp/diff.json"
         rmse=$(awk -v a="$rmse" -v b="$(json_num relative_rmse_surfaces <"$tmp/diff.json")" 'BEGIN { print a + b }')
         p95=$(awk -v a="$p95" -v b="$(json_num p95_relative_error <"$tmp/diff.json")" 'BEGIN { print a + b }')
+        # seam metrics: weighted by each view's pixels in the class (a view may have none)
         k=0
         for key in relative_rmse_seams p95_relative_error_seams relative_rmse_off_seams p95_relative_error_off_seams; do
-            seam[k]=$(awk -v a="${seam[k]}" -v b="$(json_num $key <"$tmp/diff.json")" 'BEGIN { print a + b }')
+            n=$(json_num "$([ $k -lt 2 ] && echo seam_pixels || echo off_seam_pixels)" <"$tmp/diff.json")
+            seam[k]=$(awk -v a="${seam[k]}" -v b="$(json_num $key <"$tmp/diff.json")" -v n="${n:-0}" \
+                'BEGIN { print a + b * n }')
+            k=$((k + 1))
+        done
+        k=0
+        for key in seam_pixels off_seam_pixels surface_pixels; do
+            n=$(json_num $key <"$tmp/diff.json")
+            px[k]=$((px[k] + ${n:-0}))
             k=$((k + 1))
         done
         v=$((v + 1))
     done
     rmse=$(awk -v a="$rmse" -v n="$v" 'BEGIN { printf "%.4f", a / n }')
     p95=$(awk -v a="$p95" -v n="$v" 'BEGIN { printf "%.4f", a / n }')
-    local seams="- - - -"
+    local seams="- - - - -"
     if [ "$name" = sparse ]; then
         seams=""
-        for k in 0 1 2 3; do seams+="$(awk -v a="${seam[k]}" -v n="$v" 'BEGIN { printf "%.4f", a / n }') "; done
+        for k in 0 1 2 3; do
+            n=${px[$((k / 2))]}
+            seams+="$(awk -v a="${seam[k]}" -v n="$n" 'BEGIN { printf "%.4f", (n > 0 ? a / n : 0) }') "
+        done
+        seams+="$(awk -v a="${px[0]}" -v n="${px[2]}" 'BEGIN { printf "%.3f", (n > 0 ? a / n : 0) }')"
     fi
     rows+=("$name $param $probes $bytes $ms $rmse $p95 $seams")
 }
@@ -142,27 +156,28 @@ peer_probes=$3 peer_bytes=$4 peer_ms=$5
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", (b > 0 ? a / b : 0) }'; }
 
 stem=$out/$(basename "$scene" | sed 's/\.[^.]*$//')
-printf '\n%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s\n' layout param probes "vs grid" bytes \
-    "vs grid" "bake ms" "vs grid" rmse_surf p95_rel rmse_seam p95_seam rmse_off p95_off
+printf '\n%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s %10s\n' layout param probes "vs grid" \
+    bytes "vs grid" "bake ms" "vs grid" rmse_surf p95_rel rmse_seam p95_seam rmse_off p95_off seam_frac
 echo "layout,param,probes,probes_ratio,bytes,bytes_ratio,bake_ms,bake_ratio,relative_rmse_surfaces,p95_relative_error,\
-relative_rmse_seams,p95_relative_error_seams,relative_rmse_off_seams,p95_relative_error_off_seams" >"$stem.csv"
+relative_rmse_seams,p95_relative_error_seams,relative_rmse_off_seams,p95_relative_error_off_seams,seam_fraction" >"$stem.csv"
 json="{\"scene\": \"$(basename "$scene")\", \"args\": \"${args[*]}\", \"size\": \"$size\", \"views\": ${#views[@]},"
 json+=" \"probe_spp\": $spp, \"reference_spp\": $ref_spp,"
 json+=" \"cores\": $(nproc), \"device\": \"$device\", \"peer\": \"grid $finest m\", \"rows\": ["
 sep=""
 for r in "${rows[@]}"; do
     set -- $r
-    printf '%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s\n' "$1" "$2" "$3" \
+    printf '%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s %10s\n' "$1" "$2" "$3" \
         "$(ratio "$3" "$peer_probes")" "$4" "$(ratio "$4" "$peer_bytes")" "$5" "$(ratio "$5" "$peer_ms")" "$6" "$7" \
-        "$8" "$9" "${10}" "${11}"
-    csv_seams="$8,$9,${10},${11}" json_seams="$8, $9, ${10}, ${11}"
-    [ "$8" = - ] && csv_seams=",,," json_seams="null, null, null, null"
+        "$8" "$9" "${10}" "${11}" "${12}"
+    csv_seams="$8,$9,${10},${11},${12}" json_seams="$8, $9, ${10}, ${11}, ${12}"
+    [ "$8" = - ] && csv_seams=",,,," json_seams="null, null, null, null, null"
     echo "$1,$2,$3,$(ratio "$3" "$peer_probes"),$4,$(ratio "$4" "$peer_bytes"),$5,$(ratio "$5" "$peer_ms"),$6,$7,$csv_seams" \
         >>"$stem.csv"
-    IFS=, read -r s1 s2 s3 s4 <<<"${json_seams// /}"
+    IFS=, read -r s1 s2 s3 s4 s5 <<<"${json_seams// /}"
     json+="$sep{\"layout\": \"$1\", \"param\": $2, \"probes\": $3, \"bytes\": $4, \"bake_ms\": $5,"
     json+=" \"relative_rmse_surfaces\": $6, \"p95_relative_error\": $7, \"relative_rmse_seams\": $s1,"
-    json+=" \"p95_relative_error_seams\": $s2, \"relative_rmse_off_seams\": $s3, \"p95_relative_error_off_seams\": $s4}"
+    json+=" \"p95_relative_error_seams\": $s2, \"relative_rmse_off_seams\": $s3, \"p95_relative_error_off_seams\": $s4,"
+    json+=" \"seam_fraction\": $s5}"
     sep=", "
 done
 echo "$json]}" >"$stem.json"

@@ -818,19 +818,36 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         pb_logf(&ctx->desc.log, PB_LOG_WARN,
                 "%s: no lights, no emissive surfaces and a black sky: the volume will be black (give --sky or --env)",
                 scene->path[0] ? scene->path : "scene");
+    /* wall time per stage, and the GPU time inside relocation and the passes
+     * (--verbose): what a small bake spends besides tracing */
+    double t[7], gpu_relocate = 0, gpu_passes = 0;
+    t[0] = pb_now_ms();
     r = stage_place(&j, err);
+    t[1] = pb_now_ms();
     if (r == PB_OK)
         r = stage_resources(&j, feedback, err);
+    t[2] = pb_now_ms();
     if (r == PB_OK)
         r = stage_relocate(&j, err);
+    t[3] = pb_now_ms();
+    gpu_relocate = j.run.t_trace + j.run.t_sh;
     if (r == PB_OK)
         r = stage_trace_passes(&j, err);
+    t[4] = pb_now_ms();
+    gpu_passes = j.run.t_trace + j.run.t_sh + j.run.t_depth - gpu_relocate;
     if (r == PB_OK)
         r = stage_volume(&j, out, err);
+    t[5] = pb_now_ms();
     /* points have no grid neighbourhood (invalid ones stay flagged); a
      * part's neighbours are in other parts (pb_volume_merge dilates) */
     if (r == PB_OK && !j.d.points && !j.d.shard_count)
         r = pb_volume_dilate_gpu(ctx, out, PB_DILATION_ROUNDS, err);
+    t[6] = pb_now_ms();
+    if (r == PB_OK)
+        pb_logf(&ctx->desc.log, PB_LOG_DEBUG,
+                "bake stages, wall ms: place %.1f, resources and pipelines %.1f, relocate %.1f (GPU %.1f), passes "
+                "%.1f (GPU %.1f), volume %.1f, dilate %.1f", t[1] - t[0], t[2] - t[1], t[3] - t[2], gpu_relocate,
+                t[4] - t[3], gpu_passes, t[5] - t[4], t[6] - t[5]);
     if (r == PB_OK) {
         out->traversals = j.run.traversals;
         if (j.run.long_paths)

@@ -288,9 +288,11 @@ int cmd_render(const options *o)
                    rmse, ind, surf.relative_rmse, surf.p95_relative, (unsigned long long)surf.pixels);
             if (sparse)
                 fprintf(report, ", \"seam_pixels\": %llu, \"relative_rmse_seams\": %.6f, \"p95_relative_error_seams\": %.6f, "
-                        "\"relative_rmse_off_seams\": %.6f, \"p95_relative_error_off_seams\": %.6f, \"unserved_pixels\": %llu",
+                        "\"off_seam_pixels\": %llu, \"relative_rmse_off_seams\": %.6f, \"p95_relative_error_off_seams\": %.6f, "
+                        "\"unserved_pixels\": %llu",
                         (unsigned long long)seams.pixels, seams.relative_rmse, seams.p95_relative,
-                        off_seams.relative_rmse, off_seams.p95_relative, (unsigned long long)unserved);
+                        (unsigned long long)off_seams.pixels, off_seams.relative_rmse, off_seams.p95_relative,
+                        (unsigned long long)unserved);
         }
         fprintf(report, "}\n");
     } else {
