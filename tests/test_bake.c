@@ -7,6 +7,7 @@
 #include "bake/light_cells.h"
 #include "bake_reference.h"
 #include "common/common.h"
+#include "gpu/gpu.h"
 #include "compressed_variants.h"
 
 static pb_context *ctx;
@@ -836,6 +837,35 @@ static void vertex_colours_are_albedo(void)
         free(sh), free(white);
     }
     release(&b);
+    pb_scene_destroy(s);
+}
+
+/* The context makes each pipeline once: a second bake with the same
+ * settings creates none and writes the same volume; a bake with another
+ * feature set (probe NEE) gets pipelines of its own, and its volume differs. */
+static void pipelines_are_made_once_per_context(void)
+{
+    pb_scene *s = load_demo();
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
+    d.rays_per_probe = 32, d.passes = 1, d.octmap_res = 4;
+    baked a = bake(s, &d);
+    uint32_t after_first = ctx->pipelines_created;
+    baked b = bake(s, &d);
+    uint32_t after_second = ctx->pipelines_created;
+    d.probe_nee = !d.probe_nee;
+    baked c = bake(s, &d);
+    uint32_t after_third = ctx->pipelines_created;
+    if (a.ok && b.ok && c.ok) {
+        size_t sh = 27 * sizeof(float) * a.vol.probe_count;
+        fprintf(stderr, "  pipelines created: %u by the second bake, %u by the one with probe NEE %s\n",
+                after_second - after_first, after_third - after_second, d.probe_nee ? "on" : "off");
+        CHECK(after_second == after_first && !memcmp(a.vol.sh, b.vol.sh, sh));
+        CHECK(after_third > after_second && memcmp(a.vol.sh, c.vol.sh, sh) != 0);
+    }
+    release(&a), release(&b), release(&c);
     pb_scene_destroy(s);
 }
 
@@ -2216,6 +2246,7 @@ int main(void)
     RUN(light_cells_match_cpu_reference);
     RUN(vertex_colours_are_albedo);
     RUN(dilation_kernel_matches_cpu_reference);
+    RUN(pipelines_are_made_once_per_context);
     RUN(environment_kernels_match_cpu);
     RUN(indirect_volume_matches_cpu_reference);
     RUN(relocation_and_dilation);

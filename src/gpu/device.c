@@ -415,6 +415,7 @@ void pb_context_destroy(pb_context *ctx)
         return;
     if (ctx->device) {
         ctx->vk.vkDeviceWaitIdle(ctx->device);
+        pb_pipeline_cache_release(ctx);
         if (ctx->timestamps)
             ctx->vk.vkDestroyQueryPool(ctx->device, ctx->timestamps, NULL);
         if (ctx->fence)

@@ -49,6 +49,9 @@ typedef struct pb_context {
     uint32_t allocations, submissions; /* counted for desc.fail_allocation / fail_submission */
     int recording;
     int native64;                /* shaderInt64 + shaderFloat64 enabled: run the *_native64 kernels */
+    struct pb_pipeline_entry *pipelines; /* the pipeline cache (pb_pipeline_create), destroyed with the context */
+    uint32_t pipeline_count, pipeline_capacity;
+    uint32_t pipelines_created;  /* driver pipeline creations, for tests and logs */
 } pb_context;
 
 /* SPIR-V and its size for kernel `name` on this context: the _native64
@@ -97,14 +100,30 @@ typedef struct pb_pipeline {
     VkPipeline pipeline;
     uint32_t push_size;
     uint32_t local_size;
+    uint32_t cached;            /* owned by the context's cache: pb_pipeline_destroy only forgets it */
 } pb_pipeline;
 
+/* The context keeps every pipeline it made, keyed by SPIR-V, specialisation
+ * constants and push-constant size: lavapipe spends 0.4 s creating the bake
+ * kernel, and a sparse bake or --indirect volume runs several bakes on one
+ * context (and the tests run hundreds). */
+typedef struct pb_pipeline_entry {
+    const uint32_t *spirv;
+    size_t spirv_bytes;
+    uint32_t push_size, local_size, spec_count, spec[16];
+    pb_pipeline pipeline;
+} pb_pipeline_entry;
+
 /* Compute pipeline from SPIR-V words; `spec` holds `spec_count` uint32
- * specialisation constants with ids 0..spec_count-1. */
+ * specialisation constants with ids 0..spec_count-1. Made once per context
+ * for each (SPIR-V, constants, push size, local size) and then reused; the
+ * caller still calls pb_pipeline_destroy (a no-op on a cached one). */
 pb_result pb_pipeline_create(pb_context *ctx, const uint32_t *spirv, size_t spirv_bytes, uint32_t push_size,
                              const uint32_t *spec, uint32_t spec_count, uint32_t local_size, const char *what,
                              pb_pipeline *out, pb_error *err);
 void pb_pipeline_destroy(pb_context *ctx, pb_pipeline *p);
+/* Destroys every cached pipeline (pb_context_destroy calls it). */
+void pb_pipeline_cache_release(pb_context *ctx);
 
 /* Recording: begin, add work, then submit and wait (bounded submissions are
  * the caller's loop). Timestamps written in between are read after the wait. */
