@@ -5,6 +5,7 @@
 #include "bake/dilate.h"
 #include "bake/guide.h"
 #include "bake/light_cells.h"
+#include "bake/light_cells_gpu.h"
 #include "bake_reference.h"
 #include "common/common.h"
 #include "gpu/gpu.h"
@@ -866,6 +867,42 @@ static void pipelines_are_made_once_per_context(void)
         CHECK(after_third > after_second && memcmp(a.vol.sh, c.vol.sh, sh) != 0);
     }
     release(&a), release(&b), release(&c);
+    pb_scene_destroy(s);
+}
+
+/* Light cells are learned once per GPU scene and seed: a second bake on the
+ * same GPU scene reuses them and writes the same volume; another seed learns
+ * its own. */
+static void light_cells_are_learned_once_per_scene_and_seed(void)
+{
+    pb_scene *s = load_demo();
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
+    d.rays_per_probe = 32, d.passes = 1, d.octmap_res = 4, d.light_cells = 1;
+    baked a = bake(s, &d); /* a GPU scene of its own: learns */
+    pb_volume v1, v2, v3;
+    pb_error err;
+    if (a.ok && pb_bake(ctx, s, a.gs, &d, &v1, &err) == PB_OK) {
+        const pb_light_cells_gpu *first = a.gs->light_cells;
+        CHECK(first && first->seed == d.seed && first->host.table);
+        CHECKF(pb_bake(ctx, s, a.gs, &d, &v2, &err) == PB_OK, "%s", err.message);
+        int reused = a.gs->light_cells == first;
+        size_t sh = 27 * sizeof(float) * v1.probe_count;
+        int same = !memcmp(v1.sh, v2.sh, sh) && !memcmp(a.vol.sh, v1.sh, sh);
+        d.seed = 77;
+        CHECKF(pb_bake(ctx, s, a.gs, &d, &v3, &err) == PB_OK, "%s", err.message);
+        int relearned = a.gs->light_cells && a.gs->light_cells->seed == 77;
+        fprintf(stderr, "  light cells %s by the second bake on one GPU scene; volumes %s; seed 77 %s\n",
+                reused ? "reused" : "learned again", same ? "identical" : "differ",
+                relearned ? "learned its own" : "did not");
+        CHECK(reused && same && relearned);
+        pb_volume_free(&v1), pb_volume_free(&v2), pb_volume_free(&v3);
+    } else {
+        CHECKF(0, "%s", err.message);
+    }
+    release(&a);
     pb_scene_destroy(s);
 }
 
@@ -2247,6 +2284,7 @@ int main(void)
     RUN(vertex_colours_are_albedo);
     RUN(dilation_kernel_matches_cpu_reference);
     RUN(pipelines_are_made_once_per_context);
+    RUN(light_cells_are_learned_once_per_scene_and_seed);
     RUN(environment_kernels_match_cpu);
     RUN(indirect_volume_matches_cpu_reference);
     RUN(relocation_and_dilation);

@@ -18,6 +18,7 @@
 #include "bake/depth_lists.h"
 #include "bake/guide.h"
 #include "bake/light_cells.h"
+#include "bake/light_cells_gpu.h"
 #include "bake/shading.h"
 #include "sample/sample_gpu.h"
 #include "common/common.h"
@@ -42,8 +43,7 @@ typedef struct bake_buffers {
     pb_buffer nee;                 /* probe NEE: 2 vec4 per ray of a submission (unallocated when off) */
     pb_buffer guide, guide_slots;  /* path guiding's table and entry index (unallocated when off) */
     pb_guide guide_host;           /* its host copy and grid */
-    pb_buffer light_cells, light_cell_slots, light_clusters, light_members, light_cluster_of; /* light cells */
-    pb_light_cells light_host;     /* their host copy (table NULL: emitters drawn by power) */
+    const pb_light_cells_gpu *light; /* light cells (the GPU scene's, learned once per seed); NULL: off */
     pb_shading shading;
     pb_sample_buffers feedback;
     pb_pipeline trace, sh, depth;
@@ -52,14 +52,11 @@ typedef struct bake_buffers {
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[17] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
-                           &b->list, &b->counters, &b->nee, &b->guide, &b->guide_slots, &b->light_cells,
-                           &b->light_cell_slots, &b->light_clusters, &b->light_members, &b->light_cluster_of,
-                           &b->depth_lists};
-    for (int i = 0; i < 17; ++i)
+    pb_buffer *bufs[12] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
+                           &b->list, &b->counters, &b->nee, &b->guide, &b->guide_slots, &b->depth_lists};
+    for (int i = 0; i < 12; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_guide_free(&b->guide_host);
-    pb_light_cells_free(&b->light_host);
     pb_shading_destroy(ctx, &b->shading);
     pb_sample_release(ctx, &b->feedback);
     pb_pipeline_destroy(ctx, &b->trace);
@@ -169,51 +166,6 @@ static pb_result learn_guide(pb_context *ctx, const pb_scene *scene, const pb_gp
     return r;
 }
 
-/* Light cells' stage: emitter clusters and per-cell tables measured on the
- * host with shadow rays from surface points (src/bake/light_cells.c; they
- * depend on the scene and seed only), uploaded with triangles in the
- * kernels' leaf order. */
-static pb_result learn_light_cells(pb_context *ctx, const pb_scene *scene, const pb_gpu_scene *gs,
-                                   const pb_bake_desc *d, bake_buffers *B, pb_error *err)
-{
-    pb_bake_pass tp;
-    memset(&tp, 0, sizeof tp);
-    tp.scene = scene, tp.bvh = gs->bvh, tp.seed = d->seed, tp.emitters = &B->shading.emit;
-    double t0 = pb_now_ms();
-    pb_light_cells *lc = &B->light_host;
-    pb_result r = pb_light_cells_build(&tp, lc, err);
-    if (r != PB_OK || !lc->table)
-        return r;
-    uint32_t cells = pb_cell_grid_cells(&lc->grid), E = B->shading.emit.count, T = scene->triangle_count;
-    pb_logf(&ctx->desc.log, PB_LOG_INFO, "light cells: %u emitters in %u clusters, %u of %u cells measured (%.0f ms)",
-            E, lc->clusters, lc->learned, cells, pb_now_ms() - t0);
-    uint32_t *leaf_of = malloc(T * sizeof *leaf_of), *cluster_leaf = malloc(T * sizeof *cluster_leaf);
-    gpu_emitter *members = malloc(E * sizeof *members);
-    if (!leaf_of || !cluster_leaf || !members) {
-        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for light cells (%u emitters)", E);
-    } else {
-        for (uint32_t k = 0; k < T; ++k)
-            leaf_of[gs->tri_order[k]] = k, cluster_leaf[k] = lc->cluster_of[gs->tri_order[k]];
-        for (uint32_t i = 0; i < E; ++i)
-            members[i] = (gpu_emitter){leaf_of[lc->member_tri[i]], lc->member_keep[i], lc->member_alias[i], 0.f};
-        r = make_buffer(ctx, &B->light_cells, (uint64_t)lc->learned * lc->clusters * 16, PB_MEMORY_DEVICE,
-                        "light cell tables", lc->table, err);
-    }
-    if (r == PB_OK)
-        r = make_buffer(ctx, &B->light_cell_slots, (uint64_t)cells * 4, PB_MEMORY_DEVICE, "light cell index",
-                        lc->slot, err);
-    if (r == PB_OK)
-        r = make_buffer(ctx, &B->light_clusters, (uint64_t)lc->clusters * 8, PB_MEMORY_DEVICE, "light clusters",
-                        lc->cluster_range, err);
-    if (r == PB_OK)
-        r = make_buffer(ctx, &B->light_members, (uint64_t)E * sizeof *members, PB_MEMORY_DEVICE,
-                        "light cluster members", members, err);
-    if (r == PB_OK)
-        r = make_buffer(ctx, &B->light_cluster_of, (uint64_t)T * 4, PB_MEMORY_DEVICE, "emitter clusters",
-                        cluster_leaf, err);
-    free(leaf_of), free(cluster_leaf), free(members);
-    return r;
-}
 
 #define PB_RELOCATION_PASS 0x80000000u
 
@@ -264,15 +216,15 @@ static void pass_params(const bake_run *run, uint32_t pass, int relocating, cons
             prm->guide_origin[3] = g->grid.inv_cell;
             memcpy(prm->guide_dims, g->grid.dims, sizeof g->grid.dims);
         }
-        if (B->light_host.table) {
-            const pb_light_cells *lc = &B->light_host;
+        if (B->light && B->light->host.table) {
+            const pb_light_cells *lc = &B->light->host;
             memcpy(prm->light_origin, lc->grid.origin, sizeof lc->grid.origin);
             prm->light_origin[3] = lc->grid.inv_cell;
             memcpy(prm->light_dims, lc->grid.dims, sizeof lc->grid.dims);
             prm->light_dims[3] = lc->clusters;
-            prm->light_cells = B->light_cells.address, prm->light_cell_slots = B->light_cell_slots.address;
-            prm->light_clusters = B->light_clusters.address, prm->light_members = B->light_members.address;
-            prm->light_cluster_of = B->light_cluster_of.address;
+            prm->light_cells = B->light->table.address, prm->light_cell_slots = B->light->slots.address;
+            prm->light_clusters = B->light->clusters.address, prm->light_members = B->light->members.address;
+            prm->light_cluster_of = B->light->cluster_of.address;
         }
     }
     prm->rays_per_probe = run->rpp, prm->pass_index = pass;
@@ -584,7 +536,7 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
     if (r == PB_OK && d->guide_paths && d->bounces)
         r = learn_guide(ctx, j->scene, j->gs, d, B, err);
     if (r == PB_OK && d->light_cells)
-        r = learn_light_cells(ctx, j->scene, j->gs, d, B, err);
+        r = pb_light_cells_gpu_get(ctx, j->scene, j->gs, d->seed, &B->shading.emit, &B->light, NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B->probes, (uint64_t)P * 16, PB_MEMORY_DEVICE, "probe positions", j->probes, err);
     if (r == PB_OK)
@@ -738,7 +690,7 @@ static pb_result stage_volume(bake_job *j, pb_volume *out, pb_error *err)
     out->settings.scene_hash = pb_scene_hash(j->scene);
     out->settings.techniques = (d->probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u) |
                                (j->B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u) |
-                               (j->B.light_host.table ? PB_TECHNIQUE_LIGHT_CELLS : 0u);
+                               (j->B.light && j->B.light->host.table ? PB_TECHNIQUE_LIGHT_CELLS : 0u);
     snprintf(out->device, sizeof out->device, "%.127s", j->ctx->info.name);
     pb_result r = pb_volume_alloc(out, err);
     if (r != PB_OK)

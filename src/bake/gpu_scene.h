@@ -19,6 +19,7 @@ struct pb_gpu_scene {
     /* ray/hit buffers, grown on demand and reused */
     pb_buffer rays, hits;
     uint32_t ray_capacity;
+    struct pb_light_cells_gpu *light_cells; /* the bakes' light cells, learned once per seed (light_cells_gpu.h) */
 };
 
 /* Frees the scene's device objects on `ctx`. */
