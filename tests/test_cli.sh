@@ -250,6 +250,12 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect render-sparse-seams 0 '"seam_pixels": [1-9][0-9]*, "relative_rmse_seams": [0-9.]+, .*"p95_relative_error_off_seams": [0-9.]+, "unserved_pixels": 0' -- \
         "$pb" render "$demo" --volume "$tmp/s.probes" --mode diff --json --size 64x48 --spp 2 --eye 0,1.5,2.3 \
         --target 0,1.2,0 -o "$tmp/s-diff.png"
+    # one level: no two levels meet, so no pixel is on a seam
+    "$pb" bake "$demo" --layout sparse --max-level 0 --spacing 1 --rays 16 --passes 1 --octmap-res 4 -o "$tmp/s0.probes" \
+        --quiet >/dev/null
+    expect render-sparse-one-level 0 '"seam_pixels": 0, .*"off_seam_pixels": [1-9][0-9]*, ' -- \
+        "$pb" render "$demo" --volume "$tmp/s0.probes" --mode diff --json --size 64x48 --spp 2 --eye 0,1.5,2.3 \
+        --target 0,1.2,0 -o "$tmp/s0-diff.png"
     "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 -o "$tmp/b.probes" --quiet >/dev/null
     "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --seed 9 -o "$tmp/c.probes" --quiet >/dev/null
     # same seed: identical bytes except the timings block (offsets 184..247, docs/format.md)

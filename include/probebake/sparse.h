@@ -70,6 +70,11 @@ void pb_sparse_layout_free(pb_sparse_layout *l);
  * covering its sub-cell. Returns PB_ERROR_PARSE with the first problem. */
 pb_result pb_sparse_layout_validate(const pb_sparse_layout *l, uint32_t probe_count, pb_error *err);
 
+/* Per probe of a volume of probe_count probes laid out by l: the finest
+ * level among the bricks that hold it (finest, may be NULL) and the first
+ * brick that names it (first, may be NULL; UINT32_MAX for none). */
+void pb_sparse_probe_levels(const pb_sparse_layout *l, uint32_t probe_count, uint8_t *finest, uint32_t *first);
+
 /* The layout as the run-time samplers read it (pb_sparse_word in
  * shaders/include/probe_sample_core.glsl; the texture export's sparse.ktx2):
  * four word offsets (indirection, chunks, bricks, brick probes), then those

@@ -23,18 +23,12 @@ layout(push_constant) uniform Push {
     pb_addr params;
 } pc;
 
-// The query cell holding d (pb_depth_query_cell).
+// The query cell holding d (pb_depth_query_cell); the octahedral encoding is
+// the run-time sampler's (probe_sample_core.glsl, included by bake.glsl).
 uint depth_query_cell(vec3 d, uint res)
 {
-    float l1 = abs(d.x) + abs(d.y) + abs(d.z);
-    float u = d.x / l1, v = d.y / l1;
-    if (d.z < 0.0) {
-        float fu = (1.0 - abs(v)) * sign_not_zero(u);
-        float fv = (1.0 - abs(u)) * sign_not_zero(v);
-        u = fu;
-        v = fv;
-    }
-    float fx = floor((u * 0.5 + 0.5) * float(res)), fy = floor((v * 0.5 + 0.5) * float(res));
+    vec2 uv = pb_oct_encode(d);
+    float fx = floor((uv.x * 0.5 + 0.5) * float(res)), fy = floor((uv.y * 0.5 + 0.5) * float(res));
     uint cx = fx < 0.0 ? 0u : (fx >= float(res) ? res - 1u : uint(fx));
     uint cy = fy < 0.0 ? 0u : (fy >= float(res) ? res - 1u : uint(fy));
     return cy * res + cx;

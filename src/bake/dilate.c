@@ -31,11 +31,7 @@ uint32_t *pb_dilate_sparse_neighbours(const pb_sparse_layout *l, uint32_t P)
     }
     for (uint64_t i = 0; i < (uint64_t)P * PB_DILATE_NEIGHBOURS; ++i)
         table[i] = PB_DILATE_NONE;
-    for (uint32_t b = 0; b < l->brick_count; ++b)
-        for (uint32_t i = 0; i < PB_SPARSE_BRICK_PROBES; ++i) {
-            uint32_t p = l->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)b + i];
-            finest[p] = l->bricks[b].level > finest[p] ? (uint8_t)l->bricks[b].level : finest[p];
-        }
+    pb_sparse_probe_levels(l, P, finest, NULL);
     for (uint32_t b = 0; b < l->brick_count; ++b) {
         const uint32_t *probes = l->brick_probes + PB_SPARSE_BRICK_PROBES * (size_t)b;
         for (int i = 0; i < (int)PB_SPARSE_BRICK_PROBES; ++i) {

@@ -2,7 +2,7 @@
  * irradiance, each probe a square tile (octahedral, +Z in the centre),
  * tiles row by row in probe order, a 1-pixel dark gap between them. In a
  * sparse volume each tile's top and left gap lines carry its finest level's
- * colour (PB_ATLAS_LEVEL_COLOURS), bright or dim by the parity of the first
+ * colour (level_colour below), bright or dim by the parity of the first
  * brick that names the probe, so levels and bricks show. */
 #include "common/common.h"
 #include "probebake/octahedral.h"
@@ -46,14 +46,7 @@ static void mark_sparse(const pb_volume *v, unsigned char *rgb8, uint32_t width,
         free(level), free(first);
         return;
     }
-    for (uint32_t p = 0; p < P; ++p)
-        first[p] = UINT32_MAX;
-    for (uint32_t b = 0; b < l->brick_count; ++b)
-        for (uint32_t i = 0; i < PB_SPARSE_BRICK_PROBES; ++i) {
-            uint32_t p = l->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)b + i];
-            level[p] = l->bricks[b].level > level[p] ? (uint8_t)l->bricks[b].level : level[p];
-            first[p] = first[p] == UINT32_MAX ? b : first[p];
-        }
+    pb_sparse_probe_levels(l, P, level, first);
     for (uint32_t p = 0; p < P; ++p) {
         const unsigned char *c = level_colour[level[p] < 3 ? level[p] : 2];
         int dim = first[p] % 2; /* neighbouring bricks alternate */

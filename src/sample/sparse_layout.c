@@ -264,6 +264,26 @@ pb_result pb_sparse_layout_validate(const pb_sparse_layout *l, uint32_t probe_co
     return PB_OK;
 }
 
+void pb_sparse_probe_levels(const pb_sparse_layout *l, uint32_t P, uint8_t *finest, uint32_t *first)
+{
+    for (uint32_t p = 0; p < P; ++p) {
+        if (finest)
+            finest[p] = 0;
+        if (first)
+            first[p] = UINT32_MAX;
+    }
+    for (uint32_t b = 0; b < l->brick_count; ++b)
+        for (uint32_t i = 0; i < PB_SPARSE_BRICK_PROBES; ++i) {
+            uint32_t p = l->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)b + i];
+            if (p >= P)
+                continue;
+            if (finest && l->bricks[b].level > finest[p])
+                finest[p] = (uint8_t)l->bricks[b].level;
+            if (first && first[p] == UINT32_MAX)
+                first[p] = b;
+        }
+}
+
 pb_result pb_sparse_layout_words(const pb_sparse_layout *sp, uint32_t **words, uint32_t *count)
 {
     *words = NULL, *count = 0;
