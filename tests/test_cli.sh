@@ -250,6 +250,11 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect render-sparse-seams 0 '"seam_pixels": [1-9][0-9]*, "relative_rmse_seams": [0-9.]+, .*"p95_relative_error_off_seams": [0-9.]+, "unserved_pixels": 0' -- \
         "$pb" render "$demo" --volume "$tmp/s.probes" --mode diff --json --size 64x48 --spp 2 --eye 0,1.5,2.3 \
         --target 0,1.2,0 -o "$tmp/s-diff.png"
+    # --indirect volume on a sparse layout: each bounce places its own bricks
+    expect bake-sparse-indirect-volume 0 '^sparse: 2 levels, bricks 1 [0-9]+ .*; [0-9]+ bakes' -- \
+        "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 1 --rays 16 --passes 1 --octmap-res 4 --bounces 1 \
+        --indirect volume --validation -o "$tmp/siv.probes"
+    expect inspect-sparse-indirect-volume 0 'indirect volume' -- "$pb" inspect "$tmp/siv.probes"
     # one level: no two levels meet, so no pixel is on a seam
     "$pb" bake "$demo" --layout sparse --max-level 0 --spacing 1 --rays 16 --passes 1 --octmap-res 4 -o "$tmp/s0.probes" \
         --quiet >/dev/null

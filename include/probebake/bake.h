@@ -83,7 +83,7 @@ typedef struct pb_bake_desc {
     uint32_t max_lights_per_hit;  /* default 8: with more punctual lights, each hit draws one by power
                                      (alias table) instead of tracing a shadow ray to every light */
     uint32_t indirect_volume;     /* 1: each bounce shades first hits from the previous bounce's volume through
-                                     the run-time sampler (bounces + 1 bakes, grid only; fast, biased); 0: path tracing */
+                                     the run-time sampler (bounces + 1 bakes, grid or sparse; fast, biased); 0: path tracing */
     uint32_t probe_nee;           /* 1: the light a probe sees directly (emitters, environment) is also
                                      sampled from the probe (one light sample per probe ray, a shadow ray)
                                      and MIS-combined with its rays (unbiased; docs/bake.md, "Estimators") */
@@ -202,14 +202,16 @@ typedef struct pb_sparse_stats {
 } pb_sparse_stats;
 
 /* A sparse bake: desc->grid's origin is the lattice origin, its spacing the
- * finest level's and its counts the extent; desc->points, shards and
- * --indirect volume are refused. Coarsest bricks cover the extent; each
- * level's cells near surfaces get a probe baked inside, and where the
- * coarser level mispredicts it (sd->refine_error) the cell becomes a brick
- * of the next level. Bricks whose probes are all inside geometry are
- * dropped. Probes on the faces of a finer brick next to a coarser one take
- * the coarser brick's interpolated SH, so the interpolant does not jump
- * there. Invalid probes are not dilated (the sampler gives them no weight).
+ * finest level's and its counts the extent; desc->points and shards are
+ * refused; with --indirect volume every bounce is a placement of its own.
+ * Coarsest bricks cover the extent; each level's cells near surfaces get a
+ * probe baked inside, and where the coarser level mispredicts it
+ * (sd->refine_error) the cell becomes a brick of the next level. Bricks
+ * whose probes are all inside geometry are dropped. Invalid probes are
+ * dilated (on the device, as a grid's); then probes on the faces of a finer
+ * brick next to a coarser one take what the coarser brick's sampler holds
+ * there (trilinear weights times visibility), so the interpolant does not
+ * jump in open air and no light crosses a wall (docs/sparse.md).
  * stats may be NULL. */
 pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
                          const pb_sparse_desc *sd, pb_volume *out, pb_sparse_stats *stats, pb_error *err);
@@ -220,6 +222,13 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
  * PB_ERROR_CANCELLED when the progress callback asks. */
 pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc, pb_volume *out,
                   pb_error *err);
+
+/* One bounce of --indirect volume: a bake (bounces 0, indirect_volume 0)
+ * whose probe rays' first hits also reflect the irradiance `volume` holds
+ * there (the previous bounce's, grid or sparse; NULL: none). Grids, points
+ * and parts alike: pb_bake's bounce loop and the sparse bake's are made of it. */
+pb_result pb_bake_bounce(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
+                         const pb_sample_volume *volume, pb_volume *out, pb_error *err);
 
 /* Emissive triangles as next-event-estimation light sources: an alias table
  * over their power (area x luminance of the emissive factor x strength), in

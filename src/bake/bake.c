@@ -818,6 +818,19 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     return r;
 }
 
+pb_result pb_bake_bounce(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
+                         const pb_sample_volume *volume, pb_volume *out, pb_error *err)
+{
+    if (desc->indirect_volume || desc->bounces) {
+        pb_error_clear(err);
+        memset(out, 0, sizeof *out);
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "one bounce of --indirect volume shades first hits only: bounces must be 0 (got %u)",
+                       desc->bounces);
+    }
+    return bake_once(ctx, scene, gs, desc, volume, out, err);
+}
+
 pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
                   pb_volume *out, pb_error *err)
 {
@@ -847,7 +860,7 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     for (uint32_t k = 0; r == PB_OK && k <= desc->bounces; ++k) {
         d.exclude_direct = k < desc->bounces ? 1 : desc->exclude_direct;
         pb_volume v;
-        r = bake_once(ctx, scene, gs, &d, k ? &fb : NULL, &v, err);
+        r = pb_bake_bounce(ctx, scene, gs, &d, k ? &fb : NULL, &v, err);
         if (r != PB_OK)
             break;
         t.trace += v.timings.trace, t.sh += v.timings.sh, t.octmap += v.timings.octmap, t.total += v.timings.total;

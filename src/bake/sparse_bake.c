@@ -12,7 +12,11 @@
  *
  * Every probe is keyed by its index on the finest lattice and baked once
  * (pb_bake over points, so relocation, validity and convergence are the
- * grid bake's), whatever brick or level asks for it first. */
+ * grid bake's), whatever brick or level asks for it first.
+ *
+ * With --indirect volume each bounce is such a placement of its own (bounce
+ * k's probes reflect bounce k - 1's sparse volume at their rays' first hits,
+ * pb_bake_bounce), and the last bounce's layout is the volume's. */
 #include "common/common.h"
 #include "common/key_map.h"
 #include "probebake/bake.h"
@@ -38,6 +42,8 @@ typedef struct sparse_job {
     const pb_scene *scene;
     pb_gpu_scene *gs;
     pb_bake_desc d;
+    int one_bounce;                     /* --indirect volume: every bake is pb_bake_bounce over `feedback` */
+    const pb_sample_volume *feedback;   /* the previous bounce's volume (NULL on the first) */
     uint32_t levels, cells[3];
     double F[3];                /* finest spacing per axis */
     uint64_t X, Y;              /* finest lattice points per axis (x, y), for keys */
@@ -155,7 +161,8 @@ static pb_result bake_points(sparse_job *j, const uint32_t *keys, uint32_t count
     if (r == PB_OK) {
         pb_bake_desc d = j->d;
         d.points = &pts;
-        r = pb_bake(j->ctx, j->scene, j->gs, &d, &v, err);
+        r = j->one_bounce ? pb_bake_bounce(j->ctx, j->scene, j->gs, &d, j->feedback, &v, err)
+                          : pb_bake(j->ctx, j->scene, j->gs, &d, &v, err);
         j->stats.bakes++;
     }
     if (r == PB_OK) {
@@ -420,43 +427,65 @@ done:
     return r;
 }
 
-/* Trilinear SH of brick o of the volume's layout (no visibility) at lattice
- * point k3 (finest units): its probes' SH, as the volume holds it. */
-static void brick_trilinear(const sparse_job *j, const pb_volume *v, uint32_t o, const uint32_t k3[3], float sh[27])
+/* What brick o's own sampler holds at lattice point k3 (finest units), as
+ * SH: its cage's trilinear weights times each probe's Chebyshev visibility
+ * of the point, invalid probes none, normalised. Where every cage probe sees
+ * the point this is the plain trilinear SH, and the interpolant is
+ * continuous across the level face; a probe behind a wall (valid, but dark
+ * outside a room) is not averaged in, as the sampler would not. Returns 0
+ * (sh untouched) where no probe of the cage sees the point. */
+static int brick_visible_trilinear(const sparse_job *j, const pb_volume *v, const pb_sample_volume *sv, uint32_t o,
+                                   const uint32_t k3[3], float sh[27])
 {
     const pb_sparse_brick *b = &v->sparse->bricks[o];
     const uint32_t *probes = v->sparse->brick_probes + PB_SPARSE_BRICK_PROBES * (size_t)o;
     uint32_t step = pb_sparse_step(j->levels, b->level);
     int base[3];
-    float a[3];
+    float a[3], q[3];
     for (int k = 0; k < 3; ++k) {
         double rel = (double)k3[k] / step - 3.0 * b->coord[k]; /* in [0, 3] */
         int i = (int)floor(rel);
         base[k] = i < 0 ? 0 : (i > 2 ? 2 : i);
         a[k] = (float)(rel - base[k]);
+        q[k] = (float)((double)j->d.grid.origin[k] + (double)k3[k] * j->F[k]); /* the sample volume's frame */
     }
-    memset(sh, 0, 27 * sizeof(float));
+    static const float up[3] = {0.f, 1.f, 0.f}; /* only used where q is a probe's own position */
+    float acc[27] = {0}, wsum = 0.f;
     for (int c = 0; c < 8; ++c) {
-        int q[3];
+        int qi[3];
         float w = 1.f;
         for (int k = 0; k < 3; ++k) {
             int off = (c >> k) & 1;
-            q[k] = base[k] + off;
+            qi[k] = base[k] + off;
             w *= off ? a[k] : 1.f - a[k];
         }
-        const float *src = v->sh + 27 * (size_t)probes[q[0] + 4 * (q[1] + 4 * q[2])];
+        uint32_t p = probes[qi[0] + 4 * (qi[1] + 4 * qi[2])];
+        if (w <= 0.f || !(v->probe_flags[p] & PB_PROBE_VALID))
+            continue;
+        w *= pb_sample_visibility_cpu(sv, (int)p, q, up, NULL);
+        const float *src = v->sh + 27 * (size_t)p;
         for (int i = 0; i < 27; ++i)
-            sh[i] += w * src[i];
+            acc[i] += w * src[i];
+        wsum += w;
     }
+    if (!(wsum > 1e-6f))
+        return 0;
+    for (int i = 0; i < 27; ++i)
+        sh[i] = acc[i] / wsum;
+    return 1;
 }
 
 /* Stage 5, after dilation (so no cage reads an undilated probe in rock): a
  * probe of a level-l brick next to a region served by a coarser brick that
- * does not have it takes that brick's trilinear SH; levels in ascending
- * order, so a coarser brick's own stitched probes come first. */
-static void stitch(const sparse_job *j, pb_volume *v)
+ * does not have it takes what that brick's sampler holds there; levels in
+ * ascending order, so a coarser brick's own stitched probes come first. */
+static pb_result stitch(const sparse_job *j, pb_volume *v, pb_error *err)
 {
     const pb_sparse_layout *sp = v->sparse;
+    pb_sample_volume sv;
+    pb_result r = pb_sample_volume_build(v, j->scene->origin, 0.f, 0.f, &sv, err);
+    if (r != PB_OK)
+        return r;
     float span[3];
     for (int k = 0; k < 3; ++k)
         span[k] = (float)pow3u(j->levels); /* finest steps per cell */
@@ -493,34 +522,27 @@ static void stitch(const sparse_job *j, pb_volume *v)
                         (coarse == PB_SPARSE_EMPTY || o->level < sp->bricks[coarse].level))
                         coarse = nbk;
                 }
-                if (coarse != PB_SPARSE_EMPTY)
-                    brick_trilinear(j, v, coarse, k3, v->sh + 27 * (size_t)sp->brick_probes[64 * (size_t)b + i]);
+                if (coarse == PB_SPARSE_EMPTY)
+                    continue;
+                /* sv is read for depth moments only: v->sh holds the stitched SH */
+                brick_visible_trilinear(j, v, &sv, coarse, k3, v->sh + 27 * (size_t)sp->brick_probes[64 * (size_t)b + i]);
             }
         }
+    pb_sample_volume_free(&sv);
+    return PB_OK;
 }
 
-pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
-                         const pb_sparse_desc *sd_in, pb_volume *out, pb_sparse_stats *stats, pb_error *err)
+/* One placement: coarsest bricks, refinement level by level, assembly,
+ * dilation, stitching. */
+static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
+                       const pb_sparse_desc *sd_in, int one_bounce, const pb_sample_volume *feedback, pb_volume *out,
+                       pb_sparse_stats *stats, pb_error *err)
 {
-    pb_error_clear(err);
-    memset(out, 0, sizeof *out);
-    pb_sparse_desc sd = *sd_in;
-    if (sd.levels == 0)
-        sd.levels = 3;
-    if (sd.refine_error == 0.f)
-        sd.refine_error = 0.1f;
-    if (sd.levels > PB_SPARSE_MAX_LEVELS)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--max-level %u: the sparse layout has at most %u levels (0-%u)",
-                       sd.levels - 1, PB_SPARSE_MAX_LEVELS, PB_SPARSE_MAX_LEVELS - 1);
-    if (!(sd.refine_error > 0.f) || !isfinite(sd.refine_error))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--refine-error %g: must be a positive number",
-                       (double)sd.refine_error);
-    if (desc->points || desc->shard_count || desc->indirect_volume)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "--layout sparse places its own probes: not with --points, --shard or --indirect volume");
+    const pb_sparse_desc sd = *sd_in;
     sparse_job j;
     memset(&j, 0, sizeof j);
     j.ctx = ctx, j.scene = scene, j.gs = gs, j.d = *desc, j.levels = sd.levels;
+    j.one_bounce = one_bounce, j.feedback = feedback;
     uint32_t span = pow3u(sd.levels);
     for (int k = 0; k < 3; ++k) {
         if (desc->grid.counts[k] == 0 || !(desc->grid.spacing[k] > 0.f) || !isfinite(desc->grid.spacing[k]))
@@ -560,11 +582,82 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
      * light on the device, as a grid's do; then the level seams are stitched */
     if (r == PB_OK && (r = pb_volume_dilate_gpu(ctx, out, PB_DILATION_ROUNDS, err)) != PB_OK)
         pb_volume_free(out);
-    if (r == PB_OK)
-        stitch(&j, out);
+    if (r == PB_OK && (r = stitch(&j, out, err)) != PB_OK)
+        pb_volume_free(out);
     if (stats)
         *stats = j.stats;
     store_free(&j.ps);
     free(j.bricks);
     return r;
+}
+
+pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
+                         const pb_sparse_desc *sd_in, pb_volume *out, pb_sparse_stats *stats, pb_error *err)
+{
+    pb_error_clear(err);
+    memset(out, 0, sizeof *out);
+    pb_sparse_desc sd = *sd_in;
+    if (sd.levels == 0)
+        sd.levels = 3;
+    if (sd.refine_error == 0.f)
+        sd.refine_error = 0.1f;
+    if (sd.levels > PB_SPARSE_MAX_LEVELS)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--max-level %u: the sparse layout has at most %u levels (0-%u)",
+                       sd.levels - 1, PB_SPARSE_MAX_LEVELS, PB_SPARSE_MAX_LEVELS - 1);
+    if (!(sd.refine_error > 0.f) || !isfinite(sd.refine_error))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--refine-error %g: must be a positive number",
+                       (double)sd.refine_error);
+    if (desc->points || desc->shard_count)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "--layout sparse places its own probes: not with --points or --shard");
+    if (!desc->indirect_volume || desc->bounces == 0) {
+        pb_bake_desc d = *desc;
+        d.indirect_volume = 0;
+        return place(ctx, scene, gs, &d, &sd, 0, NULL, out, stats, err);
+    }
+    /* --indirect volume: bounce k places and bakes its own layout, its probe
+     * rays' first hits reflecting bounce k - 1's volume; all but the last
+     * without the light a probe sees directly (the hits sample it), as
+     * pb_bake's grid loop */
+    pb_bake_desc d = *desc;
+    d.indirect_volume = 0;
+    d.bounces = 0;
+    pb_sample_volume fb;
+    memset(&fb, 0, sizeof fb);
+    pb_volume_timings t;
+    memset(&t, 0, sizeof t);
+    uint64_t rays = 0, traversals = 0;
+    uint32_t bakes = 0;
+    pb_result r = PB_OK;
+    for (uint32_t k = 0; r == PB_OK && k <= desc->bounces; ++k) {
+        d.exclude_direct = k < desc->bounces ? 1 : desc->exclude_direct;
+        pb_volume v;
+        pb_sparse_stats st;
+        r = place(ctx, scene, gs, &d, &sd, 1, k ? &fb : NULL, &v, &st, err);
+        if (r != PB_OK)
+            break;
+        double *tt = &t.load;
+        const double *tv = &v.timings.load;
+        for (int i = 0; i < 8; ++i)
+            tt[i] += tv[i];
+        rays += v.rays_traced, traversals += v.traversals, bakes += st.bakes;
+        pb_sample_volume_free(&fb);
+        if (k < desc->bounces) {
+            r = pb_sample_volume_build(&v, scene->origin, 0.f, 0.f, &fb, err);
+            pb_volume_free(&v);
+        } else {
+            *out = v;
+            st.bakes = bakes;
+            if (stats)
+                *stats = st;
+        }
+    }
+    pb_sample_volume_free(&fb);
+    if (r != PB_OK)
+        return r;
+    out->timings = t;
+    out->rays_traced = rays, out->traversals = traversals;
+    out->settings.bounces = desc->bounces;
+    out->settings.indirect_mode = 1;
+    return PB_OK;
 }

@@ -231,10 +231,10 @@ int cmd_bake(const options *o)
         snprintf(err.message, sizeof err.message, "--max-level and --refine-error shape a sparse layout: add --layout sparse");
         goto out;
     }
-    if (o->sparse && (o->points || o->shard_count || o->devices || d.indirect_volume)) {
+    if (o->sparse && (o->points || o->shard_count || o->devices)) {
         snprintf(err.message, sizeof err.message,
                  "--layout sparse places its own probes on one device: not with %s",
-                 o->points ? "--points" : o->shard_count ? "--shard" : o->devices ? "--devices" : "--indirect volume");
+                 o->points ? "--points" : o->shard_count ? "--shard" : "--devices");
         goto out;
     }
     if (o->devices && (o->device || o->shard_count)) {
