@@ -75,8 +75,6 @@ expect max-level-range 2 "--max-level '3' is not an integer in \[0, 2\]" -- "$pb
 expect refine-error-garbage 2 "--refine-error '-1' is not a relative error" -- "$pb" bake "$demo" --refine-error -1 -o "$tmp/x.probes"
 expect max-level-needs-sparse 1 '--max-level and --refine-error shape a sparse layout: add --layout sparse' -- \
     "$pb" bake "$demo" --max-level 1 -o "$tmp/x.probes"
-expect sparse-and-shard 1 '--layout sparse places its own probes on one device: not with --shard' -- \
-    "$pb" bake "$demo" --layout sparse --shard 0/2 -o "$tmp/x.probes"
 
 # inspect: a fixture volume (tests/make_test_volume.c)
 "$make_volume" "$tmp/v.probes"
@@ -441,6 +439,22 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-two-devices 0 "wrote $tmp/dev.probes: 210 probes" -- \
         "$pb" bake "$demo" "${shard_args[@]}" --devices 0,0 --validation -o "$tmp/dev.probes"
     expect two-devices-same-bytes 0 '^same$' -- bash -c "$(declare -f same_but_timings); same_but_timings '$tmp/whole.probes' '$tmp/dev.probes'"
+    # a sparse bake splits by coarsest brick (4 of them here): parts, merge, --devices
+    sparse_args=(--layout sparse --max-level 1 --spacing 0.3 --rays 16 --passes 1 --octmap-res 4 --quiet)
+    "$pb" bake "$demo" "${sparse_args[@]}" -o "$tmp/swhole.probes" >/dev/null
+    for i in 0 1; do
+        expect "bake-sparse-shard-$i" 0 "wrote $tmp/spart$i.probes: part $i of 2, [0-9]+ probes in [0-9]+ bricks grown from coarsest brick" -- \
+            "$pb" bake "$demo" "${sparse_args[@]}" --shard "$i/2" -o "$tmp/spart$i.probes"
+    done
+    expect inspect-sparse-shard 0 '^part        1 of 2: bricks grown from coarsest brick [0-9]+ on' -- "$pb" inspect "$tmp/spart1.probes"
+    expect merge-sparse-parts 0 "wrote $tmp/smerged.probes: 2 parts, [0-9]+ probes in sparse bricks, level seams stitched" -- \
+        "$pb" merge "$tmp/smerged.probes" "$tmp/spart1.probes" "$tmp/spart0.probes"
+    expect merge-sparse-same-bytes 0 '^same$' -- bash -c "$(declare -f same_but_timings); same_but_timings '$tmp/swhole.probes' '$tmp/smerged.probes'"
+    expect bake-sparse-two-devices 0 '^sparse: 2 levels, bricks ' -- \
+        "$pb" bake "$demo" "${sparse_args[@]}" --devices 0,0 -o "$tmp/sdev.probes"
+    expect sparse-two-devices-same-bytes 0 '^same$' -- bash -c "$(declare -f same_but_timings); same_but_timings '$tmp/swhole.probes' '$tmp/sdev.probes'"
+    expect merge-sparse-with-grid 1 "not a part of the same bake as $tmp/spart0.probes" -- \
+        "$pb" merge "$tmp/bad.probes" "$tmp/spart0.probes" "$tmp/part1.probes"
     "$pb" bake "$demo" "${shard_args[@]}" --seed 2 --shard 2/3 -o "$tmp/foreign2.probes" >/dev/null
     expect merge-missing 1 "part 1/3 is missing" -- "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part2.probes"
     expect merge-duplicated 1 "$tmp/part1.probes: part 1/3 is given twice" -- \

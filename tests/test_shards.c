@@ -1,5 +1,6 @@
 /* Sharded bakes (issue 16): parts of a bake merge to the very bytes of the
- * whole bake (the timings block aside), on a grid and on points, with a
+ * whole bake (the timings block aside), on a grid, on points and on sparse
+ * bricks (issue 14), with a
  * target error (whose floor must not tie parts together); merge refuses
  * foreign, missing, duplicated and misplaced parts; a bake on two devices
  * (two logical devices of one driver here) equals the one-device bake. */
@@ -249,6 +250,120 @@ static void shard_parameters_refused(void)
     teardown(&su);
 }
 
+/* A sparse lattice over the demo scene: 0.15 m finest, two levels, so
+ * 3 x 3 x 4 coarsest bricks of 1.35 m; fixed passes (a target error's
+ * floor would tie each level's probes together and is refused). */
+static pb_bake_desc sparse_demo_desc(const pb_scene *s)
+{
+    pb_bake_desc d = {0};
+    for (int k = 0; k < 3; ++k) {
+        d.grid.spacing[k] = 0.15f;
+        d.grid.counts[k] = (uint32_t)((s->bounds_max[k] - s->bounds_min[k]) / 0.15f) + 1;
+        d.grid.origin[k] = s->bounds_min[k];
+    }
+    d.rays_per_probe = 32, d.passes = 2, d.bounces = 1, d.octmap_res = 4, d.seed = 1;
+    d.probe_nee = 1, d.light_cells = 1;
+    return d;
+}
+
+static int bake_sparse_part(setup *su, const pb_bake_desc *d, const pb_sparse_desc *sd, uint32_t i, uint32_t n,
+                            pb_volume *out)
+{
+    pb_bake_desc dp = *d;
+    dp.shard_index = i, dp.shard_count = n;
+    pb_volume v;
+    pb_error err;
+    if (pb_bake_sparse(ctx, su->scene, su->gs, &dp, sd, &v, NULL, &err) != PB_OK) {
+        CHECKF(0, "sparse part %u/%u: %s", i, n, err.message);
+        return 0;
+    }
+    char path[512];
+    snprintf(path, sizeof path, "%s/sparse%u.probes", temp_dir(), i);
+    pb_result r = pb_volume_write(path, &v, &err);
+    pb_volume_free(&v);
+    if (r == PB_OK)
+        r = pb_volume_read(path, out, &err);
+    CHECKF(r == PB_OK, "%s", err.message);
+    return r == PB_OK;
+}
+
+/* A sparse bake splits by coarsest brick: each part places and refines its
+ * own, and the merge (bricks level by level in part order, shared face
+ * probes checked equal, then dilation and stitching) is the whole bake's
+ * file. Refused: a part of another refine error, a part whose shared probe
+ * was changed, a target error, --indirect volume. */
+static void sparse_parts_merge_to_the_whole_bake(void)
+{
+    setup su;
+    if (!setup_demo(&su))
+        return;
+    pb_bake_desc d = sparse_demo_desc(su.scene);
+    pb_sparse_desc sd = {2, 0.1f};
+    pb_volume whole, parts[3], merged;
+    pb_error err;
+    const char *names[3] = {"s0", "s1", "s2"};
+    if (pb_bake_sparse(ctx, su.scene, su.gs, &d, &sd, &whole, NULL, &err) != PB_OK) {
+        CHECKF(0, "%s", err.message);
+        teardown(&su);
+        return;
+    }
+    uint32_t made = 0, part_probes = 0, part_bricks = 0;
+    for (uint32_t i = 0; i < 3; ++i)
+        made += bake_sparse_part(&su, &d, &sd, i, 3, &parts[made]);
+    if (made == 3) {
+        for (uint32_t i = 0; i < 3; ++i) {
+            part_probes += parts[i].probe_count, part_bricks += parts[i].sparse->brick_count;
+            CHECK((parts[i].flags & PB_VOLUME_SHARD) && parts[i].sparse && parts[i].shard.total == 36);
+        }
+        CHECK(pb_volume_merge(parts, names, 3, &merged, &err) == PB_OK);
+        int same = same_but_timings(&whole, &merged);
+        fprintf(stderr, "  sparse: %u bricks, %u probes; parts %u bricks, %u probes (faces shared): merged file %s\n",
+                whole.sparse->brick_count, whole.probe_count, part_bricks, part_probes,
+                same ? "the same as the whole bake's" : "DIFFERENT");
+        CHECK(same && part_bricks == whole.sparse->brick_count && part_probes > whole.probe_count);
+        pb_volume_free(&merged);
+        /* a shared probe changed in one part: named */
+        uint32_t shared = UINT32_MAX;
+        for (uint32_t b = 0; b < parts[1].sparse->brick_count && shared == UINT32_MAX; ++b)
+            if (parts[1].sparse->bricks[b].level == 0 && parts[1].sparse->bricks[b].coord[0] == 0)
+                shared = parts[1].sparse->brick_probes[64 * (size_t)b + 0]; /* a corner on part 0's bricks too */
+        if (shared != UINT32_MAX) {
+            float keep = parts[1].sh[27 * (size_t)shared];
+            parts[1].sh[27 * (size_t)shared] += 1.f;
+            CHECK(pb_volume_merge(parts, names, 3, &merged, &err) == PB_ERROR_INVALID_ARGUMENT &&
+                  strstr(err.message, "differs from"));
+            fprintf(stderr, "  changed shared probe: %s\n", err.message);
+            parts[1].sh[27 * (size_t)shared] = keep;
+        }
+        CHECK(shared != UINT32_MAX);
+        /* a part placed with another refine error */
+        pb_volume other;
+        pb_sparse_desc sd2 = {2, 0.2f};
+        if (bake_sparse_part(&su, &d, &sd2, 2, 3, &other)) {
+            pb_volume mixed[3] = {parts[0], parts[1], other};
+            CHECK(pb_volume_merge(mixed, names, 3, &merged, &err) == PB_ERROR_INVALID_ARGUMENT &&
+                  strstr(err.message, "s2") && strstr(err.message, "refine error"));
+            fprintf(stderr, "  other refine error: %s\n", err.message);
+            pb_volume_free(&other);
+        }
+    }
+    for (uint32_t i = 0; i < made; ++i)
+        pb_volume_free(&parts[i]);
+    pb_volume_free(&whole);
+    pb_volume v;
+    d.shard_index = 0, d.shard_count = 2;
+    d.target_error = 0.05f;
+    CHECK(pb_bake_sparse(ctx, su.scene, su.gs, &d, &sd, &v, NULL, &err) == PB_ERROR_INVALID_ARGUMENT &&
+          strstr(err.message, "--target-error"));
+    d.target_error = 0.f, d.indirect_volume = 1;
+    CHECK(pb_bake_sparse(ctx, su.scene, su.gs, &d, &sd, &v, NULL, &err) == PB_ERROR_INVALID_ARGUMENT &&
+          strstr(err.message, "--indirect volume"));
+    d.indirect_volume = 0, d.shard_count = 37; /* more parts than coarsest bricks */
+    CHECK(pb_bake_sparse(ctx, su.scene, su.gs, &d, &sd, &v, NULL, &err) == PB_ERROR_INVALID_ARGUMENT &&
+          strstr(err.message, "coarsest brick"));
+    teardown(&su);
+}
+
 /* Two logical devices of the driver the tests run on: pb_bake_devices
  * (part i on device i, a thread each, merged in memory) is the bake of one. */
 static void two_devices_bake_like_one(void)
@@ -270,7 +385,7 @@ static void two_devices_bake_like_one(void)
         pb_context *ctxs[2] = {ctx, second};
         pb_gpu_scene *scenes[2] = {su.gs, gs2};
         if (pb_bake(ctx, su.scene, su.gs, &d, &whole, &err) == PB_OK &&
-            pb_bake_devices(ctxs, scenes, 2, su.scene, &d, &both, &err) == PB_OK) {
+            pb_bake_devices(ctxs, scenes, 2, su.scene, &d, NULL, &both, &err) == PB_OK) {
             int same = same_but_timings(&whole, &both);
             fprintf(stderr, "  2 devices: %s bytes as 1\n", same ? "the same" : "DIFFERENT");
             CHECK(same);
@@ -280,8 +395,21 @@ static void two_devices_bake_like_one(void)
             CHECKF(0, "%s", err.message);
         }
         pb_volume_free(&whole);
+        /* a sparse bake on two devices: parts by coarsest brick, merged */
+        pb_bake_desc ds = sparse_demo_desc(su.scene);
+        pb_sparse_desc sd = {2, 0.1f};
+        if (pb_bake_sparse(ctx, su.scene, su.gs, &ds, &sd, &whole, NULL, &err) == PB_OK &&
+            pb_bake_devices(ctxs, scenes, 2, su.scene, &ds, &sd, &both, &err) == PB_OK) {
+            int same = same_but_timings(&whole, &both);
+            fprintf(stderr, "  sparse on 2 devices: %s bytes as 1\n", same ? "the same" : "DIFFERENT");
+            CHECK(same);
+            pb_volume_free(&both);
+        } else {
+            CHECKF(0, "%s", err.message);
+        }
+        pb_volume_free(&whole);
         d.shard_count = 2; /* already split by device */
-        CHECK(pb_bake_devices(ctxs, scenes, 2, su.scene, &d, &both, &err) == PB_ERROR_INVALID_ARGUMENT);
+        CHECK(pb_bake_devices(ctxs, scenes, 2, su.scene, &d, NULL, &both, &err) == PB_ERROR_INVALID_ARGUMENT);
     }
     pb_gpu_scene_destroy(gs2);
     pb_context_destroy(second);
@@ -295,6 +423,7 @@ int main(void)
     RUN(parts_merge_to_the_whole_bake);
     RUN(merge_refuses_foreign_missing_duplicated_parts);
     RUN(shard_parameters_refused);
+    RUN(sparse_parts_merge_to_the_whole_bake);
     RUN(two_devices_bake_like_one);
     return test_gpu_finish(ctx);
 }

@@ -148,15 +148,18 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
 pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint32_t count, pb_volume *out,
                           pb_error *err);
 
+typedef struct pb_sparse_desc pb_sparse_desc;
+
 /* A bake on `count` devices at once (src/bake/multi_device.c): part i of
  * count (as desc->shard_index / shard_count, which must be 0 here) on
  * ctxs[i] with its uploaded scene scenes[i], one host thread per device,
  * joined by pb_volume_merge. On devices of one driver the result is a
  * one-device bake's, byte for byte apart from the timings. desc->progress
  * hears the mean fraction of all parts, from any of their threads (one at a
- * time); its cancel stops every part. */
+ * time); its cancel stops every part. sparse: NULL for a grid (or points),
+ * else a sparse bake split by coarsest brick (pb_bake_sparse's parts). */
 pb_result pb_bake_devices(pb_context *const *ctxs, pb_gpu_scene *const *scenes, uint32_t count, const pb_scene *scene,
-                          const pb_bake_desc *desc, pb_volume *out, pb_error *err);
+                          const pb_bake_desc *desc, const pb_sparse_desc *sparse, pb_volume *out, pb_error *err);
 
 /* Where probe `probe` starts, in the scene's local frame, and its id. The one
  * rounding rule for grids and points alike: the world position in double

@@ -67,6 +67,7 @@ typedef struct pb_volume_settings {
     float sh_window_width;              /* its W (0: the default, 3) */
     float indirect_clamp;               /* reflected light clamped per path to this radiance (0: off) */
     uint32_t techniques;                /* PB_TECHNIQUE_* bits: variance reduction the bake used */
+    float refine_error;                 /* sparse: --refine-error the layout was placed with (0: not recorded) */
 } pb_volume_settings;
 
 /* Variance-reduction techniques (pb_volume_settings.techniques). */

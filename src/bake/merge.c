@@ -2,6 +2,7 @@
  * single process would have baked. Every check runs before anything is
  * allocated, and each names the file at fault. */
 #include "bake/shard.h"
+#include "bake/sparse_merge.h"
 #include "common/common.h"
 #include "probebake/bake.h"
 
@@ -21,8 +22,9 @@ static const char *differs(const pb_volume *a, const pb_volume *b)
         return "kind (grid or points, direct light, irradiance)";
     if (a->shard.count != b->shard.count || a->shard.total != b->shard.total)
         return "number of parts or probes";
-    if (memcmp(a->counts, b->counts, sizeof a->counts) || memcmp(a->origin, b->origin, sizeof a->origin) ||
-        memcmp(a->spacing, b->spacing, sizeof a->spacing))
+    /* a sparse part's counts are its own probes' (P, 1, 1) */
+    if ((!(a->flags & PB_VOLUME_SPARSE) && memcmp(a->counts, b->counts, sizeof a->counts)) ||
+        memcmp(a->origin, b->origin, sizeof a->origin) || memcmp(a->spacing, b->spacing, sizeof a->spacing))
         return "grid (counts, origin or spacing)";
     if (x->seed != y->seed)
         return "seed";
@@ -33,6 +35,8 @@ static const char *differs(const pb_volume *a, const pb_volume *b)
         x->sh_window_width != y->sh_window_width || x->indirect_clamp != y->indirect_clamp ||
         x->techniques != y->techniques)
         return "bake settings (rays, bounces, target error, SH window, clamp or estimators)";
+    if (x->refine_error != y->refine_error)
+        return "sparse refine error";
     return "";
 }
 
@@ -69,7 +73,11 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
         if (by_index[s->index])
             r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: part %u/%u is given twice (also %s)", names[i], s->index,
                         N, name_of[s->index]);
-        else if (s->first != first || parts[i].probe_count != n)
+        else if ((parts[i].flags & PB_VOLUME_SPARSE) && s->first != first)
+            /* a sparse part: a range of coarsest bricks (`total` of them), checked brick by brick in sparse_merge.c */
+            r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: part %u/%u starts at coarsest brick %u, not %u as a part "
+                        "of %u must", names[i], s->index, N, s->first, first, total);
+        else if (!(parts[i].flags & PB_VOLUME_SPARSE) && (s->first != first || parts[i].probe_count != n))
             r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                         "%s: part %u/%u holds probes %u..%u, not %u..%u as a part of %u probes must", names[i],
                         s->index, N, s->first, s->first + parts[i].probe_count - 1, first, first + n - 1, total);
@@ -85,6 +93,11 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
         return r;
     }
 
+    if (parts[0].flags & PB_VOLUME_SPARSE) {
+        r = pb_sparse_merge(by_index, name_of, N, out, err);
+        free(by_index), free(name_of);
+        return r;
+    }
     /* the whole volume: the header of part 0, the probes of every part in order */
     const pb_volume *p0 = by_index[0];
     out->flags = p0->flags & ~PB_VOLUME_SHARD;

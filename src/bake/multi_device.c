@@ -27,6 +27,7 @@ typedef struct device_part {
     pb_gpu_scene *gs;
     const pb_scene *scene;
     pb_bake_desc desc;
+    const pb_sparse_desc *sparse;   /* NULL: a grid or points */
     uint32_t index;
     progress_share *share;
     pb_volume vol;
@@ -53,7 +54,8 @@ static int part_progress(float fraction, const char *label, void *user)
 static void *bake_part(void *arg)
 {
     device_part *p = arg;
-    p->result = pb_bake(p->ctx, p->scene, p->gs, &p->desc, &p->vol, &p->err);
+    p->result = p->sparse ? pb_bake_sparse(p->ctx, p->scene, p->gs, &p->desc, p->sparse, &p->vol, NULL, &p->err)
+                          : pb_bake(p->ctx, p->scene, p->gs, &p->desc, &p->vol, &p->err);
     if (p->result != PB_OK) { /* the others stop at their next progress report */
         pthread_mutex_lock(&p->share->lock);
         p->share->cancel = 1;
@@ -63,7 +65,7 @@ static void *bake_part(void *arg)
 }
 
 pb_result pb_bake_devices(pb_context *const *ctxs, pb_gpu_scene *const *scenes, uint32_t count, const pb_scene *scene,
-                          const pb_bake_desc *desc, pb_volume *out, pb_error *err)
+                          const pb_bake_desc *desc, const pb_sparse_desc *sparse, pb_volume *out, pb_error *err)
 {
     pb_error_clear(err);
     memset(out, 0, sizeof *out);
@@ -73,7 +75,8 @@ pb_result pb_bake_devices(pb_context *const *ctxs, pb_gpu_scene *const *scenes, 
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "a bake on several devices is already split by device: "
                                                        "give --devices or --shard, not both");
     if (count == 1)
-        return pb_bake(ctxs[0], scene, scenes[0], desc, out, err);
+        return sparse ? pb_bake_sparse(ctxs[0], scene, scenes[0], desc, sparse, out, NULL, err)
+                      : pb_bake(ctxs[0], scene, scenes[0], desc, out, err);
     device_part *parts = calloc(count, sizeof *parts);
     pthread_t *threads = calloc(count, sizeof *threads);
     progress_share share = {PTHREAD_MUTEX_INITIALIZER, calloc(count, sizeof(float)), count, desc->progress,
@@ -85,7 +88,7 @@ pb_result pb_bake_devices(pb_context *const *ctxs, pb_gpu_scene *const *scenes, 
     uint32_t started = 0;
     for (uint32_t i = 0; i < count; ++i) {
         device_part *p = &parts[i];
-        *p = (device_part){ctxs[i], scenes[i], scene, *desc, i, &share, {0}, {0}, PB_OK};
+        *p = (device_part){ctxs[i], scenes[i], scene, *desc, sparse, i, &share, {0}, {0}, PB_OK};
         p->desc.shard_index = i, p->desc.shard_count = count;
         p->desc.progress = part_progress, p->desc.progress_user = p;
         if (pthread_create(&threads[i], NULL, bake_part, p) != 0) {

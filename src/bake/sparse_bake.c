@@ -17,6 +17,8 @@
  * With --indirect volume each bounce is such a placement of its own (bounce
  * k's probes reflect bounce k - 1's sparse volume at their rays' first hits,
  * pb_bake_bounce), and the last bounce's layout is the volume's. */
+#include "bake/shard.h"
+#include "bake/sparse_stitch.h"
 #include "common/common.h"
 #include "common/key_map.h"
 #include "probebake/bake.h"
@@ -42,6 +44,7 @@ typedef struct sparse_job {
     const pb_scene *scene;
     pb_gpu_scene *gs;
     pb_bake_desc d;
+    float refine_error;                 /* recorded in the volume (parts must agree) */
     int one_bounce;                     /* --indirect volume: every bake is pb_bake_bounce over `feedback` */
     const pb_sample_volume *feedback;   /* the previous bounce's volume (NULL on the first) */
     uint32_t levels, cells[3];
@@ -277,6 +280,7 @@ static pb_result assemble(sparse_job *j, pb_volume *out, pb_error *err)
         out->spacing[k] = j->F[k];
     }
     out->settings.passes = j->passes_max;
+    out->settings.refine_error = j->refine_error;
     out->timings = j->timings;
     out->rays_traced = j->rays;
     out->traversals = j->traversals;
@@ -427,111 +431,6 @@ done:
     return r;
 }
 
-/* What brick o's own sampler holds at lattice point k3 (finest units), as
- * SH: its cage's trilinear weights times each probe's Chebyshev visibility
- * of the point, invalid probes none, normalised. Where every cage probe sees
- * the point this is the plain trilinear SH, and the interpolant is
- * continuous across the level face; a probe behind a wall (valid, but dark
- * outside a room) is not averaged in, as the sampler would not. Returns 0
- * (sh untouched) where no probe of the cage sees the point. */
-static int brick_visible_trilinear(const sparse_job *j, const pb_volume *v, const pb_sample_volume *sv, uint32_t o,
-                                   const uint32_t k3[3], float sh[27])
-{
-    const pb_sparse_brick *b = &v->sparse->bricks[o];
-    const uint32_t *probes = v->sparse->brick_probes + PB_SPARSE_BRICK_PROBES * (size_t)o;
-    uint32_t step = pb_sparse_step(j->levels, b->level);
-    int base[3];
-    float a[3], q[3];
-    for (int k = 0; k < 3; ++k) {
-        double rel = (double)k3[k] / step - 3.0 * b->coord[k]; /* in [0, 3] */
-        int i = (int)floor(rel);
-        base[k] = i < 0 ? 0 : (i > 2 ? 2 : i);
-        a[k] = (float)(rel - base[k]);
-        q[k] = (float)((double)j->d.grid.origin[k] + (double)k3[k] * j->F[k]); /* the sample volume's frame */
-    }
-    static const float up[3] = {0.f, 1.f, 0.f}; /* only used where q is a probe's own position */
-    float acc[27] = {0}, wsum = 0.f;
-    for (int c = 0; c < 8; ++c) {
-        int qi[3];
-        float w = 1.f;
-        for (int k = 0; k < 3; ++k) {
-            int off = (c >> k) & 1;
-            qi[k] = base[k] + off;
-            w *= off ? a[k] : 1.f - a[k];
-        }
-        uint32_t p = probes[qi[0] + 4 * (qi[1] + 4 * qi[2])];
-        if (w <= 0.f || !(v->probe_flags[p] & PB_PROBE_VALID))
-            continue;
-        w *= pb_sample_visibility_cpu(sv, (int)p, q, up, NULL);
-        const float *src = v->sh + 27 * (size_t)p;
-        for (int i = 0; i < 27; ++i)
-            acc[i] += w * src[i];
-        wsum += w;
-    }
-    if (!(wsum > 1e-6f))
-        return 0;
-    for (int i = 0; i < 27; ++i)
-        sh[i] = acc[i] / wsum;
-    return 1;
-}
-
-/* Stage 5, after dilation (so no cage reads an undilated probe in rock): a
- * probe of a level-l brick next to a region served by a coarser brick that
- * does not have it takes what that brick's sampler holds there; levels in
- * ascending order, so a coarser brick's own stitched probes come first. */
-static pb_result stitch(const sparse_job *j, pb_volume *v, pb_error *err)
-{
-    const pb_sparse_layout *sp = v->sparse;
-    pb_sample_volume sv;
-    pb_result r = pb_sample_volume_build(v, j->scene->origin, 0.f, 0.f, &sv, err);
-    if (r != PB_OK)
-        return r;
-    float span[3];
-    for (int k = 0; k < 3; ++k)
-        span[k] = (float)pow3u(j->levels); /* finest steps per cell */
-    for (uint32_t level = 1; level < j->levels; ++level)
-        for (uint32_t b = 0; b < sp->brick_count; ++b) {
-            const pb_sparse_brick *br = &sp->bricks[b];
-            if (br->level != level)
-                continue;
-            uint32_t keys[64 * 3];
-            brick_keys(j, br, keys);
-            uint32_t step = pb_sparse_step(j->levels, level);
-            for (uint32_t i = 0; i < 64; ++i) {
-                uint32_t off[3] = {i & 3u, (i >> 2) & 3u, i >> 4};
-                if (off[0] % 3 && off[1] % 3 && off[2] % 3)
-                    continue; /* inside the brick */
-                const uint32_t *k3 = keys + 3 * i;
-                uint32_t coarse = PB_SPARSE_EMPTY;
-                for (uint32_t c = 0; c < 8; ++c) { /* the eight cells of this level around the probe */
-                    float u[3];
-                    int outside = 0;
-                    for (int k = 0; k < 3; ++k) {
-                        double cell = (double)k3[k] + (((c >> k) & 1u) ? 0.5 : -0.5) * step;
-                        outside |= cell < 0.0 || cell > (double)j->cells[k] * span[k];
-                        u[k] = (float)(cell / span[k]);
-                    }
-                    if (outside)
-                        continue;
-                    uint32_t nbk = pb_sparse_find(sp, u);
-                    if (nbk == PB_SPARSE_EMPTY)
-                        continue;
-                    const pb_sparse_brick *o = &sp->bricks[nbk];
-                    uint32_t ostep = pb_sparse_step(j->levels, o->level);
-                    if (o->level < level && (k3[0] % ostep || k3[1] % ostep || k3[2] % ostep) &&
-                        (coarse == PB_SPARSE_EMPTY || o->level < sp->bricks[coarse].level))
-                        coarse = nbk;
-                }
-                if (coarse == PB_SPARSE_EMPTY)
-                    continue;
-                /* sv is read for depth moments only: v->sh holds the stitched SH */
-                brick_visible_trilinear(j, v, &sv, coarse, k3, v->sh + 27 * (size_t)sp->brick_probes[64 * (size_t)b + i]);
-            }
-        }
-    pb_sample_volume_free(&sv);
-    return PB_OK;
-}
-
 /* One placement: coarsest bricks, refinement level by level, assembly,
  * dilation, stitching. */
 static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
@@ -542,7 +441,8 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
     sparse_job j;
     memset(&j, 0, sizeof j);
     j.ctx = ctx, j.scene = scene, j.gs = gs, j.d = *desc, j.levels = sd.levels;
-    j.one_bounce = one_bounce, j.feedback = feedback;
+    j.one_bounce = one_bounce, j.feedback = feedback, j.refine_error = sd.refine_error;
+    j.d.shard_index = j.d.shard_count = 0; /* a part is a range of coarsest bricks, its bakes whole */
     uint32_t span = pow3u(sd.levels);
     for (int k = 0; k < 3; ++k) {
         if (desc->grid.counts[k] == 0 || !(desc->grid.spacing[k] > 0.f) || !isfinite(desc->grid.spacing[k]))
@@ -560,29 +460,55 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
     pb_sparse_brick *cand = NULL;
     pb_result r = pb_key_map_init(&j.ps.index, 4096) ? PB_OK
                                                       : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
-    /* level 0: every cell */
+    /* level 0: every cell (a part: its range of cells; refinement stays
+     * inside a coarsest brick, so parts place as the whole does) */
     uint64_t C = (uint64_t)j.cells[0] * j.cells[1] * j.cells[2];
     if (r == PB_OK && C > (1u << 22))
         r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: %llu coarsest bricks is too many (raise the spacing)",
                     (unsigned long long)C);
-    if (r == PB_OK && !(cand = malloc((size_t)C * sizeof *cand)))
+    uint32_t first = 0, count = (uint32_t)C;
+    if (r == PB_OK && desc->shard_count) {
+        if (desc->shard_index >= desc->shard_count || desc->shard_count > C)
+            r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                        "--shard %u/%u: a sparse bake splits by coarsest brick, and this one has %llu: at most %llu "
+                        "parts, index below the count", desc->shard_index, desc->shard_count, (unsigned long long)C,
+                        (unsigned long long)C);
+        else
+            pb_shard_range((uint32_t)C, desc->shard_index, desc->shard_count, &first, &count);
+    }
+    if (r == PB_OK && !(cand = malloc((size_t)count * sizeof *cand)))
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %llu bricks", (unsigned long long)C);
     if (r == PB_OK) {
-        for (uint64_t c = 0; c < C; ++c)
-            cand[c] = (pb_sparse_brick){0, {(uint32_t)(c % j.cells[0]), (uint32_t)((c / j.cells[0]) % j.cells[1]),
+        for (uint64_t i = 0; i < count; ++i) {
+            uint64_t c = first + i;
+            cand[i] = (pb_sparse_brick){0, {(uint32_t)(c % j.cells[0]), (uint32_t)((c / j.cells[0]) % j.cells[1]),
                                             (uint32_t)(c / ((uint64_t)j.cells[0] * j.cells[1]))}};
-        r = add_bricks(&j, cand, (uint32_t)C, 0, err);
+        }
+        r = add_bricks(&j, cand, count, 0, err);
     }
     free(cand);
     for (uint32_t level = 0; r == PB_OK && level + 1 < j.levels; ++level)
         r = refine_level(&j, &sd, level, err);
+    if (r == PB_OK && desc->shard_count && j.brick_count == 0)
+        r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                    "%s: part %u/%u of the sparse bake has no brick outside geometry: bake it in fewer parts",
+                    scene->path[0] ? scene->path : "scene", desc->shard_index, desc->shard_count);
     if (r == PB_OK)
         r = assemble(&j, out, err);
+    if (r == PB_OK && desc->shard_count) { /* merge dilates and stitches the whole (sparse_merge.c) */
+        out->flags |= PB_VOLUME_SHARD;
+        out->shard = (pb_volume_shard){desc->shard_index, desc->shard_count, first, (uint32_t)C};
+        if (stats)
+            *stats = j.stats;
+        store_free(&j.ps);
+        free(j.bricks);
+        return PB_OK;
+    }
     /* invalid probes (in rock, inside kept bricks) take their neighbours'
      * light on the device, as a grid's do; then the level seams are stitched */
     if (r == PB_OK && (r = pb_volume_dilate_gpu(ctx, out, PB_DILATION_ROUNDS, err)) != PB_OK)
         pb_volume_free(out);
-    if (r == PB_OK && (r = stitch(&j, out, err)) != PB_OK)
+    if (r == PB_OK && (r = pb_sparse_stitch(out, err)) != PB_OK)
         pb_volume_free(out);
     if (stats)
         *stats = j.stats;
@@ -607,9 +533,18 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
     if (!(sd.refine_error > 0.f) || !isfinite(sd.refine_error))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--refine-error %g: must be a positive number",
                        (double)sd.refine_error);
-    if (desc->points || desc->shard_count)
+    if (desc->points)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--layout sparse places its own probes: not with --points");
+    if (desc->shard_count && desc->indirect_volume && desc->bounces)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "--layout sparse places its own probes: not with --points or --shard");
+                       "--indirect volume samples the whole previous bounce's volume: a part cannot bake it alone "
+                       "(shard the path-traced bake instead)");
+    /* each of a sparse bake's bakes takes --target-error's floor from its own
+     * probes, which a part does not have all of */
+    if (desc->shard_count && desc->target_error > 0.f)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "--target-error in a sparse bake depends on every probe of each level: its parts could not "
+                       "merge into the whole bake; give fixed --passes (or no --shard)");
     if (!desc->indirect_volume || desc->bounces == 0) {
         pb_bake_desc d = *desc;
         d.indirect_volume = 0;

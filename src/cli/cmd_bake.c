@@ -70,7 +70,8 @@ static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_b
         fprintf(stderr, "\n");
     if (r == PB_OK) {
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
-        r = pb_bake_devices(ctxs, scenes, n, s, d, vol, err);
+        pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error};
+        r = pb_bake_devices(ctxs, scenes, n, s, d, o->sparse ? &sd : NULL, vol, err);
     }
     for (uint32_t i = 0; r == PB_OK && o->validation && i < n; ++i)
         if (pb_context_validation_messages(ctxs[i])) {
@@ -231,10 +232,8 @@ int cmd_bake(const options *o)
         snprintf(err.message, sizeof err.message, "--max-level and --refine-error shape a sparse layout: add --layout sparse");
         goto out;
     }
-    if (o->sparse && (o->points || o->shard_count || o->devices)) {
-        snprintf(err.message, sizeof err.message,
-                 "--layout sparse places its own probes on one device: not with %s",
-                 o->points ? "--points" : o->shard_count ? "--shard" : "--devices");
+    if (o->sparse && o->points) {
+        snprintf(err.message, sizeof err.message, "--layout sparse places its own probes: not with --points");
         goto out;
     }
     if (o->devices && (o->device || o->shard_count)) {
@@ -250,6 +249,8 @@ int cmd_bake(const options *o)
     pb_result r;
     if (o->devices) {
         r = bake_on_devices(o, s, bvh, &d, log, &vol, &err);
+        if (r == PB_OK && o->sparse)
+            probes = vol.probe_count;
     } else {
         pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
         cli_fault_injection(&cd);
@@ -287,7 +288,15 @@ int cmd_bake(const options *o)
         converged += (vol.probe_flags[i] & PB_PROBE_CONVERGED) != 0;
     }
     double rays = (double)vol.rays_traced;
-    if (o->sparse) {
+    if (o->sparse && o->devices) { /* the parts' refinement counts stay with them */
+        uint32_t per_level[3] = {0, 0, 0};
+        for (uint32_t b = 0; b < vol.sparse->brick_count; ++b)
+            per_level[vol.sparse->bricks[b].level]++;
+        fprintf(report, "sparse: %u levels, bricks", vol.sparse->levels);
+        for (uint32_t l = 0; l < vol.sparse->levels; ++l)
+            fprintf(report, " %u", per_level[l]);
+        fprintf(report, "\n");
+    } else if (o->sparse) {
         const pb_sparse_stats *st = &sparse_stats;
         fprintf(report, "sparse: %u levels, bricks", vol.sparse->levels);
         for (uint32_t l = 0; l < vol.sparse->levels; ++l)
@@ -299,7 +308,12 @@ int cmd_bake(const options *o)
                 st->tested[0] + st->tested[1], st->refined[0] + st->refined[1], st->skipped[0] + st->skipped[1],
                 st->beyond[0] + st->beyond[1], st->bakes);
     }
-    if (o->shard_count)
+    if (o->shard_count && o->sparse)
+        fprintf(report, "wrote %s: part %u of %u, %u probes in %u bricks grown from coarsest brick %u on (of %u), "
+                "undilated (probebake merge joins the parts) (%u valid, %u relocated, %u invalid, %u outside",
+                o->output, o->shard_index, o->shard_count, vol.probe_count, vol.sparse->brick_count, vol.shard.first,
+                vol.shard.total, valid, relocated, vol.probe_count - valid, outside);
+    else if (o->shard_count)
         fprintf(report, "wrote %s: part %u of %u, %u of %llu probes, undilated (probebake merge joins the parts) (%u "
                 "valid, %u relocated, %u invalid, %u outside", o->output, o->shard_index, o->shard_count,
                 vol.probe_count, (unsigned long long)probes, valid, relocated, vol.probe_count - valid, outside);

@@ -188,7 +188,10 @@ int cmd_inspect(const options *o)
                    v.sparse->chunk_count);
         } else
             printf("probes      %u placed points\n", v.probe_count);
-        if (v.flags & PB_VOLUME_SHARD)
+        if ((v.flags & PB_VOLUME_SHARD) && v.sparse)
+            printf("part        %u of %u: bricks grown from coarsest brick %u on (of %u), undilated, unstitched "
+                   "(probebake merge joins the parts)\n", v.shard.index, v.shard.count, v.shard.first, v.shard.total);
+        else if (v.flags & PB_VOLUME_SHARD)
             printf("part        %u of %u: probes %u..%u of %u, undilated (probebake merge joins the parts)\n",
                    v.shard.index, v.shard.count, v.shard.first, v.shard.first + v.probe_count - 1, v.shard.total);
         printf("flags       %u valid, %u relocated, %u dilated, %u outside, %u converged\n", counts[0], counts[1],

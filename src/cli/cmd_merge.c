@@ -27,12 +27,9 @@ int cmd_merge(const options *o)
     /* the output before any work: not a directory, writable, not a part */
     if (pb_output_check(out_path, (const char *const *)o->parts, n, &err) != PB_OK)
         goto out;
-    uint32_t probes = 0;
-    for (uint32_t i = 0; i < n; ++i) {
+    for (uint32_t i = 0; i < n; ++i)
         if (pb_volume_read(o->parts[i], &parts[i], &err) != PB_OK)
             goto out;
-        probes += parts[i].probe_count;
-    }
     cli_defer_signals(); /* from here a signal cancels the write */
     if (pb_volume_merge(parts, (const char *const *)o->parts, n, &merged, &err) != PB_OK)
         goto out;
@@ -42,8 +39,10 @@ int cmd_merge(const options *o)
     for (uint32_t p = 0; p < merged.probe_count; ++p)
         dilated += (merged.probe_flags[p] & PB_PROBE_DILATED) != 0;
     FILE *report = strcmp(out_path, "-") ? stdout : stderr;
-    fprintf(report, "wrote %s: %u parts, %u probes (%u dilated across parts), %u passes at most\n", out_path, n,
-            probes, dilated, merged.settings.passes);
+    /* a sparse bake's parts share the probes on their faces: the whole's count */
+    fprintf(report, "wrote %s: %u parts, %u probes%s (%u dilated across parts), %u passes at most\n", out_path, n,
+            merged.probe_count, merged.sparse ? " in sparse bricks, level seams stitched" : "", dilated,
+            merged.settings.passes);
     rc = 0;
 out:
     for (uint32_t i = 0; parts && i < n; ++i)

@@ -283,6 +283,7 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     }
     if (sp) {
         put_u64(b + 416, l.sparse);
+        put_f32(b + 424, s->refine_error);
         unsigned char *q = b + l.sparse;
         put_u32(q, sp->levels);
         for (int k = 0; k < 3; ++k)
@@ -493,6 +494,7 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     v->settings.sh_window_width = get_f32(h + 380);
     v->settings.indirect_clamp = get_f32(h + 384);
     v->settings.techniques = get_u32(h + 388);
+    v->settings.refine_error = (v->flags & PB_VOLUME_SPARSE) ? get_f32(h + 424) : 0.f;
     memset(&v->shard, 0, sizeof v->shard);
     if (v->flags & PB_VOLUME_SHARD)
         v->shard = (pb_volume_shard){get_u32(h + 400), get_u32(h + 404), get_u32(h + 408), get_u32(h + 412)};
@@ -512,12 +514,13 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         bad = "depth unit not a positive finite number";
     else if ((v->flags & PB_VOLUME_SHARD) &&
              (v->shard.index >= v->shard.count || v->shard.total > MAX_PROBES ||
-              (uint64_t)v->shard.first + v->probe_count > v->shard.total))
+              ((v->flags & PB_VOLUME_SPARSE) ? v->shard.first >= v->shard.total /* coarsest bricks */
+                                             : (uint64_t)v->shard.first + v->probe_count > v->shard.total)))
         bad = "shard part out of range";
     else if ((v->flags & PB_VOLUME_GRID) && (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != grid_probes)
         bad = "grid counts do not match the probe count";
-    else if ((v->flags & PB_VOLUME_SPARSE) && (version < 4 || (v->flags & (PB_VOLUME_GRID | PB_VOLUME_SHARD))))
-        bad = "sparse flag in a grid, a part or a file older than version 4";
+    else if ((v->flags & PB_VOLUME_SPARSE) && (version < 4 || (v->flags & PB_VOLUME_GRID)))
+        bad = "sparse flag in a grid or a file older than version 4";
     layout l = layout_of(v->probe_count, v->octmap_res, version);
     /* the sparse section's size is in its head: read that first */
     unsigned char sh_head[SPARSE_HEAD];
@@ -533,6 +536,8 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
             bad = "sparse layout with too many cells";
         else {
             uint64_t cells = (uint64_t)get_u32(sh_head + 4) * get_u32(sh_head + 8) * get_u32(sh_head + 12);
+            if ((v->flags & PB_VOLUME_SHARD) && v->shard.total != cells)
+                bad = "shard part out of range"; /* a sparse part counts coarsest bricks */
             l.sparse = at;
             l.end = at + sparse_bytes(cells, get_u32(sh_head + 16), get_u32(sh_head + 20));
         }

@@ -1,0 +1,117 @@
+/* Stitching a sparse volume's level seams (sparse_stitch.h). */
+#include "bake/sparse_stitch.h"
+#include "common/common.h"
+#include "probebake/sample.h"
+#include "probebake/sparse.h"
+
+#include <math.h>
+#include <string.h>
+
+/* What brick o's own sampler holds at finest-lattice point k3, as SH: its
+ * trilinear weights there, visibility of `where` (the probe's relocated
+ * position; frame: the volume's origin). Where every cage probe sees the point this is the
+ * plain trilinear SH, and the interpolant is continuous across the level
+ * face; a probe behind a wall (valid, but dark outside a room) is not
+ * averaged in, as the sampler would not. Returns 0 (sh untouched) where no
+ * probe of the cage sees the point. */
+static int brick_visible_trilinear(const pb_volume *v, const pb_sample_volume *sv, uint32_t o, const uint32_t k3[3],
+                                   const float where[3], float sh[27])
+{
+    const pb_sparse_layout *sp = v->sparse;
+    const pb_sparse_brick *b = &sp->bricks[o];
+    const uint32_t *probes = sp->brick_probes + PB_SPARSE_BRICK_PROBES * (size_t)o;
+    uint32_t step = pb_sparse_step(sp->levels, b->level);
+    int base[3];
+    float a[3], q[3];
+    for (int k = 0; k < 3; ++k) {
+        double rel = (double)k3[k] / step - 3.0 * b->coord[k]; /* in [0, 3] */
+        int i = (int)floor(rel);
+        base[k] = i < 0 ? 0 : (i > 2 ? 2 : i);
+        a[k] = (float)(rel - base[k]);
+        q[k] = where[k];
+    }
+    static const float up[3] = {0.f, 1.f, 0.f}; /* only used where q is a probe's own position */
+    float acc[27] = {0}, wsum = 0.f;
+    for (int c = 0; c < 8; ++c) {
+        int qi[3];
+        float w = 1.f;
+        for (int k = 0; k < 3; ++k) {
+            int off = (c >> k) & 1;
+            qi[k] = base[k] + off;
+            w *= off ? a[k] : 1.f - a[k];
+        }
+        uint32_t p = probes[qi[0] + 4 * (qi[1] + 4 * qi[2])];
+        if (w <= 0.f || !(v->probe_flags[p] & PB_PROBE_VALID))
+            continue;
+        w *= pb_sample_visibility_cpu(sv, (int)p, q, up, NULL);
+        const float *src = v->sh + 27 * (size_t)p;
+        for (int i = 0; i < 27; ++i)
+            acc[i] += w * src[i];
+        wsum += w;
+    }
+    if (!(wsum > 1e-6f))
+        return 0;
+    for (int i = 0; i < 27; ++i)
+        sh[i] = acc[i] / wsum;
+    return 1;
+}
+
+pb_result pb_sparse_stitch(pb_volume *v, pb_error *err)
+{
+    const pb_sparse_layout *sp = v->sparse;
+    if (!sp)
+        return PB_OK;
+    /* the frame: the volume's origin (lattice point 0); read for depth moments
+     * only, v->sh holds the stitched SH as it goes */
+    pb_sample_volume sv;
+    pb_result r = pb_sample_volume_build(v, v->origin, 0.f, 0.f, &sv, err);
+    if (r != PB_OK)
+        return r;
+    uint32_t L = sp->levels, span = 1;
+    for (uint32_t l = 0; l < L; ++l)
+        span *= 3; /* finest steps per cell */
+    for (uint32_t level = 1; level < L; ++level)
+        for (uint32_t b = 0; b < sp->brick_count; ++b) {
+            const pb_sparse_brick *br = &sp->bricks[b];
+            if (br->level != level)
+                continue;
+            uint32_t step = pb_sparse_step(L, level);
+            for (uint32_t i = 0; i < PB_SPARSE_BRICK_PROBES; ++i) {
+                uint32_t off[3] = {i & 3u, (i >> 2) & 3u, i >> 4}, k3[3];
+                if (off[0] % 3 && off[1] % 3 && off[2] % 3)
+                    continue; /* inside the brick */
+                for (int k = 0; k < 3; ++k)
+                    k3[k] = (3 * br->coord[k] + off[k]) * step;
+                uint32_t coarse = PB_SPARSE_EMPTY;
+                for (uint32_t c = 0; c < 8; ++c) { /* the eight cells of this level around the probe */
+                    float u[3];
+                    int outside = 0;
+                    for (int k = 0; k < 3; ++k) {
+                        double cell = (double)k3[k] + (((c >> k) & 1u) ? 0.5 : -0.5) * step;
+                        outside |= cell < 0.0 || cell > (double)sp->cells[k] * span;
+                        u[k] = (float)(cell / span);
+                    }
+                    if (outside)
+                        continue;
+                    uint32_t nbk = pb_sparse_find(sp, u);
+                    if (nbk == PB_SPARSE_EMPTY)
+                        continue;
+                    const pb_sparse_brick *o = &sp->bricks[nbk];
+                    uint32_t ostep = pb_sparse_step(L, o->level);
+                    if (o->level < level && (k3[0] % ostep || k3[1] % ostep || k3[2] % ostep) &&
+                        (coarse == PB_SPARSE_EMPTY || o->level < sp->bricks[coarse].level))
+                        coarse = nbk;
+                }
+                if (coarse == PB_SPARSE_EMPTY)
+                    continue;
+                /* visibility of where the probe is (relocated out of walls), not of its lattice point */
+                uint32_t p = sp->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)b + i];
+                float where[3];
+                for (int k = 0; k < 3; ++k)
+                    where[k] = v->base[3 * (size_t)p + k] + v->offset[3 * (size_t)p + k];
+                brick_visible_trilinear(v, &sv, coarse, k3, where, v->sh + 27 * (size_t)p);
+            }
+        }
+    pb_sample_volume_free(&sv);
+    return PB_OK;
+}

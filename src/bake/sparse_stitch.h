@@ -1,0 +1,15 @@
+/* Stitching a sparse volume's level seams (docs/sparse.md, placement step 6):
+ * the last stage of a sparse bake, and of merging its parts. */
+#ifndef PB_BAKE_SPARSE_STITCH_H
+#define PB_BAKE_SPARSE_STITCH_H
+
+#include "probebake/volume.h"
+
+/* Every probe on the face of a level-l brick that a coarser brick next to it
+ * does not have takes what that brick's sampler holds there: its cage's
+ * trilinear weights times each probe's Chebyshev visibility of the point,
+ * invalid probes none, normalised (coarse levels first). Run after dilation.
+ * Reads only the volume, so a bake and a merge of its parts stitch alike. */
+pb_result pb_sparse_stitch(pb_volume *v, pb_error *err);
+
+#endif
