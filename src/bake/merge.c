@@ -124,17 +124,7 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
         memcpy(out->depth + halves * f, v->depth, 2 * halves * n);
         memcpy(out->probe_paths + f, v->probe_paths, 4 * n);
         memcpy(out->probe_std_error + f, v->probe_std_error, 4 * n);
-        /* a probe's passes: the most any part ran */
-        out->settings.passes = v->settings.passes > out->settings.passes ? v->settings.passes : out->settings.passes;
-        const double *t = &v->timings.load;
-        double *o = &out->timings.load;
-        for (int i = 0; i < 8; ++i)
-            o[i] += t[i];
-        out->rays_traced += v->rays_traced, out->traversals += v->traversals;
-        if (strcmp(v->device, out->device) && !strstr(out->device, v->device)) {
-            size_t len = strlen(out->device);
-            snprintf(out->device + len, sizeof out->device - len, " + %s", v->device);
-        }
+        pb_shard_account(out, v);
     }
     free(by_index), free(name_of);
     /* the stages that need neighbours across parts */

@@ -7,6 +7,8 @@
 
 #include <stdint.h>
 
+#include "probebake/volume.h"
+
 /* Part `index` of `count` of `total` probes: a contiguous range, sizes
  * within one of each other (first = floor(total x index / count)). */
 void pb_shard_range(uint32_t total, uint32_t index, uint32_t count, uint32_t *first, uint32_t *n);
@@ -16,5 +18,10 @@ void pb_shard_range(uint32_t total, uint32_t index, uint32_t count, uint32_t *fi
  * for a whole bake and for each of its parts. */
 #define PB_FLOOR_SAMPLE 256u
 uint32_t pb_floor_stride(uint32_t total);
+
+/* What a merge adds to the whole per part: the most passes any part ran,
+ * the timings, rays and traversals summed, and the part's device name if
+ * the whole does not name it yet. */
+void pb_shard_account(pb_volume *whole, const pb_volume *part);
 
 #endif

@@ -99,20 +99,8 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
     out->settings.passes = 0;
     out->depth_unit = p0->depth_unit;
     snprintf(out->device, sizeof out->device, "%s", p0->device);
-    for (uint32_t k = 0; k < N; ++k) {
-        const pb_volume *v = parts[k];
-        if (v->settings.passes > out->settings.passes)
-            out->settings.passes = v->settings.passes;
-        const double *t = &v->timings.load;
-        double *o = &out->timings.load;
-        for (int i = 0; i < 8; ++i)
-            o[i] += t[i];
-        out->rays_traced += v->rays_traced, out->traversals += v->traversals;
-        if (strcmp(v->device, out->device) && !strstr(out->device, v->device)) {
-            size_t len = strlen(out->device);
-            snprintf(out->device + len, sizeof out->device - len, " + %s", v->device);
-        }
-    }
+    for (uint32_t k = 0; k < N; ++k)
+        pb_shard_account(out, parts[k]);
     uint8_t *filled = calloc(P ? P : 1, 1);
     uint32_t *src_part = malloc((size_t)(P ? P : 1) * sizeof *src_part);
     if (!filled || !src_part)
