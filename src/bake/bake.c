@@ -11,6 +11,7 @@
  * from the GPU: the per-pass sums are over at most rays_per_probe terms, so
  * adding passes never loses precision however many there are. */
 #include "bake/bake_data.h"
+#include "bake/indirect_volume.h"
 #include "bake/convergence.h"
 #include "bake/shard.h"
 #include "bake/gpu_scene.h"
@@ -831,6 +832,19 @@ pb_result pb_bake_bounce(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
     return bake_once(ctx, scene, gs, desc, volume, out, err);
 }
 
+typedef struct grid_bounce {
+    pb_context *ctx;
+    const pb_scene *scene;
+    pb_gpu_scene *gs;
+} grid_bounce;
+
+static pb_result grid_bounce_bake(void *user, const pb_bake_desc *d, const pb_sample_volume *previous, pb_volume *out,
+                                  pb_error *err)
+{
+    grid_bounce *g = user;
+    return pb_bake_bounce(g->ctx, g->scene, g->gs, d, previous, out, err);
+}
+
 pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
                   pb_volume *out, pb_error *err)
 {
@@ -845,40 +859,6 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if (desc->points)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "--indirect volume samples the previous bounce's grid: it needs a grid, not points");
-    /* bounce k shades the probe rays' first hits with the volume of bounce
-     * k - 1, baked without direct light (the hits' direct light is already
-     * sampled); the last bounce includes direct light if the caller asked */
-    pb_bake_desc d = *desc;
-    d.indirect_volume = 0;
-    d.bounces = 0;
-    pb_sample_volume fb;
-    memset(&fb, 0, sizeof fb);
-    pb_volume_timings t;
-    memset(&t, 0, sizeof t);
-    uint64_t rays = 0, traversals = 0;
-    pb_result r = PB_OK;
-    for (uint32_t k = 0; r == PB_OK && k <= desc->bounces; ++k) {
-        d.exclude_direct = k < desc->bounces ? 1 : desc->exclude_direct;
-        pb_volume v;
-        r = pb_bake_bounce(ctx, scene, gs, &d, k ? &fb : NULL, &v, err);
-        if (r != PB_OK)
-            break;
-        t.trace += v.timings.trace, t.sh += v.timings.sh, t.octmap += v.timings.octmap, t.total += v.timings.total;
-        rays += v.rays_traced, traversals += v.traversals;
-        pb_sample_volume_free(&fb);
-        if (k < desc->bounces) {
-            r = pb_sample_volume_build(&v, scene->origin, 0.f, 0.f, &fb, err);
-            pb_volume_free(&v);
-        } else {
-            *out = v;
-        }
-    }
-    pb_sample_volume_free(&fb);
-    if (r != PB_OK)
-        return r;
-    out->timings = t;
-    out->rays_traced = rays, out->traversals = traversals;
-    out->settings.bounces = desc->bounces;
-    out->settings.indirect_mode = 1;
-    return PB_OK;
+    grid_bounce g = {ctx, scene, gs};
+    return pb_indirect_volume_bounces(scene, desc, grid_bounce_bake, &g, out, err);
 }

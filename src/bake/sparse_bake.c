@@ -17,6 +17,7 @@
  * With --indirect volume each bounce is such a placement of its own (bounce
  * k's probes reflect bounce k - 1's sparse volume at their rays' first hits,
  * pb_bake_bounce), and the last bounce's layout is the volume's. */
+#include "bake/indirect_volume.h"
 #include "bake/shard.h"
 #include "bake/sparse_stitch.h"
 #include "common/common.h"
@@ -517,6 +518,26 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
     return r;
 }
 
+/* One bounce of --indirect volume: a placement of its own; the stats of
+ * the last, the bakes of all. */
+typedef struct sparse_bounce {
+    pb_context *ctx;
+    const pb_scene *scene;
+    pb_gpu_scene *gs;
+    const pb_sparse_desc *sd;
+    uint32_t bakes;
+    pb_sparse_stats last;
+} sparse_bounce;
+
+static pb_result sparse_bounce_bake(void *user, const pb_bake_desc *d, const pb_sample_volume *previous,
+                                    pb_volume *out, pb_error *err)
+{
+    sparse_bounce *b = user;
+    pb_result r = place(b->ctx, b->scene, b->gs, d, b->sd, 1, previous, out, &b->last, err);
+    b->bakes += r == PB_OK ? b->last.bakes : 0;
+    return r;
+}
+
 pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
                          const pb_sparse_desc *sd_in, pb_volume *out, pb_sparse_stats *stats, pb_error *err)
 {
@@ -550,49 +571,14 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
         d.indirect_volume = 0;
         return place(ctx, scene, gs, &d, &sd, 0, NULL, out, stats, err);
     }
-    /* --indirect volume: bounce k places and bakes its own layout, its probe
-     * rays' first hits reflecting bounce k - 1's volume; all but the last
-     * without the light a probe sees directly (the hits sample it), as
-     * pb_bake's grid loop */
-    pb_bake_desc d = *desc;
-    d.indirect_volume = 0;
-    d.bounces = 0;
-    pb_sample_volume fb;
-    memset(&fb, 0, sizeof fb);
-    pb_volume_timings t;
-    memset(&t, 0, sizeof t);
-    uint64_t rays = 0, traversals = 0;
-    uint32_t bakes = 0;
-    pb_result r = PB_OK;
-    for (uint32_t k = 0; r == PB_OK && k <= desc->bounces; ++k) {
-        d.exclude_direct = k < desc->bounces ? 1 : desc->exclude_direct;
-        pb_volume v;
-        pb_sparse_stats st;
-        r = place(ctx, scene, gs, &d, &sd, 1, k ? &fb : NULL, &v, &st, err);
-        if (r != PB_OK)
-            break;
-        double *tt = &t.load;
-        const double *tv = &v.timings.load;
-        for (int i = 0; i < 8; ++i)
-            tt[i] += tv[i];
-        rays += v.rays_traced, traversals += v.traversals, bakes += st.bakes;
-        pb_sample_volume_free(&fb);
-        if (k < desc->bounces) {
-            r = pb_sample_volume_build(&v, scene->origin, 0.f, 0.f, &fb, err);
-            pb_volume_free(&v);
-        } else {
-            *out = v;
-            st.bakes = bakes;
-            if (stats)
-                *stats = st;
-        }
+    /* --indirect volume: bounce k places and bakes its own layout (the
+     * last bounce's is the volume's), its probe rays' first hits reflecting
+     * bounce k - 1's sparse volume */
+    sparse_bounce sb = {ctx, scene, gs, &sd, 0, {{0}}};
+    pb_result r = pb_indirect_volume_bounces(scene, desc, sparse_bounce_bake, &sb, out, err);
+    if (r == PB_OK && stats) {
+        *stats = sb.last;
+        stats->bakes = sb.bakes;
     }
-    pb_sample_volume_free(&fb);
-    if (r != PB_OK)
-        return r;
-    out->timings = t;
-    out->rays_traced = rays, out->traversals = traversals;
-    out->settings.bounces = desc->bounces;
-    out->settings.indirect_mode = 1;
-    return PB_OK;
+    return r;
 }
