@@ -16,7 +16,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 bake=(--rays 256 --passes 4 --quiet)
 "$pb" bake "$scene" --spacing 0.5 "${bake[@]}" -o "$tmp/grid.probes" >"$tmp/grid.txt"
-"$pb" bake "$scene" --spacing 0.5 --layout sparse --refine-error 1 "${bake[@]}" -o "$tmp/sparse.probes" >"$tmp/sparse.txt"
+"$pb" bake "$scene" --spacing 0.5 --layout sparse --refine-error 0.3 "${bake[@]}" -o "$tmp/sparse.probes" >"$tmp/sparse.txt"
 "$pb" render "$scene" --mode reference --spp 2048 --size 160x120 --pfm --quiet -o "$tmp/ref.png" >/dev/null
 for v in grid sparse; do
     probes=$("$pb" inspect "$tmp/$v.probes" --json | sed -n 's/.*"probes": \([0-9]*\).*/\1/p' | head -n 1)

@@ -73,8 +73,10 @@ expect devices-and-device 1 '--devices splits the bake by device: drop --device'
 expect layout-garbage 2 "--layout 'octree' is not grid or sparse" -- "$pb" bake "$demo" --layout octree -o "$tmp/x.probes"
 expect max-level-range 2 "--max-level '3' is not an integer in \[0, 2\]" -- "$pb" bake "$demo" --max-level 3 -o "$tmp/x.probes"
 expect refine-error-garbage 2 "--refine-error '-1' is not a relative error" -- "$pb" bake "$demo" --refine-error -1 -o "$tmp/x.probes"
-expect max-level-needs-sparse 1 '--max-level and --refine-error shape a sparse layout: add --layout sparse' -- \
+expect max-level-needs-sparse 1 '--max-level, --refine-error and --refine-test shape a sparse layout: add --layout sparse' -- \
     "$pb" bake "$demo" --max-level 1 -o "$tmp/x.probes"
+expect refine-test-garbage 2 "--refine-test 'pixel' is not surface or probe" -- \
+    "$pb" bake "$demo" --layout sparse --refine-test pixel -o "$tmp/x.probes"
 
 # inspect: a fixture volume (tests/make_test_volume.c)
 "$make_volume" "$tmp/v.probes"
@@ -233,6 +235,14 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-sparse 0 '^sparse: 2 levels, bricks 1 [0-9]+ ' -- \
         "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 1 --rays 32 --passes 2 --octmap-res 4 --validation \
         -o "$tmp/s.probes"
+    # the probe test (one probe inside each cell) is still there; the surface test's error is below 1
+    expect bake-sparse-probe-test 0 '^sparse: 2 levels, bricks 1 [0-9]+ ' -- \
+        "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 1 --rays 16 --passes 1 --octmap-res 4 \
+        --refine-test probe --refine-error 1 -o "$tmp/sp.probes"
+    rm -f "$tmp/x.probes"
+    expect refine-error-surface-below-1 1 "--refine-error 1: the surface test's error is relative to the larger of prediction and bake, so at most 1" -- \
+        "$pb" bake "$demo" --layout sparse --spacing 1 --refine-error 1 -o "$tmp/x.probes"
+    expect refine-error-surface-no-file 0 '' -- test ! -e "$tmp/x.probes"
     expect export-sparse 0 'sparse.ktx2: [0-9]+ probes in [0-9]+ bricks \(2 levels\)' -- \
         "$pb" export "$tmp/s.probes" --textures "$tmp/s-textures"
     expect inspect-sparse 0 '^level 1     spacing 1 m: [0-9]+ bricks' -- "$pb" inspect "$tmp/s.probes"

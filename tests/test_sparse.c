@@ -2,10 +2,12 @@
  * uniform sky over an infinite floor the irradiance is the same everywhere,
  * so no cell may be subdivided, though cells near the floor are tested; a
  * sun behind the edge of a roof casts a sharp shadow boundary through open
- * air, and the cells it crosses must be subdivided. Also: a sparse volume
- * written and read back samples identically. */
+ * air and onto the floor, and the cells it crosses must be subdivided (with
+ * the default surface test, where the floor and the roof show it). Also: a
+ * sparse volume written and read back samples identically. */
 #include "scenes_gen.h"
 #include "bake/dilate.h"
+#include "bake/sparse_surface_tests.h"
 #include "common/common.h"
 
 static pb_context *ctx;
@@ -180,6 +182,48 @@ static pb_scene *box_scene(void)
     s->lights[0].intensity = 5.f;
     s->lights[0].direction[0] = -0.6f, s->lights[0].direction[1] = -0.8f;
     return s;
+}
+
+/* The surface test's points (sparse_surface_tests.h): per cell and normal
+ * axis, the surface point nearest the cell's centre, on its lit side. The
+ * cell [3, 4.5) x [0, 1.5) x [3, 4.5) m holds the floor beside the box and
+ * three of the box's faces; the cell above the floor's holds no surface. */
+static void surface_tests_sit_nearest_the_cell_centre(void)
+{
+    pb_scene *s = box_scene();
+    pb_bvh *bvh = NULL;
+    pb_error err;
+    if (!s || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK) {
+        CHECK(0);
+        pb_scene_destroy(s);
+        return;
+    }
+    double origin[3] = {-s->origin[0], -s->origin[1], -s->origin[2]}, size[3] = {1.5, 1.5, 1.5};
+    const uint32_t cells[3 * 3] = {0, 0, 0, 0, 2, 0, 2, 0, 2};
+    pb_cell_tests ct;
+    CHECK(pb_cell_surface_tests(s, bvh, origin, size, cells, 3, &ct, &err) == PB_OK);
+    /* expected: cell 0 the floor under its centre; cell 2 the floor, the box's -x and -z faces, and
+     * its bottom face (on the floor, facing down: its test probe is inside geometry and not judged) */
+    const double want[5][7] = {{0, 0.75, FLOOR_Y, 0.75, 0, 1, 0},
+                               {2, 3.75, FLOOR_Y, 3.75, 0, 1, 0},
+                               {2, BOX_LO[0], 0.75, 3.75, -1, 0, 0},
+                               {2, BOX_LO[0], 0.75, BOX_LO[2], 0, 0, -1},
+                               {2, BOX_LO[0], FLOOR_Y, 3.75, 0, -1, 0}};
+    CHECKF(ct.count == 5, "%u tests", ct.count);
+    uint32_t found = 0;
+    for (uint32_t i = 0; i < ct.count; ++i)
+        for (int w = 0; w < 5; ++w) {
+            double d = 0, dn = 0;
+            for (int k = 0; k < 3; ++k) {
+                d = fmax(d, fabs(ct.x[3 * i + k] + s->origin[k] - want[w][1 + k]));
+                dn = fmax(dn, fabs(ct.n[3 * i + k] - want[w][4 + k]));
+            }
+            found += ct.cell[i] == (uint32_t)want[w][0] && d < 1e-3 && dn < 1e-6;
+        }
+    CHECKF(found == 5, "%u of the 5 expected test points found", found);
+    pb_cell_tests_free(&ct);
+    pb_bvh_destroy(bvh);
+    pb_scene_destroy(s);
 }
 
 /* Done-when of issue 14: no probe inside solid geometry is ever sampled.
@@ -501,6 +545,7 @@ int main(void)
     RUN(uniform_sky_is_not_refined);
     RUN(shadow_boundary_is_refined);
     RUN(sparse_file_round_trip);
+    RUN(surface_tests_sit_nearest_the_cell_centre);
     RUN(solid_probes_are_never_sampled);
     RUN(level_seams_are_bounded);
     RUN(sparse_dilation_kernel_matches_cpu_reference);

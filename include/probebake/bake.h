@@ -182,12 +182,21 @@ pb_result pb_bake_check_light(const pb_scene *scene, const float sky[3], const p
 
 /* --- The sparse layout (src/bake/sparse_bake.c, docs/sparse.md) --- */
 
+/* Where a cell's refinement test bakes its truth. */
+typedef enum pb_refine_test {
+    PB_REFINE_TEST_SURFACE = 0,   /* probes at points on the surfaces inside the cell, along their normals
+                                     (where a renderer samples); thrown away after the test */
+    PB_REFINE_TEST_PROBE = 1      /* one probe inside the cell, all six axes (a finer-lattice point, kept if
+                                     the cell is refined) */
+} pb_refine_test;
+
 /* Zero fields mean the defaults listed on each line. */
 typedef struct pb_sparse_desc {
     uint32_t levels;              /* default 3 (bake --max-level 2): spacings F, 3F, 9F */
     float refine_error;           /* default 0.1: a cell of a brick is subdivided where the coarser level's
                                      prediction of a probe baked inside it misses by more than this
                                      fraction of the predicted irradiance (and by 3 of its standard errors) */
+    uint32_t test;                /* pb_refine_test: what the prediction is checked against; default surface */
 } pb_sparse_desc;
 
 /* What the refinement did, per level. */

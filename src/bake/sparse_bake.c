@@ -17,9 +17,11 @@
  * With --indirect volume each bounce is such a placement of its own (bounce
  * k's probes reflect bounce k - 1's sparse volume at their rays' first hits,
  * pb_bake_bounce), and the last bounce's layout is the volume's. */
+#include "bake/gpu_scene.h"
 #include "bake/indirect_volume.h"
 #include "bake/shard.h"
 #include "bake/sparse_stitch.h"
+#include "bake/sparse_surface_tests.h"
 #include "common/common.h"
 #include "common/key_map.h"
 #include "probebake/bake.h"
@@ -120,6 +122,43 @@ static uint32_t key_id(uint64_t key)
     return (uint32_t)key;
 }
 
+/* Adds what one bake of the job spent to the job's totals; the first bake's
+ * header is the volume's. */
+static pb_result account(sparse_job *j, const pb_volume *v, pb_error *err)
+{
+    j->rays += v->rays_traced;
+    j->traversals += v->traversals;
+    if (v->settings.passes > j->passes_max)
+        j->passes_max = v->settings.passes;
+    double *t = &j->timings.load;
+    const double *tv = &v->timings.load;
+    for (int i = 0; i < 8; ++i)
+        t[i] += tv[i];
+    if (j->stats.bakes == 1) { /* the header every part shares; the arrays stay v's */
+        j->first = *v;
+        j->first.base = j->first.offset = j->first.sh = j->first.probe_std_error = NULL;
+        j->first.probe_flags = j->first.probe_paths = NULL;
+        j->first.depth = NULL;
+        j->first.sparse = NULL;
+    } else if (v->depth_unit != j->first.depth_unit) {
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: depth units differ between levels (%g, %g)",
+                       (double)j->first.depth_unit, (double)v->depth_unit);
+    }
+    return PB_OK;
+}
+
+/* Bakes free points (not lattice points, not kept in the store): the
+ * refinement's surface tests. */
+static pb_result bake_free(sparse_job *j, const pb_points *pts, pb_volume *v, pb_error *err)
+{
+    pb_bake_desc d = j->d;
+    d.points = pts;
+    pb_result r = j->one_bounce ? pb_bake_bounce(j->ctx, j->scene, j->gs, &d, j->feedback, v, err)
+                                : pb_bake(j->ctx, j->scene, j->gs, &d, v, err);
+    j->stats.bakes++;
+    return r == PB_OK ? account(j, v, err) : r;
+}
+
 /* Bakes the lattice points `keys` (3 per point) not baked yet, as probes of
  * `level` (relocation bound: 45 % of that level's spacing). */
 static pb_result bake_points(sparse_job *j, const uint32_t *keys, uint32_t count, uint32_t level, pb_error *err)
@@ -169,6 +208,8 @@ static pb_result bake_points(sparse_job *j, const uint32_t *keys, uint32_t count
                           : pb_bake(j->ctx, j->scene, j->gs, &d, &v, err);
         j->stats.bakes++;
     }
+    if (r == PB_OK)
+        r = account(j, &v, err);
     if (r == PB_OK) {
         probe_store *s = &j->ps;
         for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
@@ -184,24 +225,6 @@ static pb_result bake_points(sparse_job *j, const uint32_t *keys, uint32_t count
                 r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse probes");
         }
         j->stats.probes[level] += n;
-        j->rays += v.rays_traced;
-        j->traversals += v.traversals;
-        if (v.settings.passes > j->passes_max)
-            j->passes_max = v.settings.passes;
-        double *t = &j->timings.load;
-        const double *tv = &v.timings.load;
-        for (int i = 0; i < 8; ++i)
-            t[i] += tv[i];
-        if (j->stats.bakes == 1) { /* the header every part shares; the arrays stay v's */
-            j->first = v;
-            j->first.base = j->first.offset = j->first.sh = j->first.probe_std_error = NULL;
-            j->first.probe_flags = j->first.probe_paths = NULL;
-            j->first.depth = NULL;
-            j->first.sparse = NULL;
-        } else if (v.depth_unit != j->first.depth_unit) {
-            r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: depth units differ between levels (%g, %g)",
-                        (double)j->first.depth_unit, (double)v.depth_unit);
-        }
     }
     pb_volume_free(&v);
     free(todo), free(pts.positions), free(pts.ids);
@@ -326,8 +349,129 @@ static float irradiance_lum(const float sh[27], const float n[3])
     return pb_luminance(e);
 }
 
-/* Refines the bricks of `level` into the next: test probes, predictions,
- * new bricks. */
+/* The probe test: one probe baked inside each cell (a point of the next
+ * level's lattice, kept if the cell is refined); the cell is refined where
+ * the level's sampler mispredicts it along any axis, or where it is
+ * invalid (geometry crosses the cell). */
+static pb_result test_by_probe(sparse_job *j, const pb_sparse_desc *sd, const pb_sample_volume *sv,
+                               const pb_sparse_brick *cells, uint32_t count, uint8_t *refine, pb_error *err)
+{
+    uint32_t fine_step = pb_sparse_step(j->levels, cells[0].level);
+    uint32_t *keys = malloc(((size_t)count + 1) * 3 * sizeof *keys);
+    if (!keys)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse refinement");
+    for (uint32_t t = 0; t < count; ++t)
+        for (int k = 0; k < 3; ++k)
+            keys[3 * (size_t)t + k] = (3 * cells[t].coord[k] + 1) * fine_step;
+    pb_result r = bake_points(j, keys, count, cells[0].level, err);
+    static const float axes[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (uint32_t t = 0; r == PB_OK && t < count; ++t) {
+        uint32_t s = store_find(j, keys + 3 * (size_t)t);
+        if (!(j->ps.flags[s] & PB_PROBE_VALID)) {
+            refine[t] = 1; /* geometry crosses the cell: a valid corner, an invalid probe inside */
+            continue;
+        }
+        float p[3];
+        for (int k = 0; k < 3; ++k)
+            p[k] = (float)((double)j->d.grid.origin[k] + (double)keys[3 * (size_t)t + k] * j->F[k]) +
+                   j->ps.offset[3 * (size_t)s + k];
+        float pred[6], baked[6], mean = 0.f, worst = 0.f;
+        for (int a = 0; a < 6; ++a) {
+            float rgb[3];
+            pb_sample_cpu(sv, p, axes[a], axes[a], rgb);
+            pred[a] = pb_luminance(rgb);
+            baked[a] = irradiance_lum(j->ps.sh + 27 * (size_t)s, axes[a]);
+            mean += pred[a] / 6.f;
+        }
+        for (int a = 0; a < 6; ++a)
+            worst = fmaxf(worst, fabsf(baked[a] - pred[a]));
+        float rel = mean > 0.f ? worst / mean : (worst > 0.f ? INFINITY : 0.f);
+        float noise = j->ps.std_error[s] > 0.f ? 3.f * j->ps.std_error[s] : 0.f;
+        refine[t] = rel > fmaxf(sd->refine_error, noise);
+    }
+    free(keys);
+    return r;
+}
+
+/* The surface test (sparse_surface_tests.h): probes baked at points on the
+ * surfaces inside each cell, where a renderer samples (biased off the
+ * surface as the sampler biases, seen along the normal); the cell is
+ * refined where the level's sampler mispredicts the irradiance there. The
+ * test probes are thrown away. A cell no surface crosses is not refined. */
+static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const pb_sample_volume *sv,
+                                 const pb_sparse_brick *cells, uint32_t count, uint8_t *refine, pb_error *err)
+{
+    uint32_t step = pb_sparse_step(j->levels, cells[0].level - 1);
+    double origin[3], size[3];
+    float finest = (float)fmin(j->F[0], fmin(j->F[1], j->F[2]));
+    for (int k = 0; k < 3; ++k)
+        origin[k] = j->d.grid.origin[k], size[k] = j->F[k] * step;
+    uint32_t *coords = malloc(((size_t)count + 1) * 3 * sizeof *coords);
+    if (!coords)
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse refinement");
+    for (uint32_t t = 0; t < count; ++t)
+        memcpy(coords + 3 * (size_t)t, cells[t].coord, 3 * sizeof *coords);
+    pb_cell_tests ct;
+    pb_result r = pb_cell_surface_tests(j->scene, j->gs->bvh, origin, size, coords, count, &ct, err);
+    free(coords);
+    if (r != PB_OK || ct.count == 0)
+        return r;
+    float bias = (sv->normal_bias + sv->view_bias) * finest;
+    pb_points pts = {ct.count, malloc((size_t)ct.count * 3 * sizeof(double)), malloc((size_t)ct.count * sizeof(uint32_t)),
+                     0.0};
+    pb_volume v;
+    memset(&v, 0, sizeof v);
+    if (!pts.positions || !pts.ids) {
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u surface tests", ct.count);
+    } else {
+        for (uint32_t i = 0; i < ct.count; ++i) {
+            for (int k = 0; k < 3; ++k)
+                pts.positions[3 * (size_t)i + k] =
+                    j->scene->origin[k] + (double)(ct.x[3 * (size_t)i + k] + bias * ct.n[3 * (size_t)i + k]);
+            /* keyed by cell and normal axis, apart from the lattice points' ids */
+            const pb_sparse_brick *c = &cells[ct.cell[i]];
+            uint64_t key = c->coord[0] + ((uint64_t)c->coord[1] << 21) + ((uint64_t)c->coord[2] << 42);
+            pts.ids[i] = key_id(~(key * 8u + ct.bucket[i]));
+        }
+        r = bake_free(j, &pts, &v, err);
+    }
+    /* mispredicted by more than the refine error of the larger of the two
+     * values (so in [0, 1]: a dark wall predicted bright counts as much as a
+     * bright one predicted dark), and by 3 standard errors; where both are
+     * below 1 % of the tests' mean, not judged */
+    double mean = 0.0;
+    float *baked = r == PB_OK ? malloc((size_t)ct.count * 2 * sizeof *baked) : NULL;
+    if (r == PB_OK && !baked)
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u surface tests", ct.count);
+    for (uint32_t i = 0; r == PB_OK && i < ct.count; ++i) {
+        float rgb[3];
+        const float *n = ct.n + 3 * (size_t)i;
+        baked[2 * i] = irradiance_lum(v.sh + 27 * (size_t)i, n);
+        pb_sample_cpu(sv, ct.x + 3 * (size_t)i, n, n, rgb);
+        baked[2 * i + 1] = pb_luminance(rgb);
+        mean += baked[2 * i] / ct.count;
+    }
+    for (uint32_t i = 0; r == PB_OK && i < ct.count; ++i) {
+        if (!(v.probe_flags[i] & PB_PROBE_VALID))
+            continue; /* the biased point is inside geometry: no renderer samples there */
+        float e = baked[2 * i], p = baked[2 * i + 1];
+        float big = fmaxf(e, p);
+        if (!(big > 0.01f * (float)mean))
+            continue;
+        float rel = fabsf(e - p) / big;
+        float noise = v.probe_std_error[i] > 0.f ? 3.f * v.probe_std_error[i] : 0.f;
+        if (rel > fmaxf(sd->refine_error, noise))
+            refine[ct.cell[i]] = 1;
+    }
+    free(baked);
+    pb_volume_free(&v);
+    free(pts.positions), free(pts.ids);
+    pb_cell_tests_free(&ct);
+    return r;
+}
+
+/* Refines the bricks of `level` into the next: the cells worth testing,
+ * the test, new bricks. */
 static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t level, pb_error *err)
 {
     pb_volume cur;
@@ -340,12 +484,10 @@ static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t 
     if (r != PB_OK)
         return r;
     double s_l = fmax(j->F[0], fmax(j->F[1], j->F[2])) * pb_sparse_step(j->levels, level);
-    uint32_t fine_step = pb_sparse_step(j->levels, level + 1);
     uint32_t nb = j->brick_count, tests = 0;
-    uint32_t *test_keys = malloc((size_t)nb * 27 * 3 * sizeof *test_keys);
-    pb_sparse_brick *test_cell = malloc((size_t)nb * 27 * sizeof *test_cell);
-    pb_sparse_brick *cand = malloc((size_t)nb * 27 * sizeof *cand);
-    if (!test_keys || !test_cell || !cand) {
+    pb_sparse_brick *test_cell = malloc(((size_t)nb * 27 + 1) * sizeof *test_cell);
+    uint8_t *refine = calloc((size_t)nb * 27 + 1, 1);
+    if (!test_cell || !refine) {
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse refinement");
         goto done;
     }
@@ -383,52 +525,27 @@ static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t 
                 j->stats.skipped[level]++;
                 continue;
             }
-            for (int k = 0; k < 3; ++k) {
-                test_keys[3 * (size_t)tests + k] = (3 * (3 * br->coord[k] + cc[k]) + 1) * fine_step;
+            for (int k = 0; k < 3; ++k)
                 test_cell[tests].coord[k] = 3 * br->coord[k] + cc[k];
-            }
             test_cell[tests].level = level + 1;
             tests++;
         }
     }
     j->stats.tested[level] += tests;
-    r = bake_points(j, test_keys, tests, level + 1, err);
+    if (tests)
+        r = sd->test == PB_REFINE_TEST_PROBE ? test_by_probe(j, sd, &sv, test_cell, tests, refine, err)
+                                             : test_by_surface(j, sd, &sv, test_cell, tests, refine, err);
     uint32_t nc = 0;
-    static const float axes[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    for (uint32_t t = 0; r == PB_OK && t < tests; ++t) {
-        uint32_t s = store_find(j, test_keys + 3 * (size_t)t);
-        int refine;
-        if (!(j->ps.flags[s] & PB_PROBE_VALID)) {
-            refine = 1; /* geometry crosses the cell: a valid corner, an invalid probe inside */
-        } else {
-            float p[3];
-            for (int k = 0; k < 3; ++k)
-                p[k] = (float)((double)j->d.grid.origin[k] + (double)test_keys[3 * (size_t)t + k] * j->F[k]) +
-                       j->ps.offset[3 * (size_t)s + k];
-            float pred[6], baked[6], mean = 0.f, worst = 0.f;
-            for (int a = 0; a < 6; ++a) {
-                float rgb[3];
-                pb_sample_cpu(&sv, p, axes[a], axes[a], rgb);
-                pred[a] = pb_luminance(rgb);
-                baked[a] = irradiance_lum(j->ps.sh + 27 * (size_t)s, axes[a]);
-                mean += pred[a] / 6.f;
-            }
-            for (int a = 0; a < 6; ++a)
-                worst = fmaxf(worst, fabsf(baked[a] - pred[a]));
-            float rel = mean > 0.f ? worst / mean : (worst > 0.f ? INFINITY : 0.f);
-            float noise = j->ps.std_error[s] > 0.f ? 3.f * j->ps.std_error[s] : 0.f;
-            refine = rel > fmaxf(sd->refine_error, noise);
-        }
-        if (refine) {
-            cand[nc++] = test_cell[t];
+    for (uint32_t t = 0; r == PB_OK && t < tests; ++t)
+        if (refine[t]) {
+            test_cell[nc++] = test_cell[t];
             j->stats.refined[level]++;
         }
-    }
     if (r == PB_OK)
-        r = add_bricks(j, cand, nc, level + 1, err);
+        r = add_bricks(j, test_cell, nc, level + 1, err);
 done:
     pb_sample_volume_free(&sv);
-    free(test_keys), free(test_cell), free(cand);
+    free(test_cell), free(refine);
     return r;
 }
 
@@ -554,6 +671,12 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
     if (!(sd.refine_error > 0.f) || !isfinite(sd.refine_error))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--refine-error %g: must be a positive number",
                        (double)sd.refine_error);
+    if (sd.test == PB_REFINE_TEST_SURFACE && !(sd.refine_error < 1.f))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "--refine-error %g: the surface test's error is relative to the larger of prediction and "
+                       "bake, so at most 1: give less than 1 (or --refine-test probe)", (double)sd.refine_error);
+    if (sd.test > PB_REFINE_TEST_PROBE)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: unknown refinement test %u", sd.test);
     if (desc->points)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--layout sparse places its own probes: not with --points");
     if (desc->shard_count && desc->indirect_volume && desc->bounces)

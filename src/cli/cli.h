@@ -49,6 +49,8 @@ typedef struct options {
     uint32_t max_level;                /* finest level, 0-2 (default 2) */
     int has_max_level;
     float refine_error;                /* 0: the default */
+    uint32_t refine_test;              /* pb_refine_test */
+    int has_refine_test;
     /* merge: OUT is `scene`, the parts follow */
     char **parts;
     uint32_t part_count;

@@ -70,7 +70,7 @@ static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_b
         fprintf(stderr, "\n");
     if (r == PB_OK) {
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
-        pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error};
+        pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test};
         r = pb_bake_devices(ctxs, scenes, n, s, d, o->sparse ? &sd : NULL, vol, err);
     }
     for (uint32_t i = 0; r == PB_OK && o->validation && i < n; ++i)
@@ -228,8 +228,9 @@ int cmd_bake(const options *o)
                 d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
                 d.indirect_clamp > 0.f ? (snprintf(clamp_text, sizeof clamp_text, "%g", d.indirect_clamp), clamp_text) : "",
                 d.sh_window == 1 ? " SH Hanning window" : d.sh_window == 2 ? " SH Lanczos window" : "");
-    if (!o->sparse && (o->has_max_level || o->refine_error > 0.f)) {
-        snprintf(err.message, sizeof err.message, "--max-level and --refine-error shape a sparse layout: add --layout sparse");
+    if (!o->sparse && (o->has_max_level || o->refine_error > 0.f || o->has_refine_test)) {
+        snprintf(err.message, sizeof err.message,
+                 "--max-level, --refine-error and --refine-test shape a sparse layout: add --layout sparse");
         goto out;
     }
     if (o->sparse && o->points) {
@@ -258,7 +259,7 @@ int cmd_bake(const options *o)
             goto out;
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
         if (o->sparse) {
-            pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error};
+            pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test};
             r = pb_bake_sparse(ctx, s, gs, &d, &sd, &vol, &sparse_stats, &err);
             probes = vol.probe_count;
         } else {

@@ -79,6 +79,8 @@ void cli_print_help(void)
            "  --max-level L                  sparse: finest level 0-2 (default 2: spacings 9x, 3x, 1x)\n"
            "  --refine-error E               sparse: subdivide where the coarser level mispredicts a probe\n"
            "                                 baked inside by more than E of its irradiance (default 0.1)\n"
+           "  --refine-test surface|probe    sparse: test probes at points on the surfaces in a cell, along\n"
+           "                                 their normals (default), or one probe inside it, six axes\n"
            "render options:\n"
            "  --mode probes|reference|direct|indirect|diff   (default probes with --volume, else reference)\n"
            "  --camera I | --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]   (default: glTF camera 0)\n"
@@ -161,7 +163,8 @@ static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
     X(OPT_DEVICES, "devices", required_argument) \
     X(OPT_LAYOUT, "layout", required_argument) \
     X(OPT_MAX_LEVEL, "max-level", required_argument) \
-    X(OPT_REFINE_ERROR, "refine-error", required_argument)
+    X(OPT_REFINE_ERROR, "refine-error", required_argument) \
+    X(OPT_REFINE_TEST, "refine-test", required_argument)
 
 enum {
     OPT_FIRST = 256,
@@ -424,6 +427,11 @@ static int apply(options *o, const char *a, const char *next)
                     next ? next : "");
             return 2;
         }
+    } else if (!strcmp(a, "--refine-test")) {
+        if (!next || (strcmp(next, "surface") && strcmp(next, "probe")))
+            return cli_usage_error("--refine-test '%s' is not surface or probe", next ? next : "");
+        o->refine_test = !strcmp(next, "probe") ? PB_REFINE_TEST_PROBE : PB_REFINE_TEST_SURFACE;
+        o->has_refine_test = 1;
     } else if (!strcmp(a, "--devices")) {
         if (!next)
             return cli_usage_error("%s needs all or a comma-separated list of device indices or names", a);
