@@ -194,8 +194,10 @@ typedef enum pb_refine_test {
 typedef struct pb_sparse_desc {
     uint32_t levels;              /* default 3 (bake --max-level 2): spacings F, 3F, 9F */
     float refine_error;           /* default 0.1: a cell of a brick is subdivided where the coarser level's
-                                     prediction of a probe baked inside it misses by more than this
-                                     fraction of the predicted irradiance (and by 3 of its standard errors) */
+                                     prediction misses the test's baked irradiance by more than this
+                                     fraction (and by 3 of its standard errors): of the larger of the two
+                                     for the surface test (so below 1), of the mean prediction for the
+                                     probe test */
     uint32_t test;                /* pb_refine_test: what the prediction is checked against; default surface */
 } pb_sparse_desc;
 
@@ -216,8 +218,9 @@ typedef struct pb_sparse_stats {
 /* A sparse bake: desc->grid's origin is the lattice origin, its spacing the
  * finest level's and its counts the extent; desc->points and shards are
  * refused; with --indirect volume every bounce is a placement of its own.
- * Coarsest bricks cover the extent; each level's cells near surfaces get a
- * probe baked inside, and where the coarser level mispredicts it
+ * Coarsest bricks cover the extent; each level's cells near surfaces are
+ * tested (sd->test: probes at the surface points nearest the cell's centre,
+ * or one probe inside), and where the coarser level mispredicts them
  * (sd->refine_error) the cell becomes a brick of the next level. Bricks
  * whose probes are all inside geometry are dropped. Invalid probes are
  * dilated (on the device, as a grid's); then probes on the faces of a finer
