@@ -87,26 +87,34 @@ static int same_but_timings(const pb_volume *a, const pb_volume *b)
     return same;
 }
 
-/* Bakes part i of n, writes it and reads it back (so the file's shard
- * fields are what merge sees). */
-static int bake_part(setup *su, const pb_bake_desc *d, uint32_t i, uint32_t n, pb_volume *out)
+/* Bakes part i of n (a sparse layout's with sd, else a grid's), writes it
+ * and reads it back (so the file's shard fields are what merge sees). */
+static int bake_layout_part(setup *su, const pb_bake_desc *d, const pb_sparse_desc *sd, uint32_t i, uint32_t n,
+                            pb_volume *out)
 {
     pb_bake_desc dp = *d;
     dp.shard_index = i, dp.shard_count = n;
     pb_volume v;
     pb_error err;
-    if (pb_bake(ctx, su->scene, su->gs, &dp, &v, &err) != PB_OK) {
-        CHECKF(0, "part %u/%u: %s", i, n, err.message);
+    pb_result r = sd ? pb_bake_sparse(ctx, su->scene, su->gs, &dp, sd, &v, NULL, &err)
+                     : pb_bake(ctx, su->scene, su->gs, &dp, &v, &err);
+    if (r != PB_OK) {
+        CHECKF(0, "%s part %u/%u: %s", sd ? "sparse" : "grid", i, n, err.message);
         return 0;
     }
     char path[512];
-    snprintf(path, sizeof path, "%s/part%u.probes", temp_dir(), i);
-    pb_result r = pb_volume_write(path, &v, &err);
+    snprintf(path, sizeof path, "%s/%s%u.probes", temp_dir(), sd ? "sparse" : "part", i);
+    r = pb_volume_write(path, &v, &err);
     pb_volume_free(&v);
     if (r == PB_OK)
         r = pb_volume_read(path, out, &err);
     CHECKF(r == PB_OK, "%s", err.message);
     return r == PB_OK;
+}
+
+static int bake_part(setup *su, const pb_bake_desc *d, uint32_t i, uint32_t n, pb_volume *out)
+{
+    return bake_layout_part(su, d, NULL, i, n, out);
 }
 
 /* Parts 0..n-1 merged; returns the merge's result (the message in err). */
@@ -266,27 +274,6 @@ static pb_bake_desc sparse_demo_desc(const pb_scene *s)
     return d;
 }
 
-static int bake_sparse_part(setup *su, const pb_bake_desc *d, const pb_sparse_desc *sd, uint32_t i, uint32_t n,
-                            pb_volume *out)
-{
-    pb_bake_desc dp = *d;
-    dp.shard_index = i, dp.shard_count = n;
-    pb_volume v;
-    pb_error err;
-    if (pb_bake_sparse(ctx, su->scene, su->gs, &dp, sd, &v, NULL, &err) != PB_OK) {
-        CHECKF(0, "sparse part %u/%u: %s", i, n, err.message);
-        return 0;
-    }
-    char path[512];
-    snprintf(path, sizeof path, "%s/sparse%u.probes", temp_dir(), i);
-    pb_result r = pb_volume_write(path, &v, &err);
-    pb_volume_free(&v);
-    if (r == PB_OK)
-        r = pb_volume_read(path, out, &err);
-    CHECKF(r == PB_OK, "%s", err.message);
-    return r == PB_OK;
-}
-
 /* A sparse bake splits by coarsest brick: each part places and refines its
  * own, and the merge (bricks level by level in part order, shared face
  * probes checked equal, then dilation and stitching) is the whole bake's
@@ -309,7 +296,7 @@ static void sparse_parts_merge_to_the_whole_bake(void)
     }
     uint32_t made = 0, part_probes = 0, part_bricks = 0;
     for (uint32_t i = 0; i < 3; ++i)
-        made += bake_sparse_part(&su, &d, &sd, i, 3, &parts[made]);
+        made += bake_layout_part(&su, &d, &sd, i, 3, &parts[made]);
     if (made == 3) {
         for (uint32_t i = 0; i < 3; ++i) {
             part_probes += parts[i].probe_count, part_bricks += parts[i].sparse->brick_count;
@@ -339,7 +326,7 @@ static void sparse_parts_merge_to_the_whole_bake(void)
         /* a part placed with another refine error */
         pb_volume other;
         pb_sparse_desc sd2 = {2, 0.2f};
-        if (bake_sparse_part(&su, &d, &sd2, 2, 3, &other)) {
+        if (bake_layout_part(&su, &d, &sd2, 2, 3, &other)) {
             pb_volume mixed[3] = {parts[0], parts[1], other};
             CHECK(pb_volume_merge(mixed, names, 3, &merged, &err) == PB_ERROR_INVALID_ARGUMENT &&
                   strstr(err.message, "s2") && strstr(err.message, "refine error"));

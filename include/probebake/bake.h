@@ -207,8 +207,8 @@ typedef struct pb_sparse_stats {
     uint32_t probes[3];           /* probes first baked for each level (shared probes counted once) */
     uint32_t dropped[3];          /* bricks dropped: every probe inside solid geometry */
     uint32_t tested[3];           /* cells of each level tested for subdivision (a probe baked inside) */
-    uint32_t skipped[3];          /* cells not tested: no surface within two cells of its corners, or no
-                                     valid corner (solid) */
+    uint32_t skipped[3];          /* cells not tested: no surface within two cells of its corners, no
+                                     valid corner (solid), or (surface test) no surface inside */
     uint32_t beyond[3];           /* cells not tested: wholly outside the bake bounds (the coarsest
                                      bricks overshoot them) */
     uint32_t refined[3];          /* cells subdivided into a brick of the next level */

@@ -414,6 +414,12 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
     pb_cell_tests ct;
     pb_result r = pb_cell_surface_tests(j->scene, j->gs->bvh, origin, size, coords, count, &ct, err);
     free(coords);
+    /* a cell no surface crosses gets no test: counted as skipped, not tested */
+    uint32_t with = 0;
+    for (uint32_t i = 0; r == PB_OK && i < ct.count; ++i)
+        with += i == 0 || ct.cell[i] != ct.cell[i - 1];
+    j->stats.tested[cells[0].level - 1] -= count - with;
+    j->stats.skipped[cells[0].level - 1] += count - with;
     if (r != PB_OK || ct.count == 0)
         return r;
     float bias = (sv->normal_bias + sv->view_bias) * finest;
