@@ -255,8 +255,11 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect render-sparse 0 "wrote $tmp/s.png: 32x24, probes" -- \
         "$pb" render "$demo" --volume "$tmp/s.probes" --size 32x24 --validation -o "$tmp/s.png"
     # a sparse volume's diff also reports the error where its levels meet and elsewhere
+    # levels meeting in view: at 1 m every 3 m cell of the demo is refined, at 0.3 m some 0.9 m cells are not
+    "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 0.3 --rays 16 --passes 1 --octmap-res 4 \
+        -o "$tmp/seams.probes" --quiet >/dev/null
     expect render-sparse-seams 0 '"seam_pixels": [1-9][0-9]*, "relative_rmse_seams": [0-9.]+, .*"p95_relative_error_off_seams": [0-9.]+, "unserved_pixels": 0' -- \
-        "$pb" render "$demo" --volume "$tmp/s.probes" --mode diff --json --size 64x48 --spp 2 --eye 0,1.5,2.3 \
+        "$pb" render "$demo" --volume "$tmp/seams.probes" --mode diff --json --size 64x48 --spp 2 --eye 0,1.5,2.3 \
         --target 0,1.2,0 -o "$tmp/s-diff.png"
     # --indirect volume on a sparse layout: each bounce places its own bricks
     expect bake-sparse-indirect-volume 0 '^sparse: 2 levels, bricks 1 [0-9]+ .*; [0-9]+ bakes' -- \

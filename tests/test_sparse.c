@@ -184,8 +184,9 @@ static pb_scene *box_scene(void)
     return s;
 }
 
-/* The surface test's points (sparse_surface_tests.h): per cell and normal
- * axis, the surface point nearest the cell's centre, on its lit side. The
+/* The surface test's points (sparse_surface_tests.h): per cell (or
+ * sub-cell) and normal axis, the surface point nearest its centre, on its
+ * lit side. The
  * cell [3, 4.5) x [0, 1.5) x [3, 4.5) m holds the floor beside the box and
  * three of the box's faces; the cell above the floor's holds no surface. */
 static void surface_tests_sit_nearest_the_cell_centre(void)
@@ -198,10 +199,10 @@ static void surface_tests_sit_nearest_the_cell_centre(void)
         pb_scene_destroy(s);
         return;
     }
-    double origin[3] = {-s->origin[0], -s->origin[1], -s->origin[2]}, size[3] = {1.5, 1.5, 1.5};
+    pb_cell_test_desc td = {{-s->origin[0], -s->origin[1], -s->origin[2]}, {1.5, 1.5, 1.5}, {0, 0, 0}, 1};
     const uint32_t cells[3 * 3] = {0, 0, 0, 0, 2, 0, 2, 0, 2};
     pb_cell_tests ct;
-    CHECK(pb_cell_surface_tests(s, bvh, origin, size, cells, 3, &ct, &err) == PB_OK);
+    CHECK(pb_cell_surface_tests(s, bvh, &td, cells, 3, &ct, &err) == PB_OK);
     /* expected: cell 0 the floor under its centre; cell 2 the floor, the box's -x and -z faces, and
      * its bottom face (on the floor, facing down: its test probe is inside geometry and not judged) */
     const double want[5][7] = {{0, 0.75, FLOOR_Y, 0.75, 0, 1, 0},
@@ -221,6 +222,39 @@ static void surface_tests_sit_nearest_the_cell_centre(void)
             found += ct.cell[i] == (uint32_t)want[w][0] && d < 1e-3 && dn < 1e-6;
         }
     CHECKF(found == 5, "%u of the 5 expected test points found", found);
+    pb_cell_tests_free(&ct);
+
+    /* a 4.5 m cell split into 3^3 sub-cells tests exactly what its 27 cells
+     * of 1.5 m test one by one (same points and normals, slot = sub-cell * 6
+     * + normal axis) */
+    uint32_t small[27 * 3], big[3] = {0, 0, 0};
+    for (uint32_t c = 0; c < 27; ++c)
+        small[3 * c] = c % 3, small[3 * c + 1] = (c / 3) % 3, small[3 * c + 2] = c / 9;
+    pb_cell_tests one, split;
+    pb_cell_test_desc tb = td;
+    tb.size[0] = tb.size[1] = tb.size[2] = 4.5, tb.sub = 3;
+    CHECK(pb_cell_surface_tests(s, bvh, &td, small, 27, &one, &err) == PB_OK);
+    CHECK(pb_cell_surface_tests(s, bvh, &tb, big, 1, &split, &err) == PB_OK);
+    uint32_t same = 0;
+    for (uint32_t i = 0; i < split.count; ++i)
+        for (uint32_t k = 0; k < one.count; ++k)
+            same += split.cell[i] == 0 && split.slot[i] == one.cell[k] * 6 + one.slot[k] &&
+                    !memcmp(split.x + 3 * i, one.x + 3 * k, 12) && !memcmp(split.n + 3 * i, one.n + 3 * k, 12);
+    CHECKF(one.count > 12 && split.count == one.count && same == one.count,
+           "sub-cells: %u tests, the 27 cells: %u, %u the same", split.count, one.count, same);
+    pb_cell_tests_free(&one), pb_cell_tests_free(&split);
+
+    /* the bounds reach below the lattice: with the lattice origin 0.2 m above
+     * the floor, cell 0 tests the floor only with a margin */
+    pb_cell_test_desc tm = td;
+    tm.origin[1] += FLOOR_Y + 0.2;
+    CHECK(pb_cell_surface_tests(s, bvh, &tm, cells, 1, &ct, &err) == PB_OK);
+    CHECKF(ct.count == 0, "%u tests below the cell without a margin", ct.count);
+    pb_cell_tests_free(&ct);
+    tm.margin[1] = 0.5;
+    CHECK(pb_cell_surface_tests(s, bvh, &tm, cells, 1, &ct, &err) == PB_OK);
+    CHECKF(ct.count == 1 && fabs(ct.x[1] + s->origin[1] - FLOOR_Y) < 1e-3 && ct.n[1] == 1.f,
+           "%u tests with a 0.5 m margin (the floor expected)", ct.count);
     pb_cell_tests_free(&ct);
     pb_bvh_destroy(bvh);
     pb_scene_destroy(s);

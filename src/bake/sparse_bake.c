@@ -402,17 +402,22 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
                                  const pb_sparse_brick *cells, uint32_t count, uint8_t *refine, pb_error *err)
 {
     uint32_t step = pb_sparse_step(j->levels, cells[0].level - 1);
-    double origin[3], size[3];
     float finest = (float)fmin(j->F[0], fmin(j->F[1], j->F[2]));
+    /* a test point every 3 finest spacings at most, per normal axis: a 9-cell
+     * is tested on its 27 sub-cells; below the lattice origin the bounds reach
+     * down by up to a finest spacing (the grid is centred in them) */
+    pb_cell_test_desc td = {.sub = step >= 9 ? step / 3 : 1};
+    if (td.sub > PB_CELL_TESTS_SUB_MAX)
+        td.sub = PB_CELL_TESTS_SUB_MAX;
     for (int k = 0; k < 3; ++k)
-        origin[k] = j->d.grid.origin[k], size[k] = j->F[k] * step;
+        td.origin[k] = j->d.grid.origin[k], td.size[k] = j->F[k] * step, td.margin[k] = j->F[k];
     uint32_t *coords = malloc(((size_t)count + 1) * 3 * sizeof *coords);
     if (!coords)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse refinement");
     for (uint32_t t = 0; t < count; ++t)
         memcpy(coords + 3 * (size_t)t, cells[t].coord, 3 * sizeof *coords);
     pb_cell_tests ct;
-    pb_result r = pb_cell_surface_tests(j->scene, j->gs->bvh, origin, size, coords, count, &ct, err);
+    pb_result r = pb_cell_surface_tests(j->scene, j->gs->bvh, &td, coords, count, &ct, err);
     free(coords);
     /* a cell no surface crosses gets no test: counted as skipped, not tested */
     uint32_t with = 0;
@@ -434,10 +439,10 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
             for (int k = 0; k < 3; ++k)
                 pts.positions[3 * (size_t)i + k] =
                     j->scene->origin[k] + (double)(ct.x[3 * (size_t)i + k] + bias * ct.n[3 * (size_t)i + k]);
-            /* keyed by cell and normal axis, apart from the lattice points' ids */
+            /* keyed by cell, sub-cell and normal axis, apart from the lattice points' ids */
             const pb_sparse_brick *c = &cells[ct.cell[i]];
             uint64_t key = c->coord[0] + ((uint64_t)c->coord[1] << 21) + ((uint64_t)c->coord[2] << 42);
-            pts.ids[i] = key_id(~(key * 8u + ct.bucket[i]));
+            pts.ids[i] = key_id(~(key * 512u + ct.slot[i]));
         }
         r = bake_free(j, &pts, &v, err);
     }
@@ -505,12 +510,13 @@ static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t 
         for (uint32_t c = 0; c < 27; ++c) {
             uint32_t cc[3] = {c % 3, (c / 3) % 3, c / 9};
             /* the coarsest bricks overshoot the bounds (a whole number of 27-cell
-             * spans); a cell wholly beyond them is not the user's volume */
+             * spans); a cell wholly beyond them is not the user's volume. The
+             * bounds reach up to one finest spacing past the last lattice point
+             * (the grid is centred in them, cmd_bake.c), so a cell starting at
+             * the last point still holds surfaces */
             int beyond = 0;
-            for (int k = 0; k < 3; ++k) {
-                uint32_t last = j->d.grid.counts[k] > 1 ? j->d.grid.counts[k] - 1 : 1;
-                beyond |= (3 * br->coord[k] + cc[k]) * step >= last;
-            }
+            for (int k = 0; k < 3; ++k)
+                beyond |= (3 * br->coord[k] + cc[k]) * step > j->d.grid.counts[k] - 1;
             if (beyond) {
                 j->stats.beyond[level]++;
                 continue;

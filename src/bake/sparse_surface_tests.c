@@ -61,40 +61,40 @@ static int emissive(const pb_scene *s, uint32_t tri)
 }
 
 typedef struct best_point {
-    double d2;          /* squared distance to the cell's centre; INFINITY: none */
+    double d2;          /* squared distance to the sub-cell's centre; INFINITY: none */
     float x[3], n[3];
 } best_point;
 
-/* Leaf triangle t against the cell: its point nearest the centre, if inside. */
-static void consider(const pb_scene *s, const pb_bvh *bvh, uint32_t t, const double lo[3], const double hi[3],
-                     best_point best[PB_CELL_TESTS_MAX])
+/* One cell being queried: its box (the first sub-cell of an axis reaches
+ * down by the margin), sub-cells per axis and the best point per sub-cell
+ * and normal axis (sub^3 * 6). */
+typedef struct cell_query_box {
+    double lo[3], hi[3];    /* the cell, margins included */
+    double cut_lo[3];       /* where the first sub-cell ends minus one sub-cell: lo without the margin */
+    double sub_size[3];
+    uint32_t sub;
+    best_point *best;
+} cell_query_box;
+
+/* The point of triangle (a, b, c) nearest the centre of sub-cell box
+ * [lo, hi], if it lies inside, into its slot. */
+static void consider_sub(const pb_scene *s, uint32_t tri, const double a[3], const double b[3], const double c[3],
+                         const double n_unit[3], const double lo[3], const double hi[3], best_point best[6])
 {
-    uint32_t tri = bvh->tri_order[t];
-    if (emissive(s, tri))
-        return;
-    const float *v = bvh->tri_positions + 9 * (size_t)t;
-    double a[3], b[3], c[3], centre[3], q[3], n[3], e1[3], e2[3];
-    for (int k = 0; k < 3; ++k) {
-        a[k] = v[k], b[k] = v[3 + k], c[k] = v[6 + k];
+    double centre[3], q[3], d2 = 0, facing = 0, n[3];
+    for (int k = 0; k < 3; ++k)
         centre[k] = 0.5 * (lo[k] + hi[k]);
-        e1[k] = b[k] - a[k], e2[k] = c[k] - a[k];
-    }
-    n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-    double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(nl > 0))
-        return;
     closest_on_triangle(centre, a, b, c, q);
-    double d2 = 0, facing = 0;
     for (int k = 0; k < 3; ++k) {
         if (q[k] < lo[k] || q[k] > hi[k])
             return;
         d2 += (q[k] - centre[k]) * (q[k] - centre[k]);
-        facing += n[k] * (centre[k] - q[k]);
+        facing += n_unit[k] * (centre[k] - q[k]);
     }
     /* a double-sided surface is lit on the side facing the centre; a one-sided one on its front */
     double side = s->materials[s->material[tri]].double_sided && facing < 0 ? -1.0 : 1.0;
     for (int k = 0; k < 3; ++k)
-        n[k] *= side / nl;
+        n[k] = side * n_unit[k];
     best_point *e = &best[normal_bucket(n)];
     if (!(d2 < e->d2))
         return;
@@ -105,9 +105,46 @@ static void consider(const pb_scene *s, const pb_bvh *bvh, uint32_t t, const dou
     pb_offset_ray_origin(qf, e->n, e->x);
 }
 
+/* Leaf triangle t against the cell's sub-cells its box overlaps. */
+static void consider(const pb_scene *s, const pb_bvh *bvh, uint32_t t, const cell_query_box *cq)
+{
+    uint32_t tri = bvh->tri_order[t];
+    if (emissive(s, tri))
+        return;
+    const float *v = bvh->tri_positions + 9 * (size_t)t;
+    double a[3], b[3], c[3], n[3], e1[3], e2[3];
+    uint32_t first[3], last[3];
+    for (int k = 0; k < 3; ++k) {
+        a[k] = v[k], b[k] = v[3 + k], c[k] = v[6 + k];
+        e1[k] = b[k] - a[k], e2[k] = c[k] - a[k];
+        double tlo = fmax(fmin(a[k], fmin(b[k], c[k])), cq->lo[k]), thi = fmin(fmax(a[k], fmax(b[k], c[k])), cq->hi[k]);
+        if (tlo > thi)
+            return;
+        double f = floor((tlo - cq->cut_lo[k]) / cq->sub_size[k]), l = floor((thi - cq->cut_lo[k]) / cq->sub_size[k]);
+        first[k] = f < 0 ? 0u : (f >= cq->sub ? cq->sub - 1 : (uint32_t)f);
+        last[k] = l < 0 ? 0u : (l >= cq->sub ? cq->sub - 1 : (uint32_t)l);
+    }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(nl > 0))
+        return;
+    for (int k = 0; k < 3; ++k)
+        n[k] /= nl;
+    for (uint32_t z = first[2]; z <= last[2]; ++z)
+        for (uint32_t y = first[1]; y <= last[1]; ++y)
+            for (uint32_t x = first[0]; x <= last[0]; ++x) {
+                uint32_t i3[3] = {x, y, z};
+                double lo[3], hi[3];
+                for (int k = 0; k < 3; ++k) {
+                    lo[k] = i3[k] == 0 ? cq->lo[k] : cq->cut_lo[k] + i3[k] * cq->sub_size[k];
+                    hi[k] = i3[k] + 1 == cq->sub ? cq->hi[k] : cq->cut_lo[k] + (i3[k] + 1) * cq->sub_size[k];
+                }
+                consider_sub(s, tri, a, b, c, n, lo, hi, cq->best + 6 * (x + cq->sub * (y + cq->sub * z)));
+            }
+}
+
 /* Every leaf triangle whose box overlaps the cell (the BVH's child-pair form). */
-static void cell_query(const pb_scene *s, const pb_bvh *bvh, const double lo[3], const double hi[3],
-                       best_point best[PB_CELL_TESTS_MAX])
+static void cell_query(const pb_scene *s, const pb_bvh *bvh, const cell_query_box *cq)
 {
     uint32_t stack[2 * PB_BVH_MAX_DEPTH + 2], sp = 0;
     if (bvh->node_count == 0)
@@ -121,12 +158,12 @@ static void cell_query(const pb_scene *s, const pb_bvh *bvh, const double lo[3],
             const float *bx[3] = {nd->lo_hi_x, nd->lo_hi_y, nd->lo_hi_z};
             int overlap = 1;
             for (int k = 0; k < 3; ++k)
-                overlap &= bx[k][2 * slot] <= hi[k] && bx[k][2 * slot + 1] >= lo[k];
+                overlap &= bx[k][2 * slot] <= cq->hi[k] && bx[k][2 * slot + 1] >= cq->lo[k];
             if (!overlap)
                 continue;
             if (nd->count[slot]) {
                 for (uint32_t t = 0; t < nd->count[slot]; ++t)
-                    consider(s, bvh, (uint32_t)nd->child[slot] + t, lo, hi, best);
+                    consider(s, bvh, (uint32_t)nd->child[slot] + t, cq);
             } else {
                 stack[sp++] = (uint32_t)nd->child[slot];
             }
@@ -134,46 +171,55 @@ static void cell_query(const pb_scene *s, const pb_bvh *bvh, const double lo[3],
     }
 }
 
-pb_result pb_cell_surface_tests(const pb_scene *s, const pb_bvh *bvh, const double origin[3], const double size[3],
-                                const uint32_t *cells, uint32_t cell_count, pb_cell_tests *out, pb_error *err)
+pb_result pb_cell_surface_tests(const pb_scene *s, const pb_bvh *bvh, const pb_cell_test_desc *d, const uint32_t *cells,
+                                uint32_t cell_count, pb_cell_tests *out, pb_error *err)
 {
     memset(out, 0, sizeof *out);
     if (cell_count == 0)
         return PB_OK;
-    size_t most = (size_t)cell_count * PB_CELL_TESTS_MAX;
+    if (d->sub < 1 || d->sub > PB_CELL_TESTS_SUB_MAX)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "surface tests: %u sub-cells per axis (1 to %u)", d->sub,
+                       PB_CELL_TESTS_SUB_MAX);
+    uint32_t slots = d->sub * d->sub * d->sub * 6;
+    size_t most = (size_t)cell_count * slots;
     out->x = malloc(most * 3 * sizeof *out->x);
     out->n = malloc(most * 3 * sizeof *out->n);
     out->cell = malloc(most * sizeof *out->cell);
-    out->bucket = malloc(most * sizeof *out->bucket);
-    if (!out->x || !out->n || !out->cell || !out->bucket) {
+    out->slot = malloc(most * sizeof *out->slot);
+    best_point *best = malloc(slots * sizeof *best);
+    if (!out->x || !out->n || !out->cell || !out->slot || !best) {
+        free(best);
         pb_cell_tests_free(out);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u refinement cells", cell_count);
     }
     for (uint32_t c = 0; c < cell_count; ++c) {
-        double lo[3], hi[3];
+        cell_query_box cq = {.sub = d->sub, .best = best};
         for (int k = 0; k < 3; ++k) {
-            lo[k] = origin[k] + (double)cells[3 * (size_t)c + k] * size[k];
-            hi[k] = lo[k] + size[k];
+            uint32_t ck = cells[3 * (size_t)c + k];
+            cq.cut_lo[k] = d->origin[k] + (double)ck * d->size[k];
+            cq.lo[k] = cq.cut_lo[k] - (ck == 0 ? d->margin[k] : 0.0);
+            cq.hi[k] = cq.cut_lo[k] + d->size[k];
+            cq.sub_size[k] = d->size[k] / d->sub;
         }
-        best_point best[PB_CELL_TESTS_MAX];
-        for (uint32_t b = 0; b < PB_CELL_TESTS_MAX; ++b)
+        for (uint32_t b = 0; b < slots; ++b)
             best[b].d2 = INFINITY;
-        cell_query(s, bvh, lo, hi, best);
-        for (uint32_t b = 0; b < PB_CELL_TESTS_MAX; ++b) {
+        cell_query(s, bvh, &cq);
+        for (uint32_t b = 0; b < slots; ++b) {
             if (!isfinite(best[b].d2))
                 continue;
             uint32_t t = out->count++;
             memcpy(out->x + 3 * (size_t)t, best[b].x, sizeof best[b].x);
             memcpy(out->n + 3 * (size_t)t, best[b].n, sizeof best[b].n);
             out->cell[t] = c;
-            out->bucket[t] = b;
+            out->slot[t] = b;
         }
     }
+    free(best);
     return PB_OK;
 }
 
 void pb_cell_tests_free(pb_cell_tests *t)
 {
-    free(t->x), free(t->n), free(t->cell), free(t->bucket);
+    free(t->x), free(t->n), free(t->cell), free(t->slot);
     memset(t, 0, sizeof *t);
 }
