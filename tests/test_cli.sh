@@ -232,11 +232,11 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-tiny 0 "wrote $tmp/a.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --validation -o "$tmp/a.probes"
     expect bake-inspect 0 '"probes": 8,' -- "$pb" inspect "$tmp/a.probes" --json
-    expect bake-sparse 0 '^sparse: 2 levels, bricks 1 [0-9]+ ' -- \
+    expect bake-sparse 0 '^sparse: 2 levels, bricks 1 [0-9]+ .*; [0-9]+ bakes, [1-9][0-9]* test probes thrown away' -- \
         "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 1 --rays 32 --passes 2 --octmap-res 4 --validation \
         -o "$tmp/s.probes"
     # the probe test (one probe inside each cell) is still there; the surface test's error is below 1
-    expect bake-sparse-probe-test 0 '^sparse: 2 levels, bricks 1 [0-9]+ ' -- \
+    expect bake-sparse-probe-test 0 '^sparse: 2 levels, bricks 1 [0-9]+ .*, 0 test probes thrown away' -- \
         "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 1 --rays 16 --passes 1 --octmap-res 4 \
         --refine-test probe --refine-error 1 -o "$tmp/sp.probes"
     rm -f "$tmp/x.probes"
@@ -258,7 +258,7 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     # levels meeting in view: at 1 m every 3 m cell of the demo is refined, at 0.3 m some 0.9 m cells are not
     "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 0.3 --rays 16 --passes 1 --octmap-res 4 \
         -o "$tmp/seams.probes" --quiet >/dev/null
-    expect render-sparse-seams 0 '"seam_pixels": [1-9][0-9]*, "relative_rmse_seams": [0-9.]+, .*"p95_relative_error_off_seams": [0-9.]+, "unserved_pixels": 0' -- \
+    expect render-sparse-seams 0 '"seam_pixels": [1-9][0-9]*, "relative_rmse_seams": [0-9.]+, .*"p95_relative_error_off_seams": [0-9.]+, "unserved_pixels": 0, "levels": \[\{"level": 0, "pixels": [1-9][0-9]*, .*\{"level": 1, "pixels": [1-9][0-9]*, "relative_rmse": [0-9.]+, "p95_relative_error": [0-9.]+\}\]' -- \
         "$pb" render "$demo" --volume "$tmp/seams.probes" --mode diff --json --size 64x48 --spp 2 --eye 0,1.5,2.3 \
         --target 0,1.2,0 -o "$tmp/s-diff.png"
     # --indirect volume on a sparse layout: each bounce places its own bricks

@@ -212,6 +212,7 @@ typedef struct pb_sparse_stats {
     uint32_t beyond[3];           /* cells not tested: wholly outside the bake bounds (the coarsest
                                      bricks overshoot them) */
     uint32_t refined[3];          /* cells subdivided into a brick of the next level */
+    uint32_t test_probes[3];      /* surface test: probes baked to test the cells of each level, thrown away */
     uint32_t bakes;               /* pb_bake calls */
 } pb_sparse_stats;
 

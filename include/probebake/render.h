@@ -106,13 +106,16 @@ void pb_image_surface_metrics_where(const float *a, const float *b, const uint8_
  * serves a point half a finest cell away along an axis (the band where a
  * seam between levels would show), PB_SEAM_UNSERVED where no brick serves
  * the point (black), else PB_SEAM_NONE. sv: the volume as sampled (frame =
- * the scene's local frame); layout: its bricks. */
+ * the scene's local frame); layout: its bricks. level: NULL, or receives the
+ * level of the brick serving each surface pixel (PB_LEVEL_NONE elsewhere):
+ * which level an error sits at. */
+enum { PB_LEVEL_NONE = 255 };
 enum { PB_SEAM_NONE = 0, PB_SEAM_LEVELS = 1, PB_SEAM_UNSERVED = 2 };
 struct pb_sample_volume;
 struct pb_sparse_layout;
 void pb_render_seam_pixels(const pb_scene *scene, const pb_bvh *bvh, const pb_render_desc *desc,
                            const struct pb_sample_volume *sv, const struct pb_sparse_layout *layout,
-                           const uint8_t *cls, uint8_t *seam);
+                           const uint8_t *cls, uint8_t *seam, uint8_t *level);
 
 /* Writes 8-bit RGB PNG (stb_image_write) or linear PFM (little-endian,
  * bottom row first as PFM says), atomically. PB_ERROR_IO naming the path. */

@@ -427,6 +427,7 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
     j->stats.skipped[cells[0].level - 1] += count - with;
     if (r != PB_OK || ct.count == 0)
         return r;
+    j->stats.test_probes[cells[0].level - 1] += ct.count;
     float bias = (sv->normal_bias + sv->view_bias) * finest;
     pb_points pts = {ct.count, malloc((size_t)ct.count * 3 * sizeof(double)), malloc((size_t)ct.count * sizeof(uint32_t)),
                      0.0};
@@ -648,13 +649,13 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
 }
 
 /* One bounce of --indirect volume: a placement of its own; the stats of
- * the last, the bakes of all. */
+ * the last, the bakes and test probes of all. */
 typedef struct sparse_bounce {
     pb_context *ctx;
     const pb_scene *scene;
     pb_gpu_scene *gs;
     const pb_sparse_desc *sd;
-    uint32_t bakes;
+    uint32_t bakes, test_probes[3];
     pb_sparse_stats last;
 } sparse_bounce;
 
@@ -664,6 +665,8 @@ static pb_result sparse_bounce_bake(void *user, const pb_bake_desc *d, const pb_
     sparse_bounce *b = user;
     pb_result r = place(b->ctx, b->scene, b->gs, d, b->sd, 1, previous, out, &b->last, err);
     b->bakes += r == PB_OK ? b->last.bakes : 0;
+    for (int l = 0; r == PB_OK && l < 3; ++l)
+        b->test_probes[l] += b->last.test_probes[l];
     return r;
 }
 
@@ -709,11 +712,12 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
     /* --indirect volume: bounce k places and bakes its own layout (the
      * last bounce's is the volume's), its probe rays' first hits reflecting
      * bounce k - 1's sparse volume */
-    sparse_bounce sb = {ctx, scene, gs, &sd, 0, {{0}}};
+    sparse_bounce sb = {.ctx = ctx, .scene = scene, .gs = gs, .sd = &sd};
     pb_result r = pb_indirect_volume_bounces(scene, desc, sparse_bounce_bake, &sb, out, err);
     if (r == PB_OK && stats) {
         *stats = sb.last;
         stats->bakes = sb.bakes;
+        memcpy(stats->test_probes, sb.test_probes, sizeof sb.test_probes);
     }
     return r;
 }

@@ -199,7 +199,8 @@ int cmd_render(const options *o)
     if (rr != PB_OK)
         goto out;
     double rmse = 0, rmse_indirect = 0;
-    pb_image_metrics surf, seams, off_seams;
+    pb_image_metrics surf, seams, off_seams, at_level[PB_SPARSE_MAX_LEVELS];
+    memset(at_level, 0, sizeof at_level);
     memset(&surf, 0, sizeof surf);
     memset(&seams, 0, sizeof seams);
     memset(&off_seams, 0, sizeof off_seams);
@@ -231,15 +232,17 @@ int cmd_render(const options *o)
         }
         pb_render_pixel_classes(s, bvh, &d, cls);
         pb_image_surface_metrics(img, ref, cls, d.width, d.height, &surf);
-        uint8_t *seam = sparse ? malloc(pixels) : NULL;
-        if (seam) { /* a sparse volume: the error where its levels meet, and elsewhere */
-            pb_render_seam_pixels(s, bvh, &d, &sv, vol.sparse, cls, seam);
+        uint8_t *seam = sparse ? malloc(pixels) : NULL, *level = sparse ? malloc(pixels) : NULL;
+        if (seam && level) { /* a sparse volume: the error where its levels meet, elsewhere, and per level */
+            pb_render_seam_pixels(s, bvh, &d, &sv, vol.sparse, cls, seam, level);
             pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_LEVELS, d.width, d.height, &seams);
             pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_NONE, d.width, d.height, &off_seams);
+            for (uint32_t l = 0; l < vol.sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
+                pb_image_surface_metrics_where(img, ref, cls, level, (uint8_t)l, d.width, d.height, &at_level[l]);
             for (uint64_t i = 0; i < pixels; ++i)
                 unserved += seam[i] == PB_SEAM_UNSERVED;
         }
-        free(seam);
+        free(seam), free(level);
         free(cls);
         for (uint64_t i = 0; i < pixels; ++i)
             for (int c = 0; c < 3; ++c) {
@@ -293,6 +296,14 @@ int cmd_render(const options *o)
                         (unsigned long long)seams.pixels, seams.relative_rmse, seams.p95_relative,
                         (unsigned long long)off_seams.pixels, off_seams.relative_rmse, off_seams.p95_relative,
                         (unsigned long long)unserved);
+            if (sparse) { /* where the error sits: the pixels each level serves */
+                fprintf(report, ", \"levels\": [");
+                for (uint32_t l = 0; l < vol.sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
+                    fprintf(report, "%s{\"level\": %u, \"pixels\": %llu, \"relative_rmse\": %.6f, "
+                            "\"p95_relative_error\": %.6f}", l ? ", " : "", l, (unsigned long long)at_level[l].pixels,
+                            at_level[l].relative_rmse, at_level[l].p95_relative);
+                fprintf(report, "]");
+            }
         }
         fprintf(report, "}\n");
     } else {
@@ -312,6 +323,10 @@ int cmd_render(const options *o)
                     "%.4f; %llu surface pixels served by no brick\n", (unsigned long long)seams.pixels,
                     seams.relative_rmse, seams.p95_relative, (unsigned long long)off_seams.pixels,
                     off_seams.relative_rmse, off_seams.p95_relative, (unsigned long long)unserved);
+        for (uint32_t l = 0; diff && sparse && l < vol.sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
+            fprintf(report, "%s level %u: %llu pixels, relative RMSE %.4f, p95 %.4f%s", l ? ";" : "served by", l,
+                    (unsigned long long)at_level[l].pixels, at_level[l].relative_rmse, at_level[l].p95_relative,
+                    l + 1 == vol.sparse->levels ? "\n" : "");
     }
     rc = 0;
 out:

@@ -125,10 +125,12 @@ static int level_at(const pb_sample_volume *sv, const pb_sparse_layout *l, const
 }
 
 void pb_render_seam_pixels(const pb_scene *s, const pb_bvh *bvh, const pb_render_desc *d, const pb_sample_volume *sv,
-                           const pb_sparse_layout *l, const uint8_t *cls, uint8_t *seam)
+                           const pb_sparse_layout *l, const uint8_t *cls, uint8_t *seam, uint8_t *level)
 {
     uint64_t n = (uint64_t)d->width * d->height;
     memset(seam, PB_SEAM_NONE, n);
+    if (level)
+        memset(level, PB_LEVEL_NONE, n);
     pb_ray *rays = malloc(n * sizeof *rays);
     pb_hit *hits = malloc(n * sizeof *hits);
     if (!rays || !hits || !sv->levels) {
@@ -160,6 +162,8 @@ void pb_render_seam_pixels(const pb_scene *s, const pb_bvh *bvh, const pb_render
             seam[i] = PB_SEAM_UNSERVED;
             continue;
         }
+        if (level)
+            level[i] = (uint8_t)here;
         for (int k = 0; k < 3 && seam[i] == PB_SEAM_NONE; ++k)
             for (int sgn = -1; sgn <= 1; sgn += 2) {
                 double p2[3] = {q[0], q[1], q[2]};
