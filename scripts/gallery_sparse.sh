@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's sparse-vs-grid gallery (issue 14): the Cornell box from its
 # glTF camera with a 0.5 m grid and a sparse layout of the same finest
-# spacing (refine error 1), each drawn as probe spheres and as the error
+# spacing (refine error 0.3, surface test), each drawn as probe spheres and as the error
 # map of its probe-lit image against one path-traced reference (2,048 spp,
 # shared by both). Writes docs/gallery/sparse-*.png; prints the metrics.
 #   scripts/gallery_sparse.sh [--probebake P] [SCENE]
