@@ -186,9 +186,9 @@ static pb_scene *box_scene(void)
 
 /* The surface test's points (sparse_surface_tests.h): per cell (or
  * sub-cell) and normal axis, the surface point nearest its centre, on its
- * lit side. The
- * cell [3, 4.5) x [0, 1.5) x [3, 4.5) m holds the floor beside the box and
- * three of the box's faces; the cell above the floor's holds no surface. */
+ * lit side. The cell [3, 4.5) x [0, 1.5) x [3, 4.5) m holds the floor beside
+ * the box and three of the box's faces; the cell above the floor's holds no
+ * surface. */
 static void surface_tests_sit_nearest_the_cell_centre(void)
 {
     pb_scene *s = box_scene();

@@ -221,8 +221,9 @@ typedef struct pb_sparse_stats {
  * refused; with --indirect volume every bounce is a placement of its own.
  * Coarsest bricks cover the extent; each level's cells near surfaces are
  * tested (sd->test: probes at the surface points nearest the centres of
- * the cell's sub-cells of at most 3 finest spacings, or one probe inside), and where the coarser level mispredicts them
- * (sd->refine_error) the cell becomes a brick of the next level. Bricks
+ * the cell's sub-cells of at most 3 finest spacings, or one probe inside),
+ * and where the coarser level mispredicts them (sd->refine_error) the cell
+ * becomes a brick of the next level. Bricks
  * whose probes are all inside geometry are dropped. Invalid probes are
  * dilated (on the device, as a grid's); then probes on the faces of a finer
  * brick next to a coarser one take what the coarser brick's sampler holds

@@ -70,7 +70,7 @@ typedef struct best_point {
  * and normal axis (sub^3 * 6). */
 typedef struct cell_query_box {
     double lo[3], hi[3];    /* the cell, margins included */
-    double cut_lo[3];       /* where the first sub-cell ends minus one sub-cell: lo without the margin */
+    double cut_lo[3];       /* the cell's corner without the margin: sub-cell i starts at cut_lo + i * sub_size */
     double sub_size[3];
     uint32_t sub;
     best_point *best;

@@ -1,7 +1,7 @@
 /* Where the sparse refinement looks for error: points on the surfaces inside
  * a level's cells, which is where a renderer samples the volume. A probe in
  * a cell's open air can be predicted well while the wall through that cell
- * is lit wrongly by the coarse cage (docs/sparse.md, "Refinement"). */
+ * is lit wrongly by the coarse cage (docs/sparse.md, "Placement", step 3). */
 #ifndef PB_BAKE_SPARSE_SURFACE_TESTS_H
 #define PB_BAKE_SPARSE_SURFACE_TESTS_H
 
@@ -11,7 +11,9 @@
 
 #include <stdint.h>
 
-/* Sub-cells per axis a cell may be split into for its tests. */
+/* Sub-cells per axis a cell may be split into for its tests (the sparse
+ * bake splits 9-spacing cells into 3; 4^3 * 6 slots still fit the 512 its
+ * random-number ids leave per cell). */
 #define PB_CELL_TESTS_SUB_MAX 4
 
 typedef struct pb_cell_tests {
