@@ -20,13 +20,8 @@ const params = new URLSearchParams(location.search);
 const testing = params.get('test') === '1';
 const vec = (name) => params.get(name) && params.get(name).split(',').map(Number);
 
-function showError(message) {
-    const e = document.getElementById('error');
-    e.textContent = `probebake viewer: ${message}`;
-    e.style.display = 'block';
-    const r = document.getElementById('pb-result');
-    r.textContent = JSON.stringify({ error: message });
-}
+// index.html's reporter: the error over the canvas and, for the test, in pb-result
+const showError = globalThis.pbShowError;
 
 async function fetchBytes(url) {
     const r = await fetch(url);
@@ -85,8 +80,10 @@ function checkable(m) {
 async function main() {
     const sceneUrl = params.get('scene'), probesUrl = params.get('probes');
     if (!sceneUrl || !probesUrl) throw new Error('give ?scene=URL.gltf&probes=URL.probes');
-    const [gltf, bytes] = await Promise.all([new GLTFLoader().loadAsync(sceneUrl), fetchBytes(probesUrl)]);
-    const v = parseProbes(bytes, probesUrl); // throws, naming the problem, for a malformed or newer file
+    // parseProbes throws, naming the problem, for a malformed or newer file:
+    // reported as soon as the volume arrives, not after the scene has loaded
+    const [gltf, v] = await Promise.all([new GLTFLoader().loadAsync(sceneUrl),
+        fetchBytes(probesUrl).then((bytes) => parseProbes(bytes, probesUrl))]);
     const volume = new ProbeVolume(v);
 
     const width = testing ? Number(params.get('w') || 256) : innerWidth;

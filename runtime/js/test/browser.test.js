@@ -2,19 +2,20 @@
 // the demo scene baked by probebake, drawn indirect-only by three.js through
 // runtime/js/three-probes.js (linear float target, read back by the page) and
 // by `probebake render --mode indirect` (the Vulkan kernel through the same
-// sampling code) at the same camera and size; plus a malformed volume, which
-// the page must report, not draw. Needs a Vulkan device (lavapipe) for the
+// sampling code) at the same camera and size; plus a malformed volume and a
+// page whose module does not load, which the page must report, not draw. Needs a Vulkan device (lavapipe) for the
 // bake and the render, Debian's chromium, and runtime/node_modules (npm ci).
 //   PB_PROBEBAKE=build/probebake PB_CHROMIUM=/usr/bin/chromium node --test runtime/js/test/browser.test.js
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { execFileSync, spawn } from 'node:child_process';
+import { execFileSync } from 'node:child_process';
 import { createServer } from 'node:http';
 import { mkdtempSync, readFileSync, writeFileSync, rmSync, existsSync, statSync, copyFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, normalize, extname, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { parseProbes } from '../probes.js';
+import { launch } from './headless.js';
 
 const root = normalize(join(dirname(fileURLToPath(import.meta.url)), '..', '..', '..'));
 const probebake = process.env.PB_PROBEBAKE;
@@ -41,30 +42,23 @@ before(async () => {
 });
 after(() => { server.close(); if (!process.env.PB_KEEP) rmSync(dir, { recursive: true, force: true }); else console.log(`# kept ${dir}`); });
 
-function run(cmd, args) {
-    return new Promise((ok, fail) => {
-        const p = spawn(cmd, args, { stdio: ['ignore', 'pipe', 'pipe'] });
-        let out = '', err = '';
-        p.stdout.on('data', (d) => { out += d; });
-        p.stderr.on('data', (d) => { err += d; });
-        p.on('error', fail);
-        p.on('close', (code) => (code === 0 ? ok(out) : fail(new Error(`${cmd} exited ${code}: ${err.slice(-2000)}`))));
-    });
-}
-
-// headless Chromium on its software WebGL2 (SwiftShader): the page's DOM
-// after it has run (virtual time lets the fetches and the render finish)
-const chromiumArgs = ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-    '--ignore-gpu-blocklist', '--virtual-time-budget=60000', `--window-size=${W},${H}`, '--hide-scrollbars'];
-
+// the page in headless Chromium on its software WebGL2 (SwiftShader); its
+// result once it has written one (a minute of real time at most: the slowest
+// page seen took 12 s on a loaded 2-core machine)
+const PAGE_TIMEOUT_MS = 120000;
 async function pageResult(query) {
-    const dom = await run(chromium, [...chromiumArgs, '--dump-dom', `${base}/runtime/web/index.html?${query}`]);
-    const m = dom.match(/<pre id="pb-result"[^>]*>([^<]*)<\/pre>/);
-    assert.ok(m && m[1], `the page wrote no result: ${dom.slice(0, 400)}`);
-    const r = JSON.parse(m[1].replace(/&quot;/g, '"').replace(/&amp;/g, '&'));
-    const shown = dom.match(/<div id="error" style="display: block;">([^<]*)<\/div>/);
-    r.shownError = shown ? shown[1] : null; // the message a user sees over the canvas
-    return r;
+    const browser = await launch(chromium, W, H);
+    try {
+        await browser.goto(`${base}/runtime/web/index.html?${query}`);
+        const text = await browser.waitFor("document.getElementById('pb-result').textContent", PAGE_TIMEOUT_MS);
+        const r = JSON.parse(text);
+        // the message a user sees over the canvas
+        r.shownError = await browser.evaluate(
+            "(e => e.style.display === 'block' ? e.textContent : null)(document.getElementById('error'))");
+        return r;
+    } finally {
+        await browser.close();
+    }
 }
 
 function readPFM(path) {
@@ -166,13 +160,36 @@ test('a malformed volume gives a visible error, not a blank canvas', async () =>
         assert.ok(r.error && r.error.includes(needle), `${file}: ${JSON.stringify(r).slice(0, 200)}`);
         assert.ok(r.shownError && r.shownError.includes(needle), `${file}: the page shows no error`);
     }
+    // a page whose module cannot load (here: the page away from viewer.js and
+    // three.js) says so instead of staying blank
+    copyFileSync(join(root, 'runtime/web/index.html'), join(dir, 'index.html'));
+    const browser = await launch(chromium, W, H);
+    try {
+        await browser.goto(`${base}/t/index.html?scene=/tests/scenes/demo.gltf&probes=/t/demo.probes&test=1`);
+        const r = JSON.parse(await browser.waitFor("document.getElementById('pb-result').textContent",
+            PAGE_TIMEOUT_MS));
+        assert.match(r.error || '', /could not load .*\/t\/viewer\.js/, JSON.stringify(r));
+    } finally {
+        await browser.close();
+    }
 });
 
 test('a screenshot of the page', async () => {
-    const shot = join(dir, 'viewer.png');
-    await run(chromium, [...chromiumArgs.filter((a) => !a.startsWith('--window-size')), '--window-size=640,480',
-        `--screenshot=${shot}`,
-        `${base}/runtime/web/index.html?scene=/tests/scenes/demo.gltf&probes=/t/demo.probes&eye=0,1.5,2.3&target=0,1.2,0&fov=60`]);
-    assert.ok(statSync(shot).size > 10000, 'a non-trivial PNG');
-    if (process.env.PB_SCREENSHOT) copyFileSync(shot, process.env.PB_SCREENSHOT);
+    const browser = await launch(chromium, 640, 480);
+    try {
+        await browser.goto(`${base}/runtime/web/index.html?scene=/tests/scenes/demo.gltf&probes=/t/demo.probes` +
+            '&eye=0,1.5,2.3&target=0,1.2,0&fov=60');
+        // the viewer names the volume once it is set up, then draws every frame
+        const info = await browser.waitFor(
+            "document.getElementById('error').textContent || document.getElementById('info').textContent",
+            PAGE_TIMEOUT_MS);
+        assert.match(info, /^\d+ probes \(/, info); // not an error
+        await browser.evaluate('new Promise((ok) => requestAnimationFrame(() => requestAnimationFrame(ok)))');
+        const png = await browser.screenshot();
+        assert.ok(png.length > 10000, 'a non-trivial PNG');
+        writeFileSync(join(dir, 'viewer.png'), png);
+        if (process.env.PB_SCREENSHOT) copyFileSync(join(dir, 'viewer.png'), process.env.PB_SCREENSHOT);
+    } finally {
+        await browser.close();
+    }
 });
