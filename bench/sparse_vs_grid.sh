@@ -65,7 +65,10 @@ mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 now_ms() { echo $(($(date +%s%N) / 1000000)); }
-json_num() { sed -n "s/.*\"$1\": \\([-0-9.eE+]*\\).*/\\1/p" | head -n 1; }
+# the first "KEY": number in the JSON on stdin: the top-level one (render's
+# one-line JSON repeats keys inside "levels"; a greedy sed took the last level's)
+# (nothing, and no failure, where the key is absent)
+json_num() { { grep -o "\"$1\": [-0-9.eE+]*" || :; } | head -n 1 | sed 's/.*: //'; }
 
 device=$("$pb" devices --json | sed -n 's/.*"index": 0, "name": "\([^"]*\)".*/\1/p' | head -n 1)
 echo "sparse_vs_grid: $scene ${args[*]}; grids $grids m; sparse finest $finest m, max level $max_level, errors $errors;"
