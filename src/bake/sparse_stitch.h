@@ -8,7 +8,9 @@
 /* Every probe on the face of a level-l brick that a coarser brick next to it
  * does not have takes what that brick's sampler holds there: its cage's
  * trilinear weights times each probe's Chebyshev visibility of the point,
- * invalid probes none, normalised (coarse levels first). Run after dilation.
+ * invalid probes none, normalised (coarse levels first); a baked (valid)
+ * probe only where that value misses it by no more than the volume's refine
+ * error and its noise, else it keeps its bake. Run after dilation.
  * Reads only the volume, so a bake and a merge of its parts stitch alike. */
 pb_result pb_sparse_stitch(pb_volume *v, pb_error *err);
 
