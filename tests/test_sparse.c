@@ -7,6 +7,7 @@
  * sparse volume written and read back samples identically. */
 #include "scenes_gen.h"
 #include "bake/dilate.h"
+#include "bake/sparse_stitch.h"
 #include "bake/sparse_surface_tests.h"
 #include "common/common.h"
 
@@ -469,6 +470,44 @@ static void level_seams_are_bounded(void)
         CHECK(seams - kept > 100); /* both kinds of face point arise */
         CHECKF(over == 0, "%u jumps beyond the bound", over);
         pb_sample_volume_free(&sv);
+
+        /* The rule itself: stitched again with no refine error recorded (stitch
+         * everywhere), every hanging probe takes the coarser value; with two
+         * levels those values do not depend on the first stitching (level-0
+         * probes never hang), so the probes that change are exactly the ones
+         * left with their bake, and the coarser value must miss each by more
+         * than the refine error (one pass: no standard error to allow). */
+        size_t n27 = 27 * (size_t)v.probe_count;
+        float *first = malloc(n27 * sizeof *first);
+        CHECK(first != NULL);
+        if (first) {
+            memcpy(first, v.sh, n27 * sizeof *first);
+            float tol = v.settings.refine_error;
+            v.settings.refine_error = 0.f;
+            CHECK(pb_sparse_stitch(&v, &err) == PB_OK);
+            static const float axes[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+            uint32_t unstitched = 0, wrongly = 0;
+            for (uint32_t p = 0; p < v.probe_count; ++p) {
+                if (!memcmp(first + 27 * (size_t)p, v.sh + 27 * (size_t)p, 27 * sizeof *first))
+                    continue;
+                ++unstitched;
+                CHECK(v.probe_flags[p] & PB_PROBE_VALID); /* dilated probes are always stitched */
+                float worst = 0.f, mean = 0.f;
+                for (int a = 0; a < 6; ++a) {
+                    float e[3], c[3];
+                    pb_sh_eval(first + 27 * (size_t)p, axes[a], e);
+                    pb_sh_eval(v.sh + 27 * (size_t)p, axes[a], c);
+                    worst = fmaxf(worst, fabsf(pb_luminance(e) - pb_luminance(c)));
+                    mean += pb_luminance(c) / 6.f;
+                }
+                wrongly += !(worst > tol * mean);
+            }
+            fprintf(stderr, "  stitched everywhere, %u hanging probes change (left with their bake), %u of them "
+                    "within the refine error %.2f of the coarser value\n", unstitched, wrongly, (double)tol);
+            CHECK(unstitched > 0);
+            CHECKF(wrongly == 0, "%u probes left unstitched that the coarser level does not miss", wrongly);
+            free(first);
+        }
         pb_volume_free(&v);
     }
     pb_scene_destroy(s);
