@@ -3,8 +3,9 @@
 // runtime/js/three-probes.js (linear float target, read back by the page) and
 // by `probebake render --mode indirect` (the Vulkan kernel through the same
 // sampling code) at the same camera and size; plus a malformed volume and a
-// page whose module does not load, which the page must report, not draw. Needs a Vulkan device (lavapipe) for the
-// bake and the render, Debian's chromium, and runtime/node_modules (npm ci).
+// page whose module does not load, which the page must report, not draw.
+// Needs a Vulkan device (lavapipe) for the bake and the render, Debian's
+// chromium, and runtime/node_modules (npm ci).
 //   PB_PROBEBAKE=build/probebake PB_CHROMIUM=/usr/bin/chromium node --test runtime/js/test/browser.test.js
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
@@ -43,8 +44,8 @@ before(async () => {
 after(() => { server.close(); if (!process.env.PB_KEEP) rmSync(dir, { recursive: true, force: true }); else console.log(`# kept ${dir}`); });
 
 // the page in headless Chromium on its software WebGL2 (SwiftShader); its
-// result once it has written one (a minute of real time at most: the slowest
-// page seen took 12 s on a loaded 2-core machine)
+// result once it has written one (two minutes of real time at most: the
+// slowest page seen took 12 s on a loaded 2-core machine)
 const PAGE_TIMEOUT_MS = 120000;
 async function pageResult(query) {
     const browser = await launch(chromium, W, H);
