@@ -20,6 +20,7 @@
 #include "bake/gpu_scene.h"
 #include "bake/indirect_volume.h"
 #include "bake/shard.h"
+#include "bake/sparse_miss.h"
 #include "bake/sparse_stitch.h"
 #include "bake/sparse_surface_tests.h"
 #include "common/common.h"
@@ -364,7 +365,6 @@ static pb_result test_by_probe(sparse_job *j, const pb_sparse_desc *sd, const pb
         for (int k = 0; k < 3; ++k)
             keys[3 * (size_t)t + k] = (3 * cells[t].coord[k] + 1) * fine_step;
     pb_result r = bake_points(j, keys, count, cells[0].level, err);
-    static const float axes[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     for (uint32_t t = 0; r == PB_OK && t < count; ++t) {
         uint32_t s = store_find(j, keys + 3 * (size_t)t);
         if (!(j->ps.flags[s] & PB_PROBE_VALID)) {
@@ -375,19 +375,15 @@ static pb_result test_by_probe(sparse_job *j, const pb_sparse_desc *sd, const pb
         for (int k = 0; k < 3; ++k)
             p[k] = (float)((double)j->d.grid.origin[k] + (double)keys[3 * (size_t)t + k] * j->F[k]) +
                    j->ps.offset[3 * (size_t)s + k];
-        float pred[6], baked[6], mean = 0.f, worst = 0.f;
+        float pred[6], baked[6];
         for (int a = 0; a < 6; ++a) {
+            const float *n = pb_sparse_miss_axes[a];
             float rgb[3];
-            pb_sample_cpu(sv, p, axes[a], axes[a], rgb);
+            pb_sample_cpu(sv, p, n, n, rgb);
             pred[a] = pb_luminance(rgb);
-            baked[a] = irradiance_lum(j->ps.sh + 27 * (size_t)s, axes[a]);
-            mean += pred[a] / 6.f;
+            baked[a] = irradiance_lum(j->ps.sh + 27 * (size_t)s, n);
         }
-        for (int a = 0; a < 6; ++a)
-            worst = fmaxf(worst, fabsf(baked[a] - pred[a]));
-        float rel = mean > 0.f ? worst / mean : (worst > 0.f ? INFINITY : 0.f);
-        float noise = j->ps.std_error[s] > 0.f ? 3.f * j->ps.std_error[s] : 0.f;
-        refine[t] = rel > fmaxf(sd->refine_error, noise);
+        refine[t] = pb_sparse_misses(pred, baked, j->ps.std_error[s], sd->refine_error);
     }
     free(keys);
     return r;

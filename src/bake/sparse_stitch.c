@@ -1,5 +1,6 @@
 /* Stitching a sparse volume's level seams (sparse_stitch.h). */
 #include "bake/sparse_stitch.h"
+#include "bake/sparse_miss.h"
 #include "common/common.h"
 #include "probebake/sample.h"
 #include "probebake/sh.h"
@@ -58,29 +59,23 @@ static int brick_visible_trilinear(const pb_volume *v, const pb_sample_volume *s
 }
 
 /* Whether the coarser level's value `coarse` misses probe p's baked SH by
- * more than the layout accepts: the probe test's measure (the worst
- * miss of the irradiance along +-x, +-y, +-z over the mean predicted, against
- * the refine error and 3 of the probe's standard errors). There the coarse
- * level is wrong, and a stitched probe would carry its error into the
- * finer brick, whose cells nearly all touch a face (26 of 27). */
+ * more than the layout accepts (the probe test's measure, sparse_miss.h).
+ * There the coarse level is wrong, and a stitched probe would carry its
+ * error into the finer brick, whose cells nearly all touch a face (26 of 27). */
 static int coarse_misses(const pb_volume *v, uint32_t p, const float coarse[27])
 {
-    static const float axes[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     float tol = v->settings.refine_error;
     if (!(tol > 0.f))
         return 0; /* not recorded: stitch everywhere (the first sparse files) */
-    float worst = 0.f, mean = 0.f;
+    float pred[6], baked[6];
     for (int a = 0; a < 6; ++a) {
         float e[3], c[3];
-        pb_sh_eval(v->sh + 27 * (size_t)p, axes[a], e);
-        pb_sh_eval(coarse, axes[a], c);
-        worst = fmaxf(worst, fabsf(pb_luminance(e) - pb_luminance(c)));
-        mean += pb_luminance(c) / 6.f;
+        pb_sh_eval(coarse, pb_sparse_miss_axes[a], c);
+        pb_sh_eval(v->sh + 27 * (size_t)p, pb_sparse_miss_axes[a], e);
+        pred[a] = pb_luminance(c);
+        baked[a] = pb_luminance(e);
     }
-    float se = v->probe_std_error ? v->probe_std_error[p] : 0.f;
-    float noise = se > 0.f ? 3.f * se : 0.f; /* PB_STD_ERROR_UNKNOWN is negative */
-    float rel = mean > 0.f ? worst / mean : (worst > 0.f ? INFINITY : 0.f);
-    return rel > fmaxf(tol, noise);
+    return pb_sparse_misses(pred, baked, v->probe_std_error ? v->probe_std_error[p] : 0.f, tol);
 }
 
 pb_result pb_sparse_stitch(pb_volume *v, pb_error *err)
