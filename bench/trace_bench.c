@@ -3,9 +3,15 @@
  * cores). Prints a table and writes JSON.
  *
  *   trace_bench [--probes N] [--rays N] [--repeat N] [--instanced K]
- *               [--leaf N] [--tc C] [--device D] [--portable] [--json FILE] [SCENE ...]
+ *               [--leaf N] [--tc C] [--device D] [--portable] [--shuffle]
+ *               [--bounce | --bounce-sorted] [--json FILE] [SCENE ...]
  *
  * --leaf and --tc set the BVH's maximum leaf size and SAH traversal cost.
+ * --shuffle traces the rays in a fixed random order. --bounce traces, instead
+ * of the probe rays, one cosine bounce ray from each probe ray's first front
+ * hit, in the probe rays' order (as the bake's megakernel meets them);
+ * --bounce-sorted the same rays sorted by direction and origin (as a
+ * wavefront bake could trace them).
  * --portable runs the kernels built without shaderInt64/shaderFloat64 even
  * where the device has them (to measure what the native64 build buys).
  *
@@ -20,6 +26,7 @@
 #include "probebake/probebake.h"
 
 #include "bench_util.h"
+#include "bounce_rays.h"
 #include "embree_peer.h"
 
 #include <math.h>
@@ -37,6 +44,7 @@ typedef struct options {
     int validation;           /* --validation: fail on any Vulkan validation message */
     int portable;             /* --portable: the kernels without 64-bit types */
     int shuffle;              /* --shuffle: rays in a random order (what incoherence costs) */
+    int bounce;               /* --bounce: the probe rays' bounce rays, 1 in the bake's order, 2 sorted */
 } options;
 
 typedef struct result {
@@ -163,6 +171,14 @@ static int bench_scene(pb_context *ctx, RTCDevice edev, const char *path, const 
 
     double *kt = malloc(sizeof(double) * o->repeat), *wt = malloc(sizeof(double) * o->repeat);
     pb_trace_stats st;
+    if (o->bounce) { /* the probe rays' first hits, then their bounce rays */
+        if (pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err) != PB_OK) {
+            fprintf(stderr, "trace_bench: %s\n", err.message);
+            n = 0;
+        }
+        n = bench_bounce_rays(s, rays, hits, n, o->bounce == 2);
+        res->rays = n;
+    }
     pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err); /* warm-up */
     for (uint32_t r = 0; r < o->repeat; ++r) {
         if (pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err) != PB_OK) {
@@ -236,6 +252,10 @@ int main(int argc, char **argv)
             o.portable = 1;
         else if (!strcmp(a, "--shuffle"))
             o.shuffle = 1;
+        else if (!strcmp(a, "--bounce"))
+            o.bounce = 1;
+        else if (!strcmp(a, "--bounce-sorted"))
+            o.bounce = 2;
         else if (!strcmp(a, "--json") && v)
             o.json = argv[++i];
         else if (a[0] == '-') {
@@ -277,8 +297,9 @@ int main(int argc, char **argv)
     const pb_device_info *dev = pb_context_device(ctx);
     uint32_t host_threads = pb_host_threads();
     const char *kernels = pb_context_native64(ctx) ? "native64" : "portable";
-    printf("device: %s (%s), %s kernels; Embree 3 on %u host threads\n", dev->name, dev->driver, kernels,
-           host_threads);
+    const char *rays_of = o.bounce == 2 ? "bounce rays, sorted" : o.bounce ? "bounce rays" : "probe rays";
+    printf("device: %s (%s), %s kernels; Embree 3 on %u host threads; %s%s\n", dev->name, dev->driver, kernels,
+           host_threads, rays_of, o.shuffle ? ", shuffled" : "");
     printf("%-22s %9s %8s %6s %8s %9s %11s %11s %11s %8s %7s\n", "scene", "tris", "bvh ms", "depth", "B/tri",
            "rays", "gpu Mr/s", "gpu wall", "embree Mr/s", "ratio", "agree");
     result res[16];
@@ -298,8 +319,9 @@ int main(int argc, char **argv)
     FILE *f = fopen(o.json, "w");
     if (f) {
         fprintf(f, "{\n  \"bench\": \"trace\",\n  \"device\": \"%s\",\n  \"driver\": \"%s\",\n"
-                   "  \"kernels\": \"%s\",\n  \"host_threads\": %u,\n  \"rays_per_probe\": %u,\n  \"results\": [\n",
-                dev->name, dev->driver, kernels, host_threads, o.rays);
+                   "  \"kernels\": \"%s\",\n  \"host_threads\": %u,\n  \"rays_per_probe\": %u,\n  \"rays_of\": \"%s\",\n"
+                   "  \"results\": [\n",
+                dev->name, dev->driver, kernels, host_threads, o.rays, rays_of);
         for (int i = 0; i < nres; ++i) {
             result *r = &res[i];
             double gk = r->gpu_kernel_ms > 0 ? r->rays / (r->gpu_kernel_ms * 1e3) : 0;
