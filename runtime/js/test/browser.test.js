@@ -175,6 +175,17 @@ test('a malformed volume gives a visible error, not a blank canvas', async () =>
     }
 });
 
+test('a Chromium that stops answering fails the command, not the run', async () => {
+    const browser = await launch(chromium, W, H, { commandTimeoutMs: 2000 });
+    process.kill(browser.pid, 'SIGSTOP');
+    try {
+        await assert.rejects(browser.evaluate('1 + 1'), /Runtime\.evaluate: no reply from .* in 2000 ms/);
+    } finally {
+        process.kill(browser.pid, 'SIGCONT');
+        await browser.close();
+    }
+});
+
 test('a screenshot of the page', async () => {
     const browser = await launch(chromium, 640, 480);
     try {

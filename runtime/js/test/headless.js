@@ -12,7 +12,9 @@ import { spawn } from 'node:child_process';
 const LAUNCH = ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
     '--ignore-gpu-blocklist', '--hide-scrollbars', '--no-first-run', '--remote-debugging-pipe'];
 
-export async function launch(chromium, width, height) {
+// options.commandTimeoutMs: how long one DevTools command may wait for its reply
+export async function launch(chromium, width, height, options = {}) {
+    const COMMAND_TIMEOUT_MS = options.commandTimeoutMs || 60000;
     const proc = spawn(chromium, [...LAUNCH, `--window-size=${width},${height}`, 'about:blank'],
         { stdio: ['ignore', 'ignore', 'pipe', 'pipe', 'pipe'] });
     let stderr = '', pending = Buffer.alloc(0), nextId = 1, exited = null;
@@ -20,7 +22,10 @@ export async function launch(chromium, width, height) {
     proc.stderr.on('data', (d) => { stderr = (stderr + d).slice(-4000); });
     const fail = (why) => {
         exited = why;
-        for (const { reject } of waiting.values()) reject(new Error(`${why}; chromium said: ${stderr.slice(-1500)}`));
+        for (const { reject, timer } of waiting.values()) {
+            clearTimeout(timer);
+            reject(new Error(`${why}; chromium said: ${stderr.slice(-1500)}`));
+        }
         waiting.clear();
     };
     proc.on('error', (e) => fail(`${chromium}: ${e.message}`));
@@ -32,14 +37,21 @@ export async function launch(chromium, width, height) {
             const w = m.id !== undefined && waiting.get(m.id);
             if (!w) continue; // events: not used
             waiting.delete(m.id);
+            clearTimeout(w.timer);
             if (m.error) w.reject(new Error(`${w.method}: ${m.error.message}`));
             else w.resolve(m.result);
         }
     });
+    // a Chromium that stays alive but stops answering fails the command after
+    // COMMAND_TIMEOUT_MS, not the whole test at ctest's limit
     const send = (method, params = {}, sessionId) => new Promise((resolve, reject) => {
         if (exited) { reject(new Error(exited)); return; }
         const id = nextId++;
-        waiting.set(id, { resolve, reject, method });
+        const timer = setTimeout(() => {
+            waiting.delete(id);
+            reject(new Error(`${method}: no reply from ${chromium} in ${COMMAND_TIMEOUT_MS} ms; it said: ${stderr.slice(-1500)}`));
+        }, COMMAND_TIMEOUT_MS);
+        waiting.set(id, { resolve, reject, method, timer });
         proc.stdio[3].write(JSON.stringify({ id, method, params, ...(sessionId ? { sessionId } : {}) }) + '\0');
     });
 
@@ -58,6 +70,7 @@ export async function launch(chromium, width, height) {
         return r.result.value;
     };
     return {
+        pid: proc.pid,
         async goto(url) { await page('Page.navigate', { url }); },
         evaluate,
         // polls EXPRESSION until it gives a truthy value, or fails after
