@@ -1,7 +1,10 @@
 /* The bake's bounce rays without the bake (bounce_rays.h). */
 #include "bounce_rays.h"
+#include "bake/path_cpu.h"
+#include "probebake/octahedral.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 typedef struct keyed_ray {
@@ -45,15 +48,9 @@ uint32_t bench_bounce_rays(const pb_scene *s, pb_ray *rays, const pb_hit *hits, 
             ng[k] /= facing > 0.f ? -len : len;
             x[k] = p[k] + h->u * e1[k] + h->v * e2[k];
         }
-        /* cosine direction about ng (Frisvad's basis) */
-        float sgn = ng[2] >= 0.f ? 1.f : -1.f, a = -1.f / (sgn + ng[2]), b = ng[0] * ng[1] * a;
-        float t[3] = {1.f + sgn * ng[0] * ng[0] * a, sgn * b, -sgn * ng[0]}, bt[3] = {b, sgn + ng[1] * ng[1] * a, -ng[1]};
-        float u1 = pb_random01(7, i, 0, 0), u2 = pb_random01(7, i, 1, 0);
-        float r = sqrtf(u1), phi = 6.2831853f * u2, cz = sqrtf(fmaxf(0.f, 1.f - u1));
         pb_ray out;
         pb_offset_ray_origin(x, ng, out.origin);
-        for (int k = 0; k < 3; ++k)
-            out.direction[k] = r * cosf(phi) * t[k] + r * sinf(phi) * bt[k] + cz * ng[k];
+        pb_cosine_direction_cpu(ng, pb_random01(7, i, 0, 0), pb_random01(7, i, 1, 0), out.direction);
         out.tmin = 0.f;
         out.tmax = INFINITY;
         rays[m++] = out;
@@ -61,16 +58,15 @@ uint32_t bench_bounce_rays(const pb_scene *s, pb_ray *rays, const pb_hit *hits, 
     if (!sorted || !m)
         return m;
     keyed_ray *kr = malloc((size_t)m * sizeof *kr);
-    if (!kr)
-        return m; /* unsorted: the bench says which order it traced */
+    if (!kr) {
+        fprintf(stderr, "bench: out of host memory sorting %u bounce rays\n", m);
+        exit(1);
+    }
     for (uint32_t i = 0; i < m; ++i) {
-        const float *d = rays[i].direction, *o = rays[i].origin;
-        float l1 = fabsf(d[0]) + fabsf(d[1]) + fabsf(d[2]), ox = d[0] / l1, oy = d[1] / l1;
-        if (d[2] < 0.f) {
-            float tx = (1.f - fabsf(oy)) * (ox >= 0.f ? 1.f : -1.f), ty = (1.f - fabsf(ox)) * (oy >= 0.f ? 1.f : -1.f);
-            ox = tx, oy = ty;
-        }
-        uint32_t bx = (uint32_t)fminf(7.f, (ox * 0.5f + 0.5f) * 8.f), by = (uint32_t)fminf(7.f, (oy * 0.5f + 0.5f) * 8.f);
+        const float *o = rays[i].origin;
+        float uv[2];
+        pb_oct_encode(rays[i].direction, uv);
+        uint32_t bx = (uint32_t)fminf(7.f, (uv[0] * 0.5f + 0.5f) * 8.f), by = (uint32_t)fminf(7.f, (uv[1] * 0.5f + 0.5f) * 8.f);
         uint32_t cell = 0;
         for (int k = 0; k < 3; ++k) {
             float ext = s->bounds_max[k] - s->bounds_min[k];
