@@ -172,11 +172,18 @@ static int bench_scene(pb_context *ctx, RTCDevice edev, const char *path, const 
     double *kt = malloc(sizeof(double) * o->repeat), *wt = malloc(sizeof(double) * o->repeat);
     pb_trace_stats st;
     if (o->bounce) { /* the probe rays' first hits, then their bounce rays */
-        if (pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err) != PB_OK) {
+        int traced = pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err) == PB_OK;
+        if (!traced)
             fprintf(stderr, "trace_bench: %s\n", err.message);
-            n = 0;
+        else if (!(n = bench_bounce_rays(s, rays, hits, n, o->bounce == 2)))
+            fprintf(stderr, "trace_bench: %s: no probe ray hits a front face, so there are no bounce rays\n", path);
+        if (!traced || !n) {
+            free(rays), free(hits), free(et), free(kt), free(wt), free(times);
+            pb_gpu_scene_destroy(gs);
+            pb_bvh_destroy(bvh);
+            pb_scene_destroy(s);
+            return 0;
         }
-        n = bench_bounce_rays(s, rays, hits, n, o->bounce == 2);
         res->rays = n;
     }
     pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err); /* warm-up */
