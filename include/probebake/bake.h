@@ -199,6 +199,10 @@ typedef struct pb_sparse_desc {
                                      for the surface test (so below 1), of the mean prediction for the
                                      probe test */
     uint32_t test;                /* pb_refine_test: what the prediction is checked against; default surface */
+    uint32_t test_pass_scale;     /* default 4: the surface test's probes are traced with this many times the
+                                     bake's passes. Their standard error gates the refinement, so noisy tests
+                                     leave dark, noisy surfaces coarse (bench/RESULTS.md, "The Crypt's
+                                     remaining gap") */
 } pb_sparse_desc;
 
 /* What the refinement did, per level. */

@@ -124,12 +124,13 @@ static uint32_t key_id(uint64_t key)
 }
 
 /* Adds what one bake of the job spent to the job's totals; the first bake's
- * header is the volume's. */
-static pb_result account(sparse_job *j, const pb_volume *v, pb_error *err)
+ * header is the volume's. kept: the bake's probes are the volume's (a test
+ * bake's passes are not the volume's). */
+static pb_result account(sparse_job *j, const pb_volume *v, int kept, pb_error *err)
 {
     j->rays += v->rays_traced;
     j->traversals += v->traversals;
-    if (v->settings.passes > j->passes_max)
+    if (kept && v->settings.passes > j->passes_max)
         j->passes_max = v->settings.passes;
     double *t = &j->timings.load;
     const double *tv = &v->timings.load;
@@ -150,14 +151,15 @@ static pb_result account(sparse_job *j, const pb_volume *v, pb_error *err)
 
 /* Bakes free points (not lattice points, not kept in the store): the
  * refinement's surface tests. */
-static pb_result bake_free(sparse_job *j, const pb_points *pts, pb_volume *v, pb_error *err)
+static pb_result bake_free(sparse_job *j, const pb_points *pts, uint32_t pass_scale, pb_volume *v, pb_error *err)
 {
     pb_bake_desc d = j->d;
     d.points = pts;
+    d.passes *= pass_scale;
     pb_result r = j->one_bounce ? pb_bake_bounce(j->ctx, j->scene, j->gs, &d, j->feedback, v, err)
                                 : pb_bake(j->ctx, j->scene, j->gs, &d, v, err);
     j->stats.bakes++;
-    return r == PB_OK ? account(j, v, err) : r;
+    return r == PB_OK ? account(j, v, 0, err) : r;
 }
 
 /* Bakes the lattice points `keys` (3 per point) not baked yet, as probes of
@@ -210,7 +212,7 @@ static pb_result bake_points(sparse_job *j, const uint32_t *keys, uint32_t count
         j->stats.bakes++;
     }
     if (r == PB_OK)
-        r = account(j, &v, err);
+        r = account(j, &v, 1, err);
     if (r == PB_OK) {
         probe_store *s = &j->ps;
         for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
@@ -441,7 +443,7 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
             uint64_t key = c->coord[0] + ((uint64_t)c->coord[1] << 21) + ((uint64_t)c->coord[2] << 42);
             pts.ids[i] = key_id(~(key * 512u + ct.slot[i]));
         }
-        r = bake_free(j, &pts, &v, err);
+        r = bake_free(j, &pts, sd->test_pass_scale ? sd->test_pass_scale : 4u, &v, err);
     }
     /* mispredicted by more than the refine error of the larger of the two
      * values (so in [0, 1]: a dark wall predicted bright counts as much as a
