@@ -115,6 +115,41 @@ static void uniform_sky_is_not_refined(void)
     pb_scene_destroy(s);
 }
 
+/* The surface test's probes are traced with test_pass_scale times the bake's
+ * passes (default 4); the volume records the bake's own. On the uniform sky
+ * nothing is refined either way, so the two bakes place the same probes and
+ * differ by the tests' extra passes alone. */
+static void surface_tests_take_more_passes(void)
+{
+    pb_scene *s = floor_scene(0);
+    if (!s)
+        return;
+    pb_bake_desc d = sparse_desc(s);
+    pb_sparse_desc one = {2, 0.05f, PB_REFINE_TEST_SURFACE, 1}, dflt = {2, 0.05f, PB_REFINE_TEST_SURFACE, 0};
+    pb_sparse_stats s1, s4;
+    pb_volume v1, v4;
+    if (sparse_bake(s, &d, &one, &v1, &s1)) {
+        if (sparse_bake(s, &d, &dflt, &v4, &s4)) {
+            uint64_t extra = 3ull * s1.test_probes[0] * d.rays_per_probe * d.passes;
+            fprintf(stderr, "  %u test probes; rays traced %llu at 1x, %llu at the default (extra at least %llu)\n",
+                    s1.test_probes[0], (unsigned long long)v1.rays_traced, (unsigned long long)v4.rays_traced,
+                    (unsigned long long)extra);
+            CHECK(s1.test_probes[0] > 0 && s4.test_probes[0] == s1.test_probes[0]);
+            CHECK(v4.probe_count == v1.probe_count);
+            CHECK(v4.rays_traced >= v1.rays_traced + extra);
+            CHECK(v4.settings.passes == d.passes && v1.settings.passes == d.passes);
+            pb_volume_free(&v4);
+        }
+        pb_volume_free(&v1);
+    }
+    pb_sparse_desc bad = {2, 0.05f, PB_REFINE_TEST_SURFACE, 65};
+    pb_volume vb;
+    pb_error err;
+    CHECK(pb_bake_sparse(ctx, s, NULL, &d, &bad, &vb, NULL, &err) == PB_ERROR_INVALID_ARGUMENT);
+    CHECKF(strstr(err.message, "at most 64") != NULL, "%s", err.message);
+    pb_scene_destroy(s);
+}
+
 static void shadow_boundary_is_refined(void)
 {
     pb_scene *s = floor_scene(1);
@@ -642,6 +677,7 @@ int main(void)
     if (!(ctx = test_gpu_context()))
         return 1;
     RUN(uniform_sky_is_not_refined);
+    RUN(surface_tests_take_more_passes);
     RUN(shadow_boundary_is_refined);
     RUN(sparse_file_round_trip);
     RUN(surface_tests_sit_nearest_the_cell_centre);

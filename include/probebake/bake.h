@@ -199,8 +199,8 @@ typedef struct pb_sparse_desc {
                                      for the surface test (so below 1), of the mean prediction for the
                                      probe test */
     uint32_t test;                /* pb_refine_test: what the prediction is checked against; default surface */
-    uint32_t test_pass_scale;     /* default 4: the surface test's probes are traced with this many times the
-                                     bake's passes. Their standard error gates the refinement, so noisy tests
+    uint32_t test_pass_scale;     /* default 4, at most 64: the surface test's probes are traced with this many
+                                     times the bake's passes (pb_bake_passes). Their standard error gates the refinement, so noisy tests
                                      leave dark, noisy surfaces coarse (bench/RESULTS.md, "The Crypt's
                                      remaining gap") */
 } pb_sparse_desc;
@@ -236,6 +236,10 @@ typedef struct pb_sparse_stats {
  * stats may be NULL. */
 pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
                          const pb_sparse_desc *sd, pb_volume *out, pb_sparse_stats *stats, pb_error *err);
+
+/* The passes a bake of desc takes (at most, under target_error): desc->passes,
+ * or its default when 0. */
+uint32_t pb_bake_passes(const pb_bake_desc *desc);
 
 /* Bakes into *out (arrays allocated; pb_volume_free releases them).
  * Returns PB_ERROR_INVALID_ARGUMENT before any GPU work for bad descs,

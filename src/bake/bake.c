@@ -65,10 +65,15 @@ static void release(pb_context *ctx, bake_buffers *b)
     pb_pipeline_destroy(ctx, &b->depth);
 }
 
+uint32_t pb_bake_passes(const pb_bake_desc *d)
+{
+    return d->passes ? d->passes : d->target_error > 0.f ? 64 : 4;
+}
+
 static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
 {
     if (!d->rays_per_probe) d->rays_per_probe = 256;
-    if (!d->passes) d->passes = d->target_error > 0.f ? 64 : 4;
+    d->passes = pb_bake_passes(d);
     if (!(d->target_error >= 0.f) || !(d->target_error < 1.f))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "target error %g: must be in [0, 1) (a relative error)",
                        d->target_error);

@@ -155,7 +155,7 @@ static pb_result bake_free(sparse_job *j, const pb_points *pts, uint32_t pass_sc
 {
     pb_bake_desc d = j->d;
     d.points = pts;
-    d.passes *= pass_scale;
+    d.passes = pb_bake_passes(&d) * pass_scale; /* the default resolved first: 0 x scale would be the default */
     pb_result r = j->one_bounce ? pb_bake_bounce(j->ctx, j->scene, j->gs, &d, j->feedback, v, err)
                                 : pb_bake(j->ctx, j->scene, j->gs, &d, v, err);
     j->stats.bakes++;
@@ -443,7 +443,7 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
             uint64_t key = c->coord[0] + ((uint64_t)c->coord[1] << 21) + ((uint64_t)c->coord[2] << 42);
             pts.ids[i] = key_id(~(key * 512u + ct.slot[i]));
         }
-        r = bake_free(j, &pts, sd->test_pass_scale ? sd->test_pass_scale : 4u, &v, err);
+        r = bake_free(j, &pts, sd->test_pass_scale, &v, err);
     }
     /* mispredicted by more than the refine error of the larger of the two
      * values (so in [0, 1]: a dark wall predicted bright counts as much as a
@@ -678,6 +678,12 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
         sd.levels = 3;
     if (sd.refine_error == 0.f)
         sd.refine_error = 0.1f;
+    if (sd.test_pass_scale == 0)
+        sd.test_pass_scale = 4;
+    if (sd.test_pass_scale > 64)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "sparse bake: the surface test's probes at %u times the bake's passes: at most 64",
+                       sd.test_pass_scale);
     if (sd.levels > PB_SPARSE_MAX_LEVELS)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--max-level %u: the sparse layout has at most %u levels (0-%u)",
                        sd.levels - 1, PB_SPARSE_MAX_LEVELS, PB_SPARSE_MAX_LEVELS - 1);
