@@ -4,14 +4,10 @@
  * runs under ASan/UBSan in CI), and every failure must carry a message. */
 #define _POSIX_C_SOURCE 200809L
 #include "test_util.h"
+#include "fuzz/scene_exercise.h"
 #include "fuzz/volume_exercise.h"
 
 #include <dirent.h>
-
-static void quiet(pb_log_level level, const char *msg, void *user)
-{
-    (void)level, (void)msg, (void)user;
-}
 
 static void load_all(const char *rel)
 {
@@ -51,18 +47,9 @@ static void load_all(const char *rel)
         const char *path = write_file(dst, text, size);
         free(text);
         ++files;
-        pb_scene_desc sd = {{quiet, NULL}, 0};
-        pb_scene *s = NULL;
-        pb_error err;
-        if (pb_scene_load(path, &sd, &s, &err) == PB_OK) {
-            ++loaded;
-            pb_bvh *bvh = NULL;
-            if (pb_bvh_build(s, NULL, &bvh, &err) == PB_OK)
-                pb_bvh_destroy(bvh);
-            pb_scene_destroy(s);
-        } else if (!err.message[0]) {
-            ++unnamed;
-        }
+        int got_it = pb_fuzz_scene_exercise(path);
+        loaded += got_it > 0;
+        unnamed += got_it < 0;
     }
     closedir(d);
     fprintf(stderr, "  %s: %u inputs, %u loaded, the rest refused with a message\n", rel, files, loaded);

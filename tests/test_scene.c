@@ -628,6 +628,88 @@ static void corrupt_texture_is_a_warning(void)
     pb_scene_destroy(s);
 }
 
+/* A baseline greyscale JPEG of w x h pixels in 144 bytes: one Huffman code
+ * (DC difference 0, then end of block) that stb reads from the zero bits it
+ * substitutes past the data's end, so it decodes to uniform grey of any size. */
+static size_t tiny_jpeg(uint32_t w, uint32_t h, unsigned char out[160])
+{
+    static const unsigned char head[] = {0xff, 0xd8, 0xff, 0xdb, 0x00, 0x43, 0x00};
+    unsigned char *o = out;
+    memcpy(o, head, sizeof head), o += sizeof head;
+    memset(o, 1, 64), o += 64; /* quantisation table 0 */
+    const unsigned char sof[] = {0xff, 0xc0, 0x00, 0x0b, 0x08, (unsigned char)(h >> 8), (unsigned char)h,
+                                 (unsigned char)(w >> 8), (unsigned char)w, 0x01, 0x01, 0x11, 0x00};
+    memcpy(o, sof, sizeof sof), o += sizeof sof;
+    for (int ac = 0; ac < 2; ++ac) { /* one 1-bit code for symbol 0 */
+        const unsigned char dht[] = {0xff, 0xc4, 0x00, 0x14, (unsigned char)(ac ? 0x10 : 0x00), 0x01};
+        memcpy(o, dht, sizeof dht), o += sizeof dht;
+        memset(o, 0, 16), o += 16; /* 15 empty code lengths, then the symbol */
+    }
+    const unsigned char sos[] = {0xff, 0xda, 0x00, 0x08, 0x01, 0x01, 0x00, 0x00, 0x3f, 0x00,
+                                 0x00, 0x00, 0x00, 0x00, 0xff, 0xd9};
+    memcpy(o, sos, sizeof sos), o += sizeof sos;
+    return (size_t)(o - out);
+}
+
+static int warned_pixels;
+static void count_pixel_warnings(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    if (level == PB_LOG_WARN && strstr(msg, "pixels") && strstr(msg, "its factor is used"))
+        warned_pixels++;
+}
+
+/* An image is refused from its header when it claims more pixels than an
+ * image (or the file's images together) may decode to: the fuzzer's 144-byte
+ * JPEG of 11000 x 11000 took 1.5 GB. The material keeps its factor. */
+static void oversized_texture_refused_unread(void)
+{
+    unsigned char jpg[160];
+    write_file("grey-16x8.jpg", jpg, tiny_jpeg(16, 8, jpg));
+    write_file("grey-11000.jpg", jpg, tiny_jpeg(11000, 11000, jpg));
+    const char *fmt =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0},"
+        "{\"attributes\":{\"POSITION\":0},\"material\":1}]}],"
+        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":1}}}],"
+        "\"textures\":[{\"source\":0},{\"source\":1}],\"images\":[{\"uri\":\"grey-16x8.jpg\"},{\"uri\":\"%s\"}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
+    char json[2048];
+    struct {
+        const char *second;
+        uint64_t per_image, total;
+        int tex0, tex1, warnings;
+    } cases[] = {
+        {"grey-16x8.jpg", 0, 0, 0, 1, 0},        /* both load under the defaults */
+        {"grey-11000.jpg", 0, 0, 0, -1, 1},      /* 121 M pixels > 8192^2 */
+        {"grey-16x8.jpg", 127, 0, -1, -1, 2},    /* 128 pixels each > 127 */
+        {"grey-16x8.jpg", 128, 128, 0, -1, 1},   /* the second exceeds what is left */
+        {"grey-16x8.jpg", 128, 256, 0, 1, 0},    /* exactly enough */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        snprintf(json, sizeof json, fmt, cases[i].second);
+        const char *path = write_gltf("textures-limited.gltf", json, tri_pos, 36);
+        warned_pixels = 0;
+        pb_scene_desc d = {{count_pixel_warnings, NULL}, 0, cases[i].per_image, cases[i].total};
+        pb_scene *s = NULL;
+        pb_error err;
+        pb_result r = pb_scene_load(path, &d, &s, &err);
+        CHECKF(r == PB_OK, "case %zu: %s", i, err.message);
+        if (r != PB_OK)
+            continue;
+        CHECKF(s->materials[0].base_color_texture == cases[i].tex0 &&
+                   s->materials[1].base_color_texture == cases[i].tex1 && warned_pixels == cases[i].warnings,
+               "case %zu: textures %d %d, %d warnings; want %d %d, %d", i, s->materials[0].base_color_texture,
+               s->materials[1].base_color_texture, warned_pixels, cases[i].tex0, cases[i].tex1, cases[i].warnings);
+        if (cases[i].tex0 == 0)
+            CHECK(s->textures[0].width == 16 && s->textures[0].height == 8);
+        pb_scene_destroy(s);
+    }
+}
+
 static void shared_scenes_load(void)
 {
     struct {
@@ -912,6 +994,7 @@ int main(void)
     RUN(malformed_files_get_clear_errors);
     RUN(hostile_inputs_refused);
     RUN(corrupt_texture_is_a_warning);
+    RUN(oversized_texture_refused_unread);
     RUN(shared_scenes_load);
     RUN(compressed_variants_match_originals);
     RUN(corrupt_compressed_data_refused);

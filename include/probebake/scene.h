@@ -138,7 +138,17 @@ typedef struct pb_scene {
 typedef struct pb_scene_desc {
     pb_log log;
     uint32_t skip_textures;   /* 1: do not decode images (info, bench); default 0 */
+    /* Decoded-size limits, checked from an image's header before it is
+     * decoded (a 144-byte JPEG can claim 11000 x 11000 pixels: 484 MB). An
+     * image past a limit is a warning and its material keeps its factor. */
+    uint64_t max_texture_pixels;       /* per image; default PB_MAX_TEXTURE_PIXELS */
+    uint64_t max_texture_total_pixels; /* all images of a file; default PB_MAX_TEXTURE_TOTAL_PIXELS */
 } pb_scene_desc;
+
+/* 8192 x 8192 (256 MiB as RGBA8) per image, and 16 such images per file
+ * (4 GiB): an 8K texture loads; a header claiming more is refused unread. */
+#define PB_MAX_TEXTURE_PIXELS (8192ull * 8192ull)
+#define PB_MAX_TEXTURE_TOTAL_PIXELS (16ull * PB_MAX_TEXTURE_PIXELS)
 
 /* Loads a .gltf or .glb file with the whole node hierarchy of its default
  * scene (scene 0 when none is marked default).

@@ -51,18 +51,21 @@ struct reader {
     std::map<int, decoded_accessor> draco_accessors;
 };
 
-// Custom image loader: stb_image to RGBA8. A texture that fails to decode is a
-// warning (the material falls back to its factor), never a failed load.
+// Custom image loader: stb_image to RGBA8. A texture that fails to decode, or
+// whose header claims more pixels than the limits allow, is a warning (the
+// material falls back to its factor), never a failed load.
 struct image_ctx {
     const char *path;
     pb_log log;
     int skip;
+    uint64_t max_pixels;  // per image
+    uint64_t left_pixels; // what the file's images may still decode to
 };
 
 bool load_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
                 const unsigned char *bytes, int size, void *user)
 {
-    const image_ctx *ctx = static_cast<const image_ctx *>(user);
+    image_ctx *ctx = static_cast<image_ctx *>(user);
     image->width = image->height = 0;
     image->component = 4;
     image->bits = 8;
@@ -70,8 +73,25 @@ bool load_image(tinygltf::Image *image, const int index, std::string *, std::str
     image->image.clear();
     if (ctx->skip)
         return true;
+    // the header first: stb allocates what it claims before reading the data
     int w = 0, h = 0, c = 0;
-    unsigned char *px = stbi_load_from_memory(bytes, size, &w, &h, &c, 4);
+    unsigned char *px = nullptr;
+    if (stbi_info_from_memory(bytes, size, &w, &h, &c) && w > 0 && h > 0) {
+        uint64_t n = (uint64_t)w * (uint64_t)h;
+        if (n > ctx->max_pixels || n > ctx->left_pixels) {
+            pb_logf(&ctx->log, PB_LOG_WARN,
+                    "%s: image %d is %d x %d pixels, more than the %llu pixels %s; its factor is used", ctx->path,
+                    index, w, h, (unsigned long long)(n > ctx->max_pixels ? ctx->max_pixels : ctx->left_pixels),
+                    n > ctx->max_pixels ? "an image may decode to" : "the file's images may still decode to");
+            return true;
+        }
+        int iw = w, ih = h;
+        px = stbi_load_from_memory(bytes, size, &w, &h, &c, 4);
+        if (px && (w != iw || h != ih)) { // never past what the header said
+            stbi_image_free(px);
+            px = nullptr;
+        }
+    }
     if (!px || w <= 0 || h <= 0) {
         pb_logf(&ctx->log, PB_LOG_WARN, "%s: image %d could not be decoded (%s); its factor is used", ctx->path,
                 index, stbi_failure_reason() ? stbi_failure_reason() : "unknown");
@@ -79,6 +99,7 @@ bool load_image(tinygltf::Image *image, const int index, std::string *, std::str
             stbi_image_free(px);
         return true;
     }
+    ctx->left_pixels -= (uint64_t)w * (uint64_t)h;
     image->width = w;
     image->height = h;
     image->image.assign(px, px + (size_t)w * h * 4);
@@ -989,7 +1010,8 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
         return pb_fail(err, PB_ERROR_PARSE, "%s: JSON nested deeper than %d levels", path, PB_GLTF_MAX_NESTING);
 
     tinygltf::TinyGLTF loader;
-    image_ctx ictx = {path, b->log, desc->skip_textures ? 1 : 0};
+    image_ctx ictx = {path, b->log, desc->skip_textures ? 1 : 0, desc->max_texture_pixels,
+                      desc->max_texture_total_pixels};
     loader.SetImageLoader(load_image, &ictx);
     tinygltf::FsCallbacks fs = {fs_exists, fs_expand, fs_read, fs_write, nullptr};
     loader.SetFsCallbacks(fs);

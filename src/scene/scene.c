@@ -33,6 +33,10 @@ pb_result pb_scene_load(const char *path, const pb_scene_desc *desc, pb_scene **
     memset(&d, 0, sizeof d);
     if (desc)
         d = *desc;
+    if (!d.max_texture_pixels)
+        d.max_texture_pixels = PB_MAX_TEXTURE_PIXELS;
+    if (!d.max_texture_total_pixels)
+        d.max_texture_total_pixels = PB_MAX_TEXTURE_TOTAL_PIXELS;
     pb_scene_builder b;
     pb_sb_init(&b, d.log);
     pb_result r = pb_gltf_read(path, &d, &b, err);
