@@ -246,6 +246,11 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect export-sparse 0 'sparse.ktx2: [0-9]+ probes in [0-9]+ bricks \(2 levels\)' -- \
         "$pb" export "$tmp/s.probes" --textures "$tmp/s-textures"
     expect inspect-sparse 0 '^level 1     spacing 1 m: [0-9]+ bricks' -- "$pb" inspect "$tmp/s.probes"
+    expect inspect-sparse-refined 0 '^refined     where off by more than 0.1: surface test, its probes at 4x the passes' -- \
+        "$pb" inspect "$tmp/s.probes"
+    expect inspect-sparse-refined-json 0 '"refine_error": 0.1, "refine_test": "surface", "test_pass_scale": 4' -- \
+        "$pb" inspect "$tmp/s.probes" --json
+    expect inspect-sparse-probe-test 0 '^refined     where off by more than 1: probe test' -- "$pb" inspect "$tmp/sp.probes"
     # the debug views of a sparse file: one tile per probe, in layout order
     sparse_probes=$("$pb" inspect "$tmp/s.probes" --json | sed -n 's/.*"probes": \([0-9]*\),.*/\1/p' | head -n 1)
     expect inspect-sparse-atlas 0 "depth atlas of $sparse_probes probes; tile frames by finest level" -- \

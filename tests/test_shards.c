@@ -277,7 +277,7 @@ static pb_bake_desc sparse_demo_desc(const pb_scene *s)
 /* A sparse bake splits by coarsest brick: each part places and refines its
  * own, and the merge (bricks level by level in part order, shared face
  * probes checked equal, then dilation and stitching) is the whole bake's
- * file. Refused: a part of another refine error, a part whose shared probe
+ * file. Refused: a part of another refine error or refinement test, a part whose shared probe
  * was changed, a target error, --indirect volume. */
 static void sparse_parts_merge_to_the_whole_bake(void)
 {
@@ -331,6 +331,19 @@ static void sparse_parts_merge_to_the_whole_bake(void)
             CHECK(pb_volume_merge(mixed, names, 3, &merged, &err) == PB_ERROR_INVALID_ARGUMENT &&
                   strstr(err.message, "s2") && strstr(err.message, "refine error"));
             fprintf(stderr, "  other refine error: %s\n", err.message);
+            pb_volume_free(&other);
+        }
+        /* the refinement test is recorded (the parts went through files) and must agree too:
+         * a part whose surface test took 2x the passes, not 4x, and one placed by the probe test */
+        CHECK(parts[0].settings.refine_test == 1u + PB_REFINE_TEST_SURFACE && parts[0].settings.test_pass_scale == 4u);
+        pb_sparse_desc others[2] = {{2, 0.1f, PB_REFINE_TEST_SURFACE, 2}, {2, 0.1f, PB_REFINE_TEST_PROBE, 0}};
+        for (int k = 0; k < 2; ++k) {
+            if (!bake_layout_part(&su, &d, &others[k], 2, 3, &other))
+                continue;
+            pb_volume mixed[3] = {parts[0], parts[1], other};
+            CHECK(pb_volume_merge(mixed, names, 3, &merged, &err) == PB_ERROR_INVALID_ARGUMENT &&
+                  strstr(err.message, "s2") && strstr(err.message, "refinement test"));
+            fprintf(stderr, "  other refinement test: %s\n", err.message);
             pb_volume_free(&other);
         }
     }

@@ -68,6 +68,9 @@ typedef struct pb_volume_settings {
     float indirect_clamp;               /* reflected light clamped per path to this radiance (0: off) */
     uint32_t techniques;                /* PB_TECHNIQUE_* bits: variance reduction the bake used */
     float refine_error;                 /* sparse: --refine-error the layout was placed with (0: not recorded) */
+    uint32_t refine_test;               /* sparse: 1 + the pb_refine_test it was placed with (0: not recorded) */
+    uint32_t test_pass_scale;           /* sparse, surface test: its probes' passes per bake pass (0: not
+                                           recorded, or the probe test) */
 } pb_volume_settings;
 
 /* Variance-reduction techniques (pb_volume_settings.techniques). */

@@ -49,6 +49,8 @@ typedef struct sparse_job {
     pb_gpu_scene *gs;
     pb_bake_desc d;
     float refine_error;                 /* recorded in the volume (parts must agree) */
+    uint32_t refine_test;               /* 1 + pb_refine_test, recorded too */
+    uint32_t test_pass_scale;           /* the surface test's, recorded too (0 for the probe test) */
     int one_bounce;                     /* --indirect volume: every bake is pb_bake_bounce over `feedback` */
     const pb_sample_volume *feedback;   /* the previous bounce's volume (NULL on the first) */
     uint32_t levels, cells[3];
@@ -308,6 +310,8 @@ static pb_result assemble(sparse_job *j, pb_volume *out, pb_error *err)
     }
     out->settings.passes = j->passes_max;
     out->settings.refine_error = j->refine_error;
+    out->settings.refine_test = j->refine_test;
+    out->settings.test_pass_scale = j->test_pass_scale;
     out->timings = j->timings;
     out->rays_traced = j->rays;
     out->traversals = j->traversals;
@@ -571,6 +575,8 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
     memset(&j, 0, sizeof j);
     j.ctx = ctx, j.scene = scene, j.gs = gs, j.d = *desc, j.levels = sd.levels;
     j.one_bounce = one_bounce, j.feedback = feedback, j.refine_error = sd.refine_error;
+    j.refine_test = 1u + sd.test;
+    j.test_pass_scale = sd.test == PB_REFINE_TEST_SURFACE ? sd.test_pass_scale : 0u;
     j.d.shard_index = j.d.shard_count = 0; /* a part is a range of coarsest bricks, its bakes whole */
     uint32_t span = pow3u(sd.levels);
     for (int k = 0; k < 3; ++k) {

@@ -73,6 +73,11 @@ static const char *technique_list(uint32_t t, char buf[64])
     return buf;
 }
 
+static const char *refine_test_json(uint32_t recorded)
+{
+    return recorded == 1u + PB_REFINE_TEST_SURFACE ? "\"surface\"" : recorded == 1u + PB_REFINE_TEST_PROBE ? "\"probe\"" : "null";
+}
+
 int cmd_inspect(const options *o)
 {
     if (!o->scene)
@@ -142,10 +147,12 @@ int cmd_inspect(const options *o)
         if (v.sparse) {
             sparse_census c = census(&v);
             printf(",\n  \"sparse\": {\"levels\": %u, \"cells\": [%u, %u, %u], \"bricks\": [%u, %u, %u], "
-                   "\"probes\": [%u, %u, %u], \"chunk_entries\": %u, \"bytes\": %llu}",
+                   "\"probes\": [%u, %u, %u], \"chunk_entries\": %u, \"bytes\": %llu, \"refine_error\": %g, "
+                   "\"refine_test\": %s, \"test_pass_scale\": %u}",
                    v.sparse->levels, v.sparse->cells[0], v.sparse->cells[1], v.sparse->cells[2], c.bricks[0],
                    c.bricks[1], c.bricks[2], c.probes[0], c.probes[1], c.probes[2], v.sparse->chunk_count,
-                   (unsigned long long)pb_volume_file_bytes(&v));
+                   (unsigned long long)pb_volume_file_bytes(&v), (double)s->refine_error,
+                   refine_test_json(s->refine_test), s->test_pass_scale);
         }
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
@@ -186,6 +193,16 @@ int cmd_inspect(const options *o)
                        v.spacing[0] * pb_sparse_step(v.sparse->levels, l), c.bricks[l], c.probes[l]);
             printf("bytes       %llu (%u chunk entries)\n", (unsigned long long)pb_volume_file_bytes(&v),
                    v.sparse->chunk_count);
+            if (s->refine_test == 1u + PB_REFINE_TEST_SURFACE)
+                printf("refined     where off by more than %g: surface test, its probes at %ux the passes\n",
+                       (double)s->refine_error, s->test_pass_scale);
+            else if (s->refine_test == 1u + PB_REFINE_TEST_PROBE)
+                printf("refined     where off by more than %g: probe test\n", (double)s->refine_error);
+            else if (s->refine_error > 0.f)
+                printf("refined     where off by more than %g (test not recorded: an older file)\n",
+                       (double)s->refine_error);
+            else
+                printf("refined     not recorded (a file written before it)\n");
         } else
             printf("probes      %u placed points\n", v.probe_count);
         if ((v.flags & PB_VOLUME_SHARD) && v.sparse)
