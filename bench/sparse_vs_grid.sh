@@ -5,7 +5,9 @@
 # relative_rmse_surfaces and p95_relative_error, averaged over the views;
 # for sparse layouts also the same two where its levels meet and elsewhere,
 # render's seam metrics, each the mean over views weighted by the view's
-# pixels in that class, and the fraction of surface pixels on a seam).
+# pixels in that class, and the fraction of surface pixels on a seam; and
+# the peer grid's error on those same seam pixels, render --seams-of, so a
+# seam's error is told from a region that is hard for any layout).
 # Grids at several spacings, sparse layouts at several refinement errors, all
 # in the same run; ratios are against the finest grid (the peer). Prints a
 # table, writes CSV and JSON.
@@ -98,6 +100,7 @@ measure() { # name param [bake options...]: one layout, baked and rendered
     local name=$1 param=$2
     shift 2
     local vol=$tmp/$name-$param.probes t ms probes bytes rmse=0 p95=0 v=0 seam=(0 0 0 0) px=(0 0 0) k key n
+    local peer_seam=(0 0) peer_vol="" g
     t=$(now_ms)
     "$pb" bake "$scene" "${args[@]}" "$@" --quiet -o "$vol" >"$tmp/bake.txt"
     ms=$(($(now_ms) - t))
@@ -118,6 +121,25 @@ measure() { # name param [bake options...]: one layout, baked and rendered
                 'BEGIN { print a + b * n }')
             k=$((k + 1))
         done
+        # the peer grid on this sparse volume's seam pixels
+        if [ "$name" = sparse ]; then
+            for g in $grids; do
+                [ "$(awk -v a="$g" -v b="$finest" 'BEGIN { print (a == b) }')" = 1 ] && peer_vol=$tmp/grid-$g.probes
+            done
+        fi
+        if [ -n "$peer_vol" ] && [ -s "$peer_vol" ]; then
+            # shellcheck disable=SC2086 # a view is render arguments
+            "$pb" render "$scene" --volume "$peer_vol" --seams-of "$vol" --mode diff --json --size "$size" \
+                ${spp:+--spp $spp} $view ${refs[$i]:+--reference ${refs[$i]}} -o "$tmp/diff.png" 2>/dev/null \
+                >"$tmp/peer.json"
+            n=$(json_num seam_pixels <"$tmp/peer.json")
+            k=0
+            for key in relative_rmse_seams p95_relative_error_seams; do
+                peer_seam[k]=$(awk -v a="${peer_seam[k]}" -v b="$(json_num $key <"$tmp/peer.json")" -v n="${n:-0}" \
+                    'BEGIN { print a + b * n }')
+                k=$((k + 1))
+            done
+        fi
         k=0
         for key in seam_pixels off_seam_pixels surface_pixels; do
             n=$(json_num $key <"$tmp/diff.json")
@@ -136,6 +158,15 @@ measure() { # name param [bake options...]: one layout, baked and rendered
             seams+="$(awk -v a="${seam[k]}" -v n="$n" 'BEGIN { printf "%.4f", (n > 0 ? a / n : 0) }') "
         done
         seams+="$(awk -v a="${px[0]}" -v n="${px[2]}" 'BEGIN { printf "%.3f", (n > 0 ? a / n : 0) }')"
+        if [ -n "$peer_vol" ]; then
+            for k in 0 1; do
+                seams+=" $(awk -v a="${peer_seam[k]}" -v n="${px[0]}" 'BEGIN { printf "%.4f", (n > 0 ? a / n : 0) }')"
+            done
+        else
+            seams+=" - -"
+        fi
+    else
+        seams+=" - -"
     fi
     rows+=("$name $param $probes $bytes $ms $rmse $p95 $seams")
 }
@@ -153,34 +184,40 @@ for r in "${rows[@]}"; do
     set -- $r
     [ "$1" = grid ] && [ "$(awk -v a="$2" -v b="$finest" 'BEGIN { print (a == b) }')" = 1 ] && peer=$r
 done
+peer_is_grid=0
+[ -n "$peer" ] && peer_is_grid=1
 [ -n "$peer" ] || peer=${rows[0]}
 set -- $peer
 peer_probes=$3 peer_bytes=$4 peer_ms=$5
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", (b > 0 ? a / b : 0) }'; }
 
 stem=$out/$(basename "$scene" | sed 's/\.[^.]*$//')
-printf '\n%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s %10s\n' layout param probes "vs grid" \
-    bytes "vs grid" "bake ms" "vs grid" rmse_surf p95_rel rmse_seam p95_seam rmse_off p95_off seam_frac
+printf '\n%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s %10s %10s %10s\n' layout param probes \
+    "vs grid" bytes "vs grid" "bake ms" "vs grid" rmse_surf p95_rel rmse_seam p95_seam rmse_off p95_off seam_frac \
+    peer_rmse_s peer_p95_s
 echo "layout,param,probes,probes_ratio,bytes,bytes_ratio,bake_ms,bake_ratio,relative_rmse_surfaces,p95_relative_error,\
-relative_rmse_seams,p95_relative_error_seams,relative_rmse_off_seams,p95_relative_error_off_seams,seam_fraction" >"$stem.csv"
+relative_rmse_seams,p95_relative_error_seams,relative_rmse_off_seams,p95_relative_error_off_seams,seam_fraction,\
+peer_relative_rmse_seams,peer_p95_relative_error_seams" >"$stem.csv"
 json="{\"scene\": \"$(basename "$scene")\", \"args\": \"${args[*]}\", \"size\": \"$size\", \"views\": ${#views[@]},"
 json+=" \"probe_spp\": $spp, \"reference_spp\": $ref_spp,"
 json+=" \"cores\": $(nproc), \"device\": \"$device\", \"peer\": \"grid $finest m\", \"rows\": ["
 sep=""
 for r in "${rows[@]}"; do
     set -- $r
-    printf '%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s %10s\n' "$1" "$2" "$3" \
+    printf '%-7s %8s %9s %11s %9s %11s %9s %11s %10s %10s %10s %10s %10s %10s %10s %10s %10s\n' "$1" "$2" "$3" \
         "$(ratio "$3" "$peer_probes")" "$4" "$(ratio "$4" "$peer_bytes")" "$5" "$(ratio "$5" "$peer_ms")" "$6" "$7" \
-        "$8" "$9" "${10}" "${11}" "${12}"
+        "$8" "$9" "${10}" "${11}" "${12}" "${13}" "${14}"
     csv_seams="$8,$9,${10},${11},${12}" json_seams="$8, $9, ${10}, ${11}, ${12}"
     [ "$8" = - ] && csv_seams=",,,," json_seams="null, null, null, null, null"
-    echo "$1,$2,$3,$(ratio "$3" "$peer_probes"),$4,$(ratio "$4" "$peer_bytes"),$5,$(ratio "$5" "$peer_ms"),$6,$7,$csv_seams" \
+    csv_peer="${13},${14}" json_peer_r=${13} json_peer_p=${14}
+    [ "${13}" = - ] && csv_peer="," json_peer_r=null json_peer_p=null
+    echo "$1,$2,$3,$(ratio "$3" "$peer_probes"),$4,$(ratio "$4" "$peer_bytes"),$5,$(ratio "$5" "$peer_ms"),$6,$7,$csv_seams,$csv_peer" \
         >>"$stem.csv"
     IFS=, read -r s1 s2 s3 s4 s5 <<<"${json_seams// /}"
     json+="$sep{\"layout\": \"$1\", \"param\": $2, \"probes\": $3, \"bytes\": $4, \"bake_ms\": $5,"
     json+=" \"relative_rmse_surfaces\": $6, \"p95_relative_error\": $7, \"relative_rmse_seams\": $s1,"
     json+=" \"p95_relative_error_seams\": $s2, \"relative_rmse_off_seams\": $s3, \"p95_relative_error_off_seams\": $s4,"
-    json+=" \"seam_fraction\": $s5}"
+    json+=" \"seam_fraction\": $s5, \"peer_relative_rmse_seams\": $json_peer_r, \"peer_p95_relative_error_seams\": $json_peer_p}"
     sep=", "
 done
 echo "$json]}" >"$stem.json"
@@ -194,4 +231,7 @@ for r in "${rows[@]}"; do
         { echo "sparse_vs_grid: row '$r' is incomplete" >&2; exit 1; }
     [ "$1" != sparse ] || awk -v a="$8" -v c="${10}" 'BEGIN { exit !(a ~ /^[0-9.]+$/ && c ~ /^[0-9.]+$/) }' ||
         { echo "sparse_vs_grid: sparse row '$r' has no seam metrics" >&2; exit 1; }
+    # with the finest grid among the grids, its error on the sparse seams too
+    [ "$1" != sparse ] || [ "$peer_is_grid" != 1 ] || awk -v a="${13}" 'BEGIN { exit !(a ~ /^[0-9.]+$/) }' ||
+        { echo "sparse_vs_grid: sparse row '$r' has no peer seam metrics" >&2; exit 1; }
 done

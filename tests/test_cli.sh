@@ -414,6 +414,16 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect render-reference-not-diff 2 "--reference REF.pfm is for --mode diff" -- \
         "$pb" render "$demo" --volume "$tmp/a.probes" --reference "$tmp/ref16.pfm" -o "$tmp/d4.png"
     expect render-reference-no-partial 0 '^absent$' -- bash -c "[ -e '$tmp/d4.png' ] && echo present || echo absent"
+    # a grid's error where a sparse volume's levels meet (bench/sparse_vs_grid.sh compares the two there)
+    expect render-seams-of 0 'where levels meet \([0-9]+ pixels\): relative RMSE [0-9.]+' -- \
+        "$pb" render "$demo" --volume "$tmp/a.probes" --seams-of "$tmp/s.probes" --mode diff --size 16x12 --spp 1 \
+        --reference "$tmp/ref16.pfm" -o "$tmp/d5.png"
+    expect render-seams-of-grid 1 "a.probes: not a sparse volume: it has no seams \(--seams-of\)" -- \
+        "$pb" render "$demo" --volume "$tmp/s.probes" --seams-of "$tmp/a.probes" --mode diff --size 16x12 --spp 1 \
+        --reference "$tmp/ref16.pfm" -o "$tmp/d6.png"
+    expect render-seams-of-not-diff 2 "--seams-of SPARSE.probes is for --mode diff" -- \
+        "$pb" render "$demo" --volume "$tmp/a.probes" --seams-of "$tmp/s.probes" -o "$tmp/d6.png"
+    expect render-seams-of-no-partial 0 '^absent$' -- bash -c "[ -e '$tmp/d6.png' ] && echo present || echo absent"
     expect render-reference-eye 0 "wrote $tmp/ref.png: 16x12, reference, 4 spp" -- \
         "$pb" render "$demo" --eye 0,1.5,2 --target 0,1,0 --fov 60 --size 16x12 --spp 4 --exposure 1 -o "$tmp/ref.png"
     expect bake-too-large 1 'need [0-9.]+ MiB of (device|host) memory; the budget is half of .* MiB \([0-9.]+ MiB\)' -- \

@@ -37,6 +37,7 @@ typedef struct options {
     cli_log log;
     /* render */
     const char *volume, *mode, *atlas, *sh_view, *reference;
+    const char *seams_of;   /* render --mode diff: seam metrics on another (sparse) volume's seams */
     float eye[3], target[3], up[3], fov_deg, exposure;
     int has_eye, has_target, has_up, has_camera, has_exposure, pfm, show_probes;
     uint32_t camera, width, height, spp;

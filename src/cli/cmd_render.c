@@ -63,6 +63,8 @@ int cmd_render(const options *o)
         return cli_usage_error("%s: --pfm writes beside -o FILE; -o - has no file to write beside", "render");
     if (o->reference && !diff)
         return cli_usage_error("%s: --reference REF.pfm is for --mode diff", "render");
+    if (o->seams_of && !diff)
+        return cli_usage_error("%s: --seams-of SPARSE.probes is for --mode diff", "render");
     char pfm[1100];
     sibling(o->output, ".pfm", pfm, sizeof pfm);
     pb_log log = {cli_log_to_stderr, (void *)&o->log};
@@ -75,6 +77,13 @@ int cmd_render(const options *o)
     memset(&vol, 0, sizeof vol);
     pb_sample_volume sv;
     memset(&sv, 0, sizeof sv);
+    /* whose seams and levels the diff measures: the volume's, or --seams-of's */
+    pb_volume seams_vol;
+    memset(&seams_vol, 0, sizeof seams_vol);
+    pb_sample_volume seams_sv;
+    memset(&seams_sv, 0, sizeof seams_sv);
+    const pb_volume *mv = o->seams_of ? &seams_vol : &vol;
+    const pb_sample_volume *msv = o->seams_of ? &seams_sv : &sv;
     pb_environment env;
     memset(&env, 0, sizeof env);
     pb_error err;
@@ -83,11 +92,18 @@ int cmd_render(const options *o)
     unsigned char *rgb8 = NULL;
     int rc = 1;
     /* outputs checked before any work: not a directory, writable, no input */
-    const char *inputs[4] = {o->scene, o->env, o->volume, o->reference};
-    if (pb_output_check(o->output, inputs, 4, &err) != PB_OK || (o->pfm && pb_output_check(pfm, inputs, 4, &err) != PB_OK))
+    const char *inputs[5] = {o->scene, o->env, o->volume, o->reference, o->seams_of};
+    if (pb_output_check(o->output, inputs, 5, &err) != PB_OK || (o->pfm && pb_output_check(pfm, inputs, 5, &err) != PB_OK))
         goto out;
     if (o->volume && pb_volume_read(o->volume, &vol, &err) != PB_OK)
         goto out;
+    if (o->seams_of && pb_volume_read(o->seams_of, &seams_vol, &err) != PB_OK)
+        goto out;
+    if (o->seams_of && !seams_vol.sparse) {
+        snprintf(err.message, sizeof err.message, "%s: not a sparse volume: it has no seams (--seams-of)", o->seams_of);
+        err.code = PB_ERROR_INVALID_ARGUMENT;
+        goto out;
+    }
     if (o->reference) { /* a converged reference, read and checked before any device work */
         uint32_t rw = 0, rh = 0;
         if (pb_read_pfm(o->reference, &ref, &rw, &rh, &err) != PB_OK)
@@ -111,6 +127,16 @@ int cmd_render(const options *o)
             char m[sizeof err.message];
             memcpy(m, err.message, sizeof m);
             snprintf(err.message, sizeof err.message, "%.200s: %.300s", o->volume, m);
+            goto out;
+        }
+    }
+    if (o->seams_of) {
+        if (pb_scene_hash(s) != seams_vol.settings.scene_hash && !o->log.quiet)
+            fprintf(stderr, "probebake: warning: %s was baked from a different scene than %s\n", o->seams_of, o->scene);
+        if (pb_sample_volume_build(&seams_vol, s->origin, 0.f, 0.f, &seams_sv, &err) != PB_OK) {
+            char m[sizeof err.message];
+            memcpy(m, err.message, sizeof m);
+            snprintf(err.message, sizeof err.message, "%.200s: %.300s", o->seams_of, m);
             goto out;
         }
     }
@@ -205,7 +231,7 @@ int cmd_render(const options *o)
     memset(&seams, 0, sizeof seams);
     memset(&off_seams, 0, sizeof off_seams);
     uint64_t unserved = 0;
-    int sparse = o->volume && sv.levels > 0 && vol.sparse;
+    int sparse = msv->levels > 0 && mv->sparse;
     if (diff) {
         /* the reference (path traced), and the direct image the probe image's indirect part is measured against */
         pb_render_desc dr = d;
@@ -234,10 +260,10 @@ int cmd_render(const options *o)
         pb_image_surface_metrics(img, ref, cls, d.width, d.height, &surf);
         uint8_t *seam = sparse ? malloc(pixels) : NULL, *level = sparse ? malloc(pixels) : NULL;
         if (seam && level) { /* a sparse volume: the error where its levels meet, elsewhere, and per level */
-            pb_render_seam_pixels(s, bvh, &d, &sv, vol.sparse, cls, seam, level);
+            pb_render_seam_pixels(s, bvh, &d, msv, mv->sparse, cls, seam, level);
             pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_LEVELS, d.width, d.height, &seams);
             pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_NONE, d.width, d.height, &off_seams);
-            for (uint32_t l = 0; l < vol.sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
+            for (uint32_t l = 0; l < mv->sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
                 pb_image_surface_metrics_where(img, ref, cls, level, (uint8_t)l, d.width, d.height, &at_level[l]);
             for (uint64_t i = 0; i < pixels; ++i)
                 unserved += seam[i] == PB_SEAM_UNSERVED;
@@ -298,7 +324,7 @@ int cmd_render(const options *o)
                         (unsigned long long)unserved);
             if (sparse) { /* where the error sits: the pixels each level serves */
                 fprintf(report, ", \"levels\": [");
-                for (uint32_t l = 0; l < vol.sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
+                for (uint32_t l = 0; l < mv->sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
                     fprintf(report, "%s{\"level\": %u, \"pixels\": %llu, \"relative_rmse\": %.6f, "
                             "\"p95_relative_error\": %.6f}", l ? ", " : "", l, (unsigned long long)at_level[l].pixels,
                             at_level[l].relative_rmse, at_level[l].p95_relative);
@@ -323,16 +349,18 @@ int cmd_render(const options *o)
                     "%.4f; %llu surface pixels served by no brick\n", (unsigned long long)seams.pixels,
                     seams.relative_rmse, seams.p95_relative, (unsigned long long)off_seams.pixels,
                     off_seams.relative_rmse, off_seams.p95_relative, (unsigned long long)unserved);
-        for (uint32_t l = 0; diff && sparse && l < vol.sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
+        for (uint32_t l = 0; diff && sparse && l < mv->sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
             fprintf(report, "%s level %u: %llu pixels, relative RMSE %.4f, p95 %.4f%s", l ? ";" : "served by", l,
                     (unsigned long long)at_level[l].pixels, at_level[l].relative_rmse, at_level[l].p95_relative,
-                    l + 1 == vol.sparse->levels ? "\n" : "");
+                    l + 1 == mv->sparse->levels ? "\n" : "");
     }
     rc = 0;
 out:
     free(img), free(img_direct), free(ref), free(ref_direct), free(rgb8);
     pb_sample_volume_free(&sv);
     pb_volume_free(&vol);
+    pb_sample_volume_free(&seams_sv);
+    pb_volume_free(&seams_vol);
     pb_environment_free(&env);
     pb_gpu_scene_destroy(gs);
     pb_context_destroy(ctx);

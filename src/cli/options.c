@@ -89,6 +89,8 @@ void cli_print_help(void)
            "  --show-probes   draw the volume's probes: spheres lit by their SH, invalid red, grid homes grey\n"
            "  --reference REF.pfm   diff: compare with this image (a converged `--mode reference --pfm` of the\n"
            "                  same camera and size) instead of tracing a 16x-spp reference\n"
+           "  --seams-of SPARSE.probes   diff: the seam and per-level metrics on the pixels where that sparse\n"
+           "                  volume's levels meet (e.g. a grid's error where a sparse volume has its seams)\n"
            "  --sky R,G,B | --env FILE.hdr [...]   the environment, as for bake\n",
            PB_VERSION_STRING);
 }
@@ -128,6 +130,7 @@ static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
     X(OPT_DIRECT, "direct", required_argument) \
     X(OPT_VOLUME, "volume", required_argument) \
     X(OPT_REFERENCE, "reference", required_argument) \
+    X(OPT_SEAMS_OF, "seams-of", required_argument) \
     X(OPT_MODE, "mode", required_argument) \
     X(OPT_EYE, "eye", required_argument) \
     X(OPT_TARGET, "target", required_argument) \
@@ -232,10 +235,14 @@ static int apply(options *o, const char *a, const char *next)
         if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
             return cli_usage_error("%s takes include or exclude", a);
         o->direct = next;
-    } else if (!strcmp(a, "--volume") || !strcmp(a, "--mode") || !strcmp(a, "--reference")) {
+    } else if (!strcmp(a, "--volume") || !strcmp(a, "--mode") || !strcmp(a, "--reference") ||
+               !strcmp(a, "--seams-of")) {
         if (!next)
             return cli_usage_error("%s needs a value", a);
-        *(!strcmp(a, "--volume") ? &o->volume : !strcmp(a, "--mode") ? &o->mode : &o->reference) = next;
+        *(!strcmp(a, "--volume")      ? &o->volume
+          : !strcmp(a, "--mode")      ? &o->mode
+          : !strcmp(a, "--reference") ? &o->reference
+                                      : &o->seams_of) = next;
     } else if (!strcmp(a, "--eye") || !strcmp(a, "--target") || !strcmp(a, "--up")) {
         float *dst = !strcmp(a, "--eye") ? o->eye : !strcmp(a, "--target") ? o->target : o->up;
         if (!next || !cli_parse_floats(next, 3, dst)) {
