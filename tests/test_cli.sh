@@ -73,10 +73,12 @@ expect devices-and-device 1 '--devices splits the bake by device: drop --device'
 expect layout-garbage 2 "--layout 'octree' is not grid or sparse" -- "$pb" bake "$demo" --layout octree -o "$tmp/x.probes"
 expect max-level-range 2 "--max-level '3' is not an integer in \[0, 2\]" -- "$pb" bake "$demo" --max-level 3 -o "$tmp/x.probes"
 expect refine-error-garbage 2 "--refine-error '-1' is not a relative error" -- "$pb" bake "$demo" --refine-error -1 -o "$tmp/x.probes"
-expect max-level-needs-sparse 1 '--max-level, --refine-error and --refine-test shape a sparse layout: add --layout sparse' -- \
+expect max-level-needs-sparse 1 '--max-level, --refine-error, --refine-test and --refine-seams shape a sparse layout: add --layout sparse' -- \
     "$pb" bake "$demo" --max-level 1 -o "$tmp/x.probes"
 expect refine-test-garbage 2 "--refine-test 'pixel' is not surface or probe" -- \
     "$pb" bake "$demo" --layout sparse --refine-test pixel -o "$tmp/x.probes"
+expect refine-seams-range 2 "--refine-seams '9' is not a number of rounds from 0 to 8" -- \
+    "$pb" bake "$demo" --layout sparse --refine-seams 9 -o "$tmp/x.probes"
 
 # inspect: a fixture volume (tests/make_test_volume.c)
 "$make_volume" "$tmp/v.probes"
@@ -246,10 +248,15 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect export-sparse 0 'sparse.ktx2: [0-9]+ probes in [0-9]+ bricks \(2 levels\)' -- \
         "$pb" export "$tmp/s.probes" --textures "$tmp/s-textures"
     expect inspect-sparse 0 '^level 1     spacing 1 m: [0-9]+ bricks' -- "$pb" inspect "$tmp/s.probes"
-    expect inspect-sparse-refined 0 '^refined     where off by more than 0.1: surface test, its probes at 4x the passes' -- \
+    expect inspect-sparse-refined 0 '^refined     where off by more than 0.1: surface test, its probes at 4x the passes; seam test 0 rounds' -- \
         "$pb" inspect "$tmp/s.probes"
-    expect inspect-sparse-refined-json 0 '"refine_error": 0.1, "refine_test": "surface", "test_pass_scale": 4' -- \
+    expect inspect-sparse-refined-json 0 '"refine_error": 0.1, "refine_test": "surface", "test_pass_scale": 4, "seam_rounds": 0' -- \
         "$pb" inspect "$tmp/s.probes" --json
+    # the seam test: cells refined because a finer brick's hanging probe saw them err, recorded in the file
+    expect bake-sparse-seams 0 '^sparse: 3 levels, .*refined [0-9]+ \([1-9][0-9]* at seams\)' -- \
+        "$pb" bake "$demo" --layout sparse --spacing 0.5 --rays 32 --passes 1 --octmap-res 4 --refine-seams 2 \
+        -o "$tmp/seams.probes"
+    expect inspect-sparse-seams 0 'seam test 2 rounds' -- "$pb" inspect "$tmp/seams.probes"
     expect inspect-sparse-probe-test 0 '^refined     where off by more than 1: probe test' -- "$pb" inspect "$tmp/sp.probes"
     # the debug views of a sparse file: one tile per probe, in layout order
     sparse_probes=$("$pb" inspect "$tmp/s.probes" --json | sed -n 's/.*"probes": \([0-9]*\),.*/\1/p' | head -n 1)

@@ -350,6 +350,28 @@ static void sparse_parts_merge_to_the_whole_bake(void)
     for (uint32_t i = 0; i < made; ++i)
         pb_volume_free(&parts[i]);
     pb_volume_free(&whole);
+    /* with the seam test, which adds bricks to a level in rounds (then ordered by coarsest brick):
+     * the parts still merge to the whole bake's file */
+    pb_sparse_desc seams = {2, 0.1f, PB_REFINE_TEST_SURFACE, 0, 2};
+    pb_sparse_stats st;
+    if (pb_bake_sparse(ctx, su.scene, su.gs, &d, &seams, &whole, &st, &err) == PB_OK) {
+        made = 0;
+        for (uint32_t i = 0; i < 3; ++i)
+            made += bake_layout_part(&su, &d, &seams, i, 3, &parts[made]);
+        if (made == 3) {
+            CHECK(pb_volume_merge(parts, names, 3, &merged, &err) == PB_OK);
+            int same = same_but_timings(&whole, &merged);
+            fprintf(stderr, "  sparse with the seam test: %u cells refined at seams, %u bricks; merged file %s\n",
+                    st.seam_refined[0], whole.sparse->brick_count, same ? "the same as the whole bake's" : "DIFFERENT");
+            CHECK(same && st.seam_refined[0] > 0 && whole.settings.seam_rounds == 2);
+            pb_volume_free(&merged);
+        }
+        for (uint32_t i = 0; i < made; ++i)
+            pb_volume_free(&parts[i]);
+        pb_volume_free(&whole);
+    } else {
+        CHECKF(0, "%s", err.message);
+    }
     pb_volume v;
     d.shard_index = 0, d.shard_count = 2;
     d.target_error = 0.05f;

@@ -150,6 +150,44 @@ static void surface_tests_take_more_passes(void)
     pb_scene_destroy(s);
 }
 
+/* The seam test (placement step 3): a finer brick's hanging probes test the
+ * coarser cells beside them. On the shadow boundary it may refine beside the
+ * refined cells, but never on the open sunlit side (the coarse level is right
+ * there), and it only adds bricks: every brick of the plain placement stays. */
+static void seam_test_refines_only_where_coarse_errs(void)
+{
+    pb_scene *s = floor_scene(1);
+    if (!s)
+        return;
+    pb_bake_desc d = sparse_desc(s);
+    d.sky[0] = d.sky[1] = d.sky[2] = 0.05f;
+    pb_sparse_desc plain = {2, 0.1f}, seams = {2, 0.1f, PB_REFINE_TEST_SURFACE, 0, 4};
+    pb_sparse_stats sp, ss;
+    pb_volume vp, vs;
+    if (sparse_bake(s, &d, &plain, &vp, &sp)) {
+        if (sparse_bake(s, &d, &seams, &vs, &ss)) {
+            uint32_t sunlit = 0, missing = 0;
+            for (uint32_t b = 0; b < vs.sparse->brick_count; ++b)
+                sunlit += vs.sparse->bricks[b].level == 1 && vs.sparse->bricks[b].coord[0] >= 6;
+            for (uint32_t a = 0; a < vp.sparse->brick_count; ++a) {
+                int found = 0;
+                for (uint32_t b = 0; b < vs.sparse->brick_count && !found; ++b)
+                    found = !memcmp(&vp.sparse->bricks[a], &vs.sparse->bricks[b], sizeof(pb_sparse_brick));
+                missing += !found;
+            }
+            fprintf(stderr, "  plain: %u cells refined, %u bricks; seam test: %u refined (%u at seams), %u bricks, "
+                    "%u on the open sunlit side, %u plain bricks missing\n", sp.refined[0], vp.sparse->brick_count,
+                    ss.refined[0], ss.seam_refined[0], vs.sparse->brick_count, sunlit, missing);
+            CHECK(sp.seam_refined[0] == 0 && vp.settings.seam_rounds == 0 && vs.settings.seam_rounds == 4);
+            CHECK(ss.refined[0] == sp.refined[0] + ss.seam_refined[0]);
+            CHECK(missing == 0 && sunlit == 0);
+            pb_volume_free(&vs);
+        }
+        pb_volume_free(&vp);
+    }
+    pb_scene_destroy(s);
+}
+
 static void shadow_boundary_is_refined(void)
 {
     pb_scene *s = floor_scene(1);
@@ -679,6 +717,7 @@ int main(void)
     RUN(uniform_sky_is_not_refined);
     RUN(surface_tests_take_more_passes);
     RUN(shadow_boundary_is_refined);
+    RUN(seam_test_refines_only_where_coarse_errs);
     RUN(sparse_file_round_trip);
     RUN(surface_tests_sit_nearest_the_cell_centre);
     RUN(solid_probes_are_never_sampled);

@@ -203,6 +203,9 @@ typedef struct pb_sparse_desc {
                                      times the bake's passes (pb_bake_passes). Their standard error gates the refinement, so noisy tests
                                      leave dark, noisy surfaces coarse (bench/RESULTS.md, "The Crypt's
                                      remaining gap") */
+    uint32_t seam_rounds;         /* default 0 (off), at most 8: rounds of the seam test, which refines a
+                                     coarser cell where a finer brick's hanging probe on its face misses
+                                     its value there (docs/sparse.md, placement step 3) */
 } pb_sparse_desc;
 
 /* What the refinement did, per level. */
@@ -216,6 +219,8 @@ typedef struct pb_sparse_stats {
     uint32_t beyond[3];           /* cells not tested: wholly outside the bake bounds (the coarsest
                                      bricks overshoot them) */
     uint32_t refined[3];          /* cells subdivided into a brick of the next level */
+    uint32_t seam_refined[3];     /* of those, by the seam test: a hanging probe of the next level on the
+                                     cell's face missed the cell's value there */
     uint32_t test_probes[3];      /* surface test: probes baked to test the cells of each level, thrown away */
     uint32_t bakes;               /* pb_bake calls */
 } pb_sparse_stats;

@@ -37,8 +37,9 @@ static const char *differs(const pb_volume *a, const pb_volume *b)
         return "bake settings (rays, bounces, target error, SH window, clamp or estimators)";
     if (x->refine_error != y->refine_error)
         return "sparse refine error";
-    if (x->refine_test != y->refine_test || x->test_pass_scale != y->test_pass_scale)
-        return "sparse refinement test (--refine-test or its passes)";
+    if (x->refine_test != y->refine_test || x->test_pass_scale != y->test_pass_scale ||
+        x->seam_rounds != y->seam_rounds)
+        return "sparse refinement test (--refine-test, its passes or --refine-seams)";
     return "";
 }
 

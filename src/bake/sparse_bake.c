@@ -51,6 +51,7 @@ typedef struct sparse_job {
     float refine_error;                 /* recorded in the volume (parts must agree) */
     uint32_t refine_test;               /* 1 + pb_refine_test, recorded too */
     uint32_t test_pass_scale;           /* the surface test's, recorded too (0 for the probe test) */
+    uint32_t seam_rounds;               /* the seam test's, recorded too */
     int one_bounce;                     /* --indirect volume: every bake is pb_bake_bounce over `feedback` */
     const pb_sample_volume *feedback;   /* the previous bounce's volume (NULL on the first) */
     uint32_t levels, cells[3];
@@ -312,6 +313,7 @@ static pb_result assemble(sparse_job *j, pb_volume *out, pb_error *err)
     out->settings.refine_error = j->refine_error;
     out->settings.refine_test = j->refine_test;
     out->settings.test_pass_scale = j->test_pass_scale;
+    out->settings.seam_rounds = j->seam_rounds;
     out->timings = j->timings;
     out->rays_traced = j->rays;
     out->traversals = j->traversals;
@@ -395,6 +397,21 @@ static pb_result test_by_probe(sparse_job *j, const pb_sparse_desc *sd, const pb
     return r;
 }
 
+/* Where the surface tests of the cells of level-`level` bricks lie: a test
+ * point every 3 finest spacings at most, per normal axis (a 9-cell is tested
+ * on its 27 sub-cells); below the lattice origin the bounds reach down by
+ * up to a finest spacing (the grid is centred in them). */
+static pb_cell_test_desc cell_test_desc(const sparse_job *j, uint32_t level)
+{
+    uint32_t step = pb_sparse_step(j->levels, level);
+    pb_cell_test_desc td = {.sub = step >= 9 ? step / 3 : 1};
+    if (td.sub > PB_CELL_TESTS_SUB_MAX)
+        td.sub = PB_CELL_TESTS_SUB_MAX;
+    for (int k = 0; k < 3; ++k)
+        td.origin[k] = j->d.grid.origin[k], td.size[k] = j->F[k] * step, td.margin[k] = j->F[k];
+    return td;
+}
+
 /* The surface test (sparse_surface_tests.h): probes baked at points on the
  * surfaces inside each cell, where a renderer samples (biased off the
  * surface as the sampler biases, seen along the normal); the cell is
@@ -403,16 +420,8 @@ static pb_result test_by_probe(sparse_job *j, const pb_sparse_desc *sd, const pb
 static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const pb_sample_volume *sv,
                                  const pb_sparse_brick *cells, uint32_t count, uint8_t *refine, pb_error *err)
 {
-    uint32_t step = pb_sparse_step(j->levels, cells[0].level - 1);
     float finest = (float)fmin(j->F[0], fmin(j->F[1], j->F[2]));
-    /* a test point every 3 finest spacings at most, per normal axis: a 9-cell
-     * is tested on its 27 sub-cells; below the lattice origin the bounds reach
-     * down by up to a finest spacing (the grid is centred in them) */
-    pb_cell_test_desc td = {.sub = step >= 9 ? step / 3 : 1};
-    if (td.sub > PB_CELL_TESTS_SUB_MAX)
-        td.sub = PB_CELL_TESTS_SUB_MAX;
-    for (int k = 0; k < 3; ++k)
-        td.origin[k] = j->d.grid.origin[k], td.size[k] = j->F[k] * step, td.margin[k] = j->F[k];
+    pb_cell_test_desc td = cell_test_desc(j, cells[0].level - 1);
     uint32_t *coords = malloc(((size_t)count + 1) * 3 * sizeof *coords);
     if (!coords)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse refinement");
@@ -484,8 +493,139 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
     return r;
 }
 
+/* Whether the cell of a level-`level` brick at next-level coordinates c is
+ * worth a finer brick: inside the bounds (the coarsest bricks overshoot
+ * them: a cell wholly beyond is not the user's volume; the bounds reach up to
+ * one finest spacing past the last lattice point, so a cell starting at the
+ * last point still holds surfaces), with a valid corner (else solid: nothing
+ * to light) and a surface within two cells of a corner probe or a corner
+ * inside geometry. 0 worth it, 1 beyond, 2 not near or solid. */
+static int cell_unworthy(const sparse_job *j, uint32_t level, const uint32_t c[3])
+{
+    uint32_t step = pb_sparse_step(j->levels, level);
+    double s_l = fmax(j->F[0], fmax(j->F[1], j->F[2])) * step;
+    for (int k = 0; k < 3; ++k)
+        if (c[k] * step > j->d.grid.counts[k] - 1)
+            return 1;
+    int near = 0, open = 0;
+    for (uint32_t i = 0; i < 8; ++i) {
+        uint32_t k3[3];
+        for (int k = 0; k < 3; ++k)
+            k3[k] = (c[k] + ((i >> k) & 1u)) * step;
+        uint32_t s = store_find(j, k3);
+        int valid = (j->ps.flags[s] & PB_PROBE_VALID) != 0;
+        open |= valid;
+        near |= !valid || nearest_surface(j, s) < 2.0 * s_l;
+    }
+    return near && open ? 0 : 2;
+}
+
+/* The seam test (docs/sparse.md, placement step 3): a level's new bricks'
+ * hanging probes test the coarser cells beside them; a cell whose value
+ * misses one there is refined too, and the test runs again on the bricks
+ * that adds, until none is missed (at most j->seam_rounds rounds). */
+static pb_result refine_seams(sparse_job *j, uint32_t level, pb_error *err)
+{
+    pb_key_map tried;
+    if (!pb_key_map_init(&tried, 1024))
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the seam test");
+    uint32_t step = pb_sparse_step(j->levels, level), below = pb_sparse_step(j->levels, 0) / step * 3;
+    pb_result r = PB_OK;
+    for (uint32_t round = 0; r == PB_OK && round < j->seam_rounds; ++round) {
+        pb_volume cur;
+        if ((r = assemble(j, &cur, err)) != PB_OK)
+            break;
+        pb_sparse_brick *cells = NULL;
+        uint32_t n = 0, kept = 0;
+        r = pb_sparse_seam_misses(&cur, level + 1, &cells, &n, err);
+        for (uint32_t i = 0; r == PB_OK && i < n; ++i) {
+            float u[3];
+            uint32_t k3[3];
+            for (int k = 0; k < 3; ++k) {
+                u[k] = ((float)cells[i].coord[k] + 0.5f) / (float)below;
+                k3[k] = cells[i].coord[k] * step;
+            }
+            uint32_t at = pb_sparse_find(cur.sparse, u);
+            if (at == PB_SPARSE_EMPTY || cur.sparse->bricks[at].level != level)
+                continue; /* already finer (or no brick there) */
+            uint64_t key = lattice_key(j, k3);
+            if (pb_key_map_get(&tried, key) != PB_KEY_MAP_MISSING || cell_unworthy(j, level, cells[i].coord))
+                continue;
+            if (!pb_key_map_put(&tried, key, 1u)) {
+                r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the seam test");
+                break;
+            }
+            cells[kept++] = cells[i];
+        }
+        pb_volume_free(&cur);
+        /* only cells a surface crosses: no pixel samples the others (as for the surface test) */
+        uint32_t *coords = r == PB_OK && kept ? malloc((size_t)kept * 3 * sizeof *coords) : NULL;
+        if (r == PB_OK && kept && !coords)
+            r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the seam test");
+        if (coords) {
+            for (uint32_t i = 0; i < kept; ++i)
+                memcpy(coords + 3 * (size_t)i, cells[i].coord, 3 * sizeof *coords);
+            pb_cell_test_desc td = cell_test_desc(j, level);
+            pb_cell_tests ct;
+            r = pb_cell_surface_tests(j->scene, j->gs->bvh, &td, coords, kept, &ct, err);
+            uint32_t m = 0;
+            for (uint32_t i = 0; r == PB_OK && i < ct.count; ++i)
+                if (i == 0 || ct.cell[i] != ct.cell[i - 1])
+                    cells[m++] = cells[ct.cell[i]];
+            if (r == PB_OK) {
+                kept = m;
+                pb_cell_tests_free(&ct);
+            }
+            free(coords);
+        }
+        j->stats.refined[level] += kept;
+        j->stats.seam_refined[level] += kept;
+        if (r == PB_OK)
+            r = add_bricks(j, cells, kept, level + 1, err);
+        free(cells);
+        if (kept == 0)
+            break;
+    }
+    pb_key_map_free(&tried);
+    return r;
+}
+
+/* Bricks level by level, each level's by coarsest brick (stable): the order
+ * the parts of a sharded bake merge in, now that the seam test adds bricks
+ * to a level in rounds. */
+static int brick_order(const void *a, const void *b)
+{
+    const uint64_t *x = a, *y = b;
+    return x[0] < y[0] ? -1 : x[0] > y[0] ? 1 : (x[1] > y[1]) - (x[1] < y[1]);
+}
+
+static pb_result sort_bricks(sparse_job *j, pb_error *err)
+{
+    uint64_t *order = malloc(((size_t)j->brick_count + 1) * 2 * sizeof *order);
+    pb_sparse_brick *sorted = malloc(((size_t)j->brick_count + 1) * sizeof *sorted);
+    if (!order || !sorted) {
+        free(order), free(sorted);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u bricks", j->brick_count);
+    }
+    uint64_t C = (uint64_t)j->cells[0] * j->cells[1] * j->cells[2];
+    for (uint32_t b = 0; b < j->brick_count; ++b) {
+        const pb_sparse_brick *br = &j->bricks[b];
+        uint32_t up = pb_sparse_step(j->levels, 0) / pb_sparse_step(j->levels, br->level), r3[3];
+        for (int k = 0; k < 3; ++k)
+            r3[k] = br->coord[k] / up;
+        order[2 * b] = br->level * C + r3[0] + (uint64_t)j->cells[0] * (r3[1] + (uint64_t)j->cells[1] * r3[2]);
+        order[2 * b + 1] = b;
+    }
+    qsort(order, j->brick_count, 2 * sizeof *order, brick_order);
+    for (uint32_t b = 0; b < j->brick_count; ++b)
+        sorted[b] = j->bricks[order[2 * b + 1]];
+    memcpy(j->bricks, sorted, (size_t)j->brick_count * sizeof *sorted);
+    free(order), free(sorted);
+    return PB_OK;
+}
+
 /* Refines the bricks of `level` into the next: the cells worth testing,
- * the test, new bricks. */
+ * the test, new bricks; then the seam test. */
 static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t level, pb_error *err)
 {
     pb_volume cur;
@@ -497,7 +637,6 @@ static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t 
     pb_volume_free(&cur);
     if (r != PB_OK)
         return r;
-    double s_l = fmax(j->F[0], fmax(j->F[1], j->F[2])) * pb_sparse_step(j->levels, level);
     uint32_t nb = j->brick_count, tests = 0;
     pb_sparse_brick *test_cell = malloc(((size_t)nb * 27 + 1) * sizeof *test_cell);
     uint8_t *refine = calloc((size_t)nb * 27 + 1, 1);
@@ -505,43 +644,20 @@ static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t 
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the sparse refinement");
         goto done;
     }
-    uint32_t step = pb_sparse_step(j->levels, level);
     for (uint32_t b = 0; b < nb; ++b) {
         const pb_sparse_brick *br = &j->bricks[b];
         if (br->level != level)
             continue;
         for (uint32_t c = 0; c < 27; ++c) {
-            uint32_t cc[3] = {c % 3, (c / 3) % 3, c / 9};
-            /* the coarsest bricks overshoot the bounds (a whole number of 27-cell
-             * spans); a cell wholly beyond them is not the user's volume. The
-             * bounds reach up to one finest spacing past the last lattice point
-             * (the grid is centred in them, cmd_bake.c), so a cell starting at
-             * the last point still holds surfaces */
-            int beyond = 0;
+            uint32_t cc[3] = {c % 3, (c / 3) % 3, c / 9}, coord[3];
             for (int k = 0; k < 3; ++k)
-                beyond |= (3 * br->coord[k] + cc[k]) * step > j->d.grid.counts[k] - 1;
-            if (beyond) {
-                j->stats.beyond[level]++;
+                coord[k] = 3 * br->coord[k] + cc[k];
+            int why = cell_unworthy(j, level, coord);
+            if (why) {
+                (why == 1 ? j->stats.beyond : j->stats.skipped)[level]++;
                 continue;
             }
-            /* a surface within two cells of a corner probe, or a corner inside geometry;
-             * a cell with no valid corner is solid: nothing there to light */
-            int near = 0, open = 0;
-            for (uint32_t i = 0; i < 8; ++i) {
-                uint32_t k3[3];
-                for (int k = 0; k < 3; ++k)
-                    k3[k] = (3 * br->coord[k] + cc[k] + ((i >> k) & 1u)) * step;
-                uint32_t s = store_find(j, k3);
-                int valid = (j->ps.flags[s] & PB_PROBE_VALID) != 0;
-                open |= valid;
-                near |= !valid || nearest_surface(j, s) < 2.0 * s_l;
-            }
-            if (!near || !open) {
-                j->stats.skipped[level]++;
-                continue;
-            }
-            for (int k = 0; k < 3; ++k)
-                test_cell[tests].coord[k] = 3 * br->coord[k] + cc[k];
+            memcpy(test_cell[tests].coord, coord, sizeof coord);
             test_cell[tests].level = level + 1;
             tests++;
         }
@@ -558,6 +674,10 @@ static pb_result refine_level(sparse_job *j, const pb_sparse_desc *sd, uint32_t 
         }
     if (r == PB_OK)
         r = add_bricks(j, test_cell, nc, level + 1, err);
+    if (r == PB_OK && nc && j->seam_rounds)
+        r = refine_seams(j, level, err);
+    if (r == PB_OK)
+        r = sort_bricks(j, err);
 done:
     pb_sample_volume_free(&sv);
     free(test_cell), free(refine);
@@ -577,6 +697,7 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
     j.one_bounce = one_bounce, j.feedback = feedback, j.refine_error = sd.refine_error;
     j.refine_test = 1u + sd.test;
     j.test_pass_scale = sd.test == PB_REFINE_TEST_SURFACE ? sd.test_pass_scale : 0u;
+    j.seam_rounds = sd.seam_rounds;
     j.d.shard_index = j.d.shard_count = 0; /* a part is a range of coarsest bricks, its bakes whole */
     uint32_t span = pow3u(sd.levels);
     for (int k = 0; k < 3; ++k) {
@@ -686,6 +807,8 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
         sd.refine_error = 0.1f;
     if (sd.test_pass_scale == 0)
         sd.test_pass_scale = 4;
+    if (sd.seam_rounds > 8)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--refine-seams %u: at most 8 rounds", sd.seam_rounds);
     if (sd.test_pass_scale > 64)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "sparse bake: the surface test's probes at %u times the bake's passes: at most 64",

@@ -7,6 +7,7 @@
 #include "probebake/sparse.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* What brick o's own sampler holds at finest-lattice point k3, as SH: its
@@ -78,6 +79,120 @@ static int coarse_misses(const pb_volume *v, uint32_t p, const float coarse[27])
     return pb_sparse_misses(pred, baked, v->probe_std_error ? v->probe_std_error[p] : 0.f, tol);
 }
 
+/* The coarsest brick of a level below `level` that serves a cell of this
+ * level around finest-lattice point k3 and does not have that point (k3 is
+ * a hanging probe of it), coarse levels first; PB_SPARSE_EMPTY if none.
+ * at[3]: the centre of that cell, in coarsest cells. */
+static uint32_t hanging_on(const pb_sparse_layout *sp, uint32_t level, uint32_t span, const uint32_t k3[3],
+                           float at[3])
+{
+    uint32_t L = sp->levels, step = pb_sparse_step(L, level), coarse = PB_SPARSE_EMPTY;
+    for (uint32_t c = 0; c < 8; ++c) { /* the eight cells of this level around the probe */
+        float u[3];
+        int outside = 0;
+        for (int k = 0; k < 3; ++k) {
+            double cell = (double)k3[k] + (((c >> k) & 1u) ? 0.5 : -0.5) * step;
+            outside |= cell < 0.0 || cell > (double)sp->cells[k] * span;
+            u[k] = (float)(cell / span);
+        }
+        if (outside)
+            continue;
+        uint32_t nbk = pb_sparse_find(sp, u);
+        if (nbk == PB_SPARSE_EMPTY)
+            continue;
+        const pb_sparse_brick *o = &sp->bricks[nbk];
+        uint32_t ostep = pb_sparse_step(L, o->level);
+        if (o->level < level && (k3[0] % ostep || k3[1] % ostep || k3[2] % ostep) &&
+            (coarse == PB_SPARSE_EMPTY || o->level < sp->bricks[coarse].level)) {
+            coarse = nbk;
+            memcpy(at, u, sizeof u);
+        }
+    }
+    return coarse;
+}
+
+pb_result pb_sparse_seam_misses(const pb_volume *v, uint32_t level, pb_sparse_brick **cells, uint32_t *count,
+                                pb_error *err)
+{
+    const pb_sparse_layout *sp = v->sparse;
+    *cells = NULL;
+    *count = 0;
+    if (!sp || level == 0 || level >= sp->levels)
+        return PB_OK;
+    pb_sample_volume sv;
+    pb_result r = pb_sample_volume_build(v, v->origin, 0.f, 0.f, &sv, err);
+    if (r != PB_OK)
+        return r;
+    /* span: finest steps per coarsest brick; below: level-`level` bricks per coarsest brick, per axis */
+    uint32_t L = sp->levels, span = 3 * pb_sparse_step(L, 0), step = pb_sparse_step(L, level), below = span / (3 * step);
+    uint32_t cap = 0;
+    for (uint32_t b = 0; r == PB_OK && b < sp->brick_count; ++b) {
+        const pb_sparse_brick *br = &sp->bricks[b];
+        if (br->level != level)
+            continue;
+        for (uint32_t i = 0; r == PB_OK && i < PB_SPARSE_BRICK_PROBES; ++i) {
+            uint32_t off[3] = {i & 3u, (i >> 2) & 3u, i >> 4}, k3[3];
+            if (off[0] % 3 && off[1] % 3 && off[2] % 3)
+                continue; /* inside the brick */
+            uint32_t p = sp->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)b + i];
+            if (!(v->probe_flags[p] & PB_PROBE_VALID))
+                continue; /* no bake to test against */
+            for (int k = 0; k < 3; ++k)
+                k3[k] = (3 * br->coord[k] + off[k]) * step;
+            float where[3];
+            for (int k = 0; k < 3; ++k)
+                where[k] = v->base[3 * (size_t)p + k] + v->offset[3 * (size_t)p + k];
+            /* each cell of the coarser level around the probe, in its coarsest brick (refinement never
+             * leaves one: parts place as the whole), that does not have the probe's lattice point */
+            for (uint32_t c = 0; r == PB_OK && c < 8; ++c) {
+                float u[3];
+                int outside = 0;
+                for (int k = 0; k < 3; ++k) {
+                    double at = (double)k3[k] + (((c >> k) & 1u) ? 0.5 : -0.5) * step;
+                    outside |= at < 0.0 || at > (double)sp->cells[k] * span;
+                    u[k] = (float)(at / span);
+                }
+                if (outside)
+                    continue;
+                pb_sparse_brick cell = {level, {0, 0, 0}};
+                int same_root = 1;
+                for (int k = 0; k < 3; ++k) {
+                    cell.coord[k] = (uint32_t)floorf(u[k] * (float)below);
+                    same_root &= cell.coord[k] / below == br->coord[k] / below;
+                }
+                uint32_t coarse = same_root ? pb_sparse_find(sp, u) : PB_SPARSE_EMPTY;
+                if (coarse == PB_SPARSE_EMPTY || sp->bricks[coarse].level + 1 != level)
+                    continue;
+                uint32_t ostep = pb_sparse_step(L, level - 1);
+                if (!(k3[0] % ostep || k3[1] % ostep || k3[2] % ostep))
+                    continue; /* the coarser brick has this point: not hanging there */
+                int seen = 0;
+                for (uint32_t e = *count; e-- > 0 && !seen;)
+                    seen = !memcmp((*cells)[e].coord, cell.coord, sizeof cell.coord);
+                float sh[27];
+                if (seen || !brick_visible_trilinear(v, &sv, coarse, k3, where, sh) || !coarse_misses(v, p, sh))
+                    continue;
+                if (*count == cap) {
+                    uint32_t nc = cap ? 2 * cap : 64;
+                    pb_sparse_brick *g = realloc(*cells, (size_t)nc * sizeof *g);
+                    if (!g) {
+                        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the seam test");
+                        break;
+                    }
+                    *cells = g, cap = nc;
+                }
+                (*cells)[(*count)++] = cell;
+            }
+        }
+    }
+    pb_sample_volume_free(&sv);
+    if (r != PB_OK) {
+        free(*cells);
+        *cells = NULL, *count = 0;
+    }
+    return r;
+}
+
 pb_result pb_sparse_stitch(pb_volume *v, pb_error *err)
 {
     const pb_sparse_layout *sp = v->sparse;
@@ -104,26 +219,8 @@ pb_result pb_sparse_stitch(pb_volume *v, pb_error *err)
                     continue; /* inside the brick */
                 for (int k = 0; k < 3; ++k)
                     k3[k] = (3 * br->coord[k] + off[k]) * step;
-                uint32_t coarse = PB_SPARSE_EMPTY;
-                for (uint32_t c = 0; c < 8; ++c) { /* the eight cells of this level around the probe */
-                    float u[3];
-                    int outside = 0;
-                    for (int k = 0; k < 3; ++k) {
-                        double cell = (double)k3[k] + (((c >> k) & 1u) ? 0.5 : -0.5) * step;
-                        outside |= cell < 0.0 || cell > (double)sp->cells[k] * span;
-                        u[k] = (float)(cell / span);
-                    }
-                    if (outside)
-                        continue;
-                    uint32_t nbk = pb_sparse_find(sp, u);
-                    if (nbk == PB_SPARSE_EMPTY)
-                        continue;
-                    const pb_sparse_brick *o = &sp->bricks[nbk];
-                    uint32_t ostep = pb_sparse_step(L, o->level);
-                    if (o->level < level && (k3[0] % ostep || k3[1] % ostep || k3[2] % ostep) &&
-                        (coarse == PB_SPARSE_EMPTY || o->level < sp->bricks[coarse].level))
-                        coarse = nbk;
-                }
+                float u[3];
+                uint32_t coarse = hanging_on(sp, level, span, k3, u);
                 if (coarse == PB_SPARSE_EMPTY)
                     continue;
                 /* visibility of where the probe is (relocated out of walls), not of its lattice point */

@@ -14,4 +14,14 @@
  * Reads only the volume, so a bake and a merge of its parts stitch alike. */
 pb_result pb_sparse_stitch(pb_volume *v, pb_error *err);
 
+/* The seam test of a placement (docs/sparse.md, placement step 3): every
+ * valid hanging probe of a level-`level` brick tests the coarser cell next
+ * to it, one level up, on that cell's face. Where the cell's value there
+ * misses the probe's bake as pb_sparse_stitch judges it (the refine error
+ * and 3 standard errors), that cell is returned, as a level-`level` brick
+ * coordinate inside the same coarsest brick (*cells: malloc'd, *count; each
+ * once). v: an undilated, unstitched sparse volume (the placement so far). */
+pb_result pb_sparse_seam_misses(const pb_volume *v, uint32_t level, pb_sparse_brick **cells, uint32_t *count,
+                                pb_error *err);
+
 #endif

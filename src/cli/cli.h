@@ -52,6 +52,8 @@ typedef struct options {
     float refine_error;                /* 0: the default */
     uint32_t refine_test;              /* pb_refine_test */
     int has_refine_test;
+    uint32_t refine_seams;             /* rounds of the sparse seam test */
+    int has_refine_seams;
     /* merge: OUT is `scene`, the parts follow */
     char **parts;
     uint32_t part_count;

@@ -70,7 +70,8 @@ static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_b
         fprintf(stderr, "\n");
     if (r == PB_OK) {
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
-        pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test};
+        pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test, 0,
+                                 o->refine_seams};
         r = pb_bake_devices(ctxs, scenes, n, s, d, o->sparse ? &sd : NULL, vol, err);
     }
     for (uint32_t i = 0; r == PB_OK && o->validation && i < n; ++i)
@@ -228,9 +229,9 @@ int cmd_bake(const options *o)
                 d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
                 d.indirect_clamp > 0.f ? (snprintf(clamp_text, sizeof clamp_text, "%g", d.indirect_clamp), clamp_text) : "",
                 d.sh_window == 1 ? " SH Hanning window" : d.sh_window == 2 ? " SH Lanczos window" : "");
-    if (!o->sparse && (o->has_max_level || o->refine_error > 0.f || o->has_refine_test)) {
+    if (!o->sparse && (o->has_max_level || o->refine_error > 0.f || o->has_refine_test || o->has_refine_seams)) {
         snprintf(err.message, sizeof err.message,
-                 "--max-level, --refine-error and --refine-test shape a sparse layout: add --layout sparse");
+                 "--max-level, --refine-error, --refine-test and --refine-seams shape a sparse layout: add --layout sparse");
         goto out;
     }
     if (o->sparse && o->points) {
@@ -259,7 +260,8 @@ int cmd_bake(const options *o)
             goto out;
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
         if (o->sparse) {
-            pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test};
+            pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test, 0,
+                                 o->refine_seams};
             r = pb_bake_sparse(ctx, s, gs, &d, &sd, &vol, &sparse_stats, &err);
             probes = vol.probe_count;
         } else {
@@ -305,8 +307,9 @@ int cmd_bake(const options *o)
         fprintf(report, " (%u dropped inside geometry), probes baked per level", st->dropped[0] + st->dropped[1] + st->dropped[2]);
         for (uint32_t l = 0; l < vol.sparse->levels; ++l)
             fprintf(report, " %u", st->probes[l]);
-        fprintf(report, "; cells tested %u, refined %u, not tested (no surface near or inside, or solid) %u, beyond the bounds %u; %u bakes, %u test probes thrown away\n",
-                st->tested[0] + st->tested[1], st->refined[0] + st->refined[1], st->skipped[0] + st->skipped[1],
+        fprintf(report, "; cells tested %u, refined %u (%u at seams), not tested (no surface near or inside, or solid) %u, beyond the bounds %u; %u bakes, %u test probes thrown away\n",
+                st->tested[0] + st->tested[1], st->refined[0] + st->refined[1],
+                st->seam_refined[0] + st->seam_refined[1], st->skipped[0] + st->skipped[1],
                 st->beyond[0] + st->beyond[1], st->bakes, st->test_probes[0] + st->test_probes[1]);
     }
     if (o->shard_count && o->sparse)

@@ -148,11 +148,11 @@ int cmd_inspect(const options *o)
             sparse_census c = census(&v);
             printf(",\n  \"sparse\": {\"levels\": %u, \"cells\": [%u, %u, %u], \"bricks\": [%u, %u, %u], "
                    "\"probes\": [%u, %u, %u], \"chunk_entries\": %u, \"bytes\": %llu, \"refine_error\": %g, "
-                   "\"refine_test\": %s, \"test_pass_scale\": %u}",
+                   "\"refine_test\": %s, \"test_pass_scale\": %u, \"seam_rounds\": %u}",
                    v.sparse->levels, v.sparse->cells[0], v.sparse->cells[1], v.sparse->cells[2], c.bricks[0],
                    c.bricks[1], c.bricks[2], c.probes[0], c.probes[1], c.probes[2], v.sparse->chunk_count,
                    (unsigned long long)pb_volume_file_bytes(&v), (double)s->refine_error,
-                   refine_test_json(s->refine_test), s->test_pass_scale);
+                   refine_test_json(s->refine_test), s->test_pass_scale, s->seam_rounds);
         }
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
@@ -194,10 +194,11 @@ int cmd_inspect(const options *o)
             printf("bytes       %llu (%u chunk entries)\n", (unsigned long long)pb_volume_file_bytes(&v),
                    v.sparse->chunk_count);
             if (s->refine_test == 1u + PB_REFINE_TEST_SURFACE)
-                printf("refined     where off by more than %g: surface test, its probes at %ux the passes\n",
-                       (double)s->refine_error, s->test_pass_scale);
+                printf("refined     where off by more than %g: surface test, its probes at %ux the passes; seam test "
+                       "%u rounds\n", (double)s->refine_error, s->test_pass_scale, s->seam_rounds);
             else if (s->refine_test == 1u + PB_REFINE_TEST_PROBE)
-                printf("refined     where off by more than %g: probe test\n", (double)s->refine_error);
+                printf("refined     where off by more than %g: probe test; seam test %u rounds\n",
+                       (double)s->refine_error, s->seam_rounds);
             else if (s->refine_error > 0.f)
                 printf("refined     where off by more than %g (test not recorded: an older file)\n",
                        (double)s->refine_error);

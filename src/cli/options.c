@@ -81,6 +81,8 @@ void cli_print_help(void)
            "                                 probes by more than E of their irradiance (default 0.1; < 1 for surface)\n"
            "  --refine-test surface|probe    sparse: test probes at points on the surfaces in a cell, along\n"
            "                                 their normals (default), or one probe inside it, six axes\n"
+           "  --refine-seams N               sparse: N rounds (0-8, default 0) of the seam test: also refine a\n"
+           "                                 coarser cell where a finer brick's probe on its face sees it err\n"
            "render options:\n"
            "  --mode probes|reference|direct|indirect|diff   (default probes with --volume, else reference)\n"
            "  --camera I | --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]   (default: glTF camera 0)\n"
@@ -167,7 +169,8 @@ static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
     X(OPT_LAYOUT, "layout", required_argument) \
     X(OPT_MAX_LEVEL, "max-level", required_argument) \
     X(OPT_REFINE_ERROR, "refine-error", required_argument) \
-    X(OPT_REFINE_TEST, "refine-test", required_argument)
+    X(OPT_REFINE_TEST, "refine-test", required_argument) \
+    X(OPT_REFINE_SEAMS, "refine-seams", required_argument)
 
 enum {
     OPT_FIRST = 256,
@@ -439,6 +442,10 @@ static int apply(options *o, const char *a, const char *next)
             return cli_usage_error("--refine-test '%s' is not surface or probe", next ? next : "");
         o->refine_test = !strcmp(next, "probe") ? PB_REFINE_TEST_PROBE : PB_REFINE_TEST_SURFACE;
         o->has_refine_test = 1;
+    } else if (!strcmp(a, "--refine-seams")) {
+        if (!next || !parse_u32(next, 0, 8, &o->refine_seams))
+            return cli_usage_error("--refine-seams '%s' is not a number of rounds from 0 to 8", next ? next : "");
+        o->has_refine_seams = 1;
     } else if (!strcmp(a, "--devices")) {
         if (!next)
             return cli_usage_error("%s needs all or a comma-separated list of device indices or names", a);
