@@ -79,6 +79,21 @@ static int coarse_misses(const pb_volume *v, uint32_t p, const float coarse[27])
     return pb_sparse_misses(pred, baked, v->probe_std_error ? v->probe_std_error[p] : 0.f, tol);
 }
 
+/* The centre u (in coarsest bricks) of cell c (0-7) of the eight cells of
+ * spacing `step` around finest-lattice point k3; 0 where it lies outside
+ * the layout. span: finest steps per coarsest brick. */
+static int cell_around(const pb_sparse_layout *sp, const uint32_t k3[3], uint32_t c, uint32_t step, uint32_t span,
+                       float u[3])
+{
+    int outside = 0;
+    for (int k = 0; k < 3; ++k) {
+        double at = (double)k3[k] + (((c >> k) & 1u) ? 0.5 : -0.5) * step;
+        outside |= at < 0.0 || at > (double)sp->cells[k] * span;
+        u[k] = (float)(at / span);
+    }
+    return !outside;
+}
+
 /* The coarsest brick of a level below `level` that serves a cell of this
  * level around finest-lattice point k3 and does not have that point (k3 is
  * a hanging probe of it), coarse levels first; PB_SPARSE_EMPTY if none.
@@ -89,13 +104,7 @@ static uint32_t hanging_on(const pb_sparse_layout *sp, uint32_t level, uint32_t 
     uint32_t L = sp->levels, step = pb_sparse_step(L, level), coarse = PB_SPARSE_EMPTY;
     for (uint32_t c = 0; c < 8; ++c) { /* the eight cells of this level around the probe */
         float u[3];
-        int outside = 0;
-        for (int k = 0; k < 3; ++k) {
-            double cell = (double)k3[k] + (((c >> k) & 1u) ? 0.5 : -0.5) * step;
-            outside |= cell < 0.0 || cell > (double)sp->cells[k] * span;
-            u[k] = (float)(cell / span);
-        }
-        if (outside)
+        if (!cell_around(sp, k3, c, step, span, u))
             continue;
         uint32_t nbk = pb_sparse_find(sp, u);
         if (nbk == PB_SPARSE_EMPTY)
@@ -146,13 +155,7 @@ pb_result pb_sparse_seam_misses(const pb_volume *v, uint32_t level, pb_sparse_br
              * leaves one: parts place as the whole), that does not have the probe's lattice point */
             for (uint32_t c = 0; r == PB_OK && c < 8; ++c) {
                 float u[3];
-                int outside = 0;
-                for (int k = 0; k < 3; ++k) {
-                    double at = (double)k3[k] + (((c >> k) & 1u) ? 0.5 : -0.5) * step;
-                    outside |= at < 0.0 || at > (double)sp->cells[k] * span;
-                    u[k] = (float)(at / span);
-                }
-                if (outside)
+                if (!cell_around(sp, k3, c, step, span, u))
                     continue;
                 pb_sparse_brick cell = {level, {0, 0, 0}};
                 int same_root = 1;
