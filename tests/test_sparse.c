@@ -151,9 +151,11 @@ static void surface_tests_take_more_passes(void)
 }
 
 /* The seam test (placement step 3): a finer brick's hanging probes test the
- * coarser cells beside them. On the shadow boundary it may refine beside the
- * refined cells, but never on the open sunlit side (the coarse level is right
- * there), and it only adds bricks: every brick of the plain placement stays. */
+ * coarser cells beside them. On the shadow boundary at E = 0.05 it refines
+ * cells beside the refined ones (at 0.1 it finds none to add here), never on
+ * the open sunlit side (the coarse level is right there), never a cell apart
+ * from every other fine brick, and it only adds bricks: every brick of the
+ * plain placement stays. */
 static void seam_test_refines_only_where_coarse_errs(void)
 {
     pb_scene *s = floor_scene(1);
@@ -161,14 +163,26 @@ static void seam_test_refines_only_where_coarse_errs(void)
         return;
     pb_bake_desc d = sparse_desc(s);
     d.sky[0] = d.sky[1] = d.sky[2] = 0.05f;
-    pb_sparse_desc plain = {2, 0.1f}, seams = {2, 0.1f, PB_REFINE_TEST_SURFACE, 0, 4};
+    pb_sparse_desc plain = {2, 0.05f}, seams = {2, 0.05f, PB_REFINE_TEST_SURFACE, 0, 4};
     pb_sparse_stats sp, ss;
     pb_volume vp, vs;
     if (sparse_bake(s, &d, &plain, &vp, &sp)) {
         if (sparse_bake(s, &d, &seams, &vs, &ss)) {
-            uint32_t sunlit = 0, missing = 0;
-            for (uint32_t b = 0; b < vs.sparse->brick_count; ++b)
-                sunlit += vs.sparse->bricks[b].level == 1 && vs.sparse->bricks[b].coord[0] >= 6;
+            uint32_t sunlit = 0, missing = 0, alone = 0;
+            const pb_sparse_layout *ls = vs.sparse;
+            for (uint32_t b = 0; b < ls->brick_count; ++b) {
+                if (ls->bricks[b].level != 1)
+                    continue;
+                sunlit += ls->bricks[b].coord[0] >= 6;
+                int touches = 0; /* another fine brick within one brick along every axis */
+                for (uint32_t o = 0; o < ls->brick_count && !touches; ++o) {
+                    int near = o != b && ls->bricks[o].level == 1;
+                    for (int k = 0; k < 3 && near; ++k)
+                        near = abs((int)ls->bricks[o].coord[k] - (int)ls->bricks[b].coord[k]) <= 1;
+                    touches = near;
+                }
+                alone += !touches;
+            }
             for (uint32_t a = 0; a < vp.sparse->brick_count; ++a) {
                 int found = 0;
                 for (uint32_t b = 0; b < vs.sparse->brick_count && !found; ++b)
@@ -176,11 +190,60 @@ static void seam_test_refines_only_where_coarse_errs(void)
                 missing += !found;
             }
             fprintf(stderr, "  plain: %u cells refined, %u bricks; seam test: %u refined (%u at seams), %u bricks, "
-                    "%u on the open sunlit side, %u plain bricks missing\n", sp.refined[0], vp.sparse->brick_count,
-                    ss.refined[0], ss.seam_refined[0], vs.sparse->brick_count, sunlit, missing);
+                    "%u on the open sunlit side, %u apart, %u plain bricks missing\n", sp.refined[0],
+                    vp.sparse->brick_count, ss.refined[0], ss.seam_refined[0], vs.sparse->brick_count, sunlit, alone,
+                    missing);
             CHECK(sp.seam_refined[0] == 0 && vp.settings.seam_rounds == 0 && vs.settings.seam_rounds == 4);
-            CHECK(ss.refined[0] == sp.refined[0] + ss.seam_refined[0]);
-            CHECK(missing == 0 && sunlit == 0);
+            CHECK(ss.seam_refined[0] > 0 && ss.refined[0] == sp.refined[0] + ss.seam_refined[0]);
+            CHECK(missing == 0 && sunlit == 0 && alone == 0);
+            /* the gate itself (pb_sparse_seam_misses), on this layout: with every probe's SH the
+             * same (uniform light, no noise) no coarser cell misses; with one hanging probe's
+             * light tripled, the cells it hangs on do, and only cells beside it */
+            float sh0[27];
+            memcpy(sh0, vs.sh, sizeof sh0);
+            for (uint32_t p = 0; p < vs.probe_count; ++p) {
+                memcpy(vs.sh + 27 * (size_t)p, sh0, sizeof sh0);
+                vs.probe_std_error[p] = 0.f;
+            }
+            pb_sparse_brick *cells = NULL;
+            uint32_t n = 0, hang = UINT32_MAX, hb = 0;
+            pb_error err;
+            CHECK(pb_sparse_seam_misses(&vs, 1, &cells, &n, &err) == PB_OK && n == 0);
+            free(cells);
+            /* the first valid face probe off the coarse lattice whose tripling some coarser cell sees */
+            uint32_t tried = 0;
+            for (uint32_t b = 0; b < ls->brick_count && hang == UINT32_MAX && tried < 400; ++b) {
+                if (ls->bricks[b].level != 1)
+                    continue;
+                for (uint32_t i = 0; i < 64 && hang == UINT32_MAX && tried < 400; ++i) {
+                    uint32_t off[3] = {i & 3u, (i >> 2) & 3u, i >> 4}, p = ls->brick_probes[64 * (size_t)b + i];
+                    int face = off[0] % 3 == 0 || off[1] % 3 == 0 || off[2] % 3 == 0;
+                    int lattice = off[0] % 3 == 0 && off[1] % 3 == 0 && off[2] % 3 == 0;
+                    if (!face || lattice || !(vs.probe_flags[p] & PB_PROBE_VALID))
+                        continue;
+                    tried++;
+                    for (int c = 0; c < 27; ++c)
+                        vs.sh[27 * (size_t)p + c] *= 3.f;
+                    CHECK(pb_sparse_seam_misses(&vs, 1, &cells, &n, &err) == PB_OK);
+                    if (n) {
+                        hang = p, hb = b;
+                        break;
+                    }
+                    free(cells);
+                    memcpy(vs.sh + 27 * (size_t)p, sh0, sizeof sh0);
+                }
+            }
+            CHECK(hang != UINT32_MAX);
+            if (hang != UINT32_MAX) {
+                uint32_t far = 0;
+                for (uint32_t c = 0; c < n; ++c) /* beside the probe's brick: one brick away at most */
+                    for (int k = 0; k < 3; ++k)
+                        far += abs((int)cells[c].coord[k] - (int)ls->bricks[hb].coord[k]) > 1;
+                fprintf(stderr, "  gate: uniform light 0 cells missed; one hanging probe x3 (of %u tried): %u cells, "
+                        "%u far\n", tried, n, far);
+                CHECK(n >= 1 && n <= 4 && far == 0);
+                free(cells);
+            }
             pb_volume_free(&vs);
         }
         pb_volume_free(&vp);

@@ -42,6 +42,22 @@ static void sibling(const char *path, const char *ext, char *out, size_t n)
     snprintf(out + l, n - l, "%s", ext);
 }
 
+/* The sampler of volume `path` (read into v) in the scene's frame; a volume
+ * baked from another scene is a warning, a failure names the file. */
+static pb_result sampler_of(const options *o, const char *path, pb_volume *v, const pb_scene *s, pb_sample_volume *sv,
+                            pb_error *err)
+{
+    if (pb_scene_hash(s) != v->settings.scene_hash && !o->log.quiet)
+        fprintf(stderr, "probebake: warning: %s was baked from a different scene than %s\n", path, o->scene);
+    pb_result r = pb_sample_volume_build(v, s->origin, 0.f, 0.f, sv, err);
+    if (r != PB_OK) {
+        char m[sizeof err->message];
+        memcpy(m, err->message, sizeof m);
+        snprintf(err->message, sizeof err->message, "%.200s: %.300s", path, m);
+    }
+    return r;
+}
+
 int cmd_render(const options *o)
 {
     if (!o->scene)
@@ -120,26 +136,9 @@ int cmd_render(const options *o)
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK ||
         pb_bake_check_light(s, o->sky, o->env ? &env : NULL, &err) != PB_OK)
         goto out;
-    if (o->volume) {
-        if (pb_scene_hash(s) != vol.settings.scene_hash && !o->log.quiet)
-            fprintf(stderr, "probebake: warning: %s was baked from a different scene than %s\n", o->volume, o->scene);
-        if (pb_sample_volume_build(&vol, s->origin, 0.f, 0.f, &sv, &err) != PB_OK) {
-            char m[sizeof err.message];
-            memcpy(m, err.message, sizeof m);
-            snprintf(err.message, sizeof err.message, "%.200s: %.300s", o->volume, m);
-            goto out;
-        }
-    }
-    if (o->seams_of) {
-        if (pb_scene_hash(s) != seams_vol.settings.scene_hash && !o->log.quiet)
-            fprintf(stderr, "probebake: warning: %s was baked from a different scene than %s\n", o->seams_of, o->scene);
-        if (pb_sample_volume_build(&seams_vol, s->origin, 0.f, 0.f, &seams_sv, &err) != PB_OK) {
-            char m[sizeof err.message];
-            memcpy(m, err.message, sizeof m);
-            snprintf(err.message, sizeof err.message, "%.200s: %.300s", o->seams_of, m);
-            goto out;
-        }
-    }
+    if ((o->volume && sampler_of(o, o->volume, &vol, s, &sv, &err) != PB_OK) ||
+        (o->seams_of && sampler_of(o, o->seams_of, &seams_vol, s, &seams_sv, &err) != PB_OK))
+        goto out;
     pb_render_desc d;
     memset(&d, 0, sizeof d);
     d.width = o->width ? o->width : 640;
