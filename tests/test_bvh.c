@@ -546,6 +546,32 @@ static void exact_diff_is_exact(void)
     CHECK(pb_exact_diff(0x1p100f, 0x1p100f, -0x1p100f, 0x1p100f) == INFINITY);
 }
 
+/* pb_rcp, the reciprocal the CPU and every device compute alike: its error
+ * bound (< 1.49u, u = 2^-24) over every float mantissa in
+ * [0.5, 2) (the guess and the steps scale exactly with the exponent), at
+ * scaled exponents, and its special values. */
+static void reciprocal_is_accurate_everywhere(void)
+{
+    double worst = 0.0;
+    for (uint32_t bits = 0x3f000000u; bits < 0x40000000u; ++bits) {
+        float b;
+        memcpy(&b, &bits, 4);
+        double e = fabs((double)pb_rcp(b) * (double)b - 1.0);
+        worst = e > worst ? e : worst;
+    }
+    printf("  pb_rcp over [0.5, 2): worst relative error %.3f u\n", worst / 0x1p-24);
+    CHECKF(worst < 1.49 * 0x1p-24, "pb_rcp error %.3g u", worst / 0x1p-24);
+    const float samples[] = {1e-35f, 3e-31f, 7.1e-20f, 0.3f, 3.0f, -5.5f, 1e10f, 2e30f, 3e35f, -1e-33f};
+    for (size_t i = 0; i < sizeof samples / sizeof *samples; ++i) {
+        double b = samples[i], e = fabs((double)pb_rcp(samples[i]) * b - 1.0);
+        CHECKF(e < 1.49 * 0x1p-24, "pb_rcp(%g): error %.3g u", b, e / 0x1p-24);
+    }
+    CHECK(pb_rcp(0.f) == INFINITY && pb_rcp(-0.f) == -INFINITY);
+    CHECK(pb_rcp(INFINITY) == 0.f && pb_rcp(-INFINITY) == 0.f && signbit(pb_rcp(-INFINITY)));
+    CHECK(isnan(pb_rcp(NAN)));
+    CHECK(pb_rcp(2.f) == 0.5f && pb_rcp(-0.25f) == -4.f);
+}
+
 int main(void)
 {
     RUN(structure_of_random_soups);
@@ -555,6 +581,7 @@ int main(void)
     RUN(bad_desc_is_refused);
     RUN(traversal_matches_brute_force);
     RUN(watertight_sphere_cpu);
+    RUN(reciprocal_is_accurate_everywhere);
     RUN(sliver_has_no_phantom_hit);
     RUN(robust_offset_avoids_self_intersection);
     RUN(offset_is_tiny_and_on_the_right_side);

@@ -534,6 +534,44 @@ static int spirv_capabilities(const char *path, uint32_t *caps, int max)
     return count;
 }
 
+/* Instructions with opcode `op` in a SPIR-V file, or -1 if unreadable. */
+static int spirv_op_count(const char *path, uint32_t op)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return -1;
+    static uint32_t words[1 << 18];
+    size_t n = fread(words, 4, sizeof words / 4, f);
+    fclose(f);
+    if (n < 5 || words[0] != 0x07230203u)
+        return -1;
+    int count = 0;
+    for (size_t i = 5; i < n;) {
+        uint32_t len = words[i] >> 16;
+        if (len == 0)
+            return -1;
+        count += (words[i] & 0xffffu) == op;
+        i += len;
+    }
+    return count;
+}
+
+/* The trace kernels' hits must be the CPU's on every device, and Vulkan lets
+ * a division be 2.5 ulp off (an H100's was: its alpha-blend cuts and some t
+ * differed from the CPU's). So hit values never come from a division
+ * (intersect.glsl's pb_rcp): the one OpFDiv left is the box test's 1/dir in
+ * ray_prepare's loop, which only culls (a second would be a hit value's). */
+static void trace_kernels_divide_only_for_boxes(void)
+{
+    const char *names[] = {"trace.spv", "trace_native64.spv"};
+    for (int i = 0; i < 2; ++i) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", PB_SHADER_DIR, names[i]);
+        int n = spirv_op_count(path, 136); /* OpFDiv */
+        CHECKF(n == 1, "%s: %d OpFDiv, expected the box test's one (-1: unreadable)", path, n);
+    }
+}
+
 static int has_64bit_capability(const char *path)
 {
     uint32_t caps[64];
@@ -625,6 +663,7 @@ int main(void)
     RUN(ray_offset_gpu_matches_cpu);
     RUN(exact_diff_gpu_matches_cpu);
     RUN(portable_kernels_need_no_64bit_types);
+    RUN(trace_kernels_divide_only_for_boxes);
     RUN(device_choice_and_refusals);
     return test_gpu_finish(ctx);
 }

@@ -11,7 +11,7 @@
 #include "exact_diff.glsl"
 
 #define PB_FLT_MIN 1.17549435e-38
-#define PB_BOX_FAR_SCALE 1.00000036 // 1 + 2*gamma(3): Ize 2013, conservative slabs
+#define PB_BOX_FAR_SCALE 1.00000095 // 1 + 16u: conservative slabs with Vulkan's division error, see intersect.h
 
 struct RayPre {
     vec3 org;
@@ -19,6 +19,35 @@ struct RayPre {
     int kx, ky, kz;
     float sx, sy, sz;
 };
+
+// 1/b as intersect.h's pb_rcp, operation for operation: GLSL's division may
+// be 2.5 ulp off and differs between drivers, so no hit value may depend on
+// it. Only the box test's 1/dir divides (it need only be conservative).
+float pb_rcp(float b)
+{
+    precise float m = abs(b);
+    precise float scale = 1.0;
+    if (m == 0.0)
+        return (floatBitsToUint(b) >> 31) != 0u ? -PB_INF : PB_INF;
+    if (isnan(m))
+        return b;
+    if (m < uintBitsToFloat(0x0D800000u)) { // 2^-100: scale by 2^64
+        m *= uintBitsToFloat(0x5F800000u);
+        scale = uintBitsToFloat(0x5F800000u);
+    } else if (m > uintBitsToFloat(0x71800000u)) { // 2^100
+        if (isinf(m))
+            return b < 0.0 ? -0.0 : 0.0;
+        m *= uintBitsToFloat(0x1F800000u);
+        scale = uintBitsToFloat(0x1F800000u);
+    }
+    precise float y = uintBitsToFloat(0x7EF311C3u - floatBitsToUint(m));
+    for (int i = 0; i < 3; ++i) {
+        precise float e = 1.0 - m * y;
+        y = y + y * e;
+    }
+    y *= scale;
+    return b < 0.0 ? -y : y;
+}
 
 RayPre ray_prepare(vec3 org, vec3 dir)
 {
@@ -35,9 +64,11 @@ RayPre ray_prepare(vec3 org, vec3 dir)
     r.kx = kx;
     r.ky = ky;
     r.kz = kz;
-    r.sx = dir[kx] / dir[kz];
-    r.sy = dir[ky] / dir[kz];
-    r.sz = 1.0 / dir[kz];
+    r.sz = pb_rcp(dir[kz]);
+    precise float sx = dir[kx] * r.sz;
+    precise float sy = dir[ky] * r.sz;
+    r.sx = sx;
+    r.sy = sy;
     for (int k = 0; k < 3; ++k) {
         float d = dir[k];
         if (abs(d) < 1e-30)
@@ -125,10 +156,13 @@ bool ray_triangle(RayPre r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tmax, o
     precise float hi = tmax * det;
     if (!(T > lo) || !(T < hi))
         return false;
-    float inv = 1.0 / det;
-    t = T * inv;
-    u = V * inv;
-    v = W * inv;
+    float inv = pb_rcp(det);
+    precise float tt = T * inv;
+    precise float uu = V * inv;
+    precise float vv = W * inv;
+    t = tt;
+    u = uu;
+    v = vv;
     return true;
 }
 

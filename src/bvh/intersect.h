@@ -17,14 +17,23 @@
  * (exact_diff.h, integer arithmetic: no double, no 64-bit integer on the
  * device). Both paths give the exact sign, so shared edges stay consistent.
  *
- * Box test: slabs with the far distance scaled by 1 + 2*gamma(3) (Ize,
- * "Robust BVH Ray Traversal", JCGT 2013) so rounding never culls a box the
- * ray touches. */
+ * Box test: slabs with the far distance scaled (Ize, "Robust BVH Ray
+ * Traversal", JCGT 2013) so rounding never culls a box the ray touches.
+ *
+ * No hit value depends on a division: a Vulkan device may divide with 2.5 ulp
+ * of error, and drivers differ (an H100's 1/det moved u and v by an ulp, so
+ * the alpha-blend hash of them cut different rays than the CPU did). The
+ * shear constants and 1/det come from pb_rcp, integer bit operations and
+ * correctly rounded products and sums only, which every device computes as
+ * this C does. Only the box test's 1/dir is a division (pb_rcp there cost
+ * lavapipe 4 %): a box test just culls, so it need only be conservative on
+ * every device, not identical. */
 #ifndef PB_INTERSECT_H
 #define PB_INTERSECT_H
 
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "bvh/exact_diff.h"
 
@@ -35,7 +44,45 @@ typedef struct pb_ray_pre {
     float sx, sy, sz;  /* shear constants */
 } pb_ray_pre;
 
-#define PB_BOX_FAR_SCALE 1.00000036f /* 1 + 2*gamma(3), gamma(n) = n*u/(1-n*u), u = 2^-24 */
+/* Each slab distance (lo - o) * idir carries a subtraction's and a product's
+ * rounding (u each, u = 2^-24) and 1/dir's: 0.5 ulp in C, up to 2.5 ulp (5u)
+ * in a Vulkan division. < 7u per side, < 14u for near and far together, and
+ * scaling the far one costs another u. 1 + 16u (8 float ulps above 1) covers
+ * it on every device. */
+#define PB_BOX_FAR_SCALE 1.00000095f
+
+/* 1/b the same on every device: an integer first guess (5 % off) and three
+ * Newton steps y += y(1 - by), each operation correctly rounded in IEEE and
+ * in Vulkan alike. Error < 1.49u over every float mantissa (test_bvh checks
+ * all 2^24 in [0.5, 2)); |b| outside [2^-100, 2^100] is scaled by 2^64 into
+ * it first (exact). A result below float range (|b| > 2^126) may flush to 0
+ * on a GPU. */
+static inline float pb_rcp(float b)
+{
+    float m = fabsf(b), scale = 1.f;
+    if (m == 0.f)
+        return signbit(b) ? -INFINITY : INFINITY;
+    if (!(m == m))
+        return b;
+    if (m < 0x1p-100f)
+        m *= 0x1p64f, scale = 0x1p64f;
+    else if (m > 0x1p100f) {
+        if (m == INFINITY)
+            return b < 0.f ? -0.f : 0.f;
+        m *= 0x1p-64f, scale = 0x1p-64f;
+    }
+    uint32_t bits;
+    memcpy(&bits, &m, 4);
+    bits = 0x7EF311C3u - bits;
+    float y;
+    memcpy(&y, &bits, 4);
+    for (int i = 0; i < 3; ++i) {
+        float e = 1.f - m * y;
+        y = y + y * e;
+    }
+    y *= scale;
+    return b < 0.f ? -y : y;
+}
 
 static inline void pb_ray_prepare(const float org[3], const float dir[3], pb_ray_pre *r)
 {
@@ -49,9 +96,9 @@ static inline void pb_ray_prepare(const float org[3], const float dir[3], pb_ray
         ky = t;
     }
     r->kx = kx, r->ky = ky, r->kz = kz;
-    r->sx = dir[kx] / dir[kz];
-    r->sy = dir[ky] / dir[kz];
-    r->sz = 1.0f / dir[kz];
+    r->sz = pb_rcp(dir[kz]);
+    r->sx = dir[kx] * r->sz;
+    r->sy = dir[ky] * r->sz;
     for (int k = 0; k < 3; ++k) {
         float d = dir[k];
         if (fabsf(d) < 1e-30f)
@@ -124,7 +171,7 @@ static inline int pb_ray_triangle(const pb_ray_pre *r, const float *v0, const fl
     }
     if (!(T > tmin * det) || !(T < tmax * det))
         return 0;
-    float inv = 1.0f / det;
+    float inv = pb_rcp(det);
     *t_out = T * inv;
     *u_out = V * inv;
     *v_out = W * inv;
