@@ -25,28 +25,20 @@ struct RayPre {
 // it. Only the box test's 1/dir divides (it need only be conservative).
 float pb_rcp(float b)
 {
+    // Selects, not branches: llvmpipe runs both sides of every branch anyway.
+    // The scaling by 2^64 or 2^-64 (|b| outside [2^-100, 2^100]) is exact.
     precise float m = abs(b);
-    precise float scale = 1.0;
-    if (m == 0.0)
-        return (floatBitsToUint(b) >> 31) != 0u ? -PB_INF : PB_INF;
-    if (isnan(m))
-        return b;
-    if (m < uintBitsToFloat(0x0D800000u)) { // 2^-100: scale by 2^64
-        m *= uintBitsToFloat(0x5F800000u);
-        scale = uintBitsToFloat(0x5F800000u);
-    } else if (m > uintBitsToFloat(0x71800000u)) { // 2^100
-        if (isinf(m))
-            return b < 0.0 ? -0.0 : 0.0;
-        m *= uintBitsToFloat(0x1F800000u);
-        scale = uintBitsToFloat(0x1F800000u);
-    }
-    precise float y = uintBitsToFloat(0x7EF311C3u - floatBitsToUint(m));
+    float s = m < uintBitsToFloat(0x0D800000u) ? uintBitsToFloat(0x5F800000u)
+                                               : (m > uintBitsToFloat(0x71800000u) ? uintBitsToFloat(0x1F800000u) : 1.0);
+    precise float ms = m * s;
+    precise float y = uintBitsToFloat(0x7EF311C3u - floatBitsToUint(ms));
     for (int i = 0; i < 3; ++i) {
-        precise float e = 1.0 - m * y;
+        precise float e = 1.0 - ms * y;
         y = y + y * e;
     }
-    y *= scale;
-    return b < 0.0 ? -y : y;
+    y *= s;
+    y = m == 0.0 ? PB_INF : (isinf(m) ? 0.0 : y); // NaN stays NaN
+    return uintBitsToFloat(floatBitsToUint(y) | (floatBitsToUint(b) & 0x80000000u));
 }
 
 RayPre ray_prepare(vec3 org, vec3 dir)
