@@ -620,6 +620,40 @@ static void portable_kernels_need_no_64bit_types(void)
     CHECKF(portable >= 8 && native >= 3, "only %d portable and %d native64 kernels found", portable, native);
 }
 
+/* Which memory a buffer takes, on tables like real devices': a discrete GPU
+ * with resizable BAR (an H100's kinds: device-local; host; host cached;
+ * device-local and host-visible but uncached) must keep device buffers
+ * unmapped (reading through the BAR ran at 1/1000 of the kernel there), and
+ * a UMA device (lavapipe: one cached device-local type) maps them. */
+static void memory_choice_on_discrete_and_uma(void)
+{
+    const VkMemoryPropertyFlags DL = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, HV = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+                                HC = VK_MEMORY_PROPERTY_HOST_COHERENT_BIT, CA = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+    VkPhysicalDeviceMemoryProperties bar = {0};
+    bar.memoryTypeCount = 4;
+    bar.memoryTypes[0].propertyFlags = DL;
+    bar.memoryTypes[1].propertyFlags = HV | HC;
+    bar.memoryTypes[2].propertyFlags = HV | HC | CA;
+    bar.memoryTypes[3].propertyFlags = DL | HV | HC;
+    pb_memory_choice c = pb_buffer_memory_choice(&bar, 0xfu, PB_MEMORY_DEVICE, 0);
+    CHECKF(c.type == 0 && !c.mapped, "discrete device buffer: type %d mapped %d", c.type, c.mapped);
+    c = pb_buffer_memory_choice(&bar, 0x8u, PB_MEMORY_DEVICE, 0); /* only the BAR type allowed */
+    CHECKF(c.type == 3 && !c.mapped, "BAR-only device buffer: type %d mapped %d", c.type, c.mapped);
+    c = pb_buffer_memory_choice(&bar, 0xfu, PB_MEMORY_DOWNLOAD, 0);
+    CHECKF(c.type == 2 && c.mapped, "discrete download: type %d mapped %d", c.type, c.mapped);
+    c = pb_buffer_memory_choice(&bar, 0xfu, PB_MEMORY_UPLOAD, 0);
+    CHECKF(c.type == 1 && c.mapped, "discrete upload: type %d mapped %d", c.type, c.mapped);
+    VkPhysicalDeviceMemoryProperties uma = {0};
+    uma.memoryTypeCount = 1;
+    uma.memoryTypes[0].propertyFlags = DL | HV | HC | CA;
+    c = pb_buffer_memory_choice(&uma, 0x1u, PB_MEMORY_DEVICE, 0);
+    CHECKF(c.type == 0 && c.mapped, "UMA device buffer: type %d mapped %d", c.type, c.mapped);
+    c = pb_buffer_memory_choice(&uma, 0x1u, PB_MEMORY_DEVICE, 1);
+    CHECKF(c.type == 0 && !c.mapped, "UMA device buffer, staging forced: type %d mapped %d", c.type, c.mapped);
+    c = pb_buffer_memory_choice(&uma, 0x0u, PB_MEMORY_DEVICE, 0);
+    CHECK(c.type == -1);
+}
+
 static void device_choice_and_refusals(void)
 {
     pb_context *c = (pb_context *)1;
@@ -664,6 +698,7 @@ int main(void)
     RUN(exact_diff_gpu_matches_cpu);
     RUN(portable_kernels_need_no_64bit_types);
     RUN(trace_kernels_divide_only_for_boxes);
+    RUN(memory_choice_on_discrete_and_uma);
     RUN(device_choice_and_refusals);
     return test_gpu_finish(ctx);
 }

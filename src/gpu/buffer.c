@@ -11,12 +11,12 @@
 
 #define STAGING_CHUNK (16u << 20)
 
-static int find_memory(const pb_context *ctx, uint32_t type_bits, VkMemoryPropertyFlags need,
+static int find_memory(const VkPhysicalDeviceMemoryProperties *mp, uint32_t type_bits, VkMemoryPropertyFlags need,
                        VkMemoryPropertyFlags want)
 {
     int fallback = -1;
-    for (uint32_t i = 0; i < ctx->memory.memoryTypeCount; ++i) {
-        VkMemoryPropertyFlags f = ctx->memory.memoryTypes[i].propertyFlags;
+    for (uint32_t i = 0; i < mp->memoryTypeCount; ++i) {
+        VkMemoryPropertyFlags f = mp->memoryTypes[i].propertyFlags;
         if (!(type_bits & (1u << i)) || (f & need) != need)
             continue;
         if ((f & want) == want)
@@ -25,6 +25,31 @@ static int find_memory(const pb_context *ctx, uint32_t type_bits, VkMemoryProper
             fallback = (int)i;
     }
     return fallback;
+}
+
+pb_memory_choice pb_buffer_memory_choice(const VkPhysicalDeviceMemoryProperties *mp, uint32_t type_bits,
+                                         pb_memory_kind kind, int force_staging)
+{
+    const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    /* Device memory is mapped only where it is also host-cached (UMA: lavapipe,
+     * integrated GPUs). A discrete GPU with resizable BAR offers device-local
+     * host-visible memory too, but uncached: reading results back through it
+     * ran at 1.2 Mrays/s against 1,230 in the kernel on an H100. */
+    const VkMemoryPropertyFlags uma = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+    pb_memory_choice c = {-1, 0};
+    if (kind == PB_MEMORY_DEVICE)
+        c.type = find_memory(mp, type_bits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, uma);
+    else if (kind == PB_MEMORY_UPLOAD)
+        c.type = find_memory(mp, type_bits, host, host);
+    else
+        c.type = find_memory(mp, type_bits, host, host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
+    if (c.type < 0)
+        c.type = find_memory(mp, type_bits, kind == PB_MEMORY_DEVICE ? 0 : host, 0);
+    if (c.type < 0)
+        return c;
+    VkMemoryPropertyFlags f = mp->memoryTypes[c.type].propertyFlags;
+    c.mapped = kind == PB_MEMORY_DEVICE ? (f & uma) == uma && !force_staging : (f & host) == host;
+    return c;
 }
 
 pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind kind, const char *what, pb_buffer *out,
@@ -47,21 +72,8 @@ pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind ki
         return pb_vk_fail(ctx, err, vr, what);
     VkMemoryRequirements req;
     ctx->vk.vkGetBufferMemoryRequirements(ctx->device, out->buffer, &req);
-    const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    int type = -1;
-    /* Device memory is mapped only where it is also host-cached (UMA: lavapipe,
-     * integrated GPUs). A discrete GPU with resizable BAR offers device-local
-     * host-visible memory too, but uncached: reading results back through it
-     * ran at 1.2 Mrays/s against 1,230 in the kernel on an H100. */
-    const VkMemoryPropertyFlags uma = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT | host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
-    if (kind == PB_MEMORY_DEVICE)
-        type = find_memory(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, uma);
-    else if (kind == PB_MEMORY_UPLOAD)
-        type = find_memory(ctx, req.memoryTypeBits, host, host);
-    else
-        type = find_memory(ctx, req.memoryTypeBits, host, host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
-    if (type < 0)
-        type = find_memory(ctx, req.memoryTypeBits, kind == PB_MEMORY_DEVICE ? 0 : host, 0);
+    pb_memory_choice mc = pb_buffer_memory_choice(&ctx->memory, req.memoryTypeBits, kind, (int)ctx->desc.force_staging);
+    int type = mc.type;
     if (type < 0) {
         pb_buffer_destroy(ctx, out);
         return pb_fail(err, PB_ERROR_VULKAN, "%s: no memory type for %s", ctx->info.name, what);
@@ -84,10 +96,7 @@ pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind ki
         return pb_vk_fail(ctx, err, vr, what);
     }
     VkMemoryPropertyFlags f = ctx->memory.memoryTypes[type].propertyFlags;
-    int map = (f & host) == host;
-    if (kind == PB_MEMORY_DEVICE)
-        map = (f & uma) == uma && !ctx->desc.force_staging;
-    if (map) {
+    if (mc.mapped) {
         if ((vr = ctx->vk.vkMapMemory(ctx->device, out->memory, 0, VK_WHOLE_SIZE, 0, &out->mapped)) != VK_SUCCESS) {
             pb_buffer_destroy(ctx, out);
             return pb_vk_fail(ctx, err, vr, what);

@@ -84,6 +84,16 @@ typedef struct pb_buffer {
  * source/destination and by device address. `what` names it in errors.
  * Refuses (PB_ERROR_TOO_LARGE) sizes over maxMemoryAllocationSize before
  * allocating. */
+/* The memory type a buffer of `kind` takes from the types in type_bits, and
+ * whether it stays mapped (device memory only where it is also host-cached);
+ * type -1 where none fits. Pure: tested against other devices' tables. */
+typedef struct pb_memory_choice {
+    int type;
+    int mapped;
+} pb_memory_choice;
+pb_memory_choice pb_buffer_memory_choice(const VkPhysicalDeviceMemoryProperties *mp, uint32_t type_bits,
+                                         pb_memory_kind kind, int force_staging);
+
 pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind kind, const char *what, pb_buffer *out,
                            pb_error *err);
 void pb_buffer_destroy(pb_context *ctx, pb_buffer *b);
