@@ -53,6 +53,61 @@ typedef struct probe_ray {
     float weight;                 /* cos at the emitter / distance^2 (clamped) */
 } probe_ray;
 
+/* One batch's shadow rays, R per (cell slot, candidate cluster) pair in the
+ * pairs' order: each ray depends only on its pair and index, so ranges of
+ * rays are made on all host cores, the same rays in the same order. */
+typedef struct ray_batch {
+    const pb_scene *s;
+    const pb_light_cells *out;
+    const uint32_t *pair_slot, *pair_cluster; /* per pair */
+    const uint32_t *slot_cell, *first, *order;
+    const float *points;
+    uint32_t seed, R;
+    float min_d2;
+    pb_ray *rays;
+    probe_ray *meta;
+} ray_batch;
+
+static void make_shadow_rays(void *user, uint64_t begin, uint64_t end)
+{
+    const ray_batch *b = user;
+    const pb_scene *s = b->s;
+    const pb_light_cells *out = b->out;
+    for (uint64_t nr = begin; nr < end; ++nr) {
+        uint32_t pair = (uint32_t)(nr / b->R), ri = (uint32_t)(nr % b->R);
+        uint32_t sl = b->pair_slot[pair], best = b->pair_cluster[pair];
+        uint32_t c = b->slot_cell[sl], f = b->first[c], np = b->first[c + 1] - f;
+        uint32_t cf = out->cluster_range[2 * best], cn = out->cluster_range[2 * best + 1];
+        uint32_t state = pb_rng_seed_cpu(b->seed, c, PB_LIGHT_PASS + 1u, best * b->R + ri);
+        float u0 = pb_rng_next_cpu(&state), u1 = pb_rng_next_cpu(&state);
+        float u2 = pb_rng_next_cpu(&state), u3 = pb_rng_next_cpu(&state);
+        uint32_t pi = (uint32_t)(u0 * (float)np) < np ? (uint32_t)(u0 * (float)np) : np - 1u;
+        const float *x = b->points + 6 * (size_t)b->order[f + pi], *nx = x + 3;
+        uint32_t tri = out->member_tri[cf + pb_alias_sample(out->member_keep + cf, out->member_alias + cf, cn, u1)];
+        const float *v0 = s->positions + 9 * (size_t)tri, *v1 = v0 + 3, *v2 = v0 + 6;
+        float su = sqrtf(u2), b1 = su * (1.f - u3), b2 = su * u3, e1[3], e2[3], to[3];
+        for (int a = 0; a < 3; ++a) {
+            e1[a] = v1[a] - v0[a], e2[a] = v2[a] - v0[a];
+            to[a] = v0[a] + b1 * e1[a] + b2 * e2[a] - x[a];
+        }
+        float ne[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        float nl = sqrtf(ne[0] * ne[0] + ne[1] * ne[1] + ne[2] * ne[2]);
+        float d2 = to[0] * to[0] + to[1] * to[1] + to[2] * to[2];
+        float cos_e =
+            nl > 0.f && d2 > 0.f ? -(ne[0] * to[0] + ne[1] * to[1] + ne[2] * to[2]) / (nl * sqrtf(d2)) : 0.f;
+        if (s->materials[s->material[tri]].double_sided)
+            cos_e = fabsf(cos_e);
+        pb_ray *ray = &b->rays[nr];
+        memcpy(ray->origin, x, sizeof ray->origin);
+        memcpy(ray->direction, to, sizeof ray->direction);
+        ray->tmin = 0.f;
+        float cos_x = d2 > 0.f ? (nx[0] * to[0] + nx[1] * to[1] + nx[2] * to[2]) / sqrtf(d2) : 0.f;
+        int lit = cos_e > 0.f && cos_x > 0.f;
+        ray->tmax = lit ? 0.9999f : 0.f;
+        b->meta[nr] = (probe_ray){sl, best, lit ? cos_x * cos_e / fmaxf(d2, b->min_d2) : 0.f};
+    }
+}
+
 pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -68,6 +123,7 @@ pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb
     float *centroid = malloc(3 * (size_t)E * sizeof *centroid), *cen = NULL, *points = NULL, *keep = NULL;
     keyed *k = malloc(E * sizeof *k);
     uint32_t *point_cell = NULL, *first = NULL, *order = NULL, *slot_cell = NULL, *alias = NULL;
+    uint32_t *pair_slot = NULL, *pair_cluster = NULL;
     pb_ray *rays = NULL;
     pb_hit *hits = NULL;
     probe_ray *meta = NULL;
@@ -200,7 +256,10 @@ pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb
     rays = malloc(batch_rays * sizeof *rays);
     hits = malloc(batch_rays * sizeof *hits);
     meta = malloc(batch_rays * sizeof *meta);
-    if (!out->slot || !slot_cell || !U || !light || !q || !keep || !alias || !out->table || !rays || !hits || !meta)
+    pair_slot = malloc((size_t)batch_cells * K * sizeof *pair_slot);
+    pair_cluster = malloc((size_t)batch_cells * K * sizeof *pair_cluster);
+    if (!out->slot || !slot_cell || !U || !light || !q || !keep || !alias || !out->table || !rays || !hits || !meta ||
+        !pair_slot || !pair_cluster)
         goto oom;
     memset(out->slot, 0xff, cells * sizeof *out->slot);
     uint32_t slots = 0;
@@ -209,8 +268,7 @@ pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb
             slot_cell[slots++] = c;
     float near2 = 0.25f * cell * cell, min_d2 = 0.0625f * cell * cell;
     for (uint32_t s0 = 0; s0 < slots; s0 += batch_cells) {
-        uint32_t s1 = s0 + batch_cells < slots ? s0 + batch_cells : slots;
-        size_t nr = 0;
+        uint32_t s1 = s0 + batch_cells < slots ? s0 + batch_cells : slots, npairs = 0;
         for (uint32_t sl = s0; sl < s1; ++sl) {
             uint32_t c = slot_cell[sl], f = first[c], np = first[c + 1] - f;
             float m[3] = {0, 0, 0};
@@ -232,41 +290,13 @@ pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb
                 if (!(U[best] > 0.0))
                     break;
                 U[best] = -1.0;
-                uint32_t cf = out->cluster_range[2 * best], cn = out->cluster_range[2 * best + 1];
-                for (uint32_t ri = 0; ri < R; ++ri, ++nr) {
-                    uint32_t state = pb_rng_seed_cpu(pass->seed, c, PB_LIGHT_PASS + 1u, best * R + ri);
-                    float u0 = pb_rng_next_cpu(&state), u1 = pb_rng_next_cpu(&state);
-                    float u2 = pb_rng_next_cpu(&state), u3 = pb_rng_next_cpu(&state);
-                    uint32_t pi = (uint32_t)(u0 * (float)np) < np ? (uint32_t)(u0 * (float)np) : np - 1u;
-                    const float *x = points + 6 * (size_t)order[f + pi], *nx = x + 3;
-                    uint32_t tri = out->member_tri[cf + pb_alias_sample(out->member_keep + cf, out->member_alias + cf,
-                                                                        cn, u1)];
-                    const float *v0 = s->positions + 9 * (size_t)tri, *v1 = v0 + 3, *v2 = v0 + 6;
-                    float su = sqrtf(u2), b1 = su * (1.f - u3), b2 = su * u3, e1[3], e2[3], to[3];
-                    for (int a = 0; a < 3; ++a) {
-                        e1[a] = v1[a] - v0[a], e2[a] = v2[a] - v0[a];
-                        to[a] = v0[a] + b1 * e1[a] + b2 * e2[a] - x[a];
-                    }
-                    float ne[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                   e1[0] * e2[1] - e1[1] * e2[0]};
-                    float nl = sqrtf(ne[0] * ne[0] + ne[1] * ne[1] + ne[2] * ne[2]);
-                    float d2 = to[0] * to[0] + to[1] * to[1] + to[2] * to[2];
-                    float cos_e = nl > 0.f && d2 > 0.f
-                                      ? -(ne[0] * to[0] + ne[1] * to[1] + ne[2] * to[2]) / (nl * sqrtf(d2))
-                                      : 0.f;
-                    if (s->materials[s->material[tri]].double_sided)
-                        cos_e = fabsf(cos_e);
-                    pb_ray *ray = &rays[nr];
-                    memcpy(ray->origin, x, sizeof ray->origin);
-                    memcpy(ray->direction, to, sizeof ray->direction);
-                    ray->tmin = 0.f;
-                    float cos_x = d2 > 0.f ? (nx[0] * to[0] + nx[1] * to[1] + nx[2] * to[2]) / sqrtf(d2) : 0.f;
-                    int lit = cos_e > 0.f && cos_x > 0.f;
-                    ray->tmax = lit ? 0.9999f : 0.f;
-                    meta[nr] = (probe_ray){sl, best, lit ? cos_x * cos_e / fmaxf(d2, min_d2) : 0.f};
-                }
+                pair_slot[npairs] = sl, pair_cluster[npairs++] = best;
             }
         }
+        size_t nr = (size_t)npairs * R;
+        ray_batch rb = {s, out, pair_slot, pair_cluster, slot_cell, first, order, points, pass->seed, R, min_d2, rays,
+                        meta};
+        pb_parallel_for(nr, 1024, 0, make_shadow_rays, &rb);
         pb_trace_cpu(s, pass->bvh, rays, (uint32_t)nr, PB_TRACE_ANY, hits, 0);
         for (size_t i = 0; i < nr; ++i) /* in ray order: sums independent of the threads */
             if (hits[i].triangle == PB_NO_HIT)
@@ -302,7 +332,7 @@ done:
     pb_surface_sampler_free(&surface);
     free(p), free(share), free(U), free(light), free(q), free(centroid), free(cen), free(points), free(k);
     free(point_cell), free(first), free(order), free(slot_cell), free(rays), free(hits), free(meta);
-    free(keep), free(alias);
+    free(keep), free(alias), free(pair_slot), free(pair_cluster);
     if (r != PB_OK || !out->learned)
         pb_light_cells_free(out);
     return r;
