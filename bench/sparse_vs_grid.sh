@@ -14,11 +14,13 @@
 #
 #   bench/sparse_vs_grid.sh [--probebake P] [--out DIR] [--size WxH] [--spp N]
 #                           [--grid "S1 S2 ..."] [--finest F] [--sparse "E1 E2 ..."] [--max-level L]
-#                           [--view "RENDER ARGS"]... [--ref-spp N] SCENE [bake options...]
+#                           [--sparse-args "BAKE ARGS"] [--view "RENDER ARGS"]... [--ref-spp N]
+#                           SCENE [bake options...]
 #
 # Defaults: grids at 1, 0.5 and 0.25 m; sparse with the finest spacing
 # --finest (default the smallest grid spacing) at errors 0.3, 0.1 and 0.03;
-# 160x120, probe images at 64 spp; the view "--camera 0"; bake options
+# --sparse-args: bake options for the sparse rows only (e.g. "--refine-seams 1
+# --seam-error 1.6"); 160x120, probe images at 64 spp; the view "--camera 0"; bake options
 # --rays 256 --passes 4; into bench/results/sparse_vs_grid/.
 #
 # The reference of each view is path traced once at --ref-spp (default 4096)
@@ -38,6 +40,7 @@ grids="1 0.5 0.25"
 finest=""
 errors="0.3 0.1 0.03"
 max_level=2
+sparse_args=""
 views=()
 while [ $# -gt 0 ]; do
     case $1 in
@@ -50,6 +53,7 @@ while [ $# -gt 0 ]; do
         --finest) finest=$2; shift 2 ;;
         --sparse) errors=$2; shift 2 ;;
         --max-level) max_level=$2; shift 2 ;;
+        --sparse-args) sparse_args=$2; shift 2 ;;
         --view) views+=("$2"); shift 2 ;;
         *) break ;;
     esac
@@ -73,7 +77,7 @@ now_ms() { echo $(($(date +%s%N) / 1000000)); }
 json_num() { { grep -o "\"$1\": [-0-9.eE+]*" || :; } | head -n 1 | sed 's/.*: //'; }
 
 device=$("$pb" devices --json | sed -n 's/.*"index": 0, "name": "\([^"]*\)".*/\1/p' | head -n 1)
-echo "sparse_vs_grid: $scene ${args[*]}; grids $grids m; sparse finest $finest m, max level $max_level, errors $errors;"
+echo "sparse_vs_grid: $scene ${args[*]}; grids $grids m; sparse finest $finest m, max level $max_level, errors $errors${sparse_args:+ ($sparse_args)};"
 echo "  ${#views[@]} view(s) at $size, probe images $spp spp, references $ref_spp spp; $(nproc) cores; device: $device"
 
 # one converged reference per view (cached: the slow part of the bench)
@@ -175,7 +179,8 @@ for s in $grids; do
     measure grid "$s" --spacing "$s"
 done
 for e in $errors; do
-    measure sparse "$e" --spacing "$finest" --layout sparse --max-level "$max_level" --refine-error "$e"
+    # shellcheck disable=SC2086 # sparse_args is bake arguments
+    measure sparse "$e" --spacing "$finest" --layout sparse --max-level "$max_level" --refine-error "$e" $sparse_args
 done
 
 # the peer: the finest grid

@@ -79,6 +79,11 @@ expect refine-test-garbage 2 "--refine-test 'pixel' is not surface or probe" -- 
     "$pb" bake "$demo" --layout sparse --refine-test pixel -o "$tmp/x.probes"
 expect refine-seams-range 2 "--refine-seams '9' is not a number of rounds from 0 to 8" -- \
     "$pb" bake "$demo" --layout sparse --refine-seams 9 -o "$tmp/x.probes"
+expect seam-error-garbage 2 "--seam-error '0' is not a relative error in \(0, 100\)" -- \
+    "$pb" bake "$demo" --layout sparse --refine-seams 1 --seam-error 0 -o "$tmp/x.probes"
+expect seam-error-needs-seams 1 '--seam-error sets the seam test.s threshold: add --refine-seams N' -- \
+    "$pb" bake "$demo" --layout sparse --seam-error 0.5 -o "$tmp/x.probes"
+expect seam-error-needs-seams-no-file 0 '' -- test ! -e "$tmp/x.probes"
 
 # inspect: a fixture volume (tests/make_test_volume.c)
 "$make_volume" "$tmp/v.probes"
@@ -256,7 +261,14 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-sparse-seams 0 '^sparse: 3 levels, .*refined [0-9]+ \([1-9][0-9]* at seams\)' -- \
         "$pb" bake "$demo" --layout sparse --spacing 0.5 --rays 32 --passes 1 --octmap-res 4 --refine-seams 2 \
         -o "$tmp/seams.probes"
-    expect inspect-sparse-seams 0 'seam test 2 rounds' -- "$pb" inspect "$tmp/seams.probes"
+    expect inspect-sparse-seams 0 'seam test 2 rounds, where missed by more than 0.1$' -- "$pb" inspect "$tmp/seams.probes"
+    expect inspect-sparse-seams-json 0 '"seam_rounds": 2, "seam_error": 0.1}' -- "$pb" inspect "$tmp/seams.probes" --json
+    # a seam threshold no miss reaches refines no seam cell, and is recorded
+    expect bake-sparse-seam-error 0 '^sparse: 3 levels, .*refined [0-9]+ \(0 at seams\)' -- \
+        "$pb" bake "$demo" --layout sparse --spacing 0.5 --rays 32 --passes 1 --octmap-res 4 --refine-seams 2 \
+        --seam-error 50 -o "$tmp/seams100.probes"
+    expect inspect-sparse-seam-error 0 'seam test 2 rounds, where missed by more than 50$' -- \
+        "$pb" inspect "$tmp/seams100.probes"
     expect inspect-sparse-probe-test 0 '^refined     where off by more than 1: probe test' -- "$pb" inspect "$tmp/sp.probes"
     # the debug views of a sparse file: one tile per probe, in layout order
     sparse_probes=$("$pb" inspect "$tmp/s.probes" --json | sed -n 's/.*"probes": \([0-9]*\),.*/\1/p' | head -n 1)

@@ -7,6 +7,7 @@
  * sparse volume written and read back samples identically. */
 #include "scenes_gen.h"
 #include "bake/dilate.h"
+#include "bake/sparse_miss.h"
 #include "bake/sparse_stitch.h"
 #include "bake/sparse_surface_tests.h"
 #include "common/common.h"
@@ -194,6 +195,7 @@ static void seam_test_refines_only_where_coarse_errs(void)
                     vp.sparse->brick_count, ss.refined[0], ss.seam_refined[0], vs.sparse->brick_count, sunlit, alone,
                     missing);
             CHECK(sp.seam_refined[0] == 0 && vp.settings.seam_rounds == 0 && vs.settings.seam_rounds == 4);
+            CHECK(vp.settings.seam_error == 0.f && vs.settings.seam_error == 0.05f); /* default: the refine error */
             CHECK(ss.seam_refined[0] > 0 && ss.refined[0] == sp.refined[0] + ss.seam_refined[0]);
             CHECK(missing == 0 && sunlit == 0 && alone == 0);
             /* the gate itself (pb_sparse_seam_misses), on this layout: with every probe's SH the
@@ -243,6 +245,27 @@ static void seam_test_refines_only_where_coarse_errs(void)
                         "%u far\n", tried, n, far);
                 CHECK(n >= 1 && n <= 4 && far == 0);
                 free(cells);
+                /* --seam-error: the coarser cells all predict sh0, so the tripled probe misses
+                 * them by 2 max / mean of sh0's irradiance along the six axes (the measure of
+                 * sparse_miss.h); a threshold below that refines the same cells, one above none */
+                float lum_max = 0.f, lum_mean = 0.f;
+                for (int a = 0; a < 6; ++a) {
+                    float e[3];
+                    pb_sh_eval(sh0, pb_sparse_miss_axes[a], e);
+                    lum_max = fmaxf(lum_max, pb_luminance(e));
+                    lum_mean += pb_luminance(e) / 6.f;
+                }
+                float miss = 2.f * lum_max / lum_mean;
+                uint32_t below = 0, above = 0;
+                vs.settings.seam_error = 0.9f * miss;
+                CHECK(pb_sparse_seam_misses(&vs, 1, &cells, &below, &err) == PB_OK);
+                free(cells);
+                vs.settings.seam_error = 1.1f * miss;
+                CHECK(pb_sparse_seam_misses(&vs, 1, &cells, &above, &err) == PB_OK);
+                free(cells);
+                fprintf(stderr, "  the tripled probe's miss %.3f: seam error 0.9x it %u cells, 1.1x it %u\n", miss,
+                        below, above);
+                CHECK(below == n && above == 0);
             }
             pb_volume_free(&vs);
         }
@@ -669,9 +692,11 @@ static void sparse_file_round_trip(void)
     int fd = mkstemp(path);
     close(fd);
     if (sparse_bake(s, &d, &sd, &v, &st)) {
+        v.settings.seam_rounds = 2, v.settings.seam_error = 0.375f; /* as a seam-tested bake records them */
         CHECKF(pb_volume_write(path, &v, &err) == PB_OK, "%s", err.message);
         CHECKF(pb_volume_read(path, &w, &err) == PB_OK, "%s", err.message);
         CHECK(w.file_version == 4 && (w.flags & PB_VOLUME_SPARSE) && w.sparse);
+        CHECK(w.settings.refine_error == 0.1f && w.settings.seam_rounds == 2 && w.settings.seam_error == 0.375f);
         if (w.sparse) {
             CHECK(w.sparse->levels == v.sparse->levels && w.sparse->brick_count == v.sparse->brick_count &&
                   w.sparse->chunk_count == v.sparse->chunk_count);

@@ -206,6 +206,10 @@ typedef struct pb_sparse_desc {
     uint32_t seam_rounds;         /* default 0 (off), at most 8: rounds of the seam test, which refines a
                                      coarser cell where a finer brick's hanging probe on its face misses
                                      its value there (docs/sparse.md, placement step 3) */
+    float seam_error;             /* default refine_error: the miss (relative to the mean prediction, above 3
+                                     of the probe's standard errors) past which the seam test refines; coarse
+                                     cells beside refined ones mostly miss by several E (bench/RESULTS.md,
+                                     "A seam threshold"), so a larger value refines only the worst of them */
 } pb_sparse_desc;
 
 /* What the refinement did, per level. */

@@ -72,6 +72,7 @@ typedef struct pb_volume_settings {
     uint32_t test_pass_scale;           /* sparse, surface test: its probes' passes per bake pass (0: not
                                            recorded, or the probe test) */
     uint32_t seam_rounds;               /* sparse: rounds of the seam test (0: off, or not recorded) */
+    float seam_error;                   /* sparse: the seam test's threshold (0: refine_error, or not recorded) */
 } pb_volume_settings;
 
 /* Variance-reduction techniques (pb_volume_settings.techniques). */

@@ -38,8 +38,8 @@ static const char *differs(const pb_volume *a, const pb_volume *b)
     if (x->refine_error != y->refine_error)
         return "sparse refine error";
     if (x->refine_test != y->refine_test || x->test_pass_scale != y->test_pass_scale ||
-        x->seam_rounds != y->seam_rounds)
-        return "sparse refinement test (--refine-test, its passes or --refine-seams)";
+        x->seam_rounds != y->seam_rounds || x->seam_error != y->seam_error)
+        return "sparse refinement test (--refine-test, its passes, --refine-seams or --seam-error)";
     return "";
 }
 

@@ -52,6 +52,7 @@ typedef struct sparse_job {
     uint32_t refine_test;               /* 1 + pb_refine_test, recorded too */
     uint32_t test_pass_scale;           /* the surface test's, recorded too (0 for the probe test) */
     uint32_t seam_rounds;               /* the seam test's, recorded too */
+    float seam_error;                   /* its threshold, recorded too (0 with no seam test) */
     int one_bounce;                     /* --indirect volume: every bake is pb_bake_bounce over `feedback` */
     const pb_sample_volume *feedback;   /* the previous bounce's volume (NULL on the first) */
     uint32_t levels, cells[3];
@@ -314,6 +315,7 @@ static pb_result assemble(sparse_job *j, pb_volume *out, pb_error *err)
     out->settings.refine_test = j->refine_test;
     out->settings.test_pass_scale = j->test_pass_scale;
     out->settings.seam_rounds = j->seam_rounds;
+    out->settings.seam_error = j->seam_error;
     out->timings = j->timings;
     out->rays_traced = j->rays;
     out->traversals = j->traversals;
@@ -698,6 +700,7 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
     j.refine_test = 1u + sd.test;
     j.test_pass_scale = sd.test == PB_REFINE_TEST_SURFACE ? sd.test_pass_scale : 0u;
     j.seam_rounds = sd.seam_rounds;
+    j.seam_error = sd.seam_rounds ? sd.seam_error : 0.f;
     j.d.shard_index = j.d.shard_count = 0; /* a part is a range of coarsest bricks, its bakes whole */
     uint32_t span = pow3u(sd.levels);
     for (int k = 0; k < 3; ++k) {
@@ -807,6 +810,11 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
         sd.refine_error = 0.1f;
     if (sd.test_pass_scale == 0)
         sd.test_pass_scale = 4;
+    if (sd.seam_error == 0.f)
+        sd.seam_error = sd.refine_error;
+    if (!(sd.seam_error > 0.f) || !isfinite(sd.seam_error))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--seam-error %g: must be a positive number",
+                       (double)sd.seam_error);
     if (sd.seam_rounds > 8)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--refine-seams %u: at most 8 rounds", sd.seam_rounds);
     if (sd.test_pass_scale > 64)

@@ -63,9 +63,8 @@ static int brick_visible_trilinear(const pb_volume *v, const pb_sample_volume *s
  * more than the layout accepts (the probe test's measure, sparse_miss.h).
  * There the coarse level is wrong, and a stitched probe would carry its
  * error into the finer brick, whose cells nearly all touch a face (26 of 27). */
-static int coarse_misses(const pb_volume *v, uint32_t p, const float coarse[27])
+static int coarse_misses(const pb_volume *v, uint32_t p, const float coarse[27], float tol)
 {
-    float tol = v->settings.refine_error;
     if (!(tol > 0.f))
         return 0; /* not recorded: stitch everywhere (the first sparse files) */
     float pred[6], baked[6];
@@ -135,6 +134,8 @@ pb_result pb_sparse_seam_misses(const pb_volume *v, uint32_t level, pb_sparse_br
     /* span: finest steps per coarsest brick; below: level-`level` bricks per coarsest brick, per axis */
     uint32_t L = sp->levels, span = 3 * pb_sparse_step(L, 0), step = pb_sparse_step(L, level), below = span / (3 * step);
     uint32_t cap = 0;
+    /* the seam test's own threshold where recorded, else the refinement's */
+    float tol = v->settings.seam_error > 0.f ? v->settings.seam_error : v->settings.refine_error;
     for (uint32_t b = 0; r == PB_OK && b < sp->brick_count; ++b) {
         const pb_sparse_brick *br = &sp->bricks[b];
         if (br->level != level)
@@ -173,7 +174,8 @@ pb_result pb_sparse_seam_misses(const pb_volume *v, uint32_t level, pb_sparse_br
                 for (uint32_t e = *count; e-- > 0 && !seen;)
                     seen = !memcmp((*cells)[e].coord, cell.coord, sizeof cell.coord);
                 float sh[27];
-                if (seen || !brick_visible_trilinear(v, &sv, coarse, k3, where, sh) || !coarse_misses(v, p, sh))
+                if (seen || !brick_visible_trilinear(v, &sv, coarse, k3, where, sh) ||
+                    !coarse_misses(v, p, sh, tol))
                     continue;
                 if (*count == cap) {
                     uint32_t nc = cap ? 2 * cap : 64;
@@ -234,7 +236,7 @@ pb_result pb_sparse_stitch(pb_volume *v, pb_error *err)
                 /* a dilated probe always takes it; a baked one unless the coarser level misses it */
                 float sh[27];
                 if (brick_visible_trilinear(v, &sv, coarse, k3, where, sh) &&
-                    (!(v->probe_flags[p] & PB_PROBE_VALID) || !coarse_misses(v, p, sh)))
+                    (!(v->probe_flags[p] & PB_PROBE_VALID) || !coarse_misses(v, p, sh, v->settings.refine_error)))
                     memcpy(v->sh + 27 * (size_t)p, sh, sizeof sh);
             }
         }

@@ -54,6 +54,7 @@ typedef struct options {
     int has_refine_test;
     uint32_t refine_seams;             /* rounds of the sparse seam test */
     int has_refine_seams;
+    float seam_error;                  /* the seam test's threshold (0: the refine error) */
     /* merge: OUT is `scene`, the parts follow */
     char **parts;
     uint32_t part_count;

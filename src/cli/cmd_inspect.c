@@ -26,6 +26,15 @@ typedef struct sparse_census {
     uint32_t bricks[3], probes[3];
 } sparse_census;
 
+/* ", at E" after the seam test's rounds where it ran (files before the field: 0) */
+static const char *seam_threshold(const pb_volume_settings *s, char out[64])
+{
+    out[0] = '\0';
+    if (s->seam_rounds && s->seam_error > 0.f)
+        snprintf(out, 64, ", where missed by more than %g", (double)s->seam_error);
+    return out;
+}
+
 static sparse_census census(const pb_volume *v)
 {
     sparse_census c = {{0}, {0}};
@@ -148,11 +157,12 @@ int cmd_inspect(const options *o)
             sparse_census c = census(&v);
             printf(",\n  \"sparse\": {\"levels\": %u, \"cells\": [%u, %u, %u], \"bricks\": [%u, %u, %u], "
                    "\"probes\": [%u, %u, %u], \"chunk_entries\": %u, \"bytes\": %llu, \"refine_error\": %g, "
-                   "\"refine_test\": %s, \"test_pass_scale\": %u, \"seam_rounds\": %u}",
+                   "\"refine_test\": %s, \"test_pass_scale\": %u, \"seam_rounds\": %u, \"seam_error\": %g}",
                    v.sparse->levels, v.sparse->cells[0], v.sparse->cells[1], v.sparse->cells[2], c.bricks[0],
                    c.bricks[1], c.bricks[2], c.probes[0], c.probes[1], c.probes[2], v.sparse->chunk_count,
                    (unsigned long long)pb_volume_file_bytes(&v), (double)s->refine_error,
-                   refine_test_json(s->refine_test), s->test_pass_scale, s->seam_rounds);
+                   refine_test_json(s->refine_test), s->test_pass_scale, s->seam_rounds,
+                   (double)s->seam_error);
         }
         printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
                "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
@@ -185,6 +195,7 @@ int cmd_inspect(const options *o)
                    v.counts[1], v.counts[2], v.spacing[0], v.spacing[1], v.spacing[2]);
         else if (v.sparse) {
             sparse_census c = census(&v);
+            char seam[64];
             printf("probes      %u in %u bricks (sparse, %u levels, finest spacing (%g, %g, %g) m, %u x %u x %u "
                    "coarsest cells)\n", v.probe_count, v.sparse->brick_count, v.sparse->levels, v.spacing[0],
                    v.spacing[1], v.spacing[2], v.sparse->cells[0], v.sparse->cells[1], v.sparse->cells[2]);
@@ -195,10 +206,11 @@ int cmd_inspect(const options *o)
                    v.sparse->chunk_count);
             if (s->refine_test == 1u + PB_REFINE_TEST_SURFACE)
                 printf("refined     where off by more than %g: surface test, its probes at %ux the passes; seam test "
-                       "%u rounds\n", (double)s->refine_error, s->test_pass_scale, s->seam_rounds);
+                       "%u rounds%s\n", (double)s->refine_error, s->test_pass_scale, s->seam_rounds,
+                       seam_threshold(s, seam));
             else if (s->refine_test == 1u + PB_REFINE_TEST_PROBE)
-                printf("refined     where off by more than %g: probe test; seam test %u rounds\n",
-                       (double)s->refine_error, s->seam_rounds);
+                printf("refined     where off by more than %g: probe test; seam test %u rounds%s\n",
+                       (double)s->refine_error, s->seam_rounds, seam_threshold(s, seam));
             else if (s->refine_error > 0.f)
                 printf("refined     where off by more than %g (test not recorded: an older file)\n",
                        (double)s->refine_error);

@@ -83,6 +83,8 @@ void cli_print_help(void)
            "                                 their normals (default), or one probe inside it, six axes\n"
            "  --refine-seams N               sparse: N rounds (0-8, default 0) of the seam test: also refine a\n"
            "                                 coarser cell where a finer brick's probe on its face sees it err\n"
+           "  --seam-error E                 sparse: the seam test refines where that miss exceeds E (default:\n"
+           "                                 the refine error; larger refines only the worst seams)\n"
            "render options:\n"
            "  --mode probes|reference|direct|indirect|diff   (default probes with --volume, else reference)\n"
            "  --camera I | --eye x,y,z --target x,y,z [--up x,y,z] [--fov DEG]   (default: glTF camera 0)\n"
@@ -170,7 +172,8 @@ static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
     X(OPT_MAX_LEVEL, "max-level", required_argument) \
     X(OPT_REFINE_ERROR, "refine-error", required_argument) \
     X(OPT_REFINE_TEST, "refine-test", required_argument) \
-    X(OPT_REFINE_SEAMS, "refine-seams", required_argument)
+    X(OPT_REFINE_SEAMS, "refine-seams", required_argument) \
+    X(OPT_SEAM_ERROR, "seam-error", required_argument)
 
 enum {
     OPT_FIRST = 256,
@@ -446,6 +449,14 @@ static int apply(options *o, const char *a, const char *next)
         if (!next || !parse_u32(next, 0, 8, &o->refine_seams))
             return cli_usage_error("--refine-seams '%s' is not a number of rounds from 0 to 8", next ? next : "");
         o->has_refine_seams = 1;
+    } else if (!strcmp(a, "--seam-error")) {
+        char *end = NULL;
+        o->seam_error = next ? strtof(next, &end) : -1.f;
+        if (!next || *end || !(o->seam_error > 0.f && o->seam_error < 100.f)) {
+            fprintf(stderr, "probebake: error: --seam-error '%s' is not a relative error in (0, 100)\n",
+                    next ? next : "");
+            return 2;
+        }
     } else if (!strcmp(a, "--devices")) {
         if (!next)
             return cli_usage_error("%s needs all or a comma-separated list of device indices or names", a);

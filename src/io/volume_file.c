@@ -287,6 +287,7 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
         put_u32(b + 428, s->refine_test);
         put_u32(b + 432, s->test_pass_scale);
         put_u32(b + 436, s->seam_rounds);
+        put_f32(b + 440, s->seam_error);
         unsigned char *q = b + l.sparse;
         put_u32(q, sp->levels);
         for (int k = 0; k < 3; ++k)
@@ -501,6 +502,7 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     v->settings.refine_test = (v->flags & PB_VOLUME_SPARSE) ? get_u32(h + 428) : 0u;
     v->settings.test_pass_scale = (v->flags & PB_VOLUME_SPARSE) ? get_u32(h + 432) : 0u;
     v->settings.seam_rounds = (v->flags & PB_VOLUME_SPARSE) ? get_u32(h + 436) : 0u;
+    v->settings.seam_error = (v->flags & PB_VOLUME_SPARSE) ? get_f32(h + 440) : 0.f;
     memset(&v->shard, 0, sizeof v->shard);
     if (v->flags & PB_VOLUME_SHARD)
         v->shard = (pb_volume_shard){get_u32(h + 400), get_u32(h + 404), get_u32(h + 408), get_u32(h + 412)};
