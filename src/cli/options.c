@@ -111,6 +111,17 @@ static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out)
     return 1;
 }
 
+/* A float strictly inside (lo, hi), the whole string. */
+static int parse_open_range(const char *s, float lo, float hi, float *out)
+{
+    char *end = NULL;
+    float v = strtof(s, &end);
+    if (!s[0] || *end || !(v > lo && v < hi))
+        return 0;
+    *out = v;
+    return 1;
+}
+
 /* Every long option: its code, name and whether it takes a value. The
  * short forms are -h (--help) and -o (--output). Every command accepts
  * every option (a command ignores those it has no use for). */
@@ -339,12 +350,13 @@ static int apply(options *o, const char *a, const char *next)
             return 2;
         }
         *(intensity ? &o->env_intensity : &o->env_rotation) = v;
-    } else if (!strcmp(a, "--target-error")) {
-        char *end = NULL;
-        o->target_error = next ? strtof(next, &end) : -1.f;
-        if (!next || *end || !(o->target_error > 0.f && o->target_error < 1.f)) {
-            fprintf(stderr, "probebake: error: --target-error '%s' is not a relative error in (0, 1)\n",
-                    next ? next : "");
+    } else if (!strcmp(a, "--target-error") || !strcmp(a, "--refine-error") || !strcmp(a, "--seam-error")) {
+        /* relative errors: a fraction for the stopping target, up to 100x for the sparse tests */
+        float hi = !strcmp(a, "--target-error") ? 1.f : 100.f;
+        float *dst = hi == 1.f ? &o->target_error : !strcmp(a, "--refine-error") ? &o->refine_error : &o->seam_error;
+        if (!next || !parse_open_range(next, 0.f, hi, dst)) {
+            fprintf(stderr, "probebake: error: %s '%s' is not a relative error in (0, %g)\n", a, next ? next : "",
+                    (double)hi);
             return 2;
         }
     } else if (!strcmp(a, "--spacing")) {
@@ -432,14 +444,6 @@ static int apply(options *o, const char *a, const char *next)
             return 2;
         }
         o->has_max_level = 1;
-    } else if (!strcmp(a, "--refine-error")) {
-        char *end = NULL;
-        o->refine_error = next ? strtof(next, &end) : -1.f;
-        if (!next || *end || !(o->refine_error > 0.f && o->refine_error < 100.f)) {
-            fprintf(stderr, "probebake: error: --refine-error '%s' is not a relative error in (0, 100)\n",
-                    next ? next : "");
-            return 2;
-        }
     } else if (!strcmp(a, "--refine-test")) {
         if (!next || (strcmp(next, "surface") && strcmp(next, "probe")))
             return cli_usage_error("--refine-test '%s' is not surface or probe", next ? next : "");
@@ -449,14 +453,6 @@ static int apply(options *o, const char *a, const char *next)
         if (!next || !parse_u32(next, 0, 8, &o->refine_seams))
             return cli_usage_error("--refine-seams '%s' is not a number of rounds from 0 to 8", next ? next : "");
         o->has_refine_seams = 1;
-    } else if (!strcmp(a, "--seam-error")) {
-        char *end = NULL;
-        o->seam_error = next ? strtof(next, &end) : -1.f;
-        if (!next || *end || !(o->seam_error > 0.f && o->seam_error < 100.f)) {
-            fprintf(stderr, "probebake: error: --seam-error '%s' is not a relative error in (0, 100)\n",
-                    next ? next : "");
-            return 2;
-        }
     } else if (!strcmp(a, "--devices")) {
         if (!next)
             return cli_usage_error("%s needs all or a comma-separated list of device indices or names", a);
