@@ -74,7 +74,7 @@ expect layout-garbage 2 "--layout 'octree' is not grid or sparse" -- "$pb" bake 
 expect max-level-range 2 "--max-level '3' is not an integer in \[0, 2\]" -- "$pb" bake "$demo" --max-level 3 -o "$tmp/x.probes"
 expect refine-error-garbage 2 "--refine-error '-1' is not a relative error" -- "$pb" bake "$demo" --refine-error -1 -o "$tmp/x.probes"
 expect target-error-range 2 "--target-error '1' is not a relative error in \(0, 1\)" -- "$pb" bake "$demo" --target-error 1 -o "$tmp/x.probes"
-expect max-level-needs-sparse 1 '--max-level, --refine-error, --refine-test and --refine-seams shape a sparse layout: add --layout sparse' -- \
+expect max-level-needs-sparse 1 '--max-level, --refine-error, --refine-test, --refine-seams and --seam-error shape a sparse layout: add --layout sparse' -- \
     "$pb" bake "$demo" --max-level 1 -o "$tmp/x.probes"
 expect refine-test-garbage 2 "--refine-test 'pixel' is not surface or probe" -- \
     "$pb" bake "$demo" --layout sparse --refine-test pixel -o "$tmp/x.probes"

@@ -232,7 +232,8 @@ int cmd_bake(const options *o)
     if (!o->sparse && (o->has_max_level || o->refine_error > 0.f || o->has_refine_test || o->has_refine_seams ||
                        o->seam_error > 0.f)) {
         snprintf(err.message, sizeof err.message,
-                 "--max-level, --refine-error, --refine-test and --refine-seams shape a sparse layout: add --layout sparse");
+                 "--max-level, --refine-error, --refine-test, --refine-seams and --seam-error shape a sparse layout: "
+                 "add --layout sparse");
         goto out;
     }
     if (o->seam_error > 0.f && !o->refine_seams) {

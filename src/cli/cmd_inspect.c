@@ -26,7 +26,7 @@ typedef struct sparse_census {
     uint32_t bricks[3], probes[3];
 } sparse_census;
 
-/* ", at E" after the seam test's rounds where it ran (files before the field: 0) */
+/* The seam test's threshold after its rounds, where recorded (0 with no seam test and in older files) */
 static const char *seam_threshold(const pb_volume_settings *s, char out[64])
 {
     out[0] = '\0';
