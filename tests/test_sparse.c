@@ -491,6 +491,126 @@ static void solid_probes_are_never_sampled(void)
     pb_scene_destroy(s);
 }
 
+/* Placement step 7 (docs/sparse.md): a bake's probes inside geometry are
+ * dropped and their brick slots name one empty probe. Against the same bake
+ * kept whole (one part, dilated and stitched as merge does, not compacted):
+ * every lookup whose cage holds a valid probe is bit for bit the same, a
+ * cage of only invalid probes is black, the valid probes keep their data,
+ * and the file reads back. */
+static void invalid_probes_are_dropped(void)
+{
+    pb_scene *s = box_scene();
+    if (!s)
+        return;
+    pb_bake_desc d = sparse_desc(s);
+    d.rays_per_probe = 256;
+    d.passes = 1;
+    d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
+    d.shard_index = 0, d.shard_count = 1;
+    pb_sparse_desc sd = {2, 0.1f};
+    pb_sparse_stats st;
+    pb_volume part, whole, c;
+    pb_error err;
+    if (!sparse_bake(s, &d, &sd, &part, &st)) {
+        pb_scene_destroy(s);
+        return;
+    }
+    const char *name = "part";
+    CHECKF(pb_volume_merge(&part, &name, 1, &c, &err) == PB_OK, "%s", err.message);
+    whole = part; /* the merge's stages without the last: dilation and stitching (whole owns part's arrays) */
+    whole.flags &= ~(uint32_t)PB_VOLUME_SHARD;
+    pb_volume_dilate(&whole, PB_DILATION_ROUNDS);
+    CHECKF(pb_sparse_stitch(&whole, &err) == PB_OK, "%s", err.message);
+    uint32_t invalid = 0;
+    for (uint32_t i = 0; i < whole.probe_count; ++i)
+        invalid += !(whole.probe_flags[i] & PB_PROBE_VALID);
+    CHECK(invalid > 50); /* the case arises: the box's inside */
+    CHECKF(c.probe_count == whole.probe_count - invalid + 1 && c.probes_dropped == invalid,
+           "%u probes kept of %u, %u dropped, %u invalid", c.probe_count, whole.probe_count, c.probes_dropped,
+           invalid);
+    /* numbered by first use, the one empty probe included; no other invalid probe left */
+    uint32_t seen = 0, empty = UINT32_MAX, bad_number = 0, bad_data = 0, bad_empty = 0;
+    size_t slots = (size_t)64 * c.sparse->brick_count, halves = pb_volume_tile_halves(c.octmap_res);
+    CHECK(c.sparse->brick_count == whole.sparse->brick_count);
+    for (size_t k = 0; k < slots && c.sparse->brick_count == whole.sparse->brick_count; ++k) {
+        uint32_t q = c.sparse->brick_probes[k], p = whole.sparse->brick_probes[k];
+        if (q == seen)
+            seen++;
+        else if (q > seen)
+            bad_number++;
+        if (whole.probe_flags[p] & PB_PROBE_VALID) {
+            bad_data += memcmp(c.sh + 27 * (size_t)q, whole.sh + 27 * (size_t)p, 27 * sizeof(float)) != 0 ||
+                        memcmp(c.depth + halves * q, whole.depth + halves * p, halves * 2) != 0 ||
+                        memcmp(c.base + 3 * (size_t)q, whole.base + 3 * (size_t)p, 12) != 0 ||
+                        memcmp(c.offset + 3 * (size_t)q, whole.offset + 3 * (size_t)p, 12) != 0 ||
+                        c.probe_flags[q] != whole.probe_flags[p];
+        } else {
+            if (empty == UINT32_MAX)
+                empty = q;
+            bad_empty += q != empty;
+        }
+    }
+    CHECKF(bad_number == 0 && seen == c.probe_count, "%u slots out of first-use order, %u of %u probes named",
+           bad_number, seen, c.probe_count);
+    CHECKF(bad_data == 0, "%u kept probes changed", bad_data);
+    CHECKF(bad_empty == 0 && empty < c.probe_count, "%u invalid slots not on the empty probe", bad_empty);
+    if (empty < c.probe_count) {
+        float zero[27] = {0};
+        CHECK(c.probe_flags[empty] == 0 && !memcmp(c.sh + 27 * (size_t)empty, zero, sizeof zero));
+    }
+    /* lookups near and inside the box: the same where any valid probe is in the cage, else black */
+    pb_sample_volume a, b;
+    CHECK(pb_sample_volume_build(&whole, s->origin, 0.f, 0.f, &a, &err) == PB_OK);
+    CHECK(pb_sample_volume_build(&c, s->origin, 0.f, 0.f, &b, &err) == PB_OK);
+    test_rng r = {23};
+    uint32_t same = 0, differ = 0, black = 0, unlit_cages = 0;
+    for (int i = 0; i < 100000; ++i) {
+        float p[3], n[3], ca[3], cb[3], w[8];
+        int probe[8];
+        for (int k = 0; k < 3; ++k)
+            p[k] = (float)(BOX_LO[k] - 1.5 + (BOX_HI[k] - BOX_LO[k] + 3.0) * rng_uniform(&r) - s->origin[k]);
+        rng_direction(&r, n);
+        pb_sample_cage_cpu(&a, p, n, n, ca, probe, w);
+        pb_sample_cpu(&b, p, n, n, cb);
+        /* the sampler's fallback (no valid probe with a trilinear weight: a point in the box) reads the
+         * invalid probes' dilated light; every other lookup weighs valid probes only */
+        int any_valid = 0;
+        for (int k = 0; k < 8; ++k)
+            any_valid |= probe[k] >= 0 && (whole.probe_flags[probe[k]] & PB_PROBE_VALID) && w[k] > 0.f;
+        if (any_valid) {
+            int eq = !memcmp(ca, cb, sizeof ca);
+            same += eq, differ += !eq;
+
+        } else {
+            unlit_cages++;
+            black += cb[0] == 0.f && cb[1] == 0.f && cb[2] == 0.f;
+        }
+    }
+    fprintf(stderr, "  %u probes, %u inside geometry dropped; lookups: %u the same, %u differ, %u fallbacks to "
+            "invalid probes (%u black)\n", whole.probe_count, c.probes_dropped, same, differ, unlit_cages, black);
+    CHECKF(differ == 0 && same > 50000, "%u lookups differ", differ);
+    CHECKF(unlit_cages > 1000 && black == unlit_cages, "%u of %u fallback lookups black", black, unlit_cages);
+    pb_sample_volume_free(&a);
+    pb_sample_volume_free(&b);
+    /* the file reads back (the layout's checks accept shared empty slots) and samples alike */
+    char path[] = "/tmp/pb-sparse-XXXXXX";
+    int fd = mkstemp(path);
+    close(fd);
+    pb_volume back;
+    CHECKF(pb_volume_write(path, &c, &err) == PB_OK, "%s", err.message);
+    if (pb_volume_read(path, &back, &err) == PB_OK) {
+        CHECK(back.probe_count == c.probe_count &&
+              !memcmp(back.sparse->brick_probes, c.sparse->brick_probes, slots * 4));
+        pb_volume_free(&back);
+    } else {
+        CHECKF(0, "%s", err.message);
+    }
+    unlink(path);
+    pb_volume_free(&whole);
+    pb_volume_free(&c);
+    pb_scene_destroy(s);
+}
+
 /* Trilinear irradiance (no visibility) at q from the cage `probe` of
  * pb_sample_cage_cpu: corner i is offset (i&1, i>>1&1, i>>2&1); their base
  * (lattice) positions give the cage's origin and spacing. Evaluated where the
@@ -809,6 +929,7 @@ int main(void)
     RUN(sparse_file_round_trip);
     RUN(surface_tests_sit_nearest_the_cell_centre);
     RUN(solid_probes_are_never_sampled);
+    RUN(invalid_probes_are_dropped);
     RUN(level_seams_are_bounded);
     RUN(sparse_dilation_kernel_matches_cpu_reference);
     return test_gpu_finish(ctx);

@@ -21,6 +21,7 @@
 #include "bake/indirect_volume.h"
 #include "bake/shard.h"
 #include "bake/sparse_miss.h"
+#include "bake/sparse_compact.h"
 #include "bake/sparse_stitch.h"
 #include "bake/sparse_surface_tests.h"
 #include "common/common.h"
@@ -798,6 +799,16 @@ static pb_result sparse_bounce_bake(void *user, const pb_bake_desc *d, const pb_
     return r;
 }
 
+/* Step 7: the probes in rock, read by dilation and stitching, are dropped
+ * (sparse_compact.c); a part keeps them for the merge to dilate. */
+static pb_result drop_invalid(pb_volume *out, pb_error *err)
+{
+    pb_result r = pb_sparse_drop_invalid(out, NULL, err);
+    if (r != PB_OK)
+        pb_volume_free(out);
+    return r;
+}
+
 pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
                          const pb_sparse_desc *sd_in, pb_volume *out, pb_sparse_stats *stats, pb_error *err)
 {
@@ -848,13 +859,16 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
     if (!desc->indirect_volume || desc->bounces == 0) {
         pb_bake_desc d = *desc;
         d.indirect_volume = 0;
-        return place(ctx, scene, gs, &d, &sd, 0, NULL, out, stats, err);
+        pb_result r = place(ctx, scene, gs, &d, &sd, 0, NULL, out, stats, err);
+        return r == PB_OK && !desc->shard_count ? drop_invalid(out, err) : r;
     }
     /* --indirect volume: bounce k places and bakes its own layout (the
      * last bounce's is the volume's), its probe rays' first hits reflecting
      * bounce k - 1's sparse volume */
     sparse_bounce sb = {.ctx = ctx, .scene = scene, .gs = gs, .sd = &sd};
     pb_result r = pb_indirect_volume_bounces(scene, desc, sparse_bounce_bake, &sb, out, err);
+    if (r == PB_OK) /* the bounces sampled their volumes whole; the file drops what no lookup weighs */
+        r = drop_invalid(out, err);
     if (r == PB_OK && stats) {
         *stats = sb.last;
         stats->bakes = sb.bakes;

@@ -233,10 +233,12 @@ pb_result pb_sparse_stitch(pb_volume *v, pb_error *err)
                 float where[3];
                 for (int k = 0; k < 3; ++k)
                     where[k] = v->base[3 * (size_t)p + k] + v->offset[3 * (size_t)p + k];
-                /* a dilated probe always takes it; a baked one unless the coarser level misses it */
+                /* a dilated probe always takes it; a baked one unless the coarser level misses it; the
+                 * empty probe of a compacted volume (neither) never: every dropped slot names it */
+                uint32_t f = v->probe_flags[p];
                 float sh[27];
-                if (brick_visible_trilinear(v, &sv, coarse, k3, where, sh) &&
-                    (!(v->probe_flags[p] & PB_PROBE_VALID) || !coarse_misses(v, p, sh, v->settings.refine_error)))
+                if ((f & (PB_PROBE_VALID | PB_PROBE_DILATED)) && brick_visible_trilinear(v, &sv, coarse, k3, where, sh) &&
+                    (!(f & PB_PROBE_VALID) || !coarse_misses(v, p, sh, v->settings.refine_error)))
                     memcpy(v->sh + 27 * (size_t)p, sh, sizeof sh);
             }
         }

@@ -313,10 +313,13 @@ int cmd_bake(const options *o)
         fprintf(report, " (%u dropped inside geometry), probes baked per level", st->dropped[0] + st->dropped[1] + st->dropped[2]);
         for (uint32_t l = 0; l < vol.sparse->levels; ++l)
             fprintf(report, " %u", st->probes[l]);
-        fprintf(report, "; cells tested %u, refined %u (%u at seams), not tested (no surface near or inside, or solid) %u, beyond the bounds %u; %u bakes, %u test probes thrown away\n",
+        fprintf(report, "; cells tested %u, refined %u (%u at seams), not tested (no surface near or inside, or solid) %u, beyond the bounds %u; %u bakes, %u test probes thrown away",
                 st->tested[0] + st->tested[1], st->refined[0] + st->refined[1],
                 st->seam_refined[0] + st->seam_refined[1], st->skipped[0] + st->skipped[1],
                 st->beyond[0] + st->beyond[1], st->bakes, st->test_probes[0] + st->test_probes[1]);
+        if (!o->shard_count)
+            fprintf(report, "; %u probes inside geometry dropped (no lookup weighs them)", vol.probes_dropped);
+        fprintf(report, "\n");
     }
     if (o->shard_count && o->sparse)
         fprintf(report, "wrote %s: part %u of %u, %u probes in %u bricks grown from coarsest brick %u on (of %u), "

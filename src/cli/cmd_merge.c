@@ -40,9 +40,13 @@ int cmd_merge(const options *o)
         dilated += (merged.probe_flags[p] & PB_PROBE_DILATED) != 0;
     FILE *report = strcmp(out_path, "-") ? stdout : stderr;
     /* a sparse bake's parts share the probes on their faces: the whole's count */
-    fprintf(report, "wrote %s: %u parts, %u probes%s (%u dilated across parts), %u passes at most\n", out_path, n,
-            merged.probe_count, merged.sparse ? " in sparse bricks, level seams stitched" : "", dilated,
-            merged.settings.passes);
+    if (merged.sparse)
+        fprintf(report, "wrote %s: %u parts, %u probes in sparse bricks, level seams stitched (%u inside geometry "
+                "dropped), %u passes at most\n", out_path, n, merged.probe_count, merged.probes_dropped,
+                merged.settings.passes);
+    else
+        fprintf(report, "wrote %s: %u parts, %u probes (%u dilated across parts), %u passes at most\n", out_path, n,
+                merged.probe_count, dilated, merged.settings.passes);
     rc = 0;
 out:
     for (uint32_t i = 0; parts && i < n; ++i)
