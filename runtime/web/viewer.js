@@ -37,7 +37,9 @@ function probeSpheres(v) {
         v.probeCount);
     const m = new THREE.Matrix4(), c = new THREE.Color();
     for (let p = 0; p < v.probeCount; ++p) {
-        m.makeTranslation(v.origin[0] + v.positions[3 * p], v.origin[1] + v.positions[3 * p + 1],
+        // a sparse volume's empty probe (docs/sparse.md, step 7) is not a place: scaled away
+        if (v.sparse && v.flags[p] === 0) m.makeScale(0, 0, 0);
+        else m.makeTranslation(v.origin[0] + v.positions[3 * p], v.origin[1] + v.positions[3 * p + 1],
             v.origin[2] + v.positions[3 * p + 2]);
         mesh.setMatrixAt(p, m);
         if (v.flags[p] & 1) // mean radiance E / pi from the DC term (Y00 = 0.282095)

@@ -34,6 +34,10 @@ static int probe_spheres(const pb_sample_volume *v, const float o[3], const floa
     int count = v->levels ? (int)v->probe_count : v->counts[0] * v->counts[1] * v->counts[2], hit = 0;
     color[0] = color[1] = color[2] = 0.f;
     for (int p = 0; p < count; ++p) {
+        uint32_t pf;
+        memcpy(&pf, &v->probes[4 * (size_t)p + 3], 4);
+        if (v->levels && pf == 0)
+            continue; /* a sparse volume's empty probe (docs/sparse.md, step 7): not a place */
         int ijk[3] = {p % v->counts[0], (p / v->counts[0]) % v->counts[1], p / (v->counts[0] * v->counts[1])};
         float home[3], c[3];
         for (int k = 0; k < 3; ++k)
