@@ -423,6 +423,16 @@ static void surface_tests_sit_nearest_the_cell_centre(void)
     pb_scene_destroy(s);
 }
 
+/* The box scene's bake: one quick pass under a dim sky. */
+static pb_bake_desc box_desc(const pb_scene *s)
+{
+    pb_bake_desc d = sparse_desc(s);
+    d.rays_per_probe = 256;
+    d.passes = 1;
+    d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
+    return d;
+}
+
 /* Done-when of issue 14: no probe inside solid geometry is ever sampled.
  * Random points of free space near the box (above the floor, outside it) are
  * sampled with the C reference (the GPU sampler equals it: test_sample);
@@ -432,10 +442,7 @@ static void solid_probes_are_never_sampled(void)
     pb_scene *s = box_scene();
     if (!s)
         return;
-    pb_bake_desc d = sparse_desc(s);
-    d.rays_per_probe = 256;
-    d.passes = 1;
-    d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
+    pb_bake_desc d = box_desc(s);
     pb_sparse_desc sd = {2, 0.1f};
     pb_sparse_stats st;
     pb_volume v;
@@ -502,10 +509,7 @@ static void invalid_probes_are_dropped(void)
     pb_scene *s = box_scene();
     if (!s)
         return;
-    pb_bake_desc d = sparse_desc(s);
-    d.rays_per_probe = 256;
-    d.passes = 1;
-    d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
+    pb_bake_desc d = box_desc(s);
     d.shard_index = 0, d.shard_count = 1;
     pb_sparse_desc sd = {2, 0.1f};
     pb_sparse_stats st;
