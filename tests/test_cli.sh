@@ -240,7 +240,7 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-tiny 0 "wrote $tmp/a.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --validation -o "$tmp/a.probes"
     expect bake-inspect 0 '"probes": 8,' -- "$pb" inspect "$tmp/a.probes" --json
-    expect bake-sparse 0 '^sparse: 2 levels, bricks 1 [0-9]+ .*; [0-9]+ bakes, [1-9][0-9]* test probes thrown away' -- \
+    expect bake-sparse 0 '^sparse: 2 levels, bricks 1 [0-9]+ .*; [0-9]+ bakes, [1-9][0-9]* test probes thrown away; [0-9]+ probes inside geometry dropped' -- \
         "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 1 --rays 32 --passes 2 --octmap-res 4 --validation \
         -o "$tmp/s.probes"
     # the probe test (one probe inside each cell) is still there; the surface test's error is below 1

@@ -330,6 +330,9 @@ int cmd_bake(const options *o)
         fprintf(report, "wrote %s: part %u of %u, %u of %llu probes, undilated (probebake merge joins the parts) (%u "
                 "valid, %u relocated, %u invalid, %u outside", o->output, o->shard_index, o->shard_count,
                 vol.probe_count, (unsigned long long)probes, valid, relocated, vol.probe_count - valid, outside);
+    else if (o->sparse && vol.probes_dropped) /* the one invalid probe left is the empty one of step 7 */
+        fprintf(report, "wrote %s: %u probes (%u valid, %u relocated, %u inside geometry dropped for one empty probe, "
+                "%u outside", o->output, vol.probe_count, valid, relocated, vol.probes_dropped, outside);
     else
         fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside",
                 o->output, (unsigned long long)probes, valid, relocated, vol.probe_count - valid, dilated, outside);
