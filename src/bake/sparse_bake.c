@@ -803,7 +803,7 @@ static pb_result sparse_bounce_bake(void *user, const pb_bake_desc *d, const pb_
  * (sparse_compact.c); a part keeps them for the merge to dilate. */
 static pb_result drop_invalid(pb_volume *out, pb_error *err)
 {
-    pb_result r = pb_sparse_drop_invalid(out, NULL, err);
+    pb_result r = pb_sparse_drop_invalid(out, err);
     if (r != PB_OK)
         pb_volume_free(out);
     return r;

@@ -11,10 +11,9 @@
 
 #define UNSET UINT32_MAX
 
-pb_result pb_sparse_drop_invalid(pb_volume *v, uint32_t *dropped, pb_error *err)
+pb_result pb_sparse_drop_invalid(pb_volume *v, pb_error *err)
 {
-    if (dropped)
-        *dropped = 0;
+    v->probes_dropped = 0;
     pb_sparse_layout *sp = v->sparse;
     if (!sp)
         return PB_OK;
@@ -72,7 +71,5 @@ pb_result pb_sparse_drop_invalid(pb_volume *v, uint32_t *dropped, pb_error *err)
     c.sparse = sp;
     *v = c;
     v->probes_dropped = invalid;
-    if (dropped)
-        *dropped = invalid;
     return PB_OK;
 }

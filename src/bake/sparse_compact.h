@@ -12,9 +12,9 @@
  * at the lattice origin), and the invalid probes are dropped: a cage of
  * only invalid probes then samples black, as a point with no brick does.
  * Probes stay numbered by first use in brick order (pb_sparse_layout_build's
- * rule), so a bake and a merge of its parts compact alike. *dropped (may be
- * NULL): invalid probes removed. No-op for grids and volumes with no
- * invalid probe. Run after dilation and stitching, which read them. */
-pb_result pb_sparse_drop_invalid(pb_volume *v, uint32_t *dropped, pb_error *err);
+ * rule), so a bake and a merge of its parts compact alike. Sets
+ * v->probes_dropped to the number removed. No-op for grids and volumes with
+ * no invalid probe. Run after dilation and stitching, which read them. */
+pb_result pb_sparse_drop_invalid(pb_volume *v, pb_error *err);
 
 #endif

@@ -149,7 +149,7 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
     out->sparse = sp;
     /* the stages that need neighbours across parts: as the one-process bake */
     pb_volume_dilate(out, PB_DILATION_ROUNDS);
-    if ((r = pb_sparse_stitch(out, err)) != PB_OK || (r = pb_sparse_drop_invalid(out, NULL, err)) != PB_OK)
+    if ((r = pb_sparse_stitch(out, err)) != PB_OK || (r = pb_sparse_drop_invalid(out, err)) != PB_OK)
         pb_volume_free(out);
     return r;
 }

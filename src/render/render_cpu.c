@@ -64,11 +64,9 @@ static int probe_spheres(const pb_sample_volume *v, const float o[3], const floa
             float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             for (int k = 0; k < 3; ++k)
                 n[k] /= nl;
-            uint32_t flags;
-            memcpy(&flags, &v->probes[4 * (size_t)p + 3], 4);
             if (s == 1) {
                 color[0] = color[1] = color[2] = 0.3f;
-            } else if (!(flags & PB_PROBE_VALID)) {
+            } else if (!(pf & PB_PROBE_VALID)) {
                 color[0] = 1.f, color[1] = color[2] = 0.05f;
             } else {
                 pb_sh_eval(v->sh + 27 * (size_t)p, n, color);
