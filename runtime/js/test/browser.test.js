@@ -43,7 +43,8 @@ before(async () => {
 });
 after(() => { server.close(); if (!process.env.PB_KEEP) rmSync(dir, { recursive: true, force: true }); else console.log(`# kept ${dir}`); });
 
-// the page in headless Chromium on its software WebGL2 (SwiftShader); its
+// the page in headless Chromium's WebGL2 on a software Vulkan (lavapipe where
+// installed, see headless.js; the result names it); its
 // result once it has written one (two minutes of real time at most: the
 // slowest page seen took 12 s on a loaded 2-core machine)
 const PAGE_TIMEOUT_MS = 120000;
@@ -102,6 +103,7 @@ async function pageMatchesC(probes, pfm) {
         worst = Math.max(worst, Math.abs(lj - lc) / lc);
     }
     const rrmse = Math.sqrt(se / count) / (sum / count);
+    console.log(`# drawn by ${r.glRenderer}`);
     console.log(`# ${count} surface pixels (${r.misplacedCount} left out as misplaced): relative RMSE ` +
         `${rrmse.toExponential(2)}, ${far} differ by more than 1 %, worst ${worst.toExponential(2)}`);
     assert.ok(r.misplacedCount <= 0.01 * W * H, `${r.misplacedCount} pixels shaded away from where they were drawn`);

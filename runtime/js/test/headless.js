@@ -8,6 +8,25 @@
 // had written anything (test_browser, stop 28; not reproduced here in 25 runs
 // under load). Waiting for the page's own signal leaves no such race.
 import { spawn } from 'node:child_process';
+import { existsSync } from 'node:fs';
+
+// ANGLE draws WebGL through whatever Vulkan driver the loader finds: the one
+// VK_DRIVER_FILES names, else Chromium's own SwiftShader. The tests pin Mesa's
+// lavapipe, the project's reference software device, where the caller names no
+// driver. Chromium 156's SwiftShader (Subzero) shades ~10 % of the demo floor's
+// pixels, in blocks (the floor's two triangles reach behind the camera), at a
+// world position 2 cm to 20 cm from the one its depth gives (the page's
+// position check, viewer.js), up to 43 % off; lavapipe and the C renderer
+// agree there to 1e-3.
+// PB_BROWSER_VULKAN=bundled leaves Chromium its own driver.
+const LAVAPIPE_ICD = ['/usr/share/vulkan/icd.d/lvp_icd.json', '/usr/share/vulkan/icd.d/lvp_icd.x86_64.json'];
+function browserEnv() {
+    const env = { ...process.env };
+    if (env.PB_BROWSER_VULKAN === 'bundled' || env.VK_DRIVER_FILES || env.VK_ICD_FILENAMES) return env;
+    const icd = LAVAPIPE_ICD.find((f) => existsSync(f));
+    if (icd) env.VK_DRIVER_FILES = env.VK_ICD_FILENAMES = icd;
+    return env;
+}
 
 const LAUNCH = ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
     '--ignore-gpu-blocklist', '--hide-scrollbars', '--no-first-run', '--remote-debugging-pipe'];
@@ -16,7 +35,7 @@ const LAUNCH = ['--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--
 export async function launch(chromium, width, height, options = {}) {
     const COMMAND_TIMEOUT_MS = options.commandTimeoutMs || 60000;
     const proc = spawn(chromium, [...LAUNCH, `--window-size=${width},${height}`, 'about:blank'],
-        { stdio: ['ignore', 'ignore', 'pipe', 'pipe', 'pipe'] });
+        { stdio: ['ignore', 'ignore', 'pipe', 'pipe', 'pipe'], env: browserEnv() });
     let stderr = '', pending = Buffer.alloc(0), nextId = 1, exited = null;
     const waiting = new Map();
     proc.stderr.on('data', (d) => { stderr = (stderr + d).slice(-4000); });
