@@ -195,11 +195,16 @@ static inline void test_log_line(pb_log_level level, const char *msg, void *user
  * validation layer on; PB_TEST_PORTABLE_KERNELS=1 masks shaderInt64 and
  * shaderFloat64 off (the kernels for devices without them). NULL, after printing why and a failed summary line,
  * when there is none: the caller returns 1. */
+static inline int test_portable_kernels(void)
+{
+    const char *portable = getenv("PB_TEST_PORTABLE_KERNELS");
+    return portable && strcmp(portable, "1") == 0;
+}
+
 static inline pb_context *test_gpu_context(void)
 {
     pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {test_log_line, NULL}};
-    const char *portable = getenv("PB_TEST_PORTABLE_KERNELS");
-    d.portable_kernels = portable && strcmp(portable, "1") == 0;
+    d.portable_kernels = test_portable_kernels();
     pb_context *ctx = NULL;
     pb_error err;
     if (pb_context_create(&d, &ctx, &err) != PB_OK) {
