@@ -70,7 +70,7 @@ print(f"{'scene':24s} {'pairs':>5s} {'B/A median':>10s} {'min':>7s} {'max':>7s} 
 for scene in dict.fromkeys(r["scene"] for r in rows):
     rs = [r for r in rows if r["scene"] == scene]
     ratio = [float(r["b_over_a"]) for r in rs]
-    med = lambda k: st.median(float(r[k]) for r in rs)
+    med = lambda k: round(st.median(float(r[k]) for r in rs), 4)
     s = {"scene": scene, "pairs": len(rs), "b_over_a_median": round(st.median(ratio), 4),
          "b_over_a_min": min(ratio), "b_over_a_max": max(ratio),
          "a_mrays_median": med("a_mrays"), "b_mrays_median": med("b_mrays"),
