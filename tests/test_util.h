@@ -191,16 +191,17 @@ static inline void test_log_line(pb_log_level level, const char *msg, void *user
         fprintf(stderr, "  [%s] %s\n", level == PB_LOG_WARN ? "warn" : "error", msg);
 }
 
-/* The GPU tests' context: PB_TEST_DEVICE (or the best device) with the
- * validation layer on; PB_TEST_PORTABLE_KERNELS=1 masks shaderInt64 and
- * shaderFloat64 off (the kernels for devices without them). NULL, after printing why and a failed summary line,
- * when there is none: the caller returns 1. */
+/* Whether this is the portable kernels' run (PB_TEST_PORTABLE_KERNELS=1, test_gpu_context). */
 static inline int test_portable_kernels(void)
 {
     const char *portable = getenv("PB_TEST_PORTABLE_KERNELS");
     return portable && strcmp(portable, "1") == 0;
 }
 
+/* The GPU tests' context: PB_TEST_DEVICE (or the best device) with the
+ * validation layer on; PB_TEST_PORTABLE_KERNELS=1 masks shaderInt64 and
+ * shaderFloat64 off (the kernels for devices without them). NULL, after printing why and a failed summary line,
+ * when there is none: the caller returns 1. */
 static inline pb_context *test_gpu_context(void)
 {
     pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {test_log_line, NULL}};

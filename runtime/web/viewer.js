@@ -57,10 +57,10 @@ function probeSpheres(v) {
 // position the fragment got (the interpolated world position the volume is
 // sampled at) and the position its depth and window coordinates give. They
 // agree to the depth buffer's precision on a correct rasterizer and page.
-// Chromium's bundled SwiftShader shades blocks of the demo's floor (whose
-// triangles reach behind the camera) 2 cm to 20 cm from where it draws them (depth and the
-// interpolated world position disagree; lavapipe's and the C renderer's agree:
-// runtime/js/test/headless.js); the test reports such pixels, leaves them
+// Chromium's bundled SwiftShader shades blocks of the demo's floor 2 cm to
+// 20 cm from where it draws them (depth and the interpolated world position
+// disagree; lavapipe's and the C renderer's agree: runtime/js/test/headless.js);
+// the test reports such pixels, leaves them
 // out of the comparison and allows at most 1 % of them.
 const check = { on: false, invProj: new THREE.Matrix4(), camWorld: new THREE.Matrix4(), size: new THREE.Vector2() };
 function checkable(m) {

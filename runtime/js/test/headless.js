@@ -14,8 +14,9 @@ import { existsSync } from 'node:fs';
 // VK_DRIVER_FILES names, else Chromium's own SwiftShader. The tests pin Mesa's
 // lavapipe, the project's reference software device, where the caller names no
 // driver. Chromium 156's SwiftShader (Subzero) shades ~10 % of the demo floor's
-// pixels, in blocks (the floor's two triangles reach behind the camera), at a
-// world position 2 cm to 20 cm from the one its depth gives (the page's
+// pixels, in blocks (its triangles reach behind the camera; whether that is
+// the cause was not checked), at a world position 2 cm to 20 cm from the one
+// its depth gives (the page's
 // position check, viewer.js), up to 43 % off; lavapipe and the C renderer
 // agree there to 1e-3.
 // PB_BROWSER_VULKAN=bundled leaves Chromium its own driver.
