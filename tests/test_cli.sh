@@ -237,6 +237,11 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect devices-json 0 '"subgroup_size": [0-9]+.*"kernels": "(native64|portable)"' -- "$pb" devices --json
     expect trace-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
         "$pb" trace "$demo" --verify --validation --probes 64 --rays 128
+    # the kernels for devices without 64-bit types, asked for on any device: the same hits
+    expect trace-portable-kernels 0 'kernels: portable \(asked for\)' -- \
+        "$pb" trace "$demo" --portable-kernels --verbose --validation --probes 64 --rays 32
+    expect trace-portable-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
+        "$pb" trace "$demo" --portable-kernels --verify --validation --probes 64 --rays 128
     expect bake-tiny 0 "wrote $tmp/a.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --validation -o "$tmp/a.probes"
     expect bake-inspect 0 '"probes": 8,' -- "$pb" inspect "$tmp/a.probes" --json

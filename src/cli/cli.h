@@ -33,6 +33,7 @@ typedef struct options {
     uint32_t counts[3], passes, bounces, octmap_res;
     int has_spacing, has_counts, has_bounds, has_rays, has_seed, has_bounces;
     int json, validation, verify, has_probe;
+    int portable_kernels;       /* --portable-kernels: pb_context_desc.portable_kernels */
     uint32_t probes, rays, seed, probe;
     cli_log log;
     /* render */
@@ -117,10 +118,11 @@ void cli_catch_signals(void);
 void cli_defer_signals(void);
 int cli_interrupted(void *user);
 
-/* PB_INJECT_FAULT=allocation:N or submission:N (tests of the error paths):
- * the Nth device allocation or submission fails as out of memory / device
- * lost. Unset: nothing. */
-void cli_fault_injection(pb_context_desc *cd);
+/* The context a command asks for: `device`, --validation and
+ * --portable-kernels; and PB_INJECT_FAULT=allocation:N or submission:N
+ * (tests of the error paths): the Nth device allocation or submission fails
+ * as out of memory / device lost. */
+pb_context_desc cli_context_desc(const options *o, const char *device, pb_log log);
 
 /* --sky / --env: refuses both at once; loads the map when --env is given
  * (env zeroed otherwise). */

@@ -58,16 +58,18 @@ int cli_parse_floats(const char *s, int n, float *out)
     return 1;
 }
 
-void cli_fault_injection(pb_context_desc *cd)
+pb_context_desc cli_context_desc(const options *o, const char *device, pb_log log)
 {
+    pb_context_desc cd = {device, (uint32_t)o->validation, 0, 0, log};
+    cd.portable_kernels = (uint32_t)o->portable_kernels;
+    /* PB_INJECT_FAULT=allocation:N | submission:N fails that call (test_cli's failure paths) */
     const char *f = getenv("PB_INJECT_FAULT");
     unsigned n = 0;
-    if (!f)
-        return;
-    if (sscanf(f, "allocation:%u", &n) == 1)
-        cd->fail_allocation = n;
-    else if (sscanf(f, "submission:%u", &n) == 1)
-        cd->fail_submission = n;
+    if (f && sscanf(f, "allocation:%u", &n) == 1)
+        cd.fail_allocation = n;
+    else if (f && sscanf(f, "submission:%u", &n) == 1)
+        cd.fail_submission = n;
+    return cd;
 }
 
 pb_result cli_environment(const options *o, pb_environment *env, pb_error *err)

@@ -56,8 +56,7 @@ static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_b
     pb_result r = n ? PB_OK : PB_ERROR_INVALID_ARGUMENT;
     /* contexts one after another (instance set-up is not for threads) */
     for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
-        pb_context_desc cd = {names[i], (uint32_t)o->validation, 0, 0, log};
-        cli_fault_injection(&cd);
+        pb_context_desc cd = cli_context_desc(o, names[i], log);
         r = pb_context_create(&cd, &ctxs[i], err);
         if (r == PB_OK)
             r = pb_gpu_scene_create(ctxs[i], s, bvh, &scenes[i], err);
@@ -260,8 +259,7 @@ int cmd_bake(const options *o)
         if (r == PB_OK && o->sparse)
             probes = vol.probe_count;
     } else {
-        pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
-        cli_fault_injection(&cd);
+        pb_context_desc cd = cli_context_desc(o, o->device, log);
         if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
             goto out;
         cli_defer_signals(); /* from here a signal cancels the bake or the write */

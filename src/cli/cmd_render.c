@@ -198,8 +198,7 @@ int cmd_render(const options *o)
         goto out;
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
-    pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
-    cli_fault_injection(&cd);
+    pb_context_desc cd = cli_context_desc(o, o->device, log);
     if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
     uint64_t pixels = (uint64_t)d.width * d.height;

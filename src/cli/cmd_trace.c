@@ -24,7 +24,7 @@ int cmd_trace(const options *o)
     int rc = 1;
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
-    pb_context_desc cd = {o->device, (uint32_t)o->validation, 0, 0, log};
+    pb_context_desc cd = cli_context_desc(o, o->device, log);
     if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
     pb_probe_grid grid;

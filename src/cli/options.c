@@ -32,6 +32,8 @@ void cli_print_help(void)
            "options:\n"
            "  --device INDEX|NAME     pick a device (default: discrete > integrated > virtual > CPU)\n"
            "  --validation            enable the Vulkan validation layer (fail on any message)\n"
+           "  --portable-kernels      run the kernels built for devices without shaderInt64 and\n"
+           "                          shaderFloat64 on any device (same results; to check them)\n"
            "  --probes N              probes in the grid over the scene bounds (trace; default 4096)\n"
            "  --rays N                rays per probe (trace; default 256)\n"
            "  --seed S                random seed (default 1)\n"
@@ -131,6 +133,7 @@ static int parse_open_range(const char *s, float lo, float hi, float *out)
     X(OPT_JSON, "json", no_argument) \
     X(OPT_VALIDATION, "validation", no_argument) \
     X(OPT_VERIFY, "verify", no_argument) \
+    X(OPT_PORTABLE_KERNELS, "portable-kernels", no_argument) \
     X(OPT_VERBOSE, "verbose", no_argument) \
     X(OPT_QUIET, "quiet", no_argument) \
     X(OPT_PFM, "pfm", no_argument) \
@@ -223,6 +226,8 @@ static int apply(options *o, const char *a, const char *next)
         o->validation = 1;
     } else if (!strcmp(a, "--verify")) {
         o->verify = 1;
+    } else if (!strcmp(a, "--portable-kernels")) {
+        o->portable_kernels = 1;
     } else if (!strcmp(a, "--verbose")) {
         o->log.verbose = 1;
     } else if (!strcmp(a, "--quiet")) {

@@ -338,6 +338,8 @@ static pb_result create_device(pb_context *ctx, pb_error *err)
     ctx->native64 = ctx->info.shader_int64 && ctx->info.shader_float64 && !ctx->desc.portable_kernels;
     f2.features.shaderInt64 = ctx->native64 ? VK_TRUE : VK_FALSE;
     f2.features.shaderFloat64 = ctx->native64 ? VK_TRUE : VK_FALSE;
+    pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "kernels: %s", ctx->native64 ? "native64 (shaderInt64 + shaderFloat64)"
+            : ctx->desc.portable_kernels ? "portable (asked for)" : "portable (no shaderInt64 or shaderFloat64)");
     VkDeviceCreateInfo dci = {VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
     dci.queueCreateInfoCount = 1;
     dci.pQueueCreateInfos = &qci;

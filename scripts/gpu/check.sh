@@ -1,0 +1,91 @@
+#!/usr/bin/env bash
+# One prepared pass on the lent NVIDIA machine (see scripts/gpu/pack.sh):
+# unpack the carried loader, libraries, build and scenes at the paths the
+# build was made at, then the benches and the GPU tests, each step under its
+# own time limit so one hang cannot eat the lease. Everything lands in $OUT
+# (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
+# 250 ms), ctest.log, bake_portable.log, json.tar.
+# Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
+# STEPS: any of compile bake bench clocks sweep tests (default: compile bake
+# bench clocks tests, in that order).
+set -u
+out=${OUT:?OUT must name the folder that comes back}
+steps=${*:-compile bake bench clocks tests}
+log=$out/log.txt
+say() { echo "== $(date +%T) $*" | tee -a "$log"; }
+run() { local limit=$1; shift; say "$*"; timeout "$limit" "$@" >>"$log" 2>&1; local rc=$?; [ $rc = 0 ] || say "rc $rc"; }
+keep() { [ -f "$1" ] && tar -C "$(dirname "$1")" -rf "$out/json.tar" "$(basename "$1")"; }
+
+src=$(cat .dev/srcdir)
+for f in .gl/*.deb; do dpkg -x "$f" /; done
+ldconfig
+mkdir -p /opt/pb && tar -C /opt/pb -xJf .dev/libs.tar.xz
+export LD_LIBRARY_PATH=/opt/pb/lib VK_LAYER_PATH=/opt/pb/lib
+# PB_GPU_ICD and PB_TEST_DEVICE let the script be tried here on lavapipe first
+export VK_DRIVER_FILES=${PB_GPU_ICD:-/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json}
+export PB_TEST_DEVICE=${PB_TEST_DEVICE:-NVIDIA}
+if [ "$PWD" != "$src" ]; then
+    [ -e "$src" ] && { say "$src exists and is not this checkout"; exit 1; }
+    mkdir -p "$(dirname "$src")" && ln -s "$PWD" "$src"
+fi
+[ -d "$(dirname "$src")/shared/scenes" ] || tar -C "$(dirname "$src")" -xf .dev/scenes.tar
+tar -xJf .dev/build.tar.xz
+cd "$src" || exit 1
+say "setup done in $PWD: $(nvidia-smi --query-gpu=name,driver_version --format=csv,noheader 2>/dev/null)"
+run 60 build/probebake devices || exit 1
+# the clocks beside every step: a short dispatch may run before the GPU has left its idle clocks
+nvidia-smi --query-gpu=timestamp,clocks.sm,clocks.mem,utilization.gpu,power.draw --format=csv -lms 250 \
+    >"$out/clocks.csv" 2>&1 &
+sampler=$!
+trap 'kill $sampler 2>/dev/null' EXIT
+
+crypt=../shared/scenes/openarena/oacmpdm1.glb
+cornell=../shared/scenes/cornell/cornellBox.gltf
+for s in $steps; do
+    case $s in
+    bench)
+        run 240 build/bench/trace_bench --probes 65536 --rays 1024 --repeat 5 --json /tmp/trace-probe.json
+        keep /tmp/trace-probe.json
+        run 120 build/bench/trace_bench --probes 65536 --rays 1024 --repeat 5 --portable --json /tmp/trace-probe-portable.json $crypt
+        keep /tmp/trace-probe-portable.json ;;
+    compile) # the driver's compile time for each kernel set, with an empty shader cache each
+        for k in "" --portable-kernels; do
+            say "pipelines ${k:-native64}, cold cache"
+            __GL_SHADER_DISK_CACHE_PATH=$(mktemp -d) timeout 240 build/probebake bake tests/scenes/demo.gltf \
+                --counts 2,2,2 --rays 64 --passes 1 --verbose $k -o /tmp/compile.probes 2>&1 | grep -E "pipeline|kernels" >>"$log"
+        done ;;
+    clocks) # the same Crypt rays at two probe counts, interleaved: did the 5.7x between them
+        # (2026-11-26, 368 vs 2082-2226 Mrays/s) come from the rays or from the GPU's clocks?
+        for p in 16384 65536 16384 65536; do
+            run 90 build/bench/trace_bench --probes $p --rays 1024 --repeat 3 --json /tmp/trace-clocks-$p-$SECONDS.json $crypt
+            keep /tmp/trace-clocks-$p-*.json
+            rm -f /tmp/trace-clocks-*.json
+        done ;;
+    sweep) # leaf size and SAH step cost: the defaults (8, 2) were tuned for llvmpipe
+        for lt in "8 2" "4 1" "4 2" "2 1" "8 1"; do
+            set -- $lt
+            run 90 build/bench/trace_bench --probes 16384 --rays 1024 --repeat 3 --leaf $1 --tc $2 \
+                --json /tmp/trace-leaf$1-tc$2.json $crypt
+            keep /tmp/trace-leaf$1-tc$2.json
+        done ;;
+    bake) # issue 11's GPU figure: 16k probes x 256 rays x 3 bounces on The Crypt
+        for i in 1 2; do
+            say "bake $i"
+            start=$(date +%s%N)
+            timeout 120 build/probebake bake $crypt --counts 32,16,32 --rays 256 --passes 1 --bounces 3 \
+                --verbose -o /tmp/c16k.probes >>"$log" 2>&1
+            say "rc $? wall $(( ($(date +%s%N) - start) / 1000000 )) ms"
+        done ;;
+    tests)
+        say "tests: ctest -L gpu (no browser, slurm, corpus, smoke) and test_bake_portable beside it"
+        (cd build && timeout 330 ctest -L gpu -E "browser|slurm|corpus|smoke|test_bake_portable" -j6 \
+            --timeout 300 --output-on-failure) >"$out/ctest.log" 2>&1 &
+        PB_TEST_PORTABLE_KERNELS=1 timeout 300 build/tests/test_bake >"$out/bake_portable.log" 2>&1 &
+        wait
+        say "tests finished"
+        tail -25 "$out/ctest.log" >>"$log"
+        tail -3 "$out/bake_portable.log" >>"$log" ;;
+    *) say "unknown step $s" ;;
+    esac
+done
+say "done"
