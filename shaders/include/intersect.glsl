@@ -4,9 +4,11 @@
 // functions are adaptive: float when provably right in sign, else the exact
 // value rounded once: in double where the device has shaderFloat64
 // (PB_NATIVE64, 8 % faster on lavapipe), else in 32-bit integers
-// (exact_diff.glsl). Both give the same float (see edge_function).
+// (exact_diff.glsl). Both give the same float (see edge_exact).
 #ifndef PB_INTERSECT_GLSL
 #define PB_INTERSECT_GLSL
+
+#extension GL_EXT_control_flow_attributes : require
 
 #include "exact_diff.glsl"
 
@@ -88,14 +90,21 @@ float ray_box(RayPre r, vec3 lo, vec3 hi, float tmin, float tmax)
 // On a hit with tmin < t < tmax: true, t, and barycentrics of v1 (u), v2 (v).
 #define PB_EDGE_ERROR_BOUND 2.5e-7 // float rounding bound of a*b - c*d, see intersect.h
 
-float edge_function(float a, float b, float c, float d)
+// a*b - c*d in float; `sure` when its sign (and so the value the tests use)
+// is provably the exact one's
+float edge_estimate(float a, float b, float c, float d, out bool sure)
 {
     precise float p = a * b;
     precise float q = c * d;
     precise float r = p - q;
     precise float bound = PB_EDGE_ERROR_BOUND * (abs(p) + abs(q));
-    if (abs(r) > bound)
-        return r;
+    sure = abs(r) > bound;
+    return r;
+}
+
+// a*b - c*d exactly, rounded once to float (where edge_estimate is unsure)
+float edge_exact(float a, float b, float c, float d)
+{
 #ifdef PB_NATIVE64
     // Reached only when a*b and c*d are within a factor 1 + 5e-7 (then the
     // double difference of the exact double products is exact, and one
@@ -122,9 +131,24 @@ bool ray_triangle(RayPre r, vec3 v0, vec3 v1, vec3 v2, float tmin, float tmax, o
     precise float By = B[r.ky] - r.sy * B[r.kz];
     precise float Cx = C[r.kx] - r.sx * C[r.kz];
     precise float Cy = C[r.ky] - r.sy * C[r.kz];
-    precise float U = edge_function(Cx, By, Cy, Bx);
-    precise float V = edge_function(Ax, Cy, Ay, Cx);
-    precise float W = edge_function(Bx, Ay, By, Ax);
+    bool su, sv, sw;
+    precise float U = edge_estimate(Cx, By, Cy, Bx, su);
+    precise float V = edge_estimate(Ax, Cy, Ay, Cx, sv);
+    precise float W = edge_estimate(Bx, Ay, By, Ax, sw);
+    if (!(su && sv && sw)) {
+        // The exact values, in one loop that is not unrolled: one copy of
+        // edge_exact per triangle test, not three (NVIDIA's compiler took
+        // 25-50 s over the portable bake kernel's inlined copies)
+        float q[12] = float[12](Cx, By, Cy, Bx, Ax, Cy, Ay, Cx, Bx, Ay, By, Ax);
+        float e[3] = float[3](U, V, W);
+        uint unsure = (su ? 0u : 1u) | (sv ? 0u : 2u) | (sw ? 0u : 4u);
+        [[dont_unroll]] for (int i = 0; i < 3; ++i)
+            if ((unsure & (1u << i)) != 0u)
+                e[i] = edge_exact(q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]);
+        U = e[0];
+        V = e[1];
+        W = e[2];
+    }
     t = 0.0;
     u = 0.0;
     v = 0.0;
