@@ -194,9 +194,26 @@ vec3 texture_rgb(SceneRefs s, int tex, vec2 uv)
     return srgb_to_linear(c);
 }
 
-// Irradiance a punctual light gives a surface at x with unit normal n (pass
-// n = 0 for a point without orientation: no cosine), with its shadow ray.
-vec3 light_irradiance(SceneRefs s, Light l, vec3 x, vec3 n, bool oriented)
+// A shadow ray from a surface point and the light it adds when nothing
+// blocks it. tmax < 0: no ray (the sample adds nothing).
+struct ShadowRay {
+    vec3 w;
+    float tmax;
+    vec3 L;
+};
+
+ShadowRay no_shadow_ray()
+{
+    ShadowRay r;
+    r.w = vec3(0.0, 1.0, 0.0);
+    r.tmax = -1.0;
+    r.L = vec3(0.0);
+    return r;
+}
+
+// The irradiance a punctual light gives a surface at x with unit normal n
+// (pass n = 0 for a point without orientation: no cosine), as a shadow ray.
+ShadowRay light_ray(Light l, vec3 x, vec3 n, bool oriented)
 {
     uint type = uint(l.position_type.w);
     vec3 to_light;
@@ -209,7 +226,7 @@ vec3 light_irradiance(SceneRefs s, Light l, vec3 x, vec3 n, bool oriented)
         vec3 v = l.position_type.xyz - x;
         float d2 = dot(v, v);
         if (d2 <= 0.0)
-            return vec3(0.0);
+            return no_shadow_ray();
         dist = sqrt(d2);
         to_light = v / dist;
         falloff = 1.0 / d2;
@@ -226,11 +243,22 @@ vec3 light_irradiance(SceneRefs s, Light l, vec3 x, vec3 n, bool oriented)
     }
     float cosine = oriented ? dot(n, to_light) : 1.0;
     if (cosine <= 0.0 || falloff <= 0.0)
+        return no_shadow_ray();
+    ShadowRay r;
+    r.w = to_light;
+    r.tmax = dist;
+    r.L = l.radiance.rgb * (cosine * falloff);
+    return r;
+}
+
+// light_ray with its shadow ray traced
+vec3 light_irradiance(SceneRefs s, Light l, vec3 x, vec3 n, bool oriented)
+{
+    ShadowRay r = light_ray(l, x, n, oriented);
+    if (r.tmax < 0.0)
         return vec3(0.0);
-    TraceResult shadow = trace_ray(s, x, to_light, 0.0, dist, true);
-    if (shadow.tri != PB_NO_HIT)
-        return vec3(0.0);
-    return l.radiance.rgb * (cosine * falloff);
+    TraceResult shadow = trace_ray(s, x, r.w, 0.0, r.tmax, true);
+    return shadow.tri != PB_NO_HIT ? vec3(0.0) : r.L;
 }
 
 #endif

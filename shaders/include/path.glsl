@@ -90,24 +90,25 @@ EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
     return es;
 }
 
-// Next-event estimation of one emissive triangle (sample_emitter), a shadow
-// ray, and the MIS weight against cosine-weighted bounce sampling (power
-// heuristic). Returns emitted radiance x cos / (pi pdf) x weight: the caller
-// multiplies by throughput x albedo. (A function of its own also keeps
-// glslang's `precise` analysis of main() small: inlined here, it ran out of
-// memory.)
-vec3 emitter_nee(BakeParams P, vec3 x, vec3 ng, int ge, inout uint state)
+// Next-event estimation of one emissive triangle (sample_emitter) as a
+// shadow ray, MIS-weighted against cosine-weighted bounce sampling (power
+// heuristic). Its light is emitted radiance x cos / (pi pdf) x weight: the
+// caller multiplies by throughput x albedo. (A function of its own also keeps
+// glslang's `precise` analysis of path_radiance small: inlined there, it ran
+// out of memory.)
+ShadowRay emitter_nee_ray(BakeParams P, vec3 x, vec3 ng, int ge, inout uint state)
 {
     EmitterSample es = sample_emitter(P, x, state);
     float cos_x = dot(ng, es.w);
     if (!(cos_x > 0.0 && es.pdf > 0.0))
-        return vec3(0.0);
-    TraceResult shadow = trace_ray(P.scene, x, es.w, 0.0, es.dist * 0.9999, true);
-    if (shadow.tri != PB_NO_HIT)
-        return vec3(0.0);
+        return no_shadow_ray();
     float pb = bounce_pdf(P, ge, cos_x, es.w);
     float wl = power_heuristic(es.pdf, pb);
-    return es.Le * (cos_x / (PB_PI * es.pdf) * wl);
+    ShadowRay r;
+    r.w = es.w;
+    r.tmax = es.dist * 0.9999;
+    r.L = es.Le * (cos_x / (PB_PI * es.pdf) * wl);
+    return r;
 }
 
 // Probe NEE (--probe-nee): the light a probe sees directly (emitters and
@@ -153,23 +154,24 @@ vec4[2] probe_light_nee(BakeParams P, vec3 x, inout uint state)
     return r;
 }
 
-// Next-event estimation of the environment: a direction by texel power, a
+// Next-event estimation of the environment: a direction by texel power as a
 // shadow ray, MIS against cosine-weighted bounce sampling (power heuristic).
-// Returns radiance x cos / (pi pdf) x weight, like emitter_nee.
-vec3 env_nee(BakeParams P, Env env, SceneRefs s, vec3 x, vec3 ng, int ge, inout uint state)
+// Its light is radiance x cos / (pi pdf) x weight, like emitter_nee_ray's.
+ShadowRay env_nee_ray(BakeParams P, Env env, vec3 ng, int ge, inout uint state)
 {
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
     vec3 w = env_sample(env, u0, u1, u2).xyz;
     float cos_x = dot(ng, w);
     float pe = env_pdf(env, w);
     if (!(cos_x > 0.0 && pe > 0.0))
-        return vec3(0.0);
-    TraceResult shadow = trace_ray(s, x, w, 0.0, PB_INF, true);
-    if (shadow.tri != PB_NO_HIT)
-        return vec3(0.0);
+        return no_shadow_ray();
     float pb = bounce_pdf(P, ge, cos_x, w);
     float wl = power_heuristic(pe, pb);
-    return env_radiance(env, w) * (cos_x / (PB_PI * pe) * wl);
+    ShadowRay r;
+    r.w = w;
+    r.tmax = PB_INF;
+    r.L = env_radiance(env, w) * (cos_x / (PB_PI * pe) * wl);
+    return r;
 }
 
 // --clamp-indirect: a contribution of reflected light (all but emission and
@@ -205,8 +207,26 @@ void add_found(inout PathResult res, vec3 c, uint bounce, float clamp_limit)
         res.L_seen += c;
 }
 
+// What path_radiance's one ray in flight is for
+#define PB_RAY_BOUNCE 0u  // the probe ray or a bounce: closest hit
+#define PB_RAY_LIGHT 1u   // a punctual light's shadow ray: adds to the irradiance E
+#define PB_RAY_NEE 2u     // an emitter's or the environment's shadow ray: adds to c
+// and, at a reflecting hit, which light sample comes next
+#define PB_NEXT_LIGHTS 0u
+#define PB_NEXT_EMITTER 1u
+#define PB_NEXT_ENV 2u
+#define PB_NEXT_BOUNCE 3u
+
 // `bounces`: reflections after the first hit; `see_direct`: count light that
 // reaches the origin unreflected (emission or sky seen along the ray itself).
+//
+// One loop around one trace_ray: the bounce ray, then at each reflecting hit
+// the shadow rays of its light samples (punctual lights, one emitter, the
+// environment) one at a time, then the next bounce. The compiled kernel holds
+// one traversal instead of one per kind of ray, and lanes whose rays are of
+// different kinds traverse together. Random numbers are drawn in the order
+// of the CPU reference (src/bake/bake_cpu.c), which traces each ray where it
+// is drawn.
 PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_direct, inout uint state)
 {
     SceneRefs s = P.scene;
@@ -225,9 +245,23 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
     vec3 throughput = vec3(1.0);
     float bsdf_pdf = 0.0; // of the direction that led to the current hit (0: the first ray, not MIS-weighted)
     FloatBuf emit_pdf = FloatBuf(P.emit_pdf);
-    for (uint bounce = 0u;; ++bounce) {
-        TraceResult tr = trace_ray(s, o, dir, 0.0, PB_INF, false);
-        if (tr.tri == PB_NO_HIT) {
+    // the ray in flight and the current reflecting hit: where its shadow rays
+    // start, what they add to
+    uvec2 ray = uvec2(PB_RAY_BOUNCE, PB_NEXT_LIGHTS); // (in flight, next light sample)
+    uint bounce = 0u, light = 0u;
+    vec3 x = o, ng = vec3(0.0, 1.0, 0.0), albedo = vec3(0.0), E = vec3(0.0), c = vec3(0.0);
+    int ge = -1;
+    ShadowRay sr = no_shadow_ray();
+    bool light_select = bake_feature(PB_FEATURE_LIGHT_SELECT) && P.light_select != 0u;
+    for (;;) {
+        bool bounce_ray = ray.x == PB_RAY_BOUNCE;
+        TraceResult tr = trace_ray(s, bounce_ray ? o : x, bounce_ray ? dir : sr.w, 0.0, bounce_ray ? PB_INF : sr.tmax,
+                                   !bounce_ray);
+        if (ray.x == PB_RAY_LIGHT) {
+            E += tr.tri == PB_NO_HIT ? sr.L : vec3(0.0);
+        } else if (ray.x == PB_RAY_NEE) {
+            c += throughput * albedo * (tr.tri == PB_NO_HIT ? sr.L : vec3(0.0));
+        } else if (tr.tri == PB_NO_HIT) {
             if (bounce > 0u || see_direct) {
                 float w = 1.0;
                 // the density of the ray that found it: its bounce's, or for a probe
@@ -241,71 +275,107 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                 add_found(res, throughput * env_radiance(env, dir) * w, bounce, P.indirect_clamp);
             }
             break;
-        }
-        Tri t = load_tri(s.tris, tr.tri);
-        vec3 e1 = t.v1 - t.v0, e2 = t.v2 - t.v0;
-        vec3 ng = normalize(cross(e1, e2));
-        bool back = dot(ng, dir) > 0.0;
-        if (bounce == 0u)
-            res.first_t = back ? -tr.t : tr.t;
-        ShadeMaterial m = mats.m[t.flags & ~PB_FLAG_ALPHA_MASK];
-        if (back) {
-            if (m.tex.z == 0)
-                break; // inside a single-sided surface: no light
-            ng = -ng;
-        }
-        FloatBuf uvs = FloatBuf(s.tri_uv);
-        uint b = 6u * tr.tri;
-        float w0 = 1.0 - tr.u - tr.v;
-        vec2 uv = w0 * vec2(uvs.v[b], uvs.v[b + 1u]) + tr.u * vec2(uvs.v[b + 2u], uvs.v[b + 3u]) +
-                  tr.v * vec2(uvs.v[b + 4u], uvs.v[b + 5u]);
-        if ((bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
-            float w = 1.0;
-            // the density with which NEE at the ray's origin draws this point
-            float pa = bake_emitters(P) ? emit_pdf.v[tr.tri] * light_cell_ratio(P, light_cell(P, o), tr.tri) : 0.0;
-            bool probe_nee = bounce == 0u && bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee);
-            float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
-            if (found_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
-                float pl = pa * tr.t * tr.t / abs(dot(ng, dir)) * (probe_nee ? probe_emitter_share(P) : 1.0);
-                w = power_heuristic(found_pdf, pl);
-            }
-            add_found(res, throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w, bounce,
-                      P.indirect_clamp);
-        }
-        if (bounce > bounces)
-            break; // the terminal ray: it only gathers emission (see below)
-        vec3 albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * (1.0 - m.emissive_metallic.w);
-        if (bake_feature(PB_FEATURE_VERTEX_COLORS) && (s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
-            albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
-        vec3 x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);
-        if (bounce == 0u) {
-            res.shade = true;
-            res.x = x;
-            res.ng = ng;
-            res.albedo = albedo;
-        }
-        vec3 E = vec3(0.0);
-        if (!bake_feature(PB_FEATURE_LIGHTS)) {
-            // no punctual lights: compiled out
-        } else if (bake_feature(PB_FEATURE_LIGHT_SELECT) && P.light_select != 0u) {
-            // many lights: one, drawn in proportion to its power, over its probability
-            EmitterBuf table = EmitterBuf(P.light_table);
-            float xl = rng_next(state) * float(P.light_count);
-            uint li = min(uint(xl), P.light_count - 1u);
-            Emitter le = table.e[li];
-            uint pick = xl - float(li) < le.prob ? li : le.alias;
-            Emitter chosen = table.e[pick];
-            E = light_irradiance(s, lights.l[chosen.tri], x, ng, true) / chosen.pad;
         } else {
-            for (uint k = 0u; k < P.light_count; ++k)
-                E += light_irradiance(s, lights.l[k], x, ng, true);
+            Tri t = load_tri(s.tris, tr.tri);
+            vec3 e1 = t.v1 - t.v0, e2 = t.v2 - t.v0;
+            ng = normalize(cross(e1, e2));
+            bool back = dot(ng, dir) > 0.0;
+            if (bounce == 0u)
+                res.first_t = back ? -tr.t : tr.t;
+            ShadeMaterial m = mats.m[t.flags & ~PB_FLAG_ALPHA_MASK];
+            if (back) {
+                if (m.tex.z == 0)
+                    break; // inside a single-sided surface: no light
+                ng = -ng;
+            }
+            FloatBuf uvs = FloatBuf(s.tri_uv);
+            uint b = 6u * tr.tri;
+            float w0 = 1.0 - tr.u - tr.v;
+            vec2 uv = w0 * vec2(uvs.v[b], uvs.v[b + 1u]) + tr.u * vec2(uvs.v[b + 2u], uvs.v[b + 3u]) +
+                      tr.v * vec2(uvs.v[b + 4u], uvs.v[b + 5u]);
+            if ((bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
+                float w = 1.0;
+                // the density with which NEE at the ray's origin draws this point
+                float pa = bake_emitters(P) ? emit_pdf.v[tr.tri] * light_cell_ratio(P, light_cell(P, o), tr.tri) : 0.0;
+                bool probe_nee = bounce == 0u && bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee);
+                float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
+                if (found_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
+                    float pl = pa * tr.t * tr.t / abs(dot(ng, dir)) * (probe_nee ? probe_emitter_share(P) : 1.0);
+                    w = power_heuristic(found_pdf, pl);
+                }
+                add_found(res, throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w, bounce,
+                          P.indirect_clamp);
+            }
+            if (bounce > bounces)
+                break; // the terminal ray: it only gathers emission (see below)
+            albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * (1.0 - m.emissive_metallic.w);
+            if (bake_feature(PB_FEATURE_VERTEX_COLORS) && (s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
+                albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
+            x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);
+            if (bounce == 0u) {
+                res.shade = true;
+                res.x = x;
+                res.ng = ng;
+                res.albedo = albedo;
+            }
+            E = vec3(0.0);
+            light = 0u;
+            ray.y = PB_NEXT_LIGHTS;
         }
-        vec3 c = throughput * albedo * (E / PB_PI);
-        int ge = guide_entry(P, x, ng);
-        if (bake_emitters(P) && albedo != vec3(0.0))
-            c += throughput * albedo * emitter_nee(P, x, ng, ge, state);
-        if (env.count > 0u && albedo != vec3(0.0))
-            c += throughput * albedo * env_nee(P, env, s, x, ng, ge, state);
+        // The next ray: this hit's next light sample that needs one, else the bounce
+        ray.x = PB_RAY_BOUNCE;
+        while (ray.y == PB_NEXT_LIGHTS) {
+            if (!bake_feature(PB_FEATURE_LIGHTS) || light >= (light_select ? 1u : P.light_count)) {
+                c = throughput * albedo * (E / PB_PI);
+                ge = guide_entry(P, x, ng);
+                ray.y = PB_NEXT_EMITTER;
+            } else if (light_select) {
+                // many lights: one, drawn in proportion to its power, over its probability
+                EmitterBuf table = EmitterBuf(P.light_table);
+                float xl = rng_next(state) * float(P.light_count);
+                uint li = min(uint(xl), P.light_count - 1u);
+                Emitter le = table.e[li];
+                uint pick = xl - float(li) < le.prob ? li : le.alias;
+                Emitter chosen = table.e[pick];
+                sr = light_ray(lights.l[chosen.tri], x, ng, true);
+                sr.L /= chosen.pad;
+                light = 1u;
+                if (sr.tmax >= 0.0) {
+                    ray.x = PB_RAY_LIGHT;
+                    break;
+                }
+            } else {
+                sr = light_ray(lights.l[light], x, ng, true);
+                ++light;
+                if (sr.tmax >= 0.0) {
+                    ray.x = PB_RAY_LIGHT;
+                    break;
+                }
+            }
+        }
+        if (ray.x != PB_RAY_BOUNCE)
+            continue;
+        if (ray.y == PB_NEXT_EMITTER) {
+            ray.y = PB_NEXT_ENV;
+            if (bake_emitters(P) && albedo != vec3(0.0)) {
+                sr = emitter_nee_ray(P, x, ng, ge, state);
+                if (sr.tmax >= 0.0) {
+                    ray.x = PB_RAY_NEE;
+                    continue;
+                }
+            }
+        }
+        if (ray.y == PB_NEXT_ENV) {
+            ray.y = PB_NEXT_BOUNCE;
+            if (env.count > 0u && albedo != vec3(0.0)) {
+                sr = env_nee_ray(P, env, ng, ge, state);
+                if (sr.tmax >= 0.0) {
+                    ray.x = PB_RAY_NEE;
+                    continue;
+                }
+            }
+        }
+        // every light sample of this hit is in: its light, then the bounce
         c = clamp_indirect(c, P.indirect_clamp);
         res.L += c;
         if (bounce == 0u)
@@ -339,6 +409,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
             bsdf_pdf = max(0.0, dot(ng, dir)) / PB_PI;
         }
         o = x;
+        ++bounce;
     }
     return res;
 }
