@@ -24,6 +24,8 @@ for l in $(ldd build/probebake build/bench/trace_bench build/tests/test_bake | a
     case $(basename "$l") in libc.so*|libm.so*|libgcc_s*|libstdc++*) continue ;; esac
     cp -L "$l" "$stage/lib/"
 done
+# TBB loads its allocator at run time (ldd does not list it)
+cp -L /usr/lib/x86_64-linux-gnu/libtbbmalloc.so.2 "$stage/lib/" 2>/dev/null || true
 layer=/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json
 cp -L /usr/lib/x86_64-linux-gnu/libVkLayer_khronos_validation.so "$stage/lib/"
 sed 's#"library_path": *"[^"]*"#"library_path": "./libVkLayer_khronos_validation.so"#' "$layer" >"$stage/lib/VkLayer_khronos_validation.json"
