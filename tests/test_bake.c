@@ -269,6 +269,53 @@ static void real_hdr_environment(void)
  * E(n) = rho E (1 - n_y) / 2: next-event estimation of the map, MIS-combined
  * with the (terminal) bounce rays that leave to the sky, is unbiased. With
  * bounces 0 and 1 alike (the floor cannot see itself). */
+/* Relocation reads only each probe ray's first hit (back face or not, the
+ * nearest front faces), so its 3 passes trace one traversal per probe ray
+ * however the scene is lit: here every floor hit would otherwise add an
+ * emitter shadow ray and a terminal bounce ray. The probes stand in open
+ * air, so relocation leaves them in place and the bake passes that follow
+ * are the same with and without it: the two bakes' traversals differ by
+ * exactly 3 x probes x rays. */
+static void relocation_traces_first_hits_only(void)
+{
+    double tris[36] = {-50, 0, -50, -50, 0, 50, 50, 0, 50, -50, 0, -50, 50, 0, 50, 50, 0, -50, /* floor, up */
+                       -0.5, 6, -0.5, 0.5, 6, -0.5, 0.5, 6, 0.5, -0.5, 6, -0.5, 0.5, 6, 0.5, -0.5, 6, 0.5}; /* lamp, down */
+    pb_material m[2] = {pb_material_default(), pb_material_default()};
+    m[0].base_color[0] = m[0].base_color[1] = m[0].base_color[2] = 0.5f;
+    m[0].metallic = m[1].metallic = 0.f;
+    m[1].emissive[0] = m[1].emissive[1] = m[1].emissive[2] = 20.f;
+    uint32_t ids[4] = {0, 0, 1, 1};
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(tris, 4, ids, m, 2, &s, &err) == PB_OK, "%s", err.message);
+    pb_bake_desc d = {0};
+    d.grid.counts[0] = d.grid.counts[2] = 2, d.grid.counts[1] = 1;
+    for (int k = 0; k < 3; ++k) {
+        d.grid.spacing[k] = 2.f;
+        d.grid.origin[k] = (k == 1 ? 1.5f : -1.f) - (float)s->origin[k];
+    }
+    d.rays_per_probe = 64, d.passes = 1, d.bounces = 2, d.octmap_res = 4;
+    baked with = bake(s, &d);
+    d.skip_relocation = 1;
+    baked without = bake(s, &d);
+    if (with.ok && without.ok) {
+        uint32_t P = with.vol.probe_count, moved = 0;
+        for (uint32_t i = 0; i < 3 * P; ++i)
+            moved += with.vol.offset[i] != 0.f;
+        uint64_t relocation = with.vol.traversals - without.vol.traversals, want = 3ull * P * d.rays_per_probe;
+        fprintf(stderr, "  %u probes, %u offset components moved; relocation traced %llu traversals (3 passes x %u "
+                "probe rays: %llu); the bake pass %.2f per probe ray\n", P, moved, (unsigned long long)relocation,
+                P * d.rays_per_probe, (unsigned long long)want,
+                (double)without.vol.traversals / (double)without.vol.rays_traced);
+        CHECK(moved == 0);
+        CHECK(without.vol.traversals > without.vol.rays_traced); /* the pass does trace shadow and bounce rays */
+        CHECK(relocation == want);
+    }
+    release(&with);
+    release(&without);
+    pb_scene_destroy(s);
+}
+
 static void environment_lights_floor(void)
 {
     double floor[18] = {-200, 0, -200, -200, 0, 200, 200, 0, 200, -200, 0, -200, 200, 0, 200, 200, 0, -200};
@@ -2362,6 +2409,7 @@ int main(void)
     RUN(target_error_stops_converged_probes);
     RUN(points_subset_bakes_like_the_grid);
     RUN(bad_parameters_refused_before_gpu_work);
+    RUN(relocation_traces_first_hits_only);
     RUN(compressed_scenes_bake_like_originals);
     return test_gpu_finish(ctx);
 }

@@ -29,7 +29,8 @@ void main()
     vec3 d = probe_ray_direction(P, probe, ray);
     vec3 origin = Vec4Buf(P.probes).v[probe].xyz;
     uint state = rng_seed(P.seed, probe_id(P, probe), P.pass_index, ray);
-    PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, state);
+    // a relocation pass reads only the first hits: no shading, no shadow or bounce rays
+    PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, P.pass_index >= PB_RELOCATION_PASS, state);
     if (bake_feature(PB_FEATURE_VOLUME) && !addr_null(P.volume.probes) && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
         pb_volume = P.volume;
         pr.L += pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.ng, -d);

@@ -112,7 +112,7 @@ void main()
         float sy = 1.0 - (float(py) + jy) / float(R.height) * 2.0;
         vec3 dir = normalize(R.forward.xyz + sx * R.right.xyz + sy * R.up.xyz);
         uint bounces = R.mode == MODE_REFERENCE ? R.bounces : 0u;
-        PathResult pr = path_radiance(P, R.eye.xyz, dir, bounces, true, state);
+        PathResult pr = path_radiance(P, R.eye.xyz, dir, bounces, true, false, state);
         vec3 L = pr.L, Ld = pr.L_direct;
         if (R.mode == MODE_PROBES || R.mode == MODE_INDIRECT) {
             vec3 V = vec3(0.0);

@@ -111,6 +111,10 @@ layout(constant_id = 2) const uint PB_BAKE_FEATURES = 0xffffffffu;
 #define PB_FEATURE_LIGHTS 128u
 #define PB_FEATURE_VERTEX_COLORS 256u
 
+// Pass indices from here on are relocation passes (src/bake/bake_types.h):
+// they read only each probe ray's first hit
+#define PB_RELOCATION_PASS 0x80000000u
+
 bool bake_feature(uint f)
 {
     return (PB_BAKE_FEATURES & f) != 0u;

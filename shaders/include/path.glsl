@@ -218,7 +218,9 @@ void add_found(inout PathResult res, vec3 c, uint bounce, float clamp_limit)
 #define PB_NEXT_BOUNCE 3u
 
 // `bounces`: reflections after the first hit; `see_direct`: count light that
-// reaches the origin unreflected (emission or sky seen along the ray itself).
+// reaches the origin unreflected (emission or sky seen along the ray itself);
+// `first_hit_only`: stop at the first hit, having set first_t (relocation
+// needs no light).
 //
 // One loop around one trace_ray: the bounce ray, then at each reflecting hit
 // the shadow rays of its light samples (punctual lights, one emitter, the
@@ -227,7 +229,8 @@ void add_found(inout PathResult res, vec3 c, uint bounce, float clamp_limit)
 // different kinds traverse together. Random numbers are drawn in the order
 // of the CPU reference (src/bake/bake_cpu.c), which traces each ray where it
 // is drawn.
-PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_direct, inout uint state)
+PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_direct, bool first_hit_only,
+                         inout uint state)
 {
     SceneRefs s = P.scene;
     Env env = bake_env(P);
@@ -282,6 +285,8 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
             bool back = dot(ng, dir) > 0.0;
             if (bounce == 0u)
                 res.first_t = back ? -tr.t : tr.t;
+            if (first_hit_only)
+                break;
             ShadeMaterial m = mats.m[t.flags & ~PB_FLAG_ALPHA_MASK];
             if (back) {
                 if (m.tex.z == 0)

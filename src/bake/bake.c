@@ -173,8 +173,6 @@ static pb_result learn_guide(pb_context *ctx, const pb_scene *scene, const pb_gp
 }
 
 
-#define PB_RELOCATION_PASS 0x80000000u
-
 /* What one pass needs; per-probe host arrays are indexed by global probe. */
 typedef struct bake_run {
     pb_context *ctx;

@@ -21,6 +21,11 @@ typedef struct gpu_light {
 } gpu_light;
 _Static_assert(sizeof(gpu_light) == 64, "Light layout");
 
+/* Pass indices from here on are relocation passes (their own RNG streams);
+ * bake_trace then traces only each probe ray's first hit, all relocation
+ * reads (bake.glsl has the same value). */
+#define PB_RELOCATION_PASS 0x80000000u
+
 typedef struct gpu_bake_params {
     gpu_scene_refs scene;
     uint64_t materials, lights, probes, rotations, directions, rays, reduced, probe_list, emitters, emit_pdf, env,
