@@ -262,13 +262,6 @@ static void real_hdr_environment(void)
     pb_environment_free(&env);
 }
 
-/* A 400 m floor of albedo 0.5 under a map with a small, bright sun, a probe
- * 1 m above, direct light excluded: the probe sees only the floor, of
- * radiance rho E / pi, where E is the map's irradiance on an upward surface
- * (per texel in closed form). SH of a lower-hemisphere step is exact at L1:
- * E(n) = rho E (1 - n_y) / 2: next-event estimation of the map, MIS-combined
- * with the (terminal) bounce rays that leave to the sky, is unbiased. With
- * bounces 0 and 1 alike (the floor cannot see itself). */
 /* Relocation reads only each probe ray's first hit (back face or not, the
  * nearest front faces), so its 3 passes trace one traversal per probe ray
  * however the scene is lit: here every floor hit would otherwise add an
@@ -316,6 +309,13 @@ static void relocation_traces_first_hits_only(void)
     pb_scene_destroy(s);
 }
 
+/* A 400 m floor of albedo 0.5 under a map with a small, bright sun, a probe
+ * 1 m above, direct light excluded: the probe sees only the floor, of
+ * radiance rho E / pi, where E is the map's irradiance on an upward surface
+ * (per texel in closed form). SH of a lower-hemisphere step is exact at L1:
+ * E(n) = rho E (1 - n_y) / 2: next-event estimation of the map, MIS-combined
+ * with the (terminal) bounce rays that leave to the sky, is unbiased. With
+ * bounces 0 and 1 alike (the floor cannot see itself). */
 static void environment_lights_floor(void)
 {
     double floor[18] = {-200, 0, -200, -200, 0, 200, 200, 0, 200, -200, 0, -200, 200, 0, 200, 200, 0, -200};
