@@ -4,6 +4,7 @@
  *
  *   trace_bench [--probes N] [--rays N] [--repeat N] [--instanced K]
  *               [--leaf N] [--tc C] [--device D] [--portable] [--shuffle]
+ *               [--scene-loads auto|address|texel]
  *               [--bounce | --bounce-sorted] [--json FILE] [SCENE ...]
  *
  * --leaf and --tc set the BVH's maximum leaf size and SAH traversal cost.
@@ -14,6 +15,8 @@
  * wavefront bake could trace them).
  * --portable runs the kernels built without shaderInt64/shaderFloat64 even
  * where the device has them (to measure what the native64 build buys).
+ * --scene-loads picks how the kernel reads the BVH (pb_scene_loads; default
+ * auto: texels on CPU devices, addresses on GPUs).
  *
  * Rays: a probe grid over the scene bounds, `--rays` spherical-Fibonacci
  * directions per probe, randomly rotated per probe (pb_probe_rays). GPU rates
@@ -43,6 +46,7 @@ typedef struct options {
     int scene_count;
     int validation;           /* --validation: fail on any Vulkan validation message */
     int portable;             /* --portable: the kernels without 64-bit types */
+    uint32_t scene_loads;     /* --scene-loads: pb_scene_loads */
     int shuffle;              /* --shuffle: rays in a random order (what incoherence costs) */
     int bounce;               /* --bounce: the probe rays' bounce rays, 1 in the bake's order, 2 sorted */
 } options;
@@ -257,7 +261,16 @@ int main(int argc, char **argv)
             o.validation = 1;
         else if (!strcmp(a, "--portable"))
             o.portable = 1;
-        else if (!strcmp(a, "--shuffle"))
+        else if (!strcmp(a, "--scene-loads") && v) {
+            const char *l = argv[++i];
+            o.scene_loads = !strcmp(l, "address") ? PB_SCENE_LOADS_ADDRESS
+                            : !strcmp(l, "texel") ? PB_SCENE_LOADS_TEXEL
+                            : !strcmp(l, "auto") ? PB_SCENE_LOADS_AUTO : 99u;
+            if (o.scene_loads == 99u) {
+                fprintf(stderr, "trace_bench: --scene-loads takes auto, address or texel\n");
+                return 2;
+            }
+        } else if (!strcmp(a, "--shuffle"))
             o.shuffle = 1;
         else if (!strcmp(a, "--bounce"))
             o.bounce = 1;
@@ -294,6 +307,7 @@ int main(int argc, char **argv)
 
     pb_context_desc cd = {o.device, (uint32_t)o.validation, 0, 0, {0}};
     cd.portable_kernels = (uint32_t)o.portable;
+    cd.scene_loads = o.scene_loads;
     pb_context *ctx = NULL;
     pb_error err;
     if (pb_context_create(&cd, &ctx, &err) != PB_OK) {
@@ -304,9 +318,10 @@ int main(int argc, char **argv)
     const pb_device_info *dev = pb_context_device(ctx);
     uint32_t host_threads = pb_host_threads();
     const char *kernels = pb_context_native64(ctx) ? "native64" : "portable";
+    const char *loads = pb_context_scene_texels(ctx) ? "texel" : "address";
     const char *rays_of = o.bounce == 2 ? "bounce rays, sorted" : o.bounce ? "bounce rays" : "probe rays";
-    printf("device: %s (%s), %s kernels; Embree 3 on %u host threads; %s%s\n", dev->name, dev->driver, kernels,
-           host_threads, rays_of, o.shuffle ? ", shuffled" : "");
+    printf("device: %s (%s), %s kernels, %s loads; Embree 3 on %u host threads; %s%s\n", dev->name, dev->driver,
+           kernels, loads, host_threads, rays_of, o.shuffle ? ", shuffled" : "");
     printf("%-22s %9s %8s %6s %8s %9s %11s %11s %11s %8s %7s\n", "scene", "tris", "bvh ms", "depth", "B/tri",
            "rays", "gpu Mr/s", "gpu wall", "embree Mr/s", "ratio", "agree");
     result res[16];
@@ -326,9 +341,10 @@ int main(int argc, char **argv)
     FILE *f = fopen(o.json, "w");
     if (f) {
         fprintf(f, "{\n  \"bench\": \"trace\",\n  \"device\": \"%s\",\n  \"driver\": \"%s\",\n"
-                   "  \"kernels\": \"%s\",\n  \"host_threads\": %u,\n  \"rays_per_probe\": %u,\n  \"rays_of\": \"%s\",\n"
+                   "  \"kernels\": \"%s\",\n  \"scene_loads\": \"%s\",\n  \"host_threads\": %u,\n"
+                   "  \"rays_per_probe\": %u,\n  \"rays_of\": \"%s\",\n"
                    "  \"results\": [\n",
-                dev->name, dev->driver, kernels, host_threads, o.rays, rays_of);
+                dev->name, dev->driver, kernels, loads, host_threads, o.rays, rays_of);
         for (int i = 0; i < nres; ++i) {
             result *r = &res[i];
             double gk = r->gpu_kernel_ms > 0 ? r->rays / (r->gpu_kernel_ms * 1e3) : 0;

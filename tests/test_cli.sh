@@ -150,6 +150,7 @@ expect max-lights-bad 2 "--max-lights-per-hit '0' is not an integer in \[1, 1048
     "$pb" bake "$demo" --max-lights-per-hit 0 -o "$tmp/x.probes"
 expect clamp-bad 2 "--clamp-indirect '-3' is not a positive radiance" -- "$pb" bake "$demo" --clamp-indirect -3 -o "$tmp/x.probes"
 expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
+expect scene-loads-bad 2 '--scene-loads takes auto, address or texel' -- "$pb" trace "$demo" --scene-loads words
 
 # non-finite or overflowing light and positions: refused before any device work (issue 9)
 sed 's/"intensity": 15.0/"intensity": 1e38/' "$demo" >"$tmp/hot-light.gltf"
@@ -242,6 +243,13 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
         "$pb" trace "$demo" --portable-kernels --verbose --validation --probes 64 --rays 32
     expect trace-portable-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
         "$pb" trace "$demo" --portable-kernels --verify --validation --probes 64 --rays 128
+    # the BVH read through either load, asked for: the same hits
+    for loads in address texel; do
+        expect trace-loads-$loads 0 "scene loads: ${loads}[a-z]* \\(asked for\\)" -- \
+            "$pb" trace "$demo" --scene-loads $loads --verbose --validation --probes 64 --rays 32
+        expect trace-loads-$loads-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
+            "$pb" trace "$demo" --scene-loads $loads --verify --validation --probes 64 --rays 128
+    done
     expect bake-tiny 0 "wrote $tmp/a.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --validation -o "$tmp/a.probes"
     expect bake-inspect 0 '"probes": 8,' -- "$pb" inspect "$tmp/a.probes" --json

@@ -568,6 +568,111 @@ static int spirv_op_count(const char *path, uint32_t op)
  * differed from the CPU's). So hit values never come from a division
  * (intersect.glsl's pb_rcp): the one OpFDiv left is the box test's 1/dir in
  * ray_prepare's loop, which only culls (a second would be a hit value's). */
+/* Hits of `rays` on context c (closest, then any) with the scene's loads
+ * reported through *texels; 0 when the scene could not be made. */
+static int trace_on(pb_context *c, const pb_scene *s, const pb_bvh *bvh, const pb_ray *rays, uint32_t n,
+                    pb_hit *closest, pb_hit *any, uint32_t *texels)
+{
+    pb_gpu_scene *gs = NULL;
+    pb_error err;
+    pb_result r = pb_gpu_scene_create(c, s, bvh, &gs, &err);
+    CHECKF(r == PB_OK, "%s", err.message);
+    if (r != PB_OK)
+        return 0;
+    *texels = gs->texel_loads;
+    r = pb_trace(c, gs, rays, n, PB_TRACE_CLOSEST, closest, NULL, &err);
+    CHECKF(r == PB_OK, "%s", err.message);
+    r = pb_trace(c, gs, rays, n, PB_TRACE_ANY, any, NULL, &err);
+    CHECKF(r == PB_OK, "%s", err.message);
+    pb_gpu_scene_destroy(gs);
+    return 1;
+}
+
+/* Texel loads and address loads of the BVH read the same words, so every
+ * hit must be the same bit for bit, closest and any, on scenes with an odd
+ * and an even triangle count (the last record's texels reach into the
+ * padding texel) and on the demo. The context of this run against one with
+ * the other loads; then the view limit: asked-for texel loads over
+ * maxTexelBufferElements are refused, and the default falls back. */
+static void texel_and_address_loads_same_hits(void)
+{
+    pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {test_log_line, NULL}};
+    d.portable_kernels = test_portable_kernels();
+    d.scene_loads = ctx->scene_texels ? PB_SCENE_LOADS_ADDRESS : PB_SCENE_LOADS_TEXEL;
+    pb_context *other = NULL;
+    pb_error err;
+    CHECKF(pb_context_create(&d, &other, &err) == PB_OK, "%s", err.message);
+    if (!other)
+        return;
+    CHECK(other->scene_texels != ctx->scene_texels);
+    pb_scene *scenes[3] = {random_soup(2001, 0.3f, 31, NULL), random_soup(1000, 0.2f, 32, NULL), load_demo()};
+    const uint32_t n = 50000;
+    pb_hit *h[4];
+    for (int i = 0; i < 4; ++i)
+        h[i] = malloc(n * sizeof *h[i]);
+    for (int k = 0; k < 3; ++k) {
+        pb_scene *s = scenes[k];
+        pb_bvh *bvh = NULL;
+        if (!s || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK) {
+            CHECKF(0, "scene %d: %s", k, s ? err.message : "not made");
+            continue;
+        }
+        pb_ray *rays = scene_rays(s, n, 40 + k);
+        uint32_t tex_a = 9, tex_b = 9;
+        if (trace_on(ctx, s, bvh, rays, n, h[0], h[1], &tex_a) &&
+            trace_on(other, s, bvh, rays, n, h[2], h[3], &tex_b)) {
+            uint32_t hits = 0;
+            for (uint32_t i = 0; i < n; ++i)
+                hits += h[0][i].triangle != PB_NO_HIT;
+            fprintf(stderr, "  %u triangles: %u of %u rays hit; texel loads %u here, %u there\n", s->triangle_count,
+                    hits, n, tex_a, tex_b);
+            CHECK(hits > n / 10);
+            CHECK(tex_a == (uint32_t)ctx->scene_texels && tex_b == (uint32_t)other->scene_texels);
+            CHECKF(!memcmp(h[0], h[2], n * sizeof *h[0]), "%u triangles: closest hits differ", s->triangle_count);
+            CHECKF(!memcmp(h[1], h[3], n * sizeof *h[1]), "%u triangles: any hits differ", s->triangle_count);
+        }
+        free(rays);
+        pb_bvh_destroy(bvh);
+    }
+    /* the view limit, lowered on the texel context: refused when asked for */
+    /* (the context asking for texels: this run's other one when this one reads addresses) */
+    pb_context *asked = other->desc.scene_loads == PB_SCENE_LOADS_TEXEL ? other : NULL;
+    uint32_t limit = ctx->limits.maxTexelBufferElements;
+    pb_bvh *bvh = NULL;
+    CHECK(pb_bvh_build(scenes[0], NULL, &bvh, &err) == PB_OK);
+    if (asked && bvh) {
+        asked->limits.maxTexelBufferElements = 64;
+        pb_gpu_scene *gs = NULL;
+        pb_result r = pb_gpu_scene_create(asked, scenes[0], bvh, &gs, &err);
+        fprintf(stderr, "  texel loads over the limit: %s\n", err.message);
+        CHECK(r == PB_ERROR_TOO_LARGE && strstr(err.message, "maxTexelBufferElements") && !gs);
+        pb_gpu_scene_destroy(gs);
+        asked->limits.maxTexelBufferElements = limit;
+    }
+    /* the default on a CPU device falls back to addresses, and still hits */
+    if (ctx->desc.scene_loads == PB_SCENE_LOADS_AUTO && ctx->scene_texels && bvh) {
+        ctx->limits.maxTexelBufferElements = 64;
+        uint32_t tex = 9;
+        pb_ray *rays = scene_rays(scenes[0], n, 40);
+        uint32_t tex_other = 9; /* the other context reads addresses here */
+        if (trace_on(ctx, scenes[0], bvh, rays, n, h[0], h[1], &tex) &&
+            trace_on(other, scenes[0], bvh, rays, n, h[2], h[3], &tex_other)) {
+            CHECK(tex == 0 && tex_other == 0);
+            CHECK(!memcmp(h[0], h[2], n * sizeof *h[0]) && !memcmp(h[1], h[3], n * sizeof *h[1]));
+        }
+        ctx->limits.maxTexelBufferElements = limit;
+        free(rays);
+    }
+    pb_bvh_destroy(bvh);
+    for (int i = 0; i < 4; ++i)
+        free(h[i]);
+    for (int k = 0; k < 3; ++k)
+        pb_scene_destroy(scenes[k]);
+    CHECKF(pb_context_validation_messages(other) == 0, "%u validation messages on the second context",
+           pb_context_validation_messages(other));
+    pb_context_destroy(other);
+}
+
 static void trace_kernels_divide_only_for_boxes(void)
 {
     const char *names[] = {"trace.spv", "trace_native64.spv"};
@@ -704,6 +809,7 @@ int main(void)
     RUN(ray_offset_gpu_matches_cpu);
     RUN(exact_diff_gpu_matches_cpu);
     RUN(portable_kernels_need_no_64bit_types);
+    RUN(texel_and_address_loads_same_hits);
     RUN(trace_kernels_divide_only_for_boxes);
     RUN(memory_choice_on_discrete_and_uma);
     RUN(device_choice_and_refusals);

@@ -198,14 +198,26 @@ static inline int test_portable_kernels(void)
     return portable && strcmp(portable, "1") == 0;
 }
 
+/* PB_TEST_SCENE_LOADS=address or texel: how the GPU tests' kernels read the
+ * BVH (pb_scene_loads); unset, the device's default. */
+static inline uint32_t test_scene_loads(void)
+{
+    const char *loads = getenv("PB_TEST_SCENE_LOADS");
+    return !loads ? PB_SCENE_LOADS_AUTO
+           : !strcmp(loads, "address") ? PB_SCENE_LOADS_ADDRESS
+           : !strcmp(loads, "texel") ? PB_SCENE_LOADS_TEXEL : 99u; /* refused by pb_context_create */
+}
+
 /* The GPU tests' context: PB_TEST_DEVICE (or the best device) with the
  * validation layer on; PB_TEST_PORTABLE_KERNELS=1 masks shaderInt64 and
- * shaderFloat64 off (the kernels for devices without them). NULL, after printing why and a failed summary line,
- * when there is none: the caller returns 1. */
+ * shaderFloat64 off (the kernels for devices without them);
+ * PB_TEST_SCENE_LOADS picks the BVH loads. NULL, after printing why and a
+ * failed summary line, when there is none: the caller returns 1. */
 static inline pb_context *test_gpu_context(void)
 {
     pb_context_desc d = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {test_log_line, NULL}};
     d.portable_kernels = test_portable_kernels();
+    d.scene_loads = test_scene_loads();
     pb_context *ctx = NULL;
     pb_error err;
     if (pb_context_create(&d, &ctx, &err) != PB_OK) {

@@ -49,6 +49,14 @@ typedef struct pb_device_info {
 
 typedef struct pb_context pb_context;
 
+/* How kernels read the BVH's nodes and triangles: both read the same bytes
+ * and give the same hits; which is faster depends on the device. */
+typedef enum pb_scene_loads {
+    PB_SCENE_LOADS_AUTO = 0,    /* texels on CPU devices (lavapipe: measured faster), addresses elsewhere */
+    PB_SCENE_LOADS_ADDRESS = 1, /* buffer device address loads */
+    PB_SCENE_LOADS_TEXEL = 2    /* storage texel buffer loads (imageLoad of 16-byte texels) */
+} pb_scene_loads;
+
 /* Zero fields mean the defaults listed on each line. */
 typedef struct pb_context_desc {
     const char *device;           /* NULL: best device; "N" index or name substring */
@@ -64,6 +72,7 @@ typedef struct pb_context_desc {
     uint32_t fail_submission;
     uint32_t portable_kernels;    /* 1: run the kernels that need neither shaderInt64 nor shaderFloat64
                                      even where the device has them (tests that path; same results) */
+    uint32_t scene_loads;         /* pb_scene_loads; 0: AUTO */
 } pb_context_desc;
 
 /* Lists the Vulkan devices. Writes up to `capacity` entries to `out` (may be
@@ -88,6 +97,10 @@ const char *pb_device_type_name(uint32_t type);
 /* 1 when this context runs the *_native64 kernels (shaderInt64 and
  * shaderFloat64 enabled), 0 for the portable ones. */
 int pb_context_native64(const pb_context *ctx);
+
+/* 1 when this context's kernels read the BVH as texels (pb_scene_loads; a
+ * scene over the device's texel-view limit is still read through addresses). */
+int pb_context_scene_texels(const pb_context *ctx);
 
 /* Number of validation-layer messages (warnings and errors) received so far. */
 uint32_t pb_context_validation_messages(const pb_context *ctx);

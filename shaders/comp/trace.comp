@@ -7,7 +7,7 @@
 #include "traverse.glsl"
 
 layout(local_size_x = 64) in;
-layout(constant_id = 1) const uint ANY_HIT = 0u;
+layout(constant_id = 2) const uint ANY_HIT = 0u;
 
 struct Ray {
     vec4 org_tmin;

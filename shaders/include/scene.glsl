@@ -43,6 +43,18 @@ layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Uin
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer MaterialBuf { Material m[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer TextureBuf { Texture t[]; };
 
+// How the traversal reads nodes and triangles (specialisation constant 1 of
+// every kernel that includes this file; 0 is traverse.glsl's STACK_SIZE):
+// through buffer references, or (1) as 16-byte texels of two storage texel
+// buffers, set 0 bindings 0 and 1, over the same bytes. llvmpipe on AVX2
+// lowers a divergent buffer load to one masked scalar load per lane and
+// 32/64-bit component, but an image load to one unmasked load per lane and
+// texel: 1.2-1.35x the trace rate there (bench/RESULTS.md). The host picks
+// per device (PB_SCENE_LOADS_*); both give the same words, so the same hits.
+layout(constant_id = 1) const uint PB_SCENE_TEXELS = 0u;
+layout(set = 0, binding = 0, rgba32ui) uniform readonly restrict uimageBuffer pb_node_texels;
+layout(set = 0, binding = 1, rgba32ui) uniform readonly restrict uimageBuffer pb_tri_texels;
+
 // Nodes and triangles are read as 64-bit words: half as many load
 // instructions as 32-bit components. On GPUs this is the same bytes in wider
 // transactions; on lavapipe, which gathers every load component separately,
@@ -68,21 +80,32 @@ vec4 unpack_bytes(uint w)
     return vec4((uvec4(w) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu);
 }
 
+// A node's eight 64-bit words: origin.xy | origin.z, scale exponents | q[0]
+// | q[1] | q[2] | children 0-1 | children 2-3 | counts.
 Node4 load_node4(pb_addr base, uint index)
 {
-    Words64 w = Words64(base);
-    uint b = 8u * index;
-    uvec2 o = PB_WORD(w, b + 0u), oe = PB_WORD(w, b + 1u);
-    Node4 n;
-    n.origin = vec3(uintBitsToFloat(o), uintBitsToFloat(oe.x));
-    n.scale = uintBitsToFloat(((uvec3(oe.y) >> uvec3(0u, 8u, 16u)) & 0xffu) << 23u);
-    for (uint a = 0u; a < 3u; ++a) {
-        uvec2 q = PB_WORD(w, b + 2u + a);
-        n.qlo[a] = unpack_bytes(q.x);
-        n.qhi[a] = unpack_bytes(q.y);
+    uvec2 wd[8];
+    if (PB_SCENE_TEXELS != 0u) {
+        int b = 4 * int(index);
+        for (int i = 0; i < 4; ++i) {
+            uvec4 x = imageLoad(pb_node_texels, b + i);
+            wd[2 * i] = x.xy;
+            wd[2 * i + 1] = x.zw;
+        }
+    } else {
+        Words64 w = Words64(base);
+        for (uint i = 0u; i < 8u; ++i)
+            wd[i] = PB_WORD(w, 8u * index + i);
     }
-    n.child = uvec4(PB_WORD(w, b + 5u), PB_WORD(w, b + 6u));
-    n.count = (uvec4(PB_WORD(w, b + 7u).x) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu;
+    Node4 n;
+    n.origin = vec3(uintBitsToFloat(wd[0]), uintBitsToFloat(wd[1].x));
+    n.scale = uintBitsToFloat(((uvec3(wd[1].y) >> uvec3(0u, 8u, 16u)) & 0xffu) << 23u);
+    for (uint a = 0u; a < 3u; ++a) {
+        n.qlo[a] = unpack_bytes(wd[2u + a].x);
+        n.qhi[a] = unpack_bytes(wd[2u + a].y);
+    }
+    n.child = uvec4(wd[5], wd[6]);
+    n.count = (uvec4(wd[7].x) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu;
     return n;
 }
 
@@ -92,15 +115,31 @@ struct Tri {
     uint flags;
 };
 
+// As texels, record `index` starts at texel 2.5 * index: the three texels
+// from texel (5 * index) / 2 hold it, from their first 64-bit word (even
+// index) or their second (odd). The host pads the array by one texel.
 Tri load_tri(pb_addr base, uint index)
 {
-    Words64 w = Words64(base);
-    uint b = 5u * index;
-    vec2 a = unpack_float2(PB_WORD(w, b + 0u));   // v0.x v0.y
-    vec2 c = unpack_float2(PB_WORD(w, b + 1u));   // v0.z v1.x
-    vec2 d = unpack_float2(PB_WORD(w, b + 2u));   // v1.y v1.z
-    vec2 e = unpack_float2(PB_WORD(w, b + 3u));   // v2.x v2.y
-    uvec2 f = PB_WORD(w, b + 4u);      // v2.z, flags
+    uvec2 wd[5];
+    if (PB_SCENE_TEXELS != 0u) {
+        int b = int((5u * index) >> 1u);
+        uvec4 x = imageLoad(pb_tri_texels, b), y = imageLoad(pb_tri_texels, b + 1), z = imageLoad(pb_tri_texels, b + 2);
+        bool odd = (index & 1u) != 0u;
+        wd[0] = odd ? x.zw : x.xy;
+        wd[1] = odd ? y.xy : x.zw;
+        wd[2] = odd ? y.zw : y.xy;
+        wd[3] = odd ? z.xy : y.zw;
+        wd[4] = odd ? z.zw : z.xy;
+    } else {
+        Words64 w = Words64(base);
+        for (uint i = 0u; i < 5u; ++i)
+            wd[i] = PB_WORD(w, 5u * index + i);
+    }
+    vec2 a = unpack_float2(wd[0]);   // v0.x v0.y
+    vec2 c = unpack_float2(wd[1]);   // v0.z v1.x
+    vec2 d = unpack_float2(wd[2]);   // v1.y v1.z
+    vec2 e = unpack_float2(wd[3]);   // v2.x v2.y
+    uvec2 f = wd[4];                 // v2.z, flags
     Tri t;
     t.v0 = vec3(a, c.x);
     t.v1 = vec3(c.y, d);

@@ -306,14 +306,17 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
             break;
         bake_push push = {B->params.address};
         pb_cmd_timestamp(ctx);
+        pb_cmd_bind_set(ctx, &B->trace, run->gs->set);
         pb_cmd_dispatch(ctx, &B->trace, &push, (count * rpp + 63) / 64);
         pb_cmd_timestamp(ctx);
         pb_cmd_barrier(ctx);
         pb_cmd_timestamp(ctx);
+        pb_cmd_bind_set(ctx, &B->sh, run->gs->set);
         pb_cmd_dispatch(ctx, &B->sh, &push, (count + 63) / 64);
         pb_cmd_timestamp(ctx);
         if (!relocating) {
             pb_cmd_timestamp(ctx);
+            pb_cmd_bind_set(ctx, &B->depth, run->gs->set);
             pb_cmd_dispatch2(ctx, &B->depth, &push, (texels + 63) / 64, count);
             pb_cmd_timestamp(ctx);
         }
@@ -607,7 +610,7 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
     char names[160];
     pb_bake_features_name(B->features, names, sizeof names);
     pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "bake kernels specialised to: %s", names);
-    uint32_t spec[3] = {j->gs->stack_size, 0, B->features};
+    uint32_t spec[3] = {j->gs->stack_size, j->gs->texel_loads, B->features};
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 3, 64, "bake_trace",
                                &B->trace, err);

@@ -9,6 +9,63 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The texel views of nodes and triangles and the descriptor set holding
+ * them. Made whichever loads the kernels use (they name the views either
+ * way); views longer than the device allows are cut, and the kernels then
+ * read through addresses. */
+static pb_result make_scene_set(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, pb_error *err)
+{
+    uint64_t max_texels = ctx->limits.maxTexelBufferElements;
+    uint64_t node_texels = gs->nodes.size / 16, tri_texels = gs->tris.size / 16;
+    int fits = node_texels <= max_texels && tri_texels <= max_texels;
+    if (ctx->scene_texels && !fits && ctx->desc.scene_loads == PB_SCENE_LOADS_TEXEL)
+        return pb_fail(err, PB_ERROR_TOO_LARGE,
+                       "%s: texel loads need %llu texels for the BVH and %llu for its triangles; device %s allows "
+                       "%llu (maxTexelBufferElements): use address loads (--scene-loads address)",
+                       scene->path[0] ? scene->path : "scene",
+                       (unsigned long long)node_texels, (unsigned long long)tri_texels, ctx->info.name,
+                       (unsigned long long)max_texels);
+    gs->texel_loads = ctx->scene_texels && fits;
+    if (ctx->scene_texels && !fits)
+        pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "%s: over the device's %llu texels per view: address loads",
+                scene->path[0] ? scene->path : "scene", (unsigned long long)max_texels);
+    VkBufferViewCreateInfo bv = {VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+    bv.format = VK_FORMAT_R32G32B32A32_UINT;
+    bv.buffer = gs->nodes.buffer;
+    bv.range = 16 * (node_texels < max_texels ? node_texels : max_texels);
+    VkResult vr = ctx->vk.vkCreateBufferView(ctx->device, &bv, NULL, &gs->node_view);
+    if (vr == VK_SUCCESS) {
+        bv.buffer = gs->tris.buffer;
+        bv.range = 16 * (tri_texels < max_texels ? tri_texels : max_texels);
+        vr = ctx->vk.vkCreateBufferView(ctx->device, &bv, NULL, &gs->tri_view);
+    }
+    VkDescriptorPoolSize ps = {VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 2};
+    VkDescriptorPoolCreateInfo dp = {VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    dp.maxSets = 1;
+    dp.poolSizeCount = 1;
+    dp.pPoolSizes = &ps;
+    if (vr == VK_SUCCESS)
+        vr = ctx->vk.vkCreateDescriptorPool(ctx->device, &dp, NULL, &gs->set_pool);
+    VkDescriptorSetAllocateInfo da = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    da.descriptorPool = gs->set_pool;
+    da.descriptorSetCount = 1;
+    da.pSetLayouts = &ctx->scene_set_layout;
+    if (vr == VK_SUCCESS)
+        vr = ctx->vk.vkAllocateDescriptorSets(ctx->device, &da, &gs->set);
+    if (vr != VK_SUCCESS)
+        return pb_vk_fail(ctx, err, vr, "scene texel views");
+    VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
+    for (uint32_t i = 0; i < 2; ++i) {
+        w[i].dstSet = gs->set;
+        w[i].dstBinding = i;
+        w[i].descriptorCount = 1;
+        w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
+        w[i].pTexelBufferView = i ? &gs->tri_view : &gs->node_view;
+    }
+    ctx->vk.vkUpdateDescriptorSets(ctx->device, 2, w, 0, NULL);
+    return PB_OK;
+}
+
 static pb_result upload_array(pb_context *ctx, pb_buffer *b, const void *data, uint64_t bytes, const char *what,
                               pb_error *err)
 {
@@ -31,7 +88,7 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     uint32_t n = scene->triangle_count;
     uint64_t sizes[6] = {
         (uint64_t)bvh->wide_node_count * sizeof(pb_bvh4_node),
-        (uint64_t)n * sizeof(gpu_tri),
+        (uint64_t)n * sizeof(gpu_tri) + 16u, /* + a texel: the last record's texels end 8 bytes past it */
         (uint64_t)n * (scene->colors ? 72u : 24u), /* UVs, then vertex colours */
         (uint64_t)scene->material_count * sizeof(gpu_material),
         (uint64_t)scene->texture_count * sizeof(gpu_texture),
@@ -55,7 +112,7 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: more than 2^32 texels", scene->path);
 
     pb_gpu_scene *gs = calloc(1, sizeof *gs);
-    gpu_tri *tris = malloc((size_t)(n ? n : 1) * sizeof *tris);
+    gpu_tri *tris = calloc((size_t)n + 1, sizeof *tris);
     float *uvs = malloc(sizes[2] ? (size_t)sizes[2] : 24);
     gpu_material *mats = malloc((size_t)(scene->material_count ? scene->material_count : 1) * sizeof *mats);
     gpu_texture *texs = malloc((size_t)(scene->texture_count ? scene->texture_count : 1) * sizeof *texs);
@@ -96,6 +153,8 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     if (r == PB_OK) r = upload_array(ctx, &gs->textures, texs, sizes[4], names[4], err);
     if (r == PB_OK) r = upload_array(ctx, &gs->texels, scene->texels, sizes[5], names[5], err);
     free(tris), free(uvs), free(mats), free(texs);
+    if (r == PB_OK)
+        r = make_scene_set(ctx, scene, gs, err);
     if (r != PB_OK) {
         pb_gpu_scene_destroy_ctx(ctx, gs);
         return r;
@@ -120,6 +179,12 @@ void pb_gpu_scene_destroy_ctx(pb_context *ctx, pb_gpu_scene *gs)
                           &gs->rays, &gs->hits};
     for (int i = 0; i < 8; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
+    if (gs->set_pool)
+        ctx->vk.vkDestroyDescriptorPool(ctx->device, gs->set_pool, NULL);
+    if (gs->node_view)
+        ctx->vk.vkDestroyBufferView(ctx->device, gs->node_view, NULL);
+    if (gs->tri_view)
+        ctx->vk.vkDestroyBufferView(ctx->device, gs->tri_view, NULL);
     free(gs->tri_order);
     free(gs);
 }

@@ -19,6 +19,13 @@ struct pb_gpu_scene {
     /* ray/hit buffers, grown on demand and reused */
     pb_buffer rays, hits;
     uint32_t ray_capacity;
+    /* nodes and triangles as RGBA32UI texel views, set 0 of the scene kernels
+     * (scene.glsl); texel_loads: the kernels read through them (specialisation
+     * constant 1), else through the addresses in refs */
+    VkBufferView node_view, tri_view;
+    VkDescriptorPool set_pool;
+    VkDescriptorSet set;
+    uint32_t texel_loads;
     struct pb_light_cells_gpu *light_cells; /* the bakes' light cells, learned once per seed (light_cells_gpu.h) */
 };
 

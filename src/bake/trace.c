@@ -50,8 +50,8 @@ pb_result pb_trace(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, uint32
      * lavapipe each of the two costs 15-20 ms to create */
     pb_pipeline *pipe = mode == PB_TRACE_ANY ? &gs->trace_any : &gs->trace_closest;
     if (r == PB_OK && !pipe->pipeline) {
-        uint32_t spec[2] = {gs->stack_size, mode == PB_TRACE_ANY};
-        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, trace), sizeof(trace_push), spec, 2, 64,
+        uint32_t spec[3] = {gs->stack_size, gs->texel_loads, mode == PB_TRACE_ANY};
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, trace), sizeof(trace_push), spec, 3, 64,
                                mode == PB_TRACE_ANY ? "trace (any)" : "trace (closest)", pipe, err);
     }
     for (uint32_t done = 0; r == PB_OK && done < count; done += chunk) {
@@ -65,6 +65,7 @@ pb_result pb_trace(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, uint32
         }
         trace_push push = {gs->refs, gs->rays.address, gs->hits.address, n, 0};
         pb_cmd_timestamp(ctx);
+        pb_cmd_bind_set(ctx, pipe, gs->set);
         pb_cmd_dispatch(ctx, pipe, &push, (n + 63) / 64);
         pb_cmd_timestamp(ctx);
         if (staged) {

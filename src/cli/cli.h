@@ -34,6 +34,7 @@ typedef struct options {
     int has_spacing, has_counts, has_bounds, has_rays, has_seed, has_bounces;
     int json, validation, verify, has_probe;
     int portable_kernels;       /* --portable-kernels: pb_context_desc.portable_kernels */
+    uint32_t scene_loads;       /* --scene-loads: pb_context_desc.scene_loads (pb_scene_loads) */
     uint32_t probes, rays, seed, probe;
     cli_log log;
     /* render */

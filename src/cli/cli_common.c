@@ -62,6 +62,7 @@ pb_context_desc cli_context_desc(const options *o, const char *device, pb_log lo
 {
     pb_context_desc cd = {device, (uint32_t)o->validation, 0, 0, log};
     cd.portable_kernels = (uint32_t)o->portable_kernels;
+    cd.scene_loads = o->scene_loads;
     /* PB_INJECT_FAULT=allocation:N | submission:N fails that call (test_cli's failure paths) */
     const char *f = getenv("PB_INJECT_FAULT");
     unsigned n = 0;

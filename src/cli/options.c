@@ -34,6 +34,8 @@ void cli_print_help(void)
            "  --validation            enable the Vulkan validation layer (fail on any message)\n"
            "  --portable-kernels      run the kernels built for devices without shaderInt64 and\n"
            "                          shaderFloat64 on any device (same results; to check them)\n"
+           "  --scene-loads auto|address|texel  how kernels read the BVH (same results): texel loads\n"
+           "                          are faster on lavapipe; auto: texels on CPU devices only\n"
            "  --probes N              probes in the grid over the scene bounds (trace; default 4096)\n"
            "  --rays N                rays per probe (trace; default 256)\n"
            "  --seed S                random seed (default 1)\n"
@@ -187,7 +189,8 @@ static int parse_open_range(const char *s, float lo, float hi, float *out)
     X(OPT_REFINE_ERROR, "refine-error", required_argument) \
     X(OPT_REFINE_TEST, "refine-test", required_argument) \
     X(OPT_REFINE_SEAMS, "refine-seams", required_argument) \
-    X(OPT_SEAM_ERROR, "seam-error", required_argument)
+    X(OPT_SEAM_ERROR, "seam-error", required_argument) \
+    X(OPT_SCENE_LOADS, "scene-loads", required_argument)
 
 enum {
     OPT_FIRST = 256,
@@ -341,6 +344,11 @@ static int apply(options *o, const char *a, const char *next)
             return 2;
         }
         o->sh_window_width = got == 2 ? w : 0.f;
+    } else if (!strcmp(a, "--scene-loads")) {
+        if (!next || (strcmp(next, "auto") && strcmp(next, "address") && strcmp(next, "texel")))
+            return cli_usage_error("%s takes auto, address or texel", a);
+        o->scene_loads = !strcmp(next, "address") ? PB_SCENE_LOADS_ADDRESS
+                         : !strcmp(next, "texel") ? PB_SCENE_LOADS_TEXEL : PB_SCENE_LOADS_AUTO;
     } else if (!strcmp(a, "--indirect")) {
         if (!next || (strcmp(next, "path") && strcmp(next, "volume")))
             return cli_usage_error("%s takes path or volume", a);

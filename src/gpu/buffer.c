@@ -64,8 +64,10 @@ pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind ki
                        "%.1f MiB", ctx->info.name, what, size / 1048576.0, ctx->max_allocation / 1048576.0);
     VkBufferCreateInfo bci = {VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
     bci.size = size;
-    bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
-                VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
+    /* texel buffers: the scene's BVH views (gpu_scene.c); harmless on the rest */
+    bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
+                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
     bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
     VkResult vr = ctx->vk.vkCreateBuffer(ctx->device, &bci, NULL, &out->buffer);
     if (vr != VK_SUCCESS)

@@ -349,6 +349,20 @@ static pb_result create_device(pb_context *ctx, pb_error *err)
     volkLoadDeviceTable(&ctx->vk, ctx->device);
     ctx->vk.vkGetDeviceQueue(ctx->device, ctx->queue_family, 0, &ctx->queue);
 
+    VkDescriptorSetLayoutBinding views[2] = {
+        {0, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL},
+        {1, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL}};
+    VkDescriptorSetLayoutCreateInfo dsl = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    dsl.bindingCount = 2;
+    dsl.pBindings = views;
+    if ((vr = ctx->vk.vkCreateDescriptorSetLayout(ctx->device, &dsl, NULL, &ctx->scene_set_layout)) != VK_SUCCESS)
+        return pb_vk_fail(ctx, err, vr, "vkCreateDescriptorSetLayout");
+    ctx->scene_texels = ctx->desc.scene_loads == PB_SCENE_LOADS_TEXEL ||
+                        (ctx->desc.scene_loads == PB_SCENE_LOADS_AUTO && ctx->info.type == PB_DEVICE_CPU);
+    pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "scene loads: %s (%s)", ctx->scene_texels ? "texels" : "addresses",
+            ctx->desc.scene_loads != PB_SCENE_LOADS_AUTO ? "asked for"
+            : ctx->scene_texels ? "CPU device" : "GPU device");
+
     VkPhysicalDeviceProperties props;
     vkGetPhysicalDeviceProperties(ctx->physical, &props);
     ctx->limits = props.limits;
@@ -389,6 +403,8 @@ pb_result pb_context_create(const pb_context_desc *desc, pb_context **out, pb_er
 {
     pb_error_clear(err);
     *out = NULL;
+    if (desc && desc->scene_loads > PB_SCENE_LOADS_TEXEL)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "scene_loads %u is not a pb_scene_loads", desc->scene_loads);
     pb_context *ctx = calloc(1, sizeof *ctx);
     if (!ctx)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
@@ -418,6 +434,8 @@ void pb_context_destroy(pb_context *ctx)
     if (ctx->device) {
         ctx->vk.vkDeviceWaitIdle(ctx->device);
         pb_pipeline_cache_release(ctx);
+        if (ctx->scene_set_layout)
+            ctx->vk.vkDestroyDescriptorSetLayout(ctx->device, ctx->scene_set_layout, NULL);
         if (ctx->timestamps)
             ctx->vk.vkDestroyQueryPool(ctx->device, ctx->timestamps, NULL);
         if (ctx->fence)
@@ -441,6 +459,11 @@ const pb_device_info *pb_context_device(const pb_context *ctx)
 int pb_context_native64(const pb_context *ctx)
 {
     return ctx ? ctx->native64 : 0;
+}
+
+int pb_context_scene_texels(const pb_context *ctx)
+{
+    return ctx ? ctx->scene_texels : 0;
 }
 
 uint32_t pb_context_validation_messages(const pb_context *ctx)

@@ -52,6 +52,8 @@ typedef struct pb_context {
     struct pb_pipeline_entry *pipelines; /* the pipeline cache (pb_pipeline_create), destroyed with the context */
     uint32_t pipeline_count, pipeline_capacity;
     uint32_t pipelines_created;  /* driver pipeline creations, for tests and logs */
+    VkDescriptorSetLayout scene_set_layout; /* set 0 of every pipeline: the scene's texel views (pb_gpu_scene) */
+    int scene_texels;            /* kernels read nodes and triangles as texels (desc.scene_loads, device type) */
 } pb_context;
 
 /* SPIR-V and its size for kernel `name` on this context: the _native64
@@ -125,7 +127,10 @@ typedef struct pb_pipeline_entry {
 } pb_pipeline_entry;
 
 /* Compute pipeline from SPIR-V words; `spec` holds `spec_count` uint32
- * specialisation constants with ids 0..spec_count-1. Made once per context
+ * specialisation constants with ids 0..spec_count-1 (kernels that read the
+ * scene: 0 the traversal stack, 1 PB_SCENE_TEXELS, then their own). Its
+ * layout is set 0 = ctx->scene_set_layout plus `push_size` bytes of push
+ * constants. Made once per context
  * for each (SPIR-V, constants, push size, local size) and then reused; the
  * caller still calls pb_pipeline_destroy (a no-op on a cached one). */
 pb_result pb_pipeline_create(pb_context *ctx, const uint32_t *spirv, size_t spirv_bytes, uint32_t push_size,
@@ -140,6 +145,9 @@ void pb_pipeline_cache_release(pb_context *ctx);
 pb_result pb_cmd_begin(pb_context *ctx, pb_error *err);
 void pb_cmd_dispatch(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups);
 void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups_x, uint32_t groups_y);
+/* Binds descriptor set 0 (a scene's texel views) for p's next dispatches:
+ * kernels that read the scene need it bound whichever loads they use. */
+void pb_cmd_bind_set(pb_context *ctx, const pb_pipeline *p, VkDescriptorSet set);
 void pb_cmd_barrier(pb_context *ctx); /* all compute/transfer writes -> reads */
 void pb_cmd_barrier_to_host(pb_context *ctx); /* device writes -> host reads after the wait */
 void pb_cmd_copy(pb_context *ctx, const pb_buffer *src, VkDeviceSize src_offset, const pb_buffer *dst,

@@ -1,6 +1,7 @@
-/* Compute pipelines. Kernels read every array through buffer device
- * addresses passed as push constants, so a pipeline layout is just one
- * push-constant range: no descriptor sets to keep in sync with the GLSL. */
+/* Compute pipelines. Kernels read their arrays through buffer device
+ * addresses passed as push constants; the one descriptor set, the same
+ * layout in every pipeline, holds the scene's BVH nodes and triangles as
+ * texel views for devices that read them faster that way (scene.glsl). */
 #include "common/common.h"
 #include "gpu/gpu.h"
 
@@ -70,6 +71,8 @@ pb_result pb_pipeline_create(pb_context *ctx, const uint32_t *spirv, size_t spir
     VkPipelineLayoutCreateInfo plci = {VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     plci.pushConstantRangeCount = push_size ? 1 : 0;
     plci.pPushConstantRanges = &range;
+    plci.setLayoutCount = 1;
+    plci.pSetLayouts = &ctx->scene_set_layout;
     vr = ctx->vk.vkCreatePipelineLayout(ctx->device, &plci, NULL, &out->layout);
     if (vr != VK_SUCCESS) {
         ctx->vk.vkDestroyShaderModule(ctx->device, module, NULL);

@@ -27,6 +27,11 @@ void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, u
     ctx->vk.vkCmdDispatch(ctx->cmd, groups_x, groups_y, 1);
 }
 
+void pb_cmd_bind_set(pb_context *ctx, const pb_pipeline *p, VkDescriptorSet set)
+{
+    ctx->vk.vkCmdBindDescriptorSets(ctx->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout, 0, 1, &set, 0, NULL);
+}
+
 void pb_cmd_dispatch(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups)
 {
     pb_cmd_dispatch2(ctx, p, push, groups, 1);

@@ -115,9 +115,9 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
         r = pb_buffer_create(ctx, pixels * 16, PB_MEMORY_DOWNLOAD, "image", &img, err);
     if (r == PB_OK)
         r = pb_buffer_create(ctx, pixels * 16, PB_MEMORY_DOWNLOAD, "direct image", &imgd, err);
-    uint32_t spec[1] = {gs->stack_size};
+    uint32_t spec[2] = {gs->stack_size, gs->texel_loads};
     if (r == PB_OK)
-        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, render), 16, spec, 1, 64, "render", &pipe, err);
+        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, render), 16, spec, 2, 64, "render", &pipe, err);
     if (r == PB_OK) {
         gpu_bake_params prm;
         memset(&prm, 0, sizeof prm);
@@ -166,6 +166,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
                 uint64_t pk[2] = {push0, rparams.address + (uint64_t)(k / S) * sizeof rp};
                 if (k > k0)
                     pb_cmd_barrier(ctx);
+                pb_cmd_bind_set(ctx, &pipe, gs->set);
                 pb_cmd_dispatch(ctx, &pipe, pk, (rp.rows * d.width + 63) / 64);
             }
             pb_cmd_timestamp(ctx);
