@@ -6,11 +6,11 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bench clocks sweep tests (default: compile bake
-# bench clocks tests, in that order).
+# STEPS: any of compile bake bench clocks loads sweep tests (default: compile
+# bake bench clocks loads tests, in that order).
 set -u
 out=${OUT:?OUT must name the folder that comes back}
-steps=${*:-compile bake bench clocks tests}
+steps=${*:-compile bake bench clocks loads tests}
 log=$out/log.txt
 say() { echo "== $(date +%T) $*" | tee -a "$log"; }
 run() { local limit=$1; shift; say "$*"; timeout "$limit" "$@" >>"$log" 2>&1; local rc=$?; [ $rc = 0 ] || say "rc $rc"; }
@@ -60,6 +60,19 @@ for s in $steps; do
             run 90 build/bench/trace_bench --probes $p --rays 1024 --repeat 3 --json /tmp/trace-clocks-$p-$SECONDS.json $crypt
             keep /tmp/trace-clocks-$p-*.json
             rm -f /tmp/trace-clocks-*.json
+        done ;;
+    loads) # the BVH read as texels (lavapipe's default since 2026-11-26) against addresses (the GPU
+        # default), interleaved: the trace kernel on The Crypt, then the bake with each
+        for l in address texel address texel; do
+            run 90 build/bench/trace_bench --probes 16384 --rays 1024 --repeat 3 --scene-loads $l \
+                --json /tmp/trace-loads-$l-$SECONDS.json $crypt
+            keep /tmp/trace-loads-$l-*.json
+            rm -f /tmp/trace-loads-*.json
+        done
+        for l in address texel; do
+            say "bake, $l loads"
+            timeout 120 build/probebake bake $crypt --counts 32,16,32 --rays 256 --passes 1 --bounces 3 \
+                --scene-loads $l --verbose -o /tmp/c16k.probes 2>&1 | grep -E "scene loads|^time" >>"$log"
         done ;;
     sweep) # leaf size and SAH step cost: the defaults (8, 2) were tuned for llvmpipe
         for lt in "8 2" "4 1" "4 2" "2 1" "8 1"; do
