@@ -101,6 +101,7 @@ typedef struct pb_volume {
     pb_volume_shard shard;              /* with PB_VOLUME_SHARD: which part of a bake this is */
     uint64_t rays_traced;               /* probe rays of the bake passes (set by pb_bake; not stored in files) */
     uint64_t traversals;                /* BVH traversals of relocation and bake passes: probe, bounce, shadow rays (ditto) */
+    uint64_t relocation_rays;           /* probe rays of the relocation passes: all probes, then those that moved (ditto) */
     uint32_t probes_dropped;            /* sparse: probes inside geometry dropped by the bake or merge (ditto) */
     uint32_t file_version;              /* format version of the file it was read from; 0 if not read */
     /* per probe, caller- or reader-owned arrays (pb_volume_free frees them) */

@@ -360,9 +360,11 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
 /* Moves probes after a relocation pass: one with too many back faces goes
  * out along its nearest back-face direction, past the surface; one closer
  * than min_front to a front face moves away from it. Offsets are bounded to
- * 45 % of the spacing per axis, so a probe stays inside its cell. Returns the
- * number of probes whose position changed. */
-static uint32_t relocate(bake_run *run, float *offsets)
+ * 45 % of the spacing per axis, so a probe stays inside its cell. Looks at
+ * the `count` probes of `list` (NULL: all), the ones the pass traced; writes
+ * those whose position changed to `moved` (may be `list`: it is read ahead of
+ * the writes) and returns their number. */
+static uint32_t relocate(bake_run *run, float *offsets, const uint32_t *list, uint32_t count, uint32_t *moved_list)
 {
     const pb_bake_desc *d = run->d;
     float sp = INFINITY, bounds[3];
@@ -376,7 +378,8 @@ static uint32_t relocate(bake_run *run, float *offsets)
         sp = d->max_distance;
     float margin = 0.05f * sp, min_front = 0.2f * sp;
     uint32_t moved = 0;
-    for (uint32_t p = 0; p < run->P; ++p) {
+    for (uint32_t i = 0; i < count; ++i) {
+        uint32_t p = list ? list[i] : i;
         const float *nr = run->near + 8 * (size_t)p;
         float *off = offsets + 3 * (size_t)p, step[3] = {0, 0, 0};
         float back_fraction = (float)(run->backfaces[p] / run->rpp);
@@ -398,7 +401,8 @@ static uint32_t relocate(bake_run *run, float *offsets)
             run->probes[4 * (size_t)p + k] += o - off[k];
             off[k] = o;
         }
-        moved += changed;
+        if (changed)
+            moved_list[moved++] = p;
     }
     return moved;
 }
@@ -456,6 +460,7 @@ typedef struct bake_job {
     float *probes, *rotations, *directions, *reduced, *offsets, *near;
     double *sh_sum, *depth_sum, *backfaces, *hits;
     uint32_t *active, *converged_at;
+    uint64_t relocation_rays;      /* probe rays the relocation passes traced */
     pb_convergence conv;
     bake_buffers B;
     bake_run run;
@@ -624,23 +629,31 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
 }
 
 /* Stage 4, relocate: probes in geometry move out, probes against a wall
- * move away; iterations use their own pass numbers (RNG streams), so the
- * bake passes that follow are the same whatever relocation did. */
+ * move away. The first iteration traces every probe; each later one only
+ * the probes the one before moved (the rest stay where they were tested).
+ * Iterations use their own pass numbers (RNG streams), so the bake passes
+ * that follow are the same whatever relocation did. */
 static pb_result stage_relocate(bake_job *j, pb_error *err)
 {
     const pb_bake_desc *d = &j->d;
-    uint32_t P = j->P, relocated_any = 0;
+    uint32_t P = j->P;
     uint32_t iterations = d->skip_relocation || j->scene->triangle_count == 0 ? 0 : 3;
     if (d->points && !(d->points->spacing > 0))
         iterations = 0; /* no cell to stay in */
     pb_result r = PB_OK;
-    for (uint32_t it = 0; r == PB_OK && it < iterations; ++it) {
+    const uint32_t *list = NULL; /* then j->active, free until the trace passes */
+    uint32_t count = P;
+    for (uint32_t it = 0; r == PB_OK && it < iterations && count > 0; ++it) {
         memset(j->backfaces, 0, P * sizeof(double));
-        r = run_pass(&j->run, PB_RELOCATION_PASS + it, 1, NULL, P, err);
-        if (r == PB_OK)
-            relocated_any += relocate(&j->run, j->offsets);
-        if (r == PB_OK && relocated_any)
+        r = run_pass(&j->run, PB_RELOCATION_PASS + it, 1, list, count, err);
+        if (r != PB_OK)
+            break;
+        j->relocation_rays += (uint64_t)count * j->rpp;
+        uint32_t moved = relocate(&j->run, j->offsets, list, count, j->active);
+        pb_logf(&j->ctx->desc.log, PB_LOG_DEBUG, "relocation %u: %u probes traced, %u moved", it + 1, count, moved);
+        if (moved)
             r = pb_buffer_upload(j->ctx, &j->B.probes, 0, j->probes, (uint64_t)P * 16, err);
+        list = j->active, count = moved;
     }
     memset(j->backfaces, 0, P * sizeof(double));
     memset(j->hits, 0, P * sizeof(double));
@@ -659,6 +672,10 @@ static pb_result stage_trace_passes(bake_job *j, pb_error *err)
     uint32_t active_count = j->P;
     for (uint32_t p = 0; p < j->P; ++p)
         j->active[p] = p;
+    /* start the submission size afresh: relocation's rays stop at their first
+     * hits, so the size its passes grew to would make a bake pass's first
+     * submission run for seconds (a late Ctrl-C, a watchdog) */
+    j->run.chunk_now = 0;
     double floor = 0.0;
     pb_result r = PB_OK;
     for (uint32_t pass = 0; r == PB_OK && pass < d->passes && active_count > 0; ++pass) {
@@ -851,6 +868,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                 t[4] - t[3], gpu_passes, t[5] - t[4], t[6] - t[5]);
     if (r == PB_OK) {
         out->traversals = j.run.traversals;
+        out->relocation_rays = j.relocation_rays;
         if (j.run.long_paths)
             pb_logf(&ctx->desc.log, PB_LOG_WARN,
                     "%llu paths ran over 32768 traversal steps in one invocation; llvmpipe (lavapipe) silently cuts "

@@ -17,7 +17,7 @@ pb_result pb_indirect_volume_bounces(const pb_scene *scene, const pb_bake_desc *
     memset(&fb, 0, sizeof fb);
     pb_volume_timings t;
     memset(&t, 0, sizeof t);
-    uint64_t rays = 0, traversals = 0;
+    uint64_t rays = 0, traversals = 0, relocation_rays = 0;
     pb_result r = PB_OK;
     for (uint32_t k = 0; r == PB_OK && k <= desc->bounces; ++k) {
         d.exclude_direct = k < desc->bounces ? 1 : desc->exclude_direct;
@@ -29,7 +29,7 @@ pb_result pb_indirect_volume_bounces(const pb_scene *scene, const pb_bake_desc *
         const double *tv = &v.timings.load;
         for (int i = 0; i < 8; ++i)
             sum[i] += tv[i];
-        rays += v.rays_traced, traversals += v.traversals;
+        rays += v.rays_traced, traversals += v.traversals, relocation_rays += v.relocation_rays;
         pb_sample_volume_free(&fb);
         if (k < desc->bounces) {
             r = pb_sample_volume_build(&v, scene->origin, 0.f, 0.f, &fb, err);
@@ -42,7 +42,7 @@ pb_result pb_indirect_volume_bounces(const pb_scene *scene, const pb_bake_desc *
     if (r != PB_OK)
         return r;
     out->timings = t;
-    out->rays_traced = rays, out->traversals = traversals;
+    out->rays_traced = rays, out->traversals = traversals, out->relocation_rays = relocation_rays;
     out->settings.bounces = desc->bounces;
     out->settings.indirect_mode = 1;
     return PB_OK;

@@ -25,6 +25,7 @@ void pb_shard_account(pb_volume *whole, const pb_volume *part)
     for (int i = 0; i < 8; ++i)
         o[i] += t[i];
     whole->rays_traced += part->rays_traced, whole->traversals += part->traversals;
+    whole->relocation_rays += part->relocation_rays;
     if (strcmp(part->device, whole->device) && !strstr(whole->device, part->device)) {
         size_t len = strlen(whole->device);
         snprintf(whole->device + len, sizeof whole->device - len, " + %s", part->device);

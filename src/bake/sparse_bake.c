@@ -64,7 +64,7 @@ typedef struct sparse_job {
     uint32_t brick_count, brick_cap;
     pb_volume first;            /* the first bake's header: settings, device, depth unit (no probes) */
     pb_volume_timings timings;
-    uint64_t rays, traversals;
+    uint64_t rays, traversals, relocation_rays;
     uint32_t passes_max;
     pb_sparse_stats stats;
 } sparse_job;
@@ -135,6 +135,7 @@ static pb_result account(sparse_job *j, const pb_volume *v, int kept, pb_error *
 {
     j->rays += v->rays_traced;
     j->traversals += v->traversals;
+    j->relocation_rays += v->relocation_rays;
     if (kept && v->settings.passes > j->passes_max)
         j->passes_max = v->settings.passes;
     double *t = &j->timings.load;
@@ -320,6 +321,7 @@ static pb_result assemble(sparse_job *j, pb_volume *out, pb_error *err)
     out->timings = j->timings;
     out->rays_traced = j->rays;
     out->traversals = j->traversals;
+    out->relocation_rays = j->relocation_rays;
     r = pb_volume_alloc(out, err);
     if (r != PB_OK) {
         pb_sparse_layout_free(sp);
