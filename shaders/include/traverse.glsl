@@ -79,18 +79,27 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
             run += cnt[i] != 0u && d[i] < PB_INF && d[i] <= tmax ? cnt[i] : 0u;
             e[i] = run;
         }
-        // software-pipelined: the next triangle's words are gathered before this one is tested
+        // Address loads are software-pipelined: the next triangle's words are
+        // gathered before this one is tested (+8-12 % on AVX-512 llvmpipe).
+        // Texel loads are not: there the pipelined loop's extra live values
+        // cost more than the overlap buys (0.89-0.92x the bake's GPU time on
+        // AVX2; bench/RESULTS.md). The specialisation constant keeps one loop.
         uint kn = 0u < e[0] ? ch[0] : 0u < e[1] ? ch[1] : 0u < e[2] ? ch[2] : ch[3];
         Tri trin;
-        if (run != 0u)
+        if (PB_SCENE_TEXELS == 0u && run != 0u)
             trin = load_tri(s.tris, kn);
         for (uint j = 0u; j < run; ++j) {
             uint k = kn;
-            Tri tri = trin;
             uint j1 = j + 1u;
             kn = j1 < e[0] ? ch[0] + j1 : j1 < e[1] ? ch[1] + (j1 - e[0]) : j1 < e[2] ? ch[2] + (j1 - e[1]) : ch[3] + (j1 - e[2]);
-            if (j1 < run)
-                trin = load_tri(s.tris, kn);
+            Tri tri;
+            if (PB_SCENE_TEXELS != 0u) {
+                tri = load_tri(s.tris, k);
+            } else {
+                tri = trin;
+                if (j1 < run)
+                    trin = load_tri(s.tris, kn);
+            }
             float t, u, v;
             if (!ray_triangle(r, tri.v0, tri.v1, tri.v2, tmin, tmax, t, u, v))
                 continue;
