@@ -49,7 +49,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Te
 // buffers, set 0 bindings 0 and 1, over the same bytes. llvmpipe on AVX2
 // lowers a divergent buffer load to one masked scalar load per lane and
 // 32/64-bit component, but an image load to one unmasked load per lane and
-// texel: 1.2-1.35x the trace rate there (bench/RESULTS.md). The host picks
+// texel: 1.18-1.37x the trace rate there (bench/RESULTS.md). The host picks
 // per device (PB_SCENE_LOADS_*); both give the same words, so the same hits.
 layout(constant_id = 1) const uint PB_SCENE_TEXELS = 0u;
 layout(set = 0, binding = 0, rgba32ui) uniform readonly restrict uimageBuffer pb_node_texels;
