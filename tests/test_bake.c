@@ -688,7 +688,9 @@ static float max_difference(const float *a, const float *b, uint32_t n, float *s
 }
 
 /* The kernels against bake_cpu.c on the demo scene, direct light only
- * (bounces 0: no random directions, so ray by ray equality to rounding). */
+ * (bounces 0: no random directions, so ray by ray equality to rounding).
+ * Two passes: the volume is their mean, from SH summed on the host and depth
+ * moments summed on the device (pass 0 stores them, pass 1 adds). */
 static void kernels_match_cpu_reference(void)
 {
     pb_scene *s = load_demo();
@@ -697,7 +699,7 @@ static void kernels_match_cpu_reference(void)
     pb_bake_desc d = {0};
     pb_probe_grid_fit(s->bounds_min, s->bounds_max, 27, &d.grid);
     d.rays_per_probe = 128;
-    d.passes = 1;
+    d.passes = 2;
     d.bounces = 0;
     d.octmap_res = 8;
     d.skip_relocation = 1; /* the reference below places probes on the grid */
@@ -708,7 +710,7 @@ static void kernels_match_cpu_reference(void)
         float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
         float *dirs = malloc(128 * 16), *rays = malloc((size_t)P * 128 * 16);
         float *red = calloc((size_t)P * (40 + 2 * n * n), sizeof(float));
-        reference_inputs(s, &d, P, 128, 0, probes, rot, dirs);
+        float *mean = calloc((size_t)P * (40 + 2 * n * n), sizeof(float)); /* of the passes' reduced */
         pb_bake_emitters em;
         CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK && em.count == 2); /* the ceiling panel */
         pb_environment sky;
@@ -718,9 +720,16 @@ static void kernels_match_cpu_reference(void)
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
               dz = s->bounds_max[2] - s->bounds_min[2];
         pass.max_distance = sqrtf(dx * dx + dy * dy + dz * dz);
-        pb_bake_trace_cpu(&pass, rays);
-        pb_bake_sh_cpu(&pass, rays, red);
-        pb_bake_depth_cpu(&pass, rays, red);
+        for (uint32_t k = 0; k < d.passes; ++k) {
+            reference_inputs(s, &d, P, 128, k, probes, rot, dirs);
+            pass.pass_index = k;
+            pb_bake_trace_cpu(&pass, rays);
+            pb_bake_sh_cpu(&pass, rays, red);
+            pb_bake_depth_cpu(&pass, rays, red);
+            for (size_t i = 0; i < (size_t)P * (40 + 2 * n * n); ++i)
+                mean[i] += red[i] / (float)d.passes;
+        }
+        memcpy(red, mean, (size_t)P * (40 + 2 * n * n) * sizeof(float));
         float worst_sh = 0, scale = 0;
         uint32_t flag_diff = 0, depth_bad = 0;
         for (uint32_t p = 0; p < P; ++p) {
@@ -731,7 +740,7 @@ static void kernels_match_cpu_reference(void)
                 worst_sh = fmaxf(worst_sh, fabsf(c[k] - b.vol.sh[27 * p + k]));
                 scale = fmaxf(scale, fabsf(c[k]));
             }
-            uint32_t valid = red[40 * p + 27] / 128.f <= 0.25f ? PB_PROBE_VALID : 0;
+            uint32_t valid = red[40 * p + 27] / 128.f <= 0.25f ? PB_PROBE_VALID : 0; /* the passes' mean back faces */
             flag_diff += (b.vol.probe_flags[p] & PB_PROBE_VALID) != valid;
             for (uint32_t t = 0; t < n * n; ++t) {
                 float cpu = red[40 * P + 2 * (n * n * p + t)];
@@ -748,9 +757,53 @@ static void kernels_match_cpu_reference(void)
                 worst_sh, scale, depth_bad, flag_diff);
         CHECK(scale > 0.f && worst_sh <= 1e-4f * scale);
         CHECK(depth_bad == 0 && flag_diff == 0);
-        free(probes), free(rot), free(dirs), free(rays), free(red);
+        free(probes), free(rot), free(dirs), free(rays), free(red), free(mean);
     }
     release(&b);
+    pb_scene_destroy(s);
+}
+
+/* The depth sums stay on the device across passes and are read once, at
+ * the end: in place where device memory is mapped (lavapipe), else a window
+ * of probes at a time through a download buffer (discrete GPUs). The second
+ * path on a context that never maps device memory, with submissions of 96
+ * probes so the 315 probes take four windows: the same volume, bit for bit. */
+static void staged_depth_sums_match_mapped(void)
+{
+    pb_scene *s = load_demo();
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 343, &d.grid);
+    d.rays_per_probe = 64, d.passes = 2, d.bounces = 1, d.octmap_res = 8;
+    baked a = bake(s, &d);
+    pb_context_desc cd = {getenv("PB_TEST_DEVICE"), 1, 96 * 64, 1, {test_log_line, NULL}};
+    cd.portable_kernels = test_portable_kernels();
+    cd.scene_loads = test_scene_loads();
+    pb_context *staged = NULL;
+    pb_bvh *bvh = NULL;
+    pb_gpu_scene *gs = NULL;
+    pb_volume v;
+    memset(&v, 0, sizeof v);
+    pb_error err;
+    int ok = a.ok && pb_context_create(&cd, &staged, &err) == PB_OK && pb_bvh_build(s, NULL, &bvh, &err) == PB_OK &&
+             pb_gpu_scene_create(staged, s, bvh, &gs, &err) == PB_OK && pb_bake(staged, s, gs, &d, &v, &err) == PB_OK;
+    CHECKF(ok || !a.ok, "%s", err.message);
+    if (ok) {
+        uint32_t P = a.vol.probe_count;
+        size_t depth_bytes = (size_t)pb_volume_tile_halves(8) * 2 * P;
+        int same_sh = memcmp(a.vol.sh, v.sh, (size_t)P * 27 * sizeof(float)) == 0;
+        int same_depth = memcmp(a.vol.depth, v.depth, depth_bytes) == 0;
+        fprintf(stderr, "  %u probes, staged context: SH %s, depth tiles %s, %u validation messages\n", P,
+                same_sh ? "identical" : "DIFFER", same_depth ? "identical" : "DIFFER",
+                pb_context_validation_messages(staged));
+        CHECK(v.probe_count == P && same_sh && same_depth && pb_context_validation_messages(staged) == 0);
+        pb_volume_free(&v);
+    }
+    pb_gpu_scene_destroy(gs);
+    pb_bvh_destroy(bvh);
+    pb_context_destroy(staged);
+    release(&a);
     pb_scene_destroy(s);
 }
 
@@ -2399,6 +2452,7 @@ int main(void)
     RUN(environment_lights_floor);
     RUN(closed_emissive_box);
     RUN(kernels_match_cpu_reference);
+    RUN(staged_depth_sums_match_mapped);
     RUN(multi_bounce_matches_cpu_reference);
     RUN(light_cells_match_cpu_reference);
     RUN(vertex_colours_are_albedo);

@@ -320,7 +320,8 @@ typedef struct pb_bake_pass {
 uint64_t pb_bake_trace_cpu(const pb_bake_pass *p, float *rays);
 /* bake_sh.comp and bake_depth.comp: reduced out, 40 floats per probe (27 SH,
  * back faces, hits, nearest back hit t + direction, nearest front hit t +
- * direction, 3 zeros) then 2 per probe texel. */
+ * direction, 3 zeros) then the pass's 2 depth moments per probe texel. (The
+ * depth kernel adds its moments to sums over the passes on the device.) */
 void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced);
 void pb_bake_depth_cpu(const pb_bake_pass *p, const float *rays, float *reduced);
 

@@ -6,7 +6,7 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bench clocks loads sweep tests (default: compile
+# STEPS: any of compile bake bakeab bench clocks loads sweep test_bake tests (default: compile
 # bake bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
@@ -90,6 +90,18 @@ for s in $steps; do
                 --verbose -o /tmp/c16k.probes >>"$log" 2>&1
             say "rc $? wall $(( ($(date +%s%N) - start) / 1000000 )) ms"
         done ;;
+    bakeab) # the issue's bake by this build and by .dev/probebake-before (another build's
+        # binary, put there by hand), alternately: the stages' wall and GPU times of each
+        for b in before after before after before after; do
+            bin=build/probebake
+            [ $b = before ] && bin=.dev/probebake-before
+            [ -x $bin ] || continue
+            say "bake, $b"
+            timeout 60 $bin bake $crypt --counts 32,16,32 --rays 256 --passes 1 --bounces 3 \
+                --verbose -o /tmp/c16k.probes 2>&1 | grep -E "stages|^time" >>"$log"
+        done ;;
+    test_bake) # the bake suite alone (native kernels)
+        run 200 build/tests/test_bake ;;
     tests)
         say "tests: ctest -L gpu (no browser, slurm, corpus, smoke) and test_bake_portable beside it"
         tl=${PB_GPU_TEST_LIMIT:-300}

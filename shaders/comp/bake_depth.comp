@@ -11,7 +11,9 @@
 // that can pass the cutoff is on it, in ascending order), about an eighth of
 // the rays at the default power instead of all of them.
 // CPU reference: pb_bake_depth_cpu (src/bake/bake_cpu.c), over all rays.
-// Output: 2 floats per texel at reduced[40 * probe_count + 2 * (n*n * probe_in_submission + texel)].
+// Output: the pass's 2 moments per texel added to depth_sum[2 * (n*n * probe_slot + texel)], which
+// holds the sums over the passes on the device (pass 0 stores): the host reads them once, after the
+// last pass, where it used to add every submission's moments into 4 KiB of fresh doubles per probe.
 #extension GL_GOOGLE_include_directive : require
 
 #include "bake.glsl"
@@ -69,8 +71,14 @@ void main()
         m1 += w * dist;
         m2 += w * dist * dist;
     }
-    FloatRW out_ = FloatRW(P.reduced);
-    uint base_out = 40u * P.probe_count + 2u * (texels * local + texel);
-    out_.v[base_out] = wsum > 0.0 ? m1 / wsum : P.max_distance;
-    out_.v[base_out + 1u] = wsum > 0.0 ? m2 / wsum : P.max_distance * P.max_distance;
+    float d1 = wsum > 0.0 ? m1 / wsum : P.max_distance;
+    float d2 = wsum > 0.0 ? m2 / wsum : P.max_distance * P.max_distance;
+    FloatRW sums = FloatRW(P.depth_sum);
+    uint at = 2u * (texels * probe + texel); // each probe slot once per pass: no other invocation writes it
+    if (P.pass_index != 0u) {
+        d1 += sums.v[at];
+        d2 += sums.v[at + 1u];
+    }
+    sums.v[at] = d1;
+    sums.v[at + 1u] = d2;
 }

@@ -53,7 +53,7 @@ struct BakeParams {
     pb_addr rotations;     // 3 vec4 rows per probe (this pass)
     pb_addr directions;    // vec4 per ray index: the unrotated spherical Fibonacci set
     pb_addr rays;          // out/in: vec4 per ray: radiance rgb, w = distance (negative: back face)
-    pb_addr reduced;       // out: per probe, see bake_sh.comp and bake_depth.comp
+    pb_addr reduced;       // out: per probe of the submission, see bake_sh.comp
     pb_addr probe_list;    // 0: probes first_probe.. in order; else uint slots, read from first_probe on
     pb_addr emitters;      // Emitter[]: the alias table over emissive triangles by power
     pb_addr emit_pdf;      // float per leaf-ordered triangle: area density when sampled (p_i / area), 0 if not an emitter
@@ -92,6 +92,7 @@ struct BakeParams {
     pb_addr light_members;  // Emitter[] in cluster order, alias local to the cluster
     pb_addr light_cluster_of; // uint per leaf-ordered triangle: its cluster
     pb_addr depth_lists;    // the depth filter's ray lists per query cell (src/bake/depth_lists.h)
+    pb_addr depth_sum;      // in/out: bake_depth's sums over the passes, 2 floats per texel per probe slot
 };
 
 // The estimators and scene features a pipeline is built for (host:

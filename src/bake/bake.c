@@ -41,6 +41,7 @@
 typedef struct bake_buffers {
     pb_buffer params, probes, rotations, directions, rays, reduced, list, counters;
     pb_buffer depth_lists;         /* bake_depth's ray lists per query cell (depth_lists.h) */
+    pb_buffer depth_sum;           /* bake_depth's moment sums over the passes, 2 floats per texel per probe */
     pb_buffer nee;                 /* probe NEE: 2 vec4 per ray of a submission (unallocated when off) */
     pb_buffer guide, guide_slots;  /* path guiding's table and entry index (unallocated when off) */
     pb_guide guide_host;           /* its host copy and grid */
@@ -53,9 +54,10 @@ typedef struct bake_buffers {
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[12] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
-                           &b->list, &b->counters, &b->nee, &b->guide, &b->guide_slots, &b->depth_lists};
-    for (int i = 0; i < 12; ++i)
+    pb_buffer *bufs[13] = {&b->params,   &b->probes, &b->rotations, &b->directions,  &b->rays,
+                           &b->reduced,  &b->list,   &b->counters,  &b->nee,         &b->guide,
+                           &b->guide_slots, &b->depth_lists, &b->depth_sum};
+    for (int i = 0; i < 13; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_guide_free(&b->guide_host);
     pb_shading_destroy(ctx, &b->shading);
@@ -183,7 +185,7 @@ typedef struct bake_run {
     uint32_t P, rpp, n, chunk;
     uint32_t chunk_now;            /* probes per submission now: shrinks so one takes ~0.25 s (Ctrl-C, watchdogs) */
     float *probes, *rotations, *reduced;
-    double *sh_sum, *depth_sum, *backfaces, *hits;
+    double *sh_sum, *backfaces, *hits;
     double t_trace, t_sh, t_depth; /* GPU timestamps, ms */
     float *near;                   /* 8 per probe: nearest back t + dir, nearest front t + dir */
     uint64_t traversals;           /* BVH traversals of relocation and bake passes (counted by bake_trace) */
@@ -206,7 +208,7 @@ static void pass_params(const bake_run *run, uint32_t pass, int relocating, cons
     prm->probes = B->probes.address;
     prm->rotations = B->rotations.address, prm->directions = B->directions.address, prm->rays = B->rays.address;
     prm->reduced = B->reduced.address;
-    prm->depth_lists = B->depth_lists.address;
+    prm->depth_lists = B->depth_lists.address, prm->depth_sum = B->depth_sum.address;
     prm->probe_list = list ? B->list.address : 0;
     prm->counters = B->counters.address;
     prm->indirect_clamp = d->indirect_clamp;
@@ -240,8 +242,9 @@ static void pass_params(const bake_run *run, uint32_t pass, int relocating, cons
 /* A submission's results (run->reduced) added to its probes' sums. Each
  * probe appears once in a submission and owns its slots, so ranges of
  * probes run on all host cores; the sums are the serial loop's bit for bit.
- * (Serial, this was 200 ms of a 16k-probe Crypt bake on lavapipe, with the
- * device idle meanwhile.) */
+ * The depth moments are summed on the device (bake_depth.comp): added here
+ * they cost 4 KiB of fresh doubles per probe at 16x16, whose first touch
+ * (page faults) made the first pass's host work 10x the later passes'. */
 typedef struct pass_results {
     bake_run *run;
     const uint32_t *list;
@@ -253,7 +256,6 @@ static void add_pass_results(void *user, uint64_t begin, uint64_t end)
 {
     const pass_results *pr = user;
     bake_run *run = pr->run;
-    uint32_t texels = run->n * run->n;
     for (uint32_t l = (uint32_t)begin; l < (uint32_t)end; ++l) {
         const float *o = run->reduced + PB_REDUCED_SH_STRIDE * (size_t)l;
         uint32_t p = pr->list ? pr->list[pr->first + l] : pr->first + l;
@@ -266,9 +268,6 @@ static void add_pass_results(void *user, uint64_t begin, uint64_t end)
             run->sh_sum[27 * (size_t)p + c] += o[c];
         run->hits[p] += o[28];
         pb_convergence_add(run->conv, p, o);
-        const float *dm = run->reduced + PB_REDUCED_SH_STRIDE * (size_t)pr->count + 2 * (size_t)texels * l;
-        for (uint32_t t = 0; t < 2 * texels; ++t)
-            run->depth_sum[2 * (size_t)texels * p + t] += dm[t];
     }
 }
 
@@ -340,7 +339,7 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
         memcpy(n_trav, B->counters.mapped, 8);
         run->traversals += n_trav[0];
         run->long_paths += n_trav[1];
-        memcpy(run->reduced, B->reduced.mapped, (size_t)count * (PB_REDUCED_SH_STRIDE + (relocating ? 0 : 2u * texels)) * 4);
+        memcpy(run->reduced, B->reduced.mapped, (size_t)count * PB_REDUCED_SH_STRIDE * 4);
         pass_results pr = {run, list, first, count, relocating};
         pb_parallel_for(count, 64, 0, add_pass_results, &pr);
         if (d->progress) {
@@ -458,7 +457,7 @@ typedef struct bake_job {
     uint32_t *global;              /* per local probe: its global index */
     uint32_t *floor_list, floor_count; /* local indices of the floor sample */
     float *probes, *rotations, *directions, *reduced, *offsets, *near;
-    double *sh_sum, *depth_sum, *backfaces, *hits;
+    double *sh_sum, *backfaces, *hits;
     uint32_t *active, *converged_at;
     uint64_t relocation_rays;      /* probe rays the relocation passes traced */
     pb_convergence conv;
@@ -491,9 +490,9 @@ static pb_result stage_probe_set(bake_job *j, pb_error *err)
     if (chunk > ctx->limits.maxComputeWorkGroupCount[1]) /* bake_depth dispatches one row per probe */
         chunk = ctx->limits.maxComputeWorkGroupCount[1];
     j->chunk = chunk;
-    uint64_t reduced_floats = j->reduced_floats = (uint64_t)chunk * (PB_REDUCED_SH_STRIDE + 2u * texels);
-    uint64_t need = (uint64_t)P * (16 + 48) + (uint64_t)rpp * 16 + (uint64_t)chunk * rpp * (d->probe_nee ? 48 : 16) +
-                    reduced_floats * 4;
+    uint64_t reduced_floats = j->reduced_floats = (uint64_t)chunk * PB_REDUCED_SH_STRIDE;
+    uint64_t need = (uint64_t)P * (16 + 48 + (uint64_t)texels * 8) + (uint64_t)rpp * 16 +
+                    (uint64_t)chunk * rpp * (d->probe_nee ? 48 : 16) + reduced_floats * 4;
     if (ctx->info.device_local_bytes && need > ctx->info.device_local_bytes / 2)
         return pb_fail(err, PB_ERROR_TOO_LARGE,
                        "%u probes x %u rays need %.1f MiB of device memory; the budget is half of %s's %.1f MiB "
@@ -502,9 +501,10 @@ static pb_result stage_probe_set(bake_job *j, pb_error *err)
                        ctx->info.device_local_bytes / 2097152.0);
     /* host memory too: lavapipe (Mesa 25) reports a heap as large as host
      * memory, so the device check alone lets through bakes whose host
-     * accumulators (depth sums in double, the volume) cannot be allocated */
+     * accumulators (SH sums in double, the depth sums read back, the volume)
+     * cannot be allocated */
     uint64_t tile_bytes = pb_volume_tile_halves(n) * 2u;
-    uint64_t host_need = (uint64_t)P * (16 + 48 + 27 * 8 + (uint64_t)texels * 16 + 16 + 24 + 12 + 16 + 24 + 136 +
+    uint64_t host_need = (uint64_t)P * (16 + 48 + 27 * 8 + (uint64_t)texels * 8 + 16 + 24 + 12 + 16 + 24 + 136 +
                                         tile_bytes) + (uint64_t)rpp * 16 + reduced_floats * 4;
     uint64_t host_have = pb_host_memory_bytes();
     if (host_have && host_need > host_have / 2)
@@ -520,12 +520,11 @@ static pb_result stage_probe_set(bake_job *j, pb_error *err)
  * numbers). */
 static pb_result stage_place(bake_job *j, pb_error *err)
 {
-    uint32_t P = j->P, rpp = j->rpp, texels = j->n * j->n;
+    uint32_t P = j->P, rpp = j->rpp;
     j->probes = calloc((size_t)P * 4, sizeof(float));
     j->rotations = malloc((size_t)P * 12 * sizeof(float));
     j->directions = malloc((size_t)rpp * 4 * sizeof(float));
     j->sh_sum = calloc((size_t)P * 27, sizeof(double));
-    j->depth_sum = calloc((size_t)P * texels * 2, sizeof(double));
     j->backfaces = calloc(P, sizeof(double)), j->hits = calloc(P, sizeof(double));
     j->reduced = malloc((size_t)j->reduced_floats * sizeof(float));
     j->converged_at = calloc(P, sizeof(uint32_t));
@@ -534,7 +533,7 @@ static pb_result stage_place(bake_job *j, pb_error *err)
     j->near = malloc((size_t)P * 8 * sizeof(float));
     j->global = malloc((size_t)P * sizeof *j->global);
     j->floor_list = malloc(PB_FLOOR_SAMPLE * sizeof *j->floor_list);
-    if (!j->probes || !j->rotations || !j->directions || !j->sh_sum || !j->depth_sum || !j->backfaces || !j->hits ||
+    if (!j->probes || !j->rotations || !j->directions || !j->sh_sum || !j->backfaces || !j->hits ||
         !j->reduced || !j->converged_at || !j->active || !j->offsets || !j->near || !j->global || !j->floor_list ||
         !pb_convergence_init(&j->conv, P) || pb_sf_directions(rpp, j->directions) != PB_OK)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
@@ -595,13 +594,15 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
         r = make_buffer(ctx, &B->nee, (uint64_t)chunk * rpp * 32, PB_MEMORY_DEVICE, "probe NEE samples", NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B->reduced, j->reduced_floats * 4, PB_MEMORY_DOWNLOAD, "probe results", NULL, err);
+    if (r == PB_OK) /* pass 0 stores, later passes add: never read before written */
+        r = make_buffer(ctx, &B->depth_sum, (uint64_t)P * j->n * j->n * 8, PB_MEMORY_DEVICE, "depth sums", NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B->list, (uint64_t)P * 4, PB_MEMORY_DEVICE, "active probe list", NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B->counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
     j->run = (bake_run){ctx,          B,         j->gs,        d,         j->scene,  P,      rpp,
                         j->n,         chunk,     0,            j->probes, j->rotations, j->reduced, j->sh_sum,
-                        j->depth_sum, j->backfaces, j->hits,   0,         0,         0,      j->near,
+                        j->backfaces, j->hits,   0,            0,         0,         j->near,
                         0,            0,         {0},          &j->conv};
     if (r == PB_OK && feedback) {
         r = pb_sample_upload(ctx, feedback, &B->feedback, err);
@@ -709,6 +710,8 @@ static pb_result stage_trace_passes(bake_job *j, pb_error *err)
 typedef struct volume_fill {
     const bake_job *j;
     pb_volume *out;
+    const float *sums;             /* the device's depth sums of probes first.. (a window of them) */
+    uint32_t first;
 } volume_fill;
 
 static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
@@ -719,7 +722,7 @@ static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
     pb_volume *out = vf->out;
     uint32_t rpp = j->rpp, n = j->n, texels = n * n;
     const uint32_t *passes_done = j->conv.passes;
-    for (uint32_t p = (uint32_t)begin; p < (uint32_t)end; ++p) {
+    for (uint32_t p = vf->first + (uint32_t)begin; p < vf->first + (uint32_t)end; ++p) {
         uint32_t id;
         float local[3];
         pb_bake_probe_position(j->scene, d, j->global[p], local, &id);
@@ -756,9 +759,10 @@ static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
             for (uint32_t bx = 0; bx < n + 2; ++bx) {
                 uint32_t x, y;
                 pb_oct_border_source(bx, by, n, &x, &y);
-                const double *m = j->depth_sum + 2 * ((size_t)texels * p + (size_t)y * n + x);
-                tile[2 * (by * (n + 2) + bx)] = pb_half_from_float((float)(m[0] / done_p / unit));
-                tile[2 * (by * (n + 2) + bx) + 1] = pb_half_from_float((float)(m[1] / done_p / (unit * unit)));
+                const float *m = vf->sums + 2 * ((size_t)texels * (p - vf->first) + (size_t)y * n + x);
+                tile[2 * (by * (n + 2) + bx)] = pb_half_from_float((float)((double)m[0] / done_p / unit));
+                tile[2 * (by * (n + 2) + bx) + 1] =
+                    pb_half_from_float((float)((double)m[1] / done_p / (unit * unit)));
             }
     }
 }
@@ -801,15 +805,42 @@ static pb_result stage_volume(bake_job *j, pb_volume *out, pb_error *err)
     pb_result r = pb_volume_alloc(out, err);
     if (r != PB_OK)
         return r;
-    volume_fill vf = {j, out};
-    pb_parallel_for(own, 64, 0, volume_fill_range, &vf);
-    return PB_OK;
+    /* The device's depth sums: read in place where mapped (lavapipe, UMA);
+     * else a submission's probes at a time through one download buffer,
+     * each window filled from it as it lands (no host copy of all sums:
+     * its first touch would cost what summing them on the host did) */
+    pb_context *ctx = j->ctx;
+    const pb_buffer *ds = &j->B.depth_sum;
+    uint64_t per_probe = (uint64_t)n * n * 8;
+    volume_fill vf = {j, out, ds->mapped, 0};
+    if (ds->mapped) {
+        pb_parallel_for(own, 64, 0, volume_fill_range, &vf);
+        return PB_OK;
+    }
+    uint32_t window = j->chunk < own ? j->chunk : own;
+    pb_buffer staging;
+    if ((r = pb_buffer_create(ctx, window * per_probe, PB_MEMORY_DOWNLOAD, "depth sums read back", &staging, err)) !=
+        PB_OK)
+        return r;
+    for (uint32_t first = 0, count = 0; r == PB_OK && first < own; first += count) {
+        count = own - first < window ? own - first : window;
+        if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
+            break;
+        pb_cmd_copy(ctx, ds, first * per_probe, &staging, 0, count * per_probe);
+        pb_cmd_barrier_to_host(ctx);
+        if ((r = pb_cmd_submit_wait(ctx, NULL, err)) != PB_OK)
+            break;
+        vf.sums = staging.mapped, vf.first = first;
+        pb_parallel_for(count, 64, 0, volume_fill_range, &vf);
+    }
+    pb_buffer_destroy(ctx, &staging);
+    return r;
 }
 
 static void bake_job_free(bake_job *j)
 {
     release(j->ctx, &j->B);
-    free(j->probes), free(j->rotations), free(j->directions), free(j->sh_sum), free(j->depth_sum);
+    free(j->probes), free(j->rotations), free(j->directions), free(j->sh_sum);
     free(j->backfaces), free(j->hits), free(j->reduced), free(j->offsets), free(j->near);
     free(j->active), free(j->converged_at), free(j->global), free(j->floor_list);
     pb_convergence_free(&j->conv);

@@ -47,11 +47,12 @@ typedef struct gpu_bake_params {
     uint32_t light_dims[4];
     uint64_t light_cells, light_cell_slots, light_clusters, light_members, light_cluster_of;
     uint64_t depth_lists; /* bake_depth's ray lists (depth_lists.h) */
+    uint64_t depth_sum;   /* bake_depth's sums over the passes: 2 floats per texel per probe slot */
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
 _Static_assert(offsetof(gpu_bake_params, guide_origin) == 368, "BakeParams layout");
 _Static_assert(offsetof(gpu_bake_params, light_cells) == 432, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 480, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 488, "BakeParams layout");
 _Static_assert(sizeof(pb_env_texel) == 32, "EnvTexel layout");
 
 typedef struct gpu_emitter {
@@ -70,7 +71,7 @@ typedef struct bake_push {
  * the peak: cutoff = 1e-4^(1/power) (0.83 at power 50). */
 float pb_depth_lobe_cutoff(float power);
 
-/* Floats per probe in the reduced buffer before the depth block. */
+/* Floats per probe in the reduced buffer (bake_sh.comp). */
 #define PB_REDUCED_SH_STRIDE 40u
 
 #endif
