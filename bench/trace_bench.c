@@ -322,21 +322,31 @@ int main(int argc, char **argv)
     const char *rays_of = o.bounce == 2 ? "bounce rays, sorted" : o.bounce ? "bounce rays" : "probe rays";
     printf("device: %s (%s), %s kernels, %s loads; Embree 3 on %u host threads; %s%s\n", dev->name, dev->driver,
            kernels, loads, host_threads, rays_of, o.shuffle ? ", shuffled" : "");
-    printf("%-22s %9s %8s %6s %8s %9s %11s %11s %11s %8s %7s\n", "scene", "tris", "bvh ms", "depth", "B/tri",
-           "rays", "gpu Mr/s", "gpu wall", "embree Mr/s", "ratio", "agree");
+    printf("%-22s %9s %8s %6s %8s %9s %11s %11s %5s %11s %8s %7s\n", "scene", "tris", "bvh ms", "depth", "B/tri",
+           "rays", "gpu Mr/s", "gpu wall", "busy", "embree Mr/s", "ratio", "agree");
     result res[16];
     int nres = 0;
+    double least_busy = 1.0;
     for (int i = 0; i < o.scene_count; ++i) {
         if (!bench_scene(ctx, edev, o.scenes[i], &o, &res[nres]))
             continue;
         result *r = &res[nres++];
         double gk = r->gpu_kernel_ms > 0 ? r->rays / (r->gpu_kernel_ms * 1e3) : 0;
         double gw = r->rays / (r->gpu_wall_ms * 1e3), em = r->rays / (r->embree_ms * 1e3);
-        printf("%-22.22s %9u %8.1f %6u %8.1f %9u %11.2f %11.2f %11.2f %8.3f %6.2f%%\n", basename_of(r->scene),
-               r->triangles, r->bvh_ms, r->bvh_depth, r->bytes_per_tri, r->rays, gk, gw, em, gk / em,
+        double busy = r->gpu_kernel_ms / r->gpu_wall_ms; /* of pb_trace's wall time, the kernel's share */
+        least_busy = busy < least_busy ? busy : least_busy;
+        printf("%-22.22s %9u %8.1f %6u %8.1f %9u %11.2f %11.2f %4.0f%% %11.2f %8.3f %6.2f%%\n", basename_of(r->scene),
+               r->triangles, r->bvh_ms, r->bvh_depth, r->bytes_per_tri, r->rays, gk, gw, 100 * busy, em, gk / em,
                100 * r->agree);
         fflush(stdout);
     }
+    /* An H100 fed this way dropped its SM clock from 1,980 to 345-705 MHz
+     * after about 4 s, and the kernel rate with it (bench/RESULTS.md, "NVIDIA
+     * H100, third lease"): say so where the device is a GPU left idle */
+    if (nres && least_busy < 0.5 && dev->type != PB_DEVICE_CPU)
+        printf("note: the GPU ran kernels %.0f%% of the time (rays come from the host); a driver may lower its clocks "
+               "in such runs, and the kernel rate with them: fewer --probes keep a run short\n",
+               100 * least_busy);
     mkdir("bench/out", 0755);
     FILE *f = fopen(o.json, "w");
     if (f) {
@@ -352,12 +362,13 @@ int main(int argc, char **argv)
             fprintf(f,
                     "    {\"scene\": \"%s\", \"triangles\": %u, \"probes\": %u, \"rays\": %u, \"bvh_build_ms\": %.3f, \"bvh_first_build_ms\": %.3f,"
                     " \"bvh_depth\": %u, \"bvh_sah\": %.3f, \"gpu_bytes_per_triangle\": %.2f,"
-                    " \"gpu_kernel_ms\": %.3f, \"gpu_wall_ms\": %.3f, \"gpu_mrays_kernel\": %.4f,"
+                    " \"gpu_kernel_ms\": %.3f, \"gpu_wall_ms\": %.3f, \"gpu_busy\": %.4f, \"gpu_mrays_kernel\": %.4f,"
                     " \"gpu_mrays_wall\": %.4f, \"embree_build_ms\": %.3f, \"embree_ms\": %.3f,"
                     " \"embree_mrays\": %.4f, \"ratio_gpu_kernel_to_embree\": %.4f, \"hit_agreement\": %.6f}%s\n",
                     basename_of(r->scene), r->triangles, r->probes, r->rays, r->bvh_ms, r->bvh_cold_ms, r->bvh_depth,
                     r->bvh_sah,
-                    r->bytes_per_tri, r->gpu_kernel_ms, r->gpu_wall_ms, gk, r->rays / (r->gpu_wall_ms * 1e3),
+                    r->bytes_per_tri, r->gpu_kernel_ms, r->gpu_wall_ms, r->gpu_kernel_ms / r->gpu_wall_ms, gk,
+                    r->rays / (r->gpu_wall_ms * 1e3),
                     r->embree_build_ms, r->embree_ms, em, gk / em, r->agree, i + 1 < nres ? "," : "");
         }
         fprintf(f, "  ]\n}\n");
