@@ -20,19 +20,25 @@ typedef struct baked {
     int ok;
 } baked;
 
-static baked bake(const pb_scene *s, const pb_bake_desc *d)
+/* A bake of s on context c (its own BVH and GPU scene); failures count. */
+static baked bake_on(pb_context *c, const pb_scene *s, const pb_bake_desc *d)
 {
     baked b;
     memset(&b, 0, sizeof b);
     pb_error err;
-    if (pb_bvh_build(s, NULL, &b.bvh, &err) != PB_OK || pb_gpu_scene_create(ctx, s, b.bvh, &b.gs, &err) != PB_OK ||
-        pb_bake(ctx, s, b.gs, d, &b.vol, &err) != PB_OK) {
+    if (pb_bvh_build(s, NULL, &b.bvh, &err) != PB_OK || pb_gpu_scene_create(c, s, b.bvh, &b.gs, &err) != PB_OK ||
+        pb_bake(c, s, b.gs, d, &b.vol, &err) != PB_OK) {
         fprintf(stderr, "  bake: %s\n", err.message);
         t_failures++;
         return b;
     }
     b.ok = 1;
     return b;
+}
+
+static baked bake(const pb_scene *s, const pb_bake_desc *d)
+{
+    return bake_on(ctx, s, d);
 }
 
 static void release(baked *b)
@@ -782,28 +788,22 @@ static void staged_depth_sums_match_mapped(void)
     cd.portable_kernels = test_portable_kernels();
     cd.scene_loads = test_scene_loads();
     pb_context *staged = NULL;
-    pb_bvh *bvh = NULL;
-    pb_gpu_scene *gs = NULL;
-    pb_volume v;
-    memset(&v, 0, sizeof v);
     pb_error err;
-    int ok = a.ok && pb_context_create(&cd, &staged, &err) == PB_OK && pb_bvh_build(s, NULL, &bvh, &err) == PB_OK &&
-             pb_gpu_scene_create(staged, s, bvh, &gs, &err) == PB_OK && pb_bake(staged, s, gs, &d, &v, &err) == PB_OK;
-    CHECKF(ok || !a.ok, "%s", err.message);
-    if (ok) {
+    int made = pb_context_create(&cd, &staged, &err) == PB_OK;
+    CHECKF(made, "%s", err.message);
+    baked b = a.ok && made ? bake_on(staged, s, &d) : (baked){0};
+    if (a.ok && b.ok) {
         uint32_t P = a.vol.probe_count;
         size_t depth_bytes = (size_t)pb_volume_tile_halves(8) * 2 * P;
-        int same_sh = memcmp(a.vol.sh, v.sh, (size_t)P * 27 * sizeof(float)) == 0;
-        int same_depth = memcmp(a.vol.depth, v.depth, depth_bytes) == 0;
+        int same_sh = memcmp(a.vol.sh, b.vol.sh, (size_t)P * 27 * sizeof(float)) == 0;
+        int same_depth = memcmp(a.vol.depth, b.vol.depth, depth_bytes) == 0;
         fprintf(stderr, "  %u probes, staged context: SH %s, depth tiles %s, %u validation messages\n", P,
                 same_sh ? "identical" : "DIFFER", same_depth ? "identical" : "DIFFER",
                 pb_context_validation_messages(staged));
         CHECK(P > 3 * 96); /* four windows or more */
-        CHECK(v.probe_count == P && same_sh && same_depth && pb_context_validation_messages(staged) == 0);
-        pb_volume_free(&v);
+        CHECK(b.vol.probe_count == P && same_sh && same_depth && pb_context_validation_messages(staged) == 0);
     }
-    pb_gpu_scene_destroy(gs);
-    pb_bvh_destroy(bvh);
+    release(&b);
     pb_context_destroy(staged);
     release(&a);
     pb_scene_destroy(s);
