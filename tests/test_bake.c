@@ -2371,6 +2371,17 @@ static void bad_parameters_refused_before_gpu_work(void)
     d.rays_per_probe = 4096;
     pb_result r = pb_bake(ctx, s, gs, &d, &v, &err);
     CHECKF(r == PB_ERROR_TOO_LARGE && strstr(err.message, "MiB"), "%s: %s", pb_result_name(r), err.message);
+    /* the depth sums of every probe are one buffer: a device whose
+     * maxMemoryAllocationSize they exceed (the H100's 4 GiB at 2^24 probes)
+     * refuses the bake up front, with the way out, not at allocation */
+    uint64_t max_allocation = ctx->max_allocation;
+    d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 4;
+    d.rays_per_probe = 64, d.octmap_res = 16;
+    ctx->max_allocation = 64 * 256 * 8 - 8; /* the 64 probes' sums, 8 bytes short */
+    r = pb_bake(ctx, s, gs, &d, &v, &err);
+    CHECKF(r == PB_ERROR_TOO_LARGE && strstr(err.message, "depth sums") && strstr(err.message, "--shard"), "%s: %s",
+           pb_result_name(r), err.message);
+    ctx->max_allocation = max_allocation;
     pb_gpu_scene_destroy(gs);
     pb_bvh_destroy(bvh);
     pb_scene_destroy(s);

@@ -512,6 +512,17 @@ static pb_result stage_probe_set(bake_job *j, pb_error *err)
                        "%u probes x %u rays need %.1f MiB of host memory; the budget is half of this machine's %.1f MiB "
                        "(%.1f MiB): use fewer probes or a smaller octahedral map",
                        P, rpp, host_need / 1048576.0, host_have / 1048576.0, host_have / 2097152.0);
+    /* the largest buffer, bake_depth's sums for every probe slot, is one
+     * allocation, and the kernel indexes its floats with 32-bit integers */
+    uint64_t sums = (uint64_t)P * texels * 8, one = (uint64_t)1 << 34;
+    if (ctx->max_allocation && ctx->max_allocation < one)
+        one = ctx->max_allocation;
+    if (sums > one)
+        return pb_fail(err, PB_ERROR_TOO_LARGE,
+                       "%u probes' depth sums (%u octahedral texels each) need %.1f MiB in one buffer, over the "
+                       "%.1f MiB %s allows (maxMemoryAllocationSize): bake in parts (--shard I/N) or use a "
+                       "smaller octahedral map",
+                       P, texels, sums / 1048576.0, one / 1048576.0, ctx->info.name);
     return PB_OK;
 }
 
