@@ -21,19 +21,35 @@ typedef struct baked {
 } baked;
 
 /* A bake of s on context c (its own BVH and GPU scene); failures count. */
-static baked bake_on(pb_context *c, const pb_scene *s, const pb_bake_desc *d)
+/* s baked on context c; a nonzero `limit` stands for the device's
+ * maxMemoryAllocationSize while pb_bake runs (the scene's buffers are made
+ * before it) */
+static baked bake_limited(pb_context *c, const pb_scene *s, const pb_bake_desc *d, uint64_t limit)
 {
     baked b;
     memset(&b, 0, sizeof b);
     pb_error err;
-    if (pb_bvh_build(s, NULL, &b.bvh, &err) != PB_OK || pb_gpu_scene_create(c, s, b.bvh, &b.gs, &err) != PB_OK ||
-        pb_bake(c, s, b.gs, d, &b.vol, &err) != PB_OK) {
+    uint64_t max_allocation = c->max_allocation;
+    pb_result r = pb_bvh_build(s, NULL, &b.bvh, &err);
+    if (r == PB_OK)
+        r = pb_gpu_scene_create(c, s, b.bvh, &b.gs, &err);
+    if (r == PB_OK) {
+        c->max_allocation = limit ? limit : max_allocation;
+        r = pb_bake(c, s, b.gs, d, &b.vol, &err);
+        c->max_allocation = max_allocation;
+    }
+    if (r != PB_OK) {
         fprintf(stderr, "  bake: %s\n", err.message);
         t_failures++;
         return b;
     }
     b.ok = 1;
     return b;
+}
+
+static baked bake_on(pb_context *c, const pb_scene *s, const pb_bake_desc *d)
+{
+    return bake_limited(c, s, d, 0);
 }
 
 static baked bake(const pb_scene *s, const pb_bake_desc *d)
@@ -771,10 +787,14 @@ static void kernels_match_cpu_reference(void)
 
 /* The depth sums stay on the device across passes and are read once, at
  * the end: in place where device memory is mapped (lavapipe), else a window
- * of probes at a time through a download buffer (discrete GPUs). The second
- * path on a context that never maps device memory, with submissions of 96
- * probes so the demo's 315 probes take four windows: the same volume, bit
- * for bit (and the same as with the default submission size). */
+ * of probes at a time through a download buffer (discrete GPUs). They live
+ * in blocks within the device's allocation limit (one, unless the limit is
+ * small). The demo's 315 probes with 32x32 texels (8 KiB of sums each):
+ * - on a context that never maps device memory, with submissions of 96
+ *   probes: four windows;
+ * - on both contexts with the allocation limit at 80 probes' sums: four
+ *   blocks, read in place or in windows that stop at the blocks' ends;
+ * the same volume as the default bake's, bit for bit, every time. */
 static void staged_depth_sums_match_mapped(void)
 {
     pb_scene *s = load_demo();
@@ -782,7 +802,7 @@ static void staged_depth_sums_match_mapped(void)
         return;
     pb_bake_desc d = {0};
     pb_probe_grid_fit(s->bounds_min, s->bounds_max, 343, &d.grid);
-    d.rays_per_probe = 64, d.passes = 2, d.bounces = 1, d.octmap_res = 8;
+    d.rays_per_probe = 64, d.passes = 2, d.bounces = 1, d.octmap_res = 32;
     baked a = bake(s, &d);
     pb_context_desc cd = {getenv("PB_TEST_DEVICE"), 1, 96 * 64, 1, {test_log_line, NULL}};
     cd.portable_kernels = test_portable_kernels();
@@ -791,19 +811,26 @@ static void staged_depth_sums_match_mapped(void)
     pb_error err;
     int made = pb_context_create(&cd, &staged, &err) == PB_OK;
     CHECKF(made, "%s", err.message);
-    baked b = a.ok && made ? bake_on(staged, s, &d) : (baked){0};
-    if (a.ok && b.ok) {
+    const uint64_t block = 80 * 32 * 32 * 8;
+    struct {
+        const char *name;
+        pb_context *c;
+        uint64_t limit;
+    } runs[3] = {{"staged", staged, 0}, {"blocks", ctx, block}, {"staged blocks", staged, block}};
+    for (int i = 0; a.ok && made && i < 3; ++i) {
+        baked b = bake_limited(runs[i].c, s, &d, runs[i].limit);
         uint32_t P = a.vol.probe_count;
-        size_t depth_bytes = (size_t)pb_volume_tile_halves(8) * 2 * P;
-        int same_sh = memcmp(a.vol.sh, b.vol.sh, (size_t)P * 27 * sizeof(float)) == 0;
-        int same_depth = memcmp(a.vol.depth, b.vol.depth, depth_bytes) == 0;
-        fprintf(stderr, "  %u probes, staged context: SH %s, depth tiles %s, %u validation messages\n", P,
+        size_t depth_bytes = (size_t)pb_volume_tile_halves(d.octmap_res) * 2 * P;
+        int same_sh = b.ok && memcmp(a.vol.sh, b.vol.sh, (size_t)P * 27 * sizeof(float)) == 0;
+        int same_depth = b.ok && memcmp(a.vol.depth, b.vol.depth, depth_bytes) == 0;
+        fprintf(stderr, "  %u probes, %s: SH %s, depth tiles %s, %u validation messages\n", P, runs[i].name,
                 same_sh ? "identical" : "DIFFER", same_depth ? "identical" : "DIFFER",
-                pb_context_validation_messages(staged));
-        CHECK(P > 3 * 96); /* four windows or more */
-        CHECK(b.vol.probe_count == P && same_sh && same_depth && pb_context_validation_messages(staged) == 0);
+                pb_context_validation_messages(runs[i].c));
+        CHECK(P > 3 * 96 && P > 3 * 80); /* four windows or blocks, or more */
+        CHECK(b.ok && b.vol.probe_count == P && same_sh && same_depth &&
+              pb_context_validation_messages(runs[i].c) == 0);
+        release(&b);
     }
-    release(&b);
     pb_context_destroy(staged);
     release(&a);
     pb_scene_destroy(s);
@@ -2368,19 +2395,24 @@ static void bad_parameters_refused_before_gpu_work(void)
     d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 4096; /* 2^36 probes */
     CHECK(pb_bake(ctx, s, gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT);
     d.grid.counts[0] = 16384, d.grid.counts[1] = 1024, d.grid.counts[2] = 1; /* 2^24: allowed, but too big here */
-    d.rays_per_probe = 4096;
+    d.rays_per_probe = 4096, d.octmap_res = 64; /* 512 GiB of depth sums: at 16x16 the H100 holds them */
     pb_result r = pb_bake(ctx, s, gs, &d, &v, &err);
     CHECKF(r == PB_ERROR_TOO_LARGE && strstr(err.message, "MiB"), "%s: %s", pb_result_name(r), err.message);
-    /* the depth sums of every probe are one buffer: a device whose
-     * maxMemoryAllocationSize they exceed (the H100's 4 GiB at 2^24 probes)
-     * refuses the bake up front, with the way out, not at allocation */
+    /* the depth sums live in at most PB_DEPTH_SUM_BLOCKS_MAX allocations: a
+     * device whose maxMemoryAllocationSize needs more refuses the bake up
+     * front, with the way out, not at allocation (nor does one probe's sums
+     * over the limit reach the allocator) */
     uint64_t max_allocation = ctx->max_allocation;
-    d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 4;
+    d.grid.counts[0] = 65, d.grid.counts[1] = d.grid.counts[2] = 1;
     d.rays_per_probe = 64, d.octmap_res = 16;
-    ctx->max_allocation = 64 * 256 * 8 - 8; /* the 64 probes' sums, 8 bytes short */
+    ctx->max_allocation = 256 * 8; /* one probe's sums: 65 blocks */
     r = pb_bake(ctx, s, gs, &d, &v, &err);
     CHECKF(r == PB_ERROR_TOO_LARGE && strstr(err.message, "depth sums") && strstr(err.message, "--shard"), "%s: %s",
            pb_result_name(r), err.message);
+    ctx->max_allocation = 256 * 8 - 8;
+    r = pb_bake(ctx, s, gs, &d, &v, &err);
+    CHECKF(r == PB_ERROR_TOO_LARGE && strstr(err.message, "one probe's depth sums"), "%s: %s", pb_result_name(r),
+           err.message);
     ctx->max_allocation = max_allocation;
     pb_gpu_scene_destroy(gs);
     pb_bvh_destroy(bvh);

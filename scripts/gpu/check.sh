@@ -6,7 +6,7 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bakeab bench clocks loads sweep test_bake tests (default: compile
+# STEPS: any of compile bake bakeab blocks bench clocks loads sweep test_bake tests (default: compile
 # bake bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
@@ -100,6 +100,14 @@ for s in $steps; do
             timeout 60 $bin bake $crypt --counts 32,16,32 --rays 256 --passes 1 --bounces 3 \
                 --verbose -o /tmp/c16k.probes 2>&1 | grep -E "stages|^time" >>"$log"
         done ;;
+    blocks) # a bake whose depth sums pass NVIDIA's 4 GiB allocation limit: 2.3M probes at 16x16,
+        # 4.4 GiB in two blocks (src/bake/depth_sums.h); one short pass, no bounces
+        say "bake 160 x 90 x 160"
+        start=$(date +%s%N)
+        timeout 200 build/probebake bake $crypt --counts 160,90,160 --rays 32 --passes 1 --bounces 0 \
+            --verbose -o /tmp/big.probes >>"$log" 2>&1
+        say "rc $? wall $(( ($(date +%s%N) - start) / 1000000 )) ms, $(stat -c %s /tmp/big.probes 2>/dev/null) bytes"
+        rm -f /tmp/big.probes ;;
     test_bake) # the bake suite alone (native kernels)
         run 200 build/tests/test_bake ;;
     tests)

@@ -11,9 +11,10 @@
 // that can pass the cutoff is on it, in ascending order), about an eighth of
 // the rays at the default power instead of all of them.
 // CPU reference: pb_bake_depth_cpu (src/bake/bake_cpu.c), over all rays.
-// Output: the pass's 2 moments per texel added to depth_sum[2 * (n*n * probe_slot + texel)], which
-// holds the sums over the passes on the device (pass 0 stores): the host reads them once, after the
-// last pass, where it used to add every submission's moments into 4 KiB of fresh doubles per probe.
+// Output: the pass's 2 moments per texel added to the probe slot's sums, 2 floats per texel, in the
+// slot's block (src/bake/depth_sums.h), which hold the sums over the passes on the device (pass 0
+// stores): the host reads them once, after the last pass, where it used to add every submission's
+// moments into 4 KiB of fresh doubles per probe.
 #extension GL_GOOGLE_include_directive : require
 
 #include "bake.glsl"
@@ -73,8 +74,11 @@ void main()
     }
     float d1 = wsum > 0.0 ? m1 / wsum : P.max_distance;
     float d2 = wsum > 0.0 ? m2 / wsum : P.max_distance * P.max_distance;
-    FloatRW sums = FloatRW(P.depth_sum);
-    uint at = 2u * (texels * probe + texel); // each probe slot once per pass: no other invocation writes it
+    // the slot's block of sums (one unless the device's allocations are too small for all)
+    uint block = probe / P.depth_block_probes;
+    UintBuf table = UintBuf(P.depth_sum);
+    FloatRW sums = FloatRW(uvec2(table.v[2u * block], table.v[2u * block + 1u]));
+    uint at = 2u * (texels * (probe - block * P.depth_block_probes) + texel); // written by this invocation only
     if (P.pass_index != 0u) {
         d1 += sums.v[at];
         d2 += sums.v[at + 1u];

@@ -92,7 +92,8 @@ struct BakeParams {
     pb_addr light_members;  // Emitter[] in cluster order, alias local to the cluster
     pb_addr light_cluster_of; // uint per leaf-ordered triangle: its cluster
     pb_addr depth_lists;    // the depth filter's ray lists per query cell (src/bake/depth_lists.h)
-    pb_addr depth_sum;      // in/out: bake_depth's sums over the passes, 2 floats per texel per probe slot
+    pb_addr depth_sum;      // bake_depth's sums over the passes: the address of each block of probe slots
+    uint depth_block_probes; // probe slots per block; each holds 2 floats per texel per slot (depth_sums.h)
 };
 
 // The estimators and scene features a pipeline is built for (host:

@@ -17,6 +17,7 @@
 #include "bake/gpu_scene.h"
 #include "bake/bake_features.h"
 #include "bake/depth_lists.h"
+#include "bake/depth_sums.h"
 #include "bake/guide.h"
 #include "bake/light_cells.h"
 #include "bake/light_cells_gpu.h"
@@ -41,7 +42,7 @@
 typedef struct bake_buffers {
     pb_buffer params, probes, rotations, directions, rays, reduced, list, counters;
     pb_buffer depth_lists;         /* bake_depth's ray lists per query cell (depth_lists.h) */
-    pb_buffer depth_sum;           /* bake_depth's moment sums over the passes, 2 floats per texel per probe */
+    pb_depth_sums sums;            /* bake_depth's moment sums over the passes (depth_sums.h) */
     pb_buffer nee;                 /* probe NEE: 2 vec4 per ray of a submission (unallocated when off) */
     pb_buffer guide, guide_slots;  /* path guiding's table and entry index (unallocated when off) */
     pb_guide guide_host;           /* its host copy and grid */
@@ -54,11 +55,12 @@ typedef struct bake_buffers {
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[13] = {&b->params,   &b->probes, &b->rotations, &b->directions,  &b->rays,
+    pb_buffer *bufs[12] = {&b->params,   &b->probes, &b->rotations, &b->directions,  &b->rays,
                            &b->reduced,  &b->list,   &b->counters,  &b->nee,         &b->guide,
-                           &b->guide_slots, &b->depth_lists, &b->depth_sum};
-    for (int i = 0; i < 13; ++i)
+                           &b->guide_slots, &b->depth_lists};
+    for (int i = 0; i < 12; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
+    pb_depth_sums_destroy(ctx, &b->sums);
     pb_guide_free(&b->guide_host);
     pb_shading_destroy(ctx, &b->shading);
     pb_sample_release(ctx, &b->feedback);
@@ -208,7 +210,8 @@ static void pass_params(const bake_run *run, uint32_t pass, int relocating, cons
     prm->probes = B->probes.address;
     prm->rotations = B->rotations.address, prm->directions = B->directions.address, prm->rays = B->rays.address;
     prm->reduced = B->reduced.address;
-    prm->depth_lists = B->depth_lists.address, prm->depth_sum = B->depth_sum.address;
+    prm->depth_lists = B->depth_lists.address, prm->depth_sum = B->sums.table.address;
+    prm->depth_block_probes = B->sums.block_probes;
     prm->probe_list = list ? B->list.address : 0;
     prm->counters = B->counters.address;
     prm->indirect_clamp = d->indirect_clamp;
@@ -496,34 +499,24 @@ static pb_result stage_probe_set(bake_job *j, pb_error *err)
     if (ctx->info.device_local_bytes && need > ctx->info.device_local_bytes / 2)
         return pb_fail(err, PB_ERROR_TOO_LARGE,
                        "%u probes x %u rays need %.1f MiB of device memory; the budget is half of %s's %.1f MiB "
-                       "(%.1f MiB): use fewer probes or rays",
+                       "(%.1f MiB): use fewer probes or rays, or a smaller octahedral map",
                        P, rpp, need / 1048576.0, ctx->info.name, ctx->info.device_local_bytes / 1048576.0,
                        ctx->info.device_local_bytes / 2097152.0);
     /* host memory too: lavapipe (Mesa 25) reports a heap as large as host
      * memory, so the device check alone lets through bakes whose host
-     * accumulators (SH sums in double, the depth sums read back, the volume)
-     * cannot be allocated */
+     * accumulators (SH sums in double, a window of depth sums read back, the
+     * volume) cannot be allocated */
     uint64_t tile_bytes = pb_volume_tile_halves(n) * 2u;
-    uint64_t host_need = (uint64_t)P * (16 + 48 + 27 * 8 + (uint64_t)texels * 8 + 16 + 24 + 12 + 16 + 24 + 136 +
-                                        tile_bytes) + (uint64_t)rpp * 16 + reduced_floats * 4;
+    uint64_t host_need = (uint64_t)P * (16 + 48 + 27 * 8 + 16 + 24 + 12 + 16 + 24 + 136 + tile_bytes) +
+                         (uint64_t)chunk * texels * 8 + (uint64_t)rpp * 16 + reduced_floats * 4;
     uint64_t host_have = pb_host_memory_bytes();
     if (host_have && host_need > host_have / 2)
         return pb_fail(err, PB_ERROR_TOO_LARGE,
                        "%u probes x %u rays need %.1f MiB of host memory; the budget is half of this machine's %.1f MiB "
                        "(%.1f MiB): use fewer probes or a smaller octahedral map",
                        P, rpp, host_need / 1048576.0, host_have / 1048576.0, host_have / 2097152.0);
-    /* the largest buffer, bake_depth's sums for every probe slot, is one
-     * allocation, and the kernel indexes its floats with 32-bit integers */
-    uint64_t sums = (uint64_t)P * texels * 8, one = (uint64_t)1 << 34;
-    if (ctx->max_allocation && ctx->max_allocation < one)
-        one = ctx->max_allocation;
-    if (sums > one)
-        return pb_fail(err, PB_ERROR_TOO_LARGE,
-                       "%u probes' depth sums (%u octahedral texels each) need %.1f MiB in one buffer, over the "
-                       "%.1f MiB %s allows (maxMemoryAllocationSize): bake in parts (--shard I/N) or use a "
-                       "smaller octahedral map",
-                       P, texels, sums / 1048576.0, one / 1048576.0, ctx->info.name);
-    return PB_OK;
+    /* the largest buffer, bake_depth's sums: within the allocation limit in blocks */
+    return pb_depth_sums_plan(ctx, P, texels, &j->B.sums, err);
 }
 
 /* Stage 2, place: the host arrays, the local-to-global map, the floor
@@ -606,7 +599,7 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
     if (r == PB_OK)
         r = make_buffer(ctx, &B->reduced, j->reduced_floats * 4, PB_MEMORY_DOWNLOAD, "probe results", NULL, err);
     if (r == PB_OK) /* pass 0 stores, later passes add: never read before written */
-        r = make_buffer(ctx, &B->depth_sum, (uint64_t)P * j->n * j->n * 8, PB_MEMORY_DEVICE, "depth sums", NULL, err);
+        r = pb_depth_sums_create(ctx, &B->sums, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B->list, (uint64_t)P * 4, PB_MEMORY_DEVICE, "active probe list", NULL, err);
     if (r == PB_OK)
@@ -721,7 +714,7 @@ static pb_result stage_trace_passes(bake_job *j, pb_error *err)
 typedef struct volume_fill {
     const bake_job *j;
     pb_volume *out;
-    const float *sums;             /* the device's depth sums of probes first.. (a window of them) */
+    const float *sums;             /* the device's depth sums of probes first.. (a run of them) */
     uint32_t first;
 } volume_fill;
 
@@ -778,6 +771,13 @@ static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
     }
 }
 
+static void volume_fill_run(void *user, const float *sums, uint32_t first, uint32_t n)
+{
+    volume_fill *vf = user;
+    vf->sums = sums, vf->first = first;
+    pb_parallel_for(n, 64, 0, volume_fill_range, vf);
+}
+
 /* Stage 6, SH, depth and validity: the passes' means as irradiance SH
  * (windowed if asked) and depth tiles with borders, each probe's flags,
  * paths and standard error, into the volume (a part's, for a shard). */
@@ -816,36 +816,12 @@ static pb_result stage_volume(bake_job *j, pb_volume *out, pb_error *err)
     pb_result r = pb_volume_alloc(out, err);
     if (r != PB_OK)
         return r;
-    /* The device's depth sums: read in place where mapped (lavapipe, UMA);
-     * else a submission's probes at a time through one download buffer,
-     * each window filled from it as it lands (no host copy of all sums:
-     * its first touch would cost what summing them on the host did) */
-    pb_context *ctx = j->ctx;
-    const pb_buffer *ds = &j->B.depth_sum;
-    uint64_t per_probe = (uint64_t)n * n * 8;
-    volume_fill vf = {j, out, ds->mapped, 0};
-    if (ds->mapped) {
-        pb_parallel_for(own, 64, 0, volume_fill_range, &vf);
-        return PB_OK;
-    }
-    uint32_t window = j->chunk < own ? j->chunk : own;
-    pb_buffer staging;
-    if ((r = pb_buffer_create(ctx, window * per_probe, PB_MEMORY_DOWNLOAD, "depth sums read back", &staging, err)) !=
-        PB_OK)
-        return r;
-    for (uint32_t first = 0, count = 0; r == PB_OK && first < own; first += count) {
-        count = own - first < window ? own - first : window;
-        if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
-            break;
-        pb_cmd_copy(ctx, ds, first * per_probe, &staging, 0, count * per_probe);
-        pb_cmd_barrier_to_host(ctx);
-        if ((r = pb_cmd_submit_wait(ctx, NULL, err)) != PB_OK)
-            break;
-        vf.sums = staging.mapped, vf.first = first;
-        pb_parallel_for(count, 64, 0, volume_fill_range, &vf);
-    }
-    pb_buffer_destroy(ctx, &staging);
-    return r;
+    /* The device's depth sums, a run at a time: in place where mapped
+     * (lavapipe, UMA), else at most a submission's probes through one
+     * download buffer, each run filled as it lands (no host copy of all
+     * sums: its first touch would cost what summing them on the host did) */
+    volume_fill vf = {j, out, NULL, 0};
+    return pb_depth_sums_read(j->ctx, &j->B.sums, own, j->chunk, volume_fill_run, &vf, err);
 }
 
 static void bake_job_free(bake_job *j)

@@ -47,12 +47,14 @@ typedef struct gpu_bake_params {
     uint32_t light_dims[4];
     uint64_t light_cells, light_cell_slots, light_clusters, light_members, light_cluster_of;
     uint64_t depth_lists; /* bake_depth's ray lists (depth_lists.h) */
-    uint64_t depth_sum;   /* bake_depth's sums over the passes: 2 floats per texel per probe slot */
+    uint64_t depth_sum;   /* bake_depth's sums over the passes: uint64 address per block (depth_sums.h) */
+    uint32_t depth_block_probes; /* probe slots per block of them */
+    uint32_t pad_;
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
 _Static_assert(offsetof(gpu_bake_params, guide_origin) == 368, "BakeParams layout");
 _Static_assert(offsetof(gpu_bake_params, light_cells) == 432, "BakeParams layout");
-_Static_assert(sizeof(gpu_bake_params) == 488, "BakeParams layout");
+_Static_assert(sizeof(gpu_bake_params) == 496, "BakeParams layout");
 _Static_assert(sizeof(pb_env_texel) == 32, "EnvTexel layout");
 
 typedef struct gpu_emitter {
