@@ -601,6 +601,10 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
     if (r == PB_OK) /* pass 0 stores, later passes add: never read before written */
         r = pb_depth_sums_create(ctx, &B->sums, err);
     if (r == PB_OK)
+        pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "depth sums: %.1f MiB in %u block%s of up to %u probes",
+                (double)P * B->sums.probe_bytes / 1048576.0, B->sums.block_count, B->sums.block_count > 1 ? "s" : "",
+                B->sums.block_probes);
+    if (r == PB_OK)
         r = make_buffer(ctx, &B->list, (uint64_t)P * 4, PB_MEMORY_DEVICE, "active probe list", NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B->counters, 16, PB_MEMORY_DOWNLOAD, "traversal counter", NULL, err);
