@@ -2413,6 +2413,16 @@ static void bad_parameters_refused_before_gpu_work(void)
     r = pb_bake(ctx, s, gs, &d, &v, &err);
     CHECKF(r == PB_ERROR_TOO_LARGE && strstr(err.message, "one probe's depth sums"), "%s: %s", pb_result_name(r),
            err.message);
+    /* --indirect volume samples each bounce's volume on the device: depth
+     * tiles over one allocation are refused before the first bounce (without
+     * the check the first bounce bakes, in two blocks of sums, and the
+     * second fails at allocation) */
+    d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 3;
+    d.bounces = 1, d.indirect_volume = 1, d.octmap_res = 64;
+    ctx->max_allocation = 27 * 66 * 66 * 4 - 4;
+    r = pb_bake(ctx, s, gs, &d, &v, &err);
+    CHECKF(r == PB_ERROR_TOO_LARGE && strstr(err.message, "--indirect volume"), "%s: %s", pb_result_name(r),
+           err.message);
     ctx->max_allocation = max_allocation;
     pb_gpu_scene_destroy(gs);
     pb_bvh_destroy(bvh);

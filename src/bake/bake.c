@@ -947,6 +947,16 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
     if (desc->points)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "--indirect volume samples the previous bounce's grid: it needs a grid, not points");
+    /* each bounce samples the previous volume on the device, its depth tiles
+     * one buffer: refused before the first bounce, not after it */
+    uint64_t probes = (uint64_t)desc->grid.counts[0] * desc->grid.counts[1] * desc->grid.counts[2];
+    uint64_t side = (desc->octmap_res ? desc->octmap_res : 16) + 2, tiles = probes * side * side * 4;
+    if (ctx->max_allocation && tiles > ctx->max_allocation)
+        return pb_fail(err, PB_ERROR_TOO_LARGE,
+                       "--indirect volume samples each bounce's volume on the device: %llu probes' depth tiles need "
+                       "%.1f MiB in one buffer, over the %.1f MiB %s allows (maxMemoryAllocationSize): use fewer "
+                       "probes, a smaller octahedral map, or --indirect path",
+                       (unsigned long long)probes, tiles / 1048576.0, ctx->max_allocation / 1048576.0, ctx->info.name);
     grid_bounce g = {ctx, scene, gs};
     return pb_indirect_volume_bounces(scene, desc, grid_bounce_bake, &g, out, err);
 }
