@@ -20,10 +20,9 @@ typedef struct baked {
     int ok;
 } baked;
 
-/* A bake of s on context c (its own BVH and GPU scene); failures count. */
-/* s baked on context c; a nonzero `limit` stands for the device's
- * maxMemoryAllocationSize while pb_bake runs (the scene's buffers are made
- * before it) */
+/* A bake of s on context c (its own BVH and GPU scene); failures count. A
+ * nonzero `limit` stands for the device's maxMemoryAllocationSize while
+ * pb_bake runs (the scene's buffers are made before it). */
 static baked bake_limited(pb_context *c, const pb_scene *s, const pb_bake_desc *d, uint64_t limit)
 {
     baked b;

@@ -55,9 +55,8 @@ typedef struct bake_buffers {
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[12] = {&b->params,   &b->probes, &b->rotations, &b->directions,  &b->rays,
-                           &b->reduced,  &b->list,   &b->counters,  &b->nee,         &b->guide,
-                           &b->guide_slots, &b->depth_lists};
+    pb_buffer *bufs[12] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
+                           &b->list, &b->counters, &b->nee, &b->guide, &b->guide_slots, &b->depth_lists};
     for (int i = 0; i < 12; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_depth_sums_destroy(ctx, &b->sums);
@@ -948,10 +947,11 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "--indirect volume samples the previous bounce's grid: it needs a grid, not points");
     /* each bounce samples the previous volume on the device, its depth tiles
-     * one buffer: refused before the first bounce, not after it */
+     * one buffer: refused before the first bounce, not after it (counts past
+     * 2^24 probes are bake_once's to refuse) */
     uint64_t probes = (uint64_t)desc->grid.counts[0] * desc->grid.counts[1] * desc->grid.counts[2];
-    uint64_t side = (desc->octmap_res ? desc->octmap_res : 16) + 2, tiles = probes * side * side * 4;
-    if (ctx->max_allocation && tiles > ctx->max_allocation)
+    uint64_t tiles = pb_sample_depth_bytes(probes, desc->octmap_res ? desc->octmap_res : 16);
+    if (ctx->max_allocation && probes <= (1u << 24) && tiles > ctx->max_allocation)
         return pb_fail(err, PB_ERROR_TOO_LARGE,
                        "--indirect volume samples each bounce's volume on the device: %llu probes' depth tiles need "
                        "%.1f MiB in one buffer, over the %.1f MiB %s allows (maxMemoryAllocationSize): use fewer "

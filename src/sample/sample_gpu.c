@@ -11,7 +11,7 @@
 pb_result pb_sample_upload(pb_context *ctx, const pb_sample_volume *s, pb_sample_buffers *out, pb_error *err)
 {
     memset(out, 0, sizeof *out);
-    uint64_t P = s->probe_count, side = (uint64_t)s->octmap_res + 2;
+    uint64_t P = s->probe_count, depth_bytes = pb_sample_depth_bytes(P, s->octmap_res);
     pb_result r = pb_buffer_create(ctx, P * 16, PB_MEMORY_DEVICE, "volume probes", &out->probes, err);
     if (r == PB_OK)
         r = pb_buffer_upload(ctx, &out->probes, 0, s->probes, P * 16, err);
@@ -20,9 +20,9 @@ pb_result pb_sample_upload(pb_context *ctx, const pb_sample_volume *s, pb_sample
     if (r == PB_OK)
         r = pb_buffer_upload(ctx, &out->sh, 0, s->sh, P * 27 * 4, err);
     if (r == PB_OK)
-        r = pb_buffer_create(ctx, P * side * side * 4, PB_MEMORY_DEVICE, "volume depth", &out->depth, err);
+        r = pb_buffer_create(ctx, depth_bytes, PB_MEMORY_DEVICE, "volume depth", &out->depth, err);
     if (r == PB_OK)
-        r = pb_buffer_upload(ctx, &out->depth, 0, s->depth, P * side * side * 4, err);
+        r = pb_buffer_upload(ctx, &out->depth, 0, s->depth, depth_bytes, err);
     if (r == PB_OK && s->levels) {
         uint64_t bytes = (uint64_t)s->sparse_word_count * 4;
         r = pb_buffer_create(ctx, bytes, PB_MEMORY_DEVICE, "volume sparse layout", &out->sparse, err);

@@ -29,6 +29,15 @@ typedef struct pb_sample_buffers {
     gpu_volume_refs refs;
 } pb_sample_buffers;
 
+/* Bytes of the uploaded depth tiles of `probes` probes (one uint32, two
+ * halves, per bordered texel): a single buffer, so bounded by the device's
+ * maxMemoryAllocationSize (--indirect volume checks before its first bounce). */
+static inline uint64_t pb_sample_depth_bytes(uint64_t probes, uint32_t octmap_res)
+{
+    uint64_t side = (uint64_t)octmap_res + 2;
+    return probes * side * side * 4;
+}
+
 pb_result pb_sample_upload(pb_context *ctx, const pb_sample_volume *s, pb_sample_buffers *out, pb_error *err);
 void pb_sample_release(pb_context *ctx, pb_sample_buffers *b);
 
