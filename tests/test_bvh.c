@@ -1,12 +1,15 @@
 /* BVH build and the CPU references: structure, determinism, bounded depth on
  * hostile inputs, traversal == brute force, watertightness, robust origins.
  * CPU only (also run under ASan/UBSan). */
+#define _GNU_SOURCE /* sched_setaffinity */
 #include "scenes_gen.h"
 #include "exact_inputs.h"
 #include "bvh/intersect.h"
 #include "bvh/bvh_wide.h"
+#include "common/common.h"
 
 #include <float.h>
+#include <sched.h>
 
 /* Every triangle in exactly one leaf; each child box holds its subtree. */
 static uint32_t check_node(const pb_bvh *b, uint32_t node, const float lo[3], const float hi[3], uint32_t depth,
@@ -211,6 +214,25 @@ static void build_is_deterministic_across_threads(void)
     for (int i = 0; i < 3; ++i)
         pb_bvh_destroy(b[i]);
     pb_scene_destroy(s);
+}
+
+/* Host threads (the BVH build's, the volume's, Embree's in the benches) are
+ * as many as the cores this process may use: under a narrowed affinity mask
+ * (a Slurm job's cgroup, taskset) they must not be as many as the machine's. */
+static void host_threads_follow_affinity(void)
+{
+    cpu_set_t all, one;
+    CHECK(sched_getaffinity(0, sizeof all, &all) == 0);
+    CHECK(pb_host_threads() == (uint32_t)CPU_COUNT(&all));
+    int first = 0;
+    while (first < CPU_SETSIZE && !CPU_ISSET(first, &all))
+        ++first;
+    CPU_ZERO(&one);
+    CPU_SET(first, &one);
+    CHECK(sched_setaffinity(0, sizeof one, &one) == 0);
+    CHECK(pb_host_threads() == 1u);
+    CHECK(sched_setaffinity(0, sizeof all, &all) == 0);
+    CHECK(pb_host_threads() == (uint32_t)CPU_COUNT(&all));
 }
 
 static void hostile_inputs_keep_depth_bounded(void)
@@ -577,6 +599,7 @@ int main(void)
     RUN(structure_of_random_soups);
     RUN(empty_scene_builds_and_misses);
     RUN(build_is_deterministic_across_threads);
+    RUN(host_threads_follow_affinity);
     RUN(hostile_inputs_keep_depth_bounded);
     RUN(bad_desc_is_refused);
     RUN(traversal_matches_brute_force);

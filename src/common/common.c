@@ -1,8 +1,8 @@
-#define _DEFAULT_SOURCE /* sysconf(_SC_PHYS_PAGES) */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE /* sysconf(_SC_PHYS_PAGES), sched_getaffinity */
 #include "common/common.h"
 
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -75,8 +75,17 @@ double pb_now_ms(void)
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
+/* The cores this process may run on, not the machine's: a Slurm job's
+ * cgroup, a container's cpuset or `taskset` narrow the affinity mask, and
+ * threads for every online core would then share the few allowed ones. */
 uint32_t pb_host_threads(void)
 {
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof set, &set) == 0) {
+        int n = CPU_COUNT(&set);
+        if (n > 0)
+            return (uint32_t)n;
+    }
     long n = sysconf(_SC_NPROCESSORS_ONLN);
     return n < 1 ? 1u : (uint32_t)n;
 }

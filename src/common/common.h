@@ -28,7 +28,8 @@ void pb_logf(const pb_log *log, pb_log_level level, const char *fmt, ...) PB_PRI
 /* Monotonic wall clock in milliseconds. */
 double pb_now_ms(void);
 
-/* Number of online host cores (at least 1). */
+/* Host cores this process may run on: its affinity mask, else the online
+ * cores (at least 1). */
 uint32_t pb_host_threads(void);
 
 /* Calls fn(user, begin, end) over [0, count) split into contiguous blocks of
