@@ -6,7 +6,7 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bakeab blocks bench clocks loads sweep test_bake tests (default: compile
+# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads sweep test_bake tests (default: compile
 # bake bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
@@ -108,6 +108,33 @@ for s in $steps; do
             --verbose -o /tmp/big.probes >>"$log" 2>&1
         say "rc $? wall $(( ($(date +%s%N) - start) / 1000000 )) ms, $(stat -c %s /tmp/big.probes 2>/dev/null) bytes"
         rm -f /tmp/big.probes ;;
+    lavapipe) # the CPU benches through lavapipe on two of this machine's host cores (pack.sh
+        # --lavapipe): the trace kernel against Embree in the same run, texel and address
+        # loads alternately, bake_bench, bounce rays; each result in the log as it comes
+        [ -f .dev/lvp.tar.xz ] || { say "no .dev/lvp.tar.xz: run pack.sh --lavapipe"; continue; }
+        mkdir -p /opt/lvp && tar -C /opt/lvp -xJf .dev/lvp.tar.xz
+        printf '{"file_format_version": "1.0.0", "ICD": {"library_path": "/opt/lvp/lib/libvulkan_lvp.so", "api_version": "1.4.305"}}\n' \
+            >/opt/lvp/icd.json
+        say "host: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores; lavapipe pinned to cores ${PB_LVP_CORES:-2,3}"
+        (
+            export VK_DRIVER_FILES=/opt/lvp/icd.json LP_NUM_THREADS=2 LD_LIBRARY_PATH=/opt/pb/lib:/opt/lvp/lib
+            two="taskset -c ${PB_LVP_CORES:-2,3}" # PB_LVP_CORES: to try it here first
+            run 60 $two build/probebake devices
+            pair() { # $1: a tag, the rest: trace_bench's options
+                local tag=$1; shift
+                for l in texel address; do
+                    run 60 $two build/bench/trace_bench --probes 4096 --rays 256 --repeat 3 --scene-loads $l \
+                        "$@" --json /tmp/lvp-$tag-$l-$SECONDS.json $cornell $crypt
+                    keep /tmp/lvp-$tag-$l-*.json && rm -f /tmp/lvp-$tag-$l-*.json
+                done
+            }
+            for i in 1 2 3; do pair probe; done
+            run 90 $two build/bench/bake_bench --json /tmp/lvp-bake-1.json && keep /tmp/lvp-bake-1.json
+            pair bounce --bounce
+            for i in 4 5 6; do pair probe; done
+            run 90 $two build/bench/bake_bench --json /tmp/lvp-bake-2.json && keep /tmp/lvp-bake-2.json
+            pair bounce --bounce
+        ) ;;
     test_bake) # the bake suite alone (native kernels)
         run 200 build/tests/test_bake ;;
     tests)
