@@ -53,9 +53,10 @@ typedef struct wide_check {
     uint32_t *seen, max_depth, bad, loose;
 } wide_check;
 
-/* The traced 4-wide form: every triangle in exactly one leaf, each decoded
- * child box encloses its subtree's triangles (conservative quantization) and
- * overshoots them by at most one quantization step per bound (tight).
+/* The traced 4-wide form: every triangle in exactly one leaf, inner siblings
+ * consecutive, each decoded child box encloses its subtree's triangles
+ * (conservative quantization) and overshoots them by at most one
+ * quantization step per bound (tight).
  * Returns the exact bounds of the subtree's vertices. */
 static void check_wide_node(wide_check *c, uint32_t node, uint32_t depth, float lo[3], float hi[3])
 {
@@ -64,6 +65,15 @@ static void check_wide_node(wide_check *c, uint32_t node, uint32_t depth, float 
         lo[k] = INFINITY, hi[k] = -INFINITY;
     if (depth + 1 > c->max_depth)
         c->max_depth = depth + 1;
+    /* inner children consecutive in slot order: traversals name pending
+     * siblings by the first one's index and their ranks */
+    uint32_t inner = 0, first = PB_BVH4_EMPTY;
+    for (uint32_t i = 0; i < 4; ++i)
+        if (n->child[i] != PB_BVH4_EMPTY && !n->count[i]) {
+            if (!inner++)
+                first = n->child[i];
+            c->bad += n->child[i] != first + inner - 1;
+        }
     for (uint32_t i = 0; i < 4; ++i) {
         if (n->child[i] == PB_BVH4_EMPTY) {
             c->bad += n->count[i] != 0;
@@ -117,7 +127,7 @@ static void check_wide(const pb_bvh *b, const char *what)
     uint32_t once = 0;
     for (uint32_t t = 0; t < b->triangle_count; ++t)
         once += c.seen[t] == 1;
-    CHECKF(c.bad == 0, "%s: %u violations in the 4-wide BVH (a box not enclosing its triangles)", what, c.bad);
+    CHECKF(c.bad == 0, "%s: %u violations in the 4-wide BVH (a box not enclosing its triangles, or inner siblings not consecutive)", what, c.bad);
     CHECKF(c.loose == 0, "%s: %u quantized bounds looser than one step or scales coarser than needed", what, c.loose);
     CHECKF(once == b->triangle_count, "%s: %u of %u triangles in exactly one 4-wide leaf", what, once,
            b->triangle_count);

@@ -25,7 +25,9 @@
  *   uint32 child[4]            node index (count 0), first triangle, or PB_BVH4_EMPTY
  *   uint8 count[4]             triangles in the leaf, 0 for an inner node
  *
- * Decoded boxes enclose the exact ones; node 0 is the root.
+ * Decoded boxes enclose the exact ones; node 0 is the root, and a node's
+ * inner children have consecutive indices in slot order (traversals name
+ * pending siblings by the first one and their ranks).
  */
 #ifndef PROBEBAKE_BVH_H
 #define PROBEBAKE_BVH_H
@@ -91,12 +93,15 @@ typedef struct pb_bvh_desc {
     float intersection_cost;  /* SAH cost of one triangle test, default 1.0 */
 } pb_bvh_desc;
 
-/* Deepest child-pair tree the build makes. A traversal pushes at most three
- * entries per 4-wide level, so its stack needs 3 * wide_depth + 1 entries
- * (PB_BVH_STACK_SIZE); the GPU kernel is specialised with this, so overflow
- * cannot happen. */
+/* Deepest child-pair tree the build makes. A traversal keeps a node's pending
+ * inner children as one group and pushes at most one group per 4-wide level,
+ * so its stack needs wide_depth + 1 entries (PB_BVH_STACK_SIZE); the GPU
+ * kernel is specialised with this, so overflow cannot happen. A group names
+ * its first node in 24 bits, so a BVH has at most PB_BVH4_MAX_NODES 4-wide
+ * nodes (about 100 M triangles; the build refuses more with TOO_LARGE). */
 #define PB_BVH_MAX_DEPTH 64
-#define PB_BVH_STACK_SIZE(wide_depth) (3u * (wide_depth) + 1u)
+#define PB_BVH_STACK_SIZE(wide_depth) ((wide_depth) + 1u)
+#define PB_BVH4_MAX_NODES (1u << 24)
 
 /* Builds the BVH of `scene` (which must outlive nothing: the BVH copies the
  * positions it needs). Deterministic: the result does not depend on the

@@ -21,6 +21,10 @@ layout(constant_id = 0) const uint STACK_SIZE = 193u;
         d[b] = td_; ch[b] = tc_; cnt[b] = tn_;                                  \
     }
 
+// A group of pending inner siblings: the first sibling's node index, how
+// many are pending (1-3) and their ranks, nearest first, 2 bits each.
+#define PB_GROUP(first, count, ranks) ((first) << 8u | (count) << 6u | (ranks))
+
 struct TraceResult {
     float t;
     uint tri; // leaf order, PB_NO_HIT on a miss
@@ -46,9 +50,10 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
     if (s.triangle_count == 0u)
         return res;
     RayPre r = ray_prepare(org, dir);
-    uint stack[STACK_SIZE];
+    uint stack[STACK_SIZE]; // pending groups
     uint sp = 0u;
     uint node = 0u;
+    uint group = 0u; // pending siblings: PB_GROUP(first, count, ranks); count 0: none
     for (;;) {
 #ifdef PB_COUNT_TRAVERSALS
         ++pb_loop_steps;
@@ -114,20 +119,35 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
             if (any_hit)
                 return res;
         }
-        uint next = PB_BVH4_EMPTY;
-        for (int i = 3; i >= 0; --i) {
-            if (cnt[i] != 0u || !(d[i] < PB_INF && d[i] <= tmax)) // a miss is +inf, tmax may be too
-                continue;
-            if (next != PB_BVH4_EMPTY)
-                stack[sp++] = next;
-            next = ch[i];
+        // The hit inner children, near to far, as ranks among the node's
+        // inner children (consecutive from `first`): the nearest is next,
+        // the rest become the pending group, and the group they replace is
+        // the one stack push of this step.
+        uint first = PB_BVH4_EMPTY;
+        for (int i = 0; i < 4; ++i)
+            first = cnt[i] == 0u ? min(first, ch[i]) : first; // empty slots are 0xffffffff
+        uint n = 0u, ranks = 0u;
+        for (int i = 0; i < 4; ++i) {
+            bool take = cnt[i] == 0u && d[i] < PB_INF && d[i] <= tmax; // a miss is +inf, tmax may be too
+            ranks |= take ? (ch[i] - first) << (2u * n) : 0u;
+            n += take ? 1u : 0u;
         }
-        if (next == PB_BVH4_EMPTY) {
-            if (sp == 0u)
-                break;
-            next = stack[--sp];
+        if (n != 0u) {
+            node = first + (ranks & 3u);
+            if (n > 1u) {
+                if ((group & 192u) != 0u)
+                    stack[sp++] = group;
+                group = PB_GROUP(first, n - 1u, ranks >> 2u);
+            }
+        } else {
+            if ((group & 192u) == 0u) {
+                if (sp == 0u)
+                    break;
+                group = stack[--sp];
+            }
+            node = (group >> 8u) + (group & 3u);
+            group = ((group & ~63u) - 64u) | ((group & 63u) >> 2u); // one fewer pending
         }
-        node = next;
     }
     return res;
 }

@@ -585,6 +585,12 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
         pb_bvh_destroy(bvh);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory building the BVH of %u triangles", n);
     }
+    if (bvh->wide_node_count > PB_BVH4_MAX_NODES) {
+        uint32_t w = bvh->wide_node_count;
+        pb_bvh_destroy(bvh);
+        return pb_fail(err, PB_ERROR_TOO_LARGE, "the BVH of %u triangles has %u 4-wide nodes, more than the %u a traversal can address",
+                       n, w, PB_BVH4_MAX_NODES);
+    }
     *out = bvh;
     return PB_OK;
 }

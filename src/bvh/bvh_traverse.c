@@ -1,7 +1,8 @@
 /* CPU reference traversal and brute force. The traversal is the GPU kernel's
  * loop in C (shaders/include/traverse.glsl): 4-wide quantized nodes, child
  * boxes sorted near to far, hit leaves tested in that order, the nearest hit
- * inner child next and the others on a stack (at most three per level). */
+ * inner child next and the others a pending group, whose predecessor goes on
+ * the stack (at most one entry per level). */
 #include "bvh/alpha.h"
 #include "bvh/bvh_wide.h"
 #include "bvh/intersect.h"
@@ -45,6 +46,14 @@ static void finish_hit(const pb_scene *s, const pb_ray *ray, uint32_t tri, float
         }                                                                                                          \
     } while (0)
 
+/* A group of pending inner siblings: the first sibling's node index, how many
+ * are pending (0-3) and their ranks among the node's inner children, nearest
+ * first, 2 bits each. One stack entry per level instead of three: on llvmpipe
+ * a push is a scalar store per SIMD lane, so one push site instead of three
+ * is what pays (bench/RESULTS.md). */
+#define PB_GROUP(first, count, ranks) ((first) << 8 | (count) << 6 | (ranks))
+#define PB_GROUP_COUNT(g) (((g) >> 6) & 3)
+
 static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
 {
     const pb_bvh *bvh = j->bvh;
@@ -53,8 +62,8 @@ static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
     float tmin = ray->tmin, tmax = ray->tmax;
     uint32_t best = PB_NO_HIT;
     float bu = 0.f, bv = 0.f;
-    uint32_t stack[PB_BVH_STACK_SIZE(PB_BVH_MAX_DEPTH)];
-    uint32_t sp = 0, node = 0;
+    uint32_t stack[PB_BVH_STACK_SIZE(PB_BVH_MAX_DEPTH)]; /* pending groups */
+    uint32_t sp = 0, node = 0, group = 0;                 /* no group pending */
     if (bvh->triangle_count == 0) {
         finish_hit(j->scene, ray, PB_NO_HIT, 0.f, 0.f, 0.f, hit);
         return;
@@ -98,20 +107,33 @@ static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
             if (j->mode == PB_TRACE_ANY)
                 goto done;
         }
-        uint32_t next = PB_BVH4_EMPTY;
-        for (int s = 3; s >= 0; --s) {
+        /* the hit inner children, near to far, as ranks among the node's inner
+         * children (consecutive from `first`): the nearest is next, the rest
+         * become the pending group, and the group they replace is pushed */
+        uint32_t first = PB_BVH4_EMPTY, n = 0, ranks = 0;
+        for (int s = 0; s < 4; ++s)
+            first = cnt[s] == 0 && ch[s] < first ? ch[s] : first;
+        for (int s = 0; s < 4; ++s) {
             if (cnt[s] != 0 || !(d[s] < INFINITY && d[s] <= tmax)) /* a miss is +inf, tmax may be too */
                 continue;
-            if (next != PB_BVH4_EMPTY)
-                stack[sp++] = next;
-            next = ch[s];
+            ranks |= (ch[s] - first) << (2 * n++);
         }
-        if (next == PB_BVH4_EMPTY) {
-            if (sp == 0)
-                break;
-            next = stack[--sp];
+        if (n != 0) {
+            node = first + (ranks & 3);
+            if (n > 1) {
+                if (PB_GROUP_COUNT(group) != 0)
+                    stack[sp++] = group;
+                group = PB_GROUP(first, n - 1, ranks >> 2);
+            }
+        } else {
+            if (PB_GROUP_COUNT(group) == 0) {
+                if (sp == 0)
+                    break;
+                group = stack[--sp];
+            }
+            node = (group >> 8) + (group & 3);
+            group = PB_GROUP(group >> 8, PB_GROUP_COUNT(group) - 1, (group & 63) >> 2);
         }
-        node = next;
     }
 done:
     finish_hit(j->scene, ray, best, tmax, bu, bv, hit);

@@ -5,8 +5,9 @@
  * takes half the steps.
  *
  * Collapse: a wide node's children are its pair node's children, where each
- * inner child is replaced by that child's own two children. Depth first, so
- * node 0 is the root and every child follows its parent.
+ * inner child is replaced by that child's own two children. Node 0 is the
+ * root, every child follows its parent, and a node's inner children are
+ * consecutive.
  *
  * Quantization is conservative and exact to decode: bound q of axis k
  * decodes to origin[k] + q * 2^e[k]. The product is exact (8 bits times a
@@ -83,7 +84,10 @@ static uint8_t quantize_hi(float origin, float scale, float v)
     return (uint8_t)q;
 }
 
-static uint32_t emit(wide_state *ws, uint32_t pair, uint32_t depth)
+/* Writes the wide node of pair node `pair` at `index`; its inner children get
+ * consecutive indices, in slot order, so a traversal can name a node's
+ * pending children by the first one's index and their ranks. */
+static void emit(wide_state *ws, uint32_t pair, uint32_t index, uint32_t depth)
 {
     const pb_bvh_node *n = &ws->bvh->nodes[pair];
     wide_slot slot[4];
@@ -100,7 +104,6 @@ static uint32_t emit(wide_state *ws, uint32_t pair, uint32_t depth)
         for (int t = 0; t < 2; ++t)
             k += gather_slots(m, t, &slot[k]);
     }
-    uint32_t index = ws->next++;
     if (depth + 1 > ws->depth)
         ws->depth = depth + 1;
     pb_bvh4_node *w = &ws->out[index];
@@ -129,12 +132,12 @@ static uint32_t emit(wide_state *ws, uint32_t pair, uint32_t depth)
         }
         w->count[i] = (uint8_t)slot[i].count;
     }
-    /* children after the node: the slots are filled once all are emitted */
-    for (uint32_t i = 0; i < k; ++i) {
-        uint32_t c = slot[i].count ? slot[i].child : emit(ws, slot[i].child, depth + 1);
-        ws->out[index].child[i] = c;
-    }
-    return index;
+    /* siblings first, then each sibling's subtree */
+    for (uint32_t i = 0; i < k; ++i)
+        w->child[i] = slot[i].count ? slot[i].child : ws->next++;
+    for (uint32_t i = 0; i < k; ++i)
+        if (!slot[i].count)
+            emit(ws, slot[i].child, ws->out[index].child[i], depth + 1);
 }
 
 int pb_bvh_collapse_wide(pb_bvh *bvh)
@@ -143,8 +146,8 @@ int pb_bvh_collapse_wide(pb_bvh *bvh)
     bvh->wide_nodes = calloc(bvh->node_count ? bvh->node_count : 1, sizeof(pb_bvh4_node));
     if (!bvh->wide_nodes)
         return 0;
-    wide_state ws = {bvh, bvh->wide_nodes, 0, 0};
-    emit(&ws, 0, 0);
+    wide_state ws = {bvh, bvh->wide_nodes, 1, 0};
+    emit(&ws, 0, 0, 0);
     bvh->wide_node_count = ws.next;
     bvh->stats.wide_nodes = ws.next;
     bvh->stats.wide_depth = ws.depth;
