@@ -6,7 +6,7 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads sweep test_bake tests (default: compile
+# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads sweep test_bake test_trace tests (default: compile
 # bake bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
@@ -137,6 +137,8 @@ for s in $steps; do
         ) ;;
     test_bake) # the bake suite alone (native kernels)
         run 200 build/tests/test_bake ;;
+    test_trace) # every trace kernel variant against the CPU reference, hit for hit
+        run 200 build/tests/test_trace ;;
     tests)
         say "tests: ctest -L gpu (no browser, slurm, corpus, smoke) and test_bake_portable beside it"
         tl=${PB_GPU_TEST_LIMIT:-300}
