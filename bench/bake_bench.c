@@ -1,6 +1,6 @@
 /* bake_bench: bake time per stage and error against a long bake.
  *
- *   bake_bench [--probes N] [--reference-passes N] [--bounces N] [--json FILE] [SCENE ...]
+ *   bake_bench [--probes N] [--reference-passes N] [--bounces N] [--repeat N] [--json FILE] [SCENE ...]
  *
  * For each scene: a reference bake (256 rays x --reference-passes passes,
  * default 32), then bakes at 64, 128 and 256 rays per probe (1 pass, other
@@ -16,7 +16,15 @@
  * cost at most 30 %. "vs bnc" divides by the trace kernel's rate on the
  * bounce rays of those probe rays instead (one cosine ray from each first
  * front hit, bounce_rays.h): most of the bake's traversals are such rays,
- * which start on surfaces and cost more than probe rays on any tracer. */
+ * which start on surfaces and cost more than probe rays on any tracer.
+ *
+ * --repeat N (default 3): each row is N rounds of one timed trace of the
+ * probe rays, one of their bounce rays and one bake (same seed: their
+ * traversal counts and errors must agree, else the bench says so and
+ * fails). The ratios are medians of the rounds' ratios, the times those of
+ * the bake of median GPU time. On lavapipe a run's rate can be off by 2x and
+ * drifts within a process (bench/RESULTS.md), so each ratio pairs a bake with
+ * trace runs made next to it. */
 #define _POSIX_C_SOURCE 200809L
 #include "common/common.h"
 #include "bench_util.h"
@@ -29,6 +37,30 @@
 #include <string.h>
 #include <sys/stat.h>
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static double median(const double *v, uint32_t n)
+{
+    double t[64];
+    memcpy(t, v, n * sizeof *t);
+    qsort(t, n, sizeof *t, cmp_double);
+    return n ? t[n / 2] : 0.0;
+}
+
+/* The trace kernel's Mrays/s in one timed run; 0 when it fails. */
+static double trace_rate(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, uint32_t n, pb_hit *hits)
+{
+    pb_error err;
+    pb_trace_stats st;
+    if (!n || pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err) != PB_OK || !(st.kernel_ms > 0))
+        return 0.0;
+    return n / (st.kernel_ms * 1e3);
+}
+
 typedef struct row {
     char scene[128];
     uint32_t probes, rays, passes;
@@ -36,12 +68,13 @@ typedef struct row {
     uint64_t traversals;
     double trace_kernel_mrays;    /* trace.comp on this scene's probe rays */
     double bounce_kernel_mrays;   /* trace.comp on their bounce rays */
+    double vs_trace, vs_bounce;   /* the bake's traversal rate over those, medians of the rounds */
 } row;
 
 
 int main(int argc, char **argv)
 {
-    uint32_t probes = 256, ref_passes = 32, bounces = 2;
+    uint32_t probes = 256, ref_passes = 32, bounces = 2, repeat = 3;
     const char *json = "bench/out/bake_bench.json";
     int validation = 0; /* --validation: fail on any Vulkan validation message */
     const char *scenes[16];
@@ -53,6 +86,8 @@ int main(int argc, char **argv)
             ref_passes = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(argv[i], "--bounces") && i + 1 < argc)
             bounces = (uint32_t)atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--repeat") && i + 1 < argc)
+            repeat = (uint32_t)atoi(argv[++i]);
         else if (!strcmp(argv[i], "--json") && i + 1 < argc)
             json = argv[++i];
         else if (!strcmp(argv[i], "--validation"))
@@ -63,6 +98,10 @@ int main(int argc, char **argv)
         } else if (nscenes < 16)
             scenes[nscenes++] = argv[i];
     }
+    if (repeat < 1 || repeat > 15) {
+        fprintf(stderr, "bake_bench: --repeat %u is out of range 1..15\n", repeat);
+        return 2;
+    }
     if (!nscenes)
         nscenes = bench_default_scenes("bake_bench", scenes, 16);
     pb_context *ctx = NULL;
@@ -72,12 +111,12 @@ int main(int argc, char **argv)
         fprintf(stderr, "bake_bench: %s\n", err.message);
         return 1;
     }
-    printf("device: %s; %u probes, %u bounces, reference 256 rays x %u passes\n", pb_context_device(ctx)->name, probes,
-           bounces, ref_passes);
+    printf("device: %s; %u probes, %u bounces, reference 256 rays x %u passes; medians of %u runs\n",
+           pb_context_device(ctx)->name, probes, bounces, ref_passes, repeat);
     printf("%-18s %6s %6s %9s %8s %8s %9s %9s %9s %7s %7s %8s\n", "scene", "rays", "passes", "trace ms", "sh ms",
            "depth ms", "wall ms", "Mrays/s", "Mtrav/s", "vs trc", "vs bnc", "rel RMSE");
     row rows[64];
-    int nrows = 0;
+    int nrows = 0, nondeterministic = 0;
     for (int si = 0; si < nscenes; ++si) {
         pb_scene *s;
         pb_bvh *bvh;
@@ -96,23 +135,22 @@ int main(int argc, char **argv)
                        s->materials[m].emissive[2] > 0.f;
         if (!self_lit)
             d.sky[0] = d.sky[1] = d.sky[2] = 0.2f;
-        /* the trace kernel's throughput on 256 probe rays per probe of this grid */
-        double trace_mrays = 0, bounce_mrays = 0;
-        {
-            uint32_t P = pb_probe_grid_count(&d.grid), n = P * 256;
-            pb_ray *rays = malloc((size_t)n * sizeof *rays);
-            pb_hit *hits = malloc((size_t)n * sizeof *hits);
-            pb_trace_stats st;
-            if (rays && hits && pb_probe_rays(&d.grid, 0, P, 256, 1, rays) == PB_OK &&
-                pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, NULL, &err) == PB_OK && /* warm-up */
-                pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err) == PB_OK && st.kernel_ms > 0)
-                trace_mrays = n / (st.kernel_ms * 1e3);
-            uint32_t nb = trace_mrays > 0 ? bench_bounce_rays(s, rays, hits, n, 0) : 0;
-            if (nb && pb_trace(ctx, gs, rays, nb, PB_TRACE_CLOSEST, hits, NULL, &err) == PB_OK &&
-                pb_trace(ctx, gs, rays, nb, PB_TRACE_CLOSEST, hits, &st, &err) == PB_OK && st.kernel_ms > 0)
-                bounce_mrays = nb / (st.kernel_ms * 1e3);
-            free(rays), free(hits);
+        /* the trace kernel on 256 probe rays per probe of this grid and on
+         * their bounce rays, timed beside each bake below (one warm-up each) */
+        uint32_t P = pb_probe_grid_count(&d.grid), n = P * 256, nb = 0;
+        pb_ray *rays = malloc((size_t)n * sizeof *rays), *brays = malloc((size_t)n * sizeof *brays);
+        pb_hit *hits = malloc((size_t)n * sizeof *hits);
+        if (rays && brays && hits && pb_probe_rays(&d.grid, 0, P, 256, 1, rays) == PB_OK &&
+            pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, NULL, &err) == PB_OK) {
+            memcpy(brays, rays, (size_t)n * sizeof *rays);
+            nb = bench_bounce_rays(s, brays, hits, n, 0);
+            if (nb && pb_trace(ctx, gs, brays, nb, PB_TRACE_CLOSEST, hits, NULL, &err) != PB_OK)
+                nb = 0;
+        } else {
+            n = 0;
         }
+        double all_trace[48], all_bounce[48];
+        uint32_t nall = 0;
         pb_volume ref;
         d.rays_per_probe = 256;
         d.passes = ref_passes;
@@ -124,39 +162,82 @@ int main(int argc, char **argv)
             double ref_ms = pb_now_ms() - t0;
             uint32_t rays_list[3] = {64, 128, 256};
             for (int ri = 0; ri < 3; ++ri) {
-                pb_volume v;
                 d.rays_per_probe = rays_list[ri];
                 d.passes = 1;
                 d.seed = 7;
-                t0 = pb_now_ms();
-                if (pb_bake(ctx, s, gs, &d, &v, &err) != PB_OK) {
-                    fprintf(stderr, "bake_bench: %s\n", err.message);
+                row run[16];
+                double vs_trace[16], vs_bounce[16];
+                uint32_t done = 0;
+                for (; done < repeat; ++done) {
+                    double tr = trace_rate(ctx, gs, rays, n, hits), br = trace_rate(ctx, gs, brays, nb, hits);
+                    if (nall < 48)
+                        all_trace[nall] = tr, all_bounce[nall++] = br;
+                    pb_volume v;
+                    t0 = pb_now_ms();
+                    if (pb_bake(ctx, s, gs, &d, &v, &err) != PB_OK) {
+                        fprintf(stderr, "bake_bench: %s\n", err.message);
+                        break;
+                    }
+                    row *r = &run[done];
+                    memset(r, 0, sizeof *r);
+                    snprintf(r->scene, sizeof r->scene, "%s", name);
+                    r->probes = v.probe_count;
+                    r->rays = rays_list[ri];
+                    r->passes = 1;
+                    r->wall_ms = pb_now_ms() - t0;
+                    r->trace_ms = v.timings.trace, r->sh_ms = v.timings.sh, r->depth_ms = v.timings.octmap;
+                    r->rmse = bench_volume_rmse(&v, &ref);
+                    r->traversals = v.traversals;
+                    r->trace_kernel_mrays = tr;
+                    r->bounce_kernel_mrays = br;
+                    pb_volume_free(&v);
+                    double gpu = r->trace_ms + r->sh_ms + r->depth_ms;
+                    double mtrav = gpu > 0 ? (double)r->traversals / (gpu * 1e3) : 0.0;
+                    vs_trace[done] = tr > 0 ? mtrav / tr : 0.0;
+                    vs_bounce[done] = br > 0 ? mtrav / br : 0.0;
+                    if (r->traversals != run[0].traversals || r->rmse != run[0].rmse) {
+                        fprintf(stderr, "bake_bench: %s, %u rays: the same bake gave %llu traversals and RMSE %.6f, then %llu and %.6f\n",
+                                name, r->rays, (unsigned long long)run[0].traversals, run[0].rmse,
+                                (unsigned long long)r->traversals, r->rmse);
+                        nondeterministic = 1;
+                    }
+                }
+                if (done < repeat)
                     continue;
+                /* the run of median GPU time stands for the row */
+                uint32_t pick = 0;
+                for (uint32_t a = 0; a < repeat; ++a) {
+                    double ga = run[a].trace_ms + run[a].sh_ms + run[a].depth_ms;
+                    uint32_t below = 0, equal_before = 0;
+                    for (uint32_t b = 0; b < repeat; ++b) {
+                        double gb = run[b].trace_ms + run[b].sh_ms + run[b].depth_ms;
+                        below += gb < ga;
+                        equal_before += gb == ga && b < a;
+                    }
+                    if (below + equal_before == repeat / 2)
+                        pick = a;
                 }
                 row *r = &rows[nrows++];
-                snprintf(r->scene, sizeof r->scene, "%s", name);
-                r->probes = v.probe_count;
-                r->rays = rays_list[ri];
-                r->passes = 1;
-                r->wall_ms = pb_now_ms() - t0;
-                r->trace_ms = v.timings.trace, r->sh_ms = v.timings.sh, r->depth_ms = v.timings.octmap;
-                r->rmse = bench_volume_rmse(&v, &ref);
-                r->traversals = v.traversals;
-                r->trace_kernel_mrays = trace_mrays;
-                r->bounce_kernel_mrays = bounce_mrays;
-                double rays = (double)v.probe_count * r->rays, gpu_ms = r->trace_ms + r->sh_ms + r->depth_ms;
-                double mtrav = gpu_ms > 0 ? (double)v.traversals / (gpu_ms * 1e3) : 0.0;
+                *r = run[pick];
+                double trace_rates[16], bounce_rates[16];
+                for (uint32_t k = 0; k < repeat; ++k)
+                    trace_rates[k] = run[k].trace_kernel_mrays, bounce_rates[k] = run[k].bounce_kernel_mrays;
+                r->trace_kernel_mrays = median(trace_rates, repeat);
+                r->bounce_kernel_mrays = median(bounce_rates, repeat);
+                r->vs_trace = median(vs_trace, repeat);
+                r->vs_bounce = median(vs_bounce, repeat);
+                double probe_rays = (double)r->probes * r->rays, gpu_ms = r->trace_ms + r->sh_ms + r->depth_ms;
+                double mtrav = gpu_ms > 0 ? (double)r->traversals / (gpu_ms * 1e3) : 0.0;
                 printf("%-18.18s %6u %6u %9.1f %8.1f %8.1f %9.1f %9.3f %9.3f %7.2f %7.2f %8.4f\n", name, r->rays, 1,
-                       r->trace_ms, r->sh_ms, r->depth_ms, r->wall_ms, r->trace_ms > 0 ? rays / (r->trace_ms * 1e3) : 0.0,
-                       mtrav, trace_mrays > 0 ? mtrav / trace_mrays : 0.0, bounce_mrays > 0 ? mtrav / bounce_mrays : 0.0,
-                       r->rmse);
+                       r->trace_ms, r->sh_ms, r->depth_ms, r->wall_ms, r->trace_ms > 0 ? probe_rays / (r->trace_ms * 1e3) : 0.0,
+                       mtrav, r->vs_trace, r->vs_bounce, r->rmse);
                 fflush(stdout);
-                pb_volume_free(&v);
             }
             printf("%-18.18s reference: %.0f ms wall; trace kernel alone %.3f Mrays/s on probe rays, %.3f on bounce rays\n",
-                   name, ref_ms, trace_mrays, bounce_mrays);
+                   name, ref_ms, median(all_trace, nall), median(all_bounce, nall));
             pb_volume_free(&ref);
         }
+        free(rays), free(brays), free(hits);
         pb_gpu_scene_destroy(gs);
         pb_bvh_destroy(bvh);
         pb_scene_destroy(s);
@@ -165,15 +246,17 @@ int main(int argc, char **argv)
     FILE *f = fopen(json, "w");
     if (f) {
         fprintf(f, "{\n  \"bench\": \"bake\",\n  \"device\": \"%s\",\n  \"bounces\": %u,\n  \"reference_passes\": %u,\n"
-                   "  \"results\": [\n", pb_context_device(ctx)->name, bounces, ref_passes);
+                   "  \"repeat\": %u,\n  \"results\": [\n", pb_context_device(ctx)->name, bounces, ref_passes, repeat);
         for (int i = 0; i < nrows; ++i)
             fprintf(f,
                     "    {\"scene\": \"%s\", \"probes\": %u, \"rays_per_probe\": %u, \"passes\": %u, \"trace_ms\": %.3f, "
                     "\"sh_ms\": %.3f, \"depth_ms\": %.3f, \"wall_ms\": %.3f, \"relative_rmse\": %.6f, "
-                    "\"traversals\": %llu, \"trace_kernel_mrays_per_s\": %.4f, \"bounce_kernel_mrays_per_s\": %.4f}%s\n",
+                    "\"traversals\": %llu, \"trace_kernel_mrays_per_s\": %.4f, \"bounce_kernel_mrays_per_s\": %.4f, "
+                    "\"vs_trace\": %.4f, \"vs_bounce\": %.4f}%s\n",
                     rows[i].scene, rows[i].probes, rows[i].rays, rows[i].passes, rows[i].trace_ms, rows[i].sh_ms,
                     rows[i].depth_ms, rows[i].wall_ms, rows[i].rmse, (unsigned long long)rows[i].traversals,
-                    rows[i].trace_kernel_mrays, rows[i].bounce_kernel_mrays, i + 1 < nrows ? "," : "");
+                    rows[i].trace_kernel_mrays, rows[i].bounce_kernel_mrays, rows[i].vs_trace, rows[i].vs_bounce,
+                    i + 1 < nrows ? "," : "");
         fprintf(f, "  ]\n}\n");
         fclose(f);
         printf("wrote %s\n", json);
@@ -182,5 +265,5 @@ int main(int argc, char **argv)
     if (vmsgs)
         fprintf(stderr, "%s: %u Vulkan validation messages\n", argv[0], vmsgs);
     pb_context_destroy(ctx);
-    return vmsgs ? 1 : 0;
+    return vmsgs || nondeterministic ? 1 : 0;
 }
