@@ -1,9 +1,10 @@
 // BVH traversal: src/bvh/bvh_traverse.c in GLSL. 4-wide quantized nodes
 // (include/probebake/bvh.h): the four child boxes are sorted near to far,
 // hit leaves are tested in that order, the nearest hit inner child is
-// visited next and the others pushed. At most three entries per level are
-// ever on the stack, and STACK_SIZE (a specialisation constant) is
-// 3 * wide depth + 1, so the stack cannot overflow.
+// visited next and the others become the pending group, whose predecessor
+// is pushed. At most one entry per level is ever on the stack, and
+// STACK_SIZE (a specialisation constant) is wide depth + 1, so the stack
+// cannot overflow.
 #ifndef PB_TRAVERSE_GLSL
 #define PB_TRAVERSE_GLSL
 
@@ -11,7 +12,7 @@
 #include "intersect.glsl"
 #include "alpha.glsl"
 
-layout(constant_id = 0) const uint STACK_SIZE = 193u;
+layout(constant_id = 0) const uint STACK_SIZE = 65u; // PB_BVH_STACK_SIZE(PB_BVH_MAX_DEPTH)
 
 // Compare-exchange of child slots a and b by box distance; ties keep slot order.
 #define PB_SORT2(a, b)                                                          \
@@ -21,9 +22,11 @@ layout(constant_id = 0) const uint STACK_SIZE = 193u;
         d[b] = td_; ch[b] = tc_; cnt[b] = tn_;                                  \
     }
 
-// A group of pending inner siblings: the first sibling's node index, how
-// many are pending (1-3) and their ranks, nearest first, 2 bits each.
+// A group of pending inner siblings (src/bvh/bvh_traverse.c): the first
+// sibling's node index, how many are pending (0-3; 0: none) and their ranks
+// among the node's inner children, nearest first, 2 bits each.
 #define PB_GROUP(first, count, ranks) ((first) << 8u | (count) << 6u | (ranks))
+#define PB_GROUP_COUNT(g) (((g) >> 6u) & 3u)
 
 struct TraceResult {
     float t;
@@ -53,7 +56,7 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
     uint stack[STACK_SIZE]; // pending groups
     uint sp = 0u;
     uint node = 0u;
-    uint group = 0u; // pending siblings: PB_GROUP(first, count, ranks); count 0: none
+    uint group = 0u; // no group pending
     for (;;) {
 #ifdef PB_COUNT_TRAVERSALS
         ++pb_loop_steps;
@@ -135,18 +138,18 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
         if (n != 0u) {
             node = first + (ranks & 3u);
             if (n > 1u) {
-                if ((group & 192u) != 0u)
+                if (PB_GROUP_COUNT(group) != 0u)
                     stack[sp++] = group;
                 group = PB_GROUP(first, n - 1u, ranks >> 2u);
             }
         } else {
-            if ((group & 192u) == 0u) {
+            if (PB_GROUP_COUNT(group) == 0u) {
                 if (sp == 0u)
                     break;
                 group = stack[--sp];
             }
             node = (group >> 8u) + (group & 3u);
-            group = ((group & ~63u) - 64u) | ((group & 63u) >> 2u); // one fewer pending
+            group = PB_GROUP(group >> 8u, PB_GROUP_COUNT(group) - 1u, (group & 63u) >> 2u);
         }
     }
     return res;
