@@ -320,6 +320,21 @@ static void bad_desc_is_refused(void)
     d.bins = 2;
     CHECK(pb_bvh_build(s, &d, &b, &err) == PB_ERROR_INVALID_ARGUMENT);
     pb_scene_destroy(s);
+    /* more 4-wide nodes than allowed (the default limit is what a traversal's
+     * 24-bit group index addresses, about 100 M triangles: too big to build
+     * here, so the same check at a lower limit) */
+    s = random_soup(4096, 0.05f, 3, NULL);
+    pb_bvh_desc w = {0};
+    CHECK(pb_bvh_build(s, &w, &b, &err) == PB_OK && b->wide_node_count > 8);
+    uint32_t nodes = b ? b->wide_node_count : 0;
+    pb_bvh_destroy(b);
+    w.max_wide_nodes = nodes - 1;
+    CHECK(pb_bvh_build(s, &w, &b, &err) == PB_ERROR_TOO_LARGE && b == NULL);
+    CHECKF(strstr(err.message, "4-wide nodes") && !strchr(err.message, '\n'), "%s", err.message);
+    w.max_wide_nodes = nodes;
+    CHECK(pb_bvh_build(s, &w, &b, &err) == PB_OK);
+    pb_bvh_destroy(b);
+    pb_scene_destroy(s);
 }
 
 static void traversal_matches_brute_force(void)

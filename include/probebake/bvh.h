@@ -91,6 +91,8 @@ typedef struct pb_bvh_desc {
     uint32_t threads;         /* default: all online host cores */
     float traversal_cost;     /* SAH cost of one node step, default 2.0 (see docs/bvh.md) */
     float intersection_cost;  /* SAH cost of one triangle test, default 1.0 */
+    uint32_t max_wide_nodes;  /* refuse (TOO_LARGE) a BVH of more 4-wide nodes; default and
+                                 at most PB_BVH4_MAX_NODES, what a traversal can address */
 } pb_bvh_desc;
 
 /* Deepest child-pair tree the build makes. A traversal keeps a node's pending
@@ -98,7 +100,8 @@ typedef struct pb_bvh_desc {
  * so its stack needs wide_depth + 1 entries (PB_BVH_STACK_SIZE); the GPU
  * kernel is specialised with this, so overflow cannot happen. A group names
  * its first node in 24 bits, so a BVH has at most PB_BVH4_MAX_NODES 4-wide
- * nodes (about 100 M triangles; the build refuses more with TOO_LARGE). */
+ * nodes (about 100 M triangles; the build refuses more with TOO_LARGE,
+ * pb_bvh_desc.max_wide_nodes). */
 #define PB_BVH_MAX_DEPTH 64
 #define PB_BVH_STACK_SIZE(wide_depth) ((wide_depth) + 1u)
 #define PB_BVH4_MAX_NODES (1u << 24)

@@ -474,6 +474,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     if (!d.threads) d.threads = pb_host_threads();
     if (d.traversal_cost == 0.f) d.traversal_cost = 2.f;
     if (d.intersection_cost == 0.f) d.intersection_cost = 1.f;
+    if (!d.max_wide_nodes || d.max_wide_nodes > PB_BVH4_MAX_NODES) d.max_wide_nodes = PB_BVH4_MAX_NODES;
     if (d.max_leaf_size > 16)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH max leaf size %u is out of range 1..16", d.max_leaf_size);
     if (d.bins < 4 || d.bins > MAX_BINS)
@@ -585,11 +586,11 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
         pb_bvh_destroy(bvh);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory building the BVH of %u triangles", n);
     }
-    if (bvh->wide_node_count > PB_BVH4_MAX_NODES) {
+    if (bvh->wide_node_count > d.max_wide_nodes) {
         uint32_t w = bvh->wide_node_count;
         pb_bvh_destroy(bvh);
-        return pb_fail(err, PB_ERROR_TOO_LARGE, "the BVH of %u triangles has %u 4-wide nodes, more than the %u a traversal can address",
-                       n, w, PB_BVH4_MAX_NODES);
+        return pb_fail(err, PB_ERROR_TOO_LARGE, "the BVH of %u triangles has %u 4-wide nodes, more than the %u %s", n, w,
+                       d.max_wide_nodes, d.max_wide_nodes == PB_BVH4_MAX_NODES ? "a traversal can address" : "allowed");
     }
     *out = bvh;
     return PB_OK;
