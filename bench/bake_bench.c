@@ -37,20 +37,6 @@
 #include <string.h>
 #include <sys/stat.h>
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static double median(const double *v, uint32_t n)
-{
-    double t[64];
-    memcpy(t, v, n * sizeof *t);
-    qsort(t, n, sizeof *t, cmp_double);
-    return n ? t[n / 2] : 0.0;
-}
-
 /* The trace kernel's Mrays/s in one timed run; 0 when it fails. */
 static double trace_rate(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, uint32_t n, pb_hit *hits)
 {
@@ -222,10 +208,10 @@ int main(int argc, char **argv)
                 double trace_rates[16], bounce_rates[16];
                 for (uint32_t k = 0; k < repeat; ++k)
                     trace_rates[k] = run[k].trace_kernel_mrays, bounce_rates[k] = run[k].bounce_kernel_mrays;
-                r->trace_kernel_mrays = median(trace_rates, repeat);
-                r->bounce_kernel_mrays = median(bounce_rates, repeat);
-                r->vs_trace = median(vs_trace, repeat);
-                r->vs_bounce = median(vs_bounce, repeat);
+                r->trace_kernel_mrays = bench_median(trace_rates, repeat);
+                r->bounce_kernel_mrays = bench_median(bounce_rates, repeat);
+                r->vs_trace = bench_median(vs_trace, repeat);
+                r->vs_bounce = bench_median(vs_bounce, repeat);
                 double probe_rays = (double)r->probes * r->rays, gpu_ms = r->trace_ms + r->sh_ms + r->depth_ms;
                 double mtrav = gpu_ms > 0 ? (double)r->traversals / (gpu_ms * 1e3) : 0.0;
                 printf("%-18.18s %6u %6u %9.1f %8.1f %8.1f %9.1f %9.3f %9.3f %7.2f %7.2f %8.4f\n", name, r->rays, 1,
@@ -234,7 +220,7 @@ int main(int argc, char **argv)
                 fflush(stdout);
             }
             printf("%-18.18s reference: %.0f ms wall; trace kernel alone %.3f Mrays/s on probe rays, %.3f on bounce rays\n",
-                   name, ref_ms, median(all_trace, nall), median(all_bounce, nall));
+                   name, ref_ms, bench_median(all_trace, nall), bench_median(all_bounce, nall));
             pb_volume_free(&ref);
         }
         free(rays), free(brays), free(hits);

@@ -1,4 +1,4 @@
-/* Shared by the benches: the probe error metric. */
+/* Shared by the benches: the probe error metric, medians, scene setup. */
 #ifndef PB_BENCH_UTIL_H
 #define PB_BENCH_UTIL_H
 
@@ -7,6 +7,25 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+
+/* qsort's comparison of doubles. */
+static inline int bench_cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Median of v[0..n) (the upper one of an even count), v unchanged; n <= 64. */
+static inline double bench_median(const double *v, uint32_t n)
+{
+    double t[64];
+    if (!n || n > 64)
+        return 0.0;
+    for (uint32_t i = 0; i < n; ++i)
+        t[i] = v[i];
+    qsort(t, n, sizeof *t, bench_cmp_double);
+    return t[n / 2];
+}
 
 /* Relative RMSE of irradiance luminance of volume a against ref, over ref's
  * valid probes and 64 spherical-Fibonacci directions:

@@ -101,12 +101,6 @@ typedef struct point {
     double median, p95;
 } point;
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 /* Median and p95 of the per-axis relative irradiance error of v against ref
  * (header comment). *compared: probes compared, *moved: valid reference
  * probes left out because v has them elsewhere (none when v was baked at
@@ -148,7 +142,7 @@ static void axis_errors(const pb_volume *v, const pb_volume *ref, double *median
     mean /= n;
     for (uint32_t i = 0; i < n; ++i)
         err[i] = fabs(err[i]) / fmax(eref[i], 0.05 * mean);
-    qsort(err, n, sizeof *err, cmp_double);
+    qsort(err, n, sizeof *err, bench_cmp_double);
     *median = err[n / 2];
     *p95 = err[(size_t)((n - 1) * 0.95 + 0.5)];
 out:
@@ -385,7 +379,7 @@ int main(int argc, char **argv)
             if ((ref.probe_flags[p] & PB_PROBE_VALID) && ref.probe_std_error[p] >= 0.f)
                 rse[nr++] = ref.probe_std_error[p];
         if (nr)
-            qsort(rse, nr, sizeof *rse, cmp_double);
+            qsort(rse, nr, sizeof *rse, bench_cmp_double);
         printf("\n%s (%u probes, %u valid; reference %.0f paths per probe, its standard error median %.2f %%, "
                "p95 %.2f %%)\n", c->name, ref.probe_count, valid, mean_paths(&ref), nr ? 100 * rse[nr / 2] : NAN,
                nr ? 100 * rse[(size_t)((nr - 1) * 0.95 + 0.5)] : NAN);

@@ -88,7 +88,7 @@ typedef struct pb_bvh {
 typedef struct pb_bvh_desc {
     uint32_t max_leaf_size;   /* default 8; 1..16 */
     uint32_t bins;            /* default 16; 4..64 */
-    uint32_t threads;         /* default: all online host cores */
+    uint32_t threads;         /* default: every host core this process may use (affinity mask) */
     float traversal_cost;     /* SAH cost of one node step, default 2.0 (see docs/bvh.md) */
     float intersection_cost;  /* SAH cost of one triangle test, default 1.0 */
     uint32_t max_wide_nodes;  /* refuse (TOO_LARGE) a BVH of more 4-wide nodes; default and
