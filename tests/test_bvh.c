@@ -65,23 +65,22 @@ static void check_wide_node(wide_check *c, uint32_t node, uint32_t depth, float 
         lo[k] = INFINITY, hi[k] = -INFINITY;
     if (depth + 1 > c->max_depth)
         c->max_depth = depth + 1;
-    /* inner children consecutive in slot order: traversals name pending
-     * siblings by the first one's index and their ranks */
-    uint32_t inner = 0, first = PB_BVH4_EMPTY;
-    for (uint32_t i = 0; i < 4; ++i)
-        if (n->child[i] != PB_BVH4_EMPTY && !n->count[i]) {
-            if (!inner++)
-                first = n->child[i];
-            c->bad += n->child[i] != first + inner - 1;
-        }
+    /* the slots as traversals decode them: inner children and leaves'
+     * triangles consecutive in slot order by construction, so what is
+     * checked is that they are the right ones (the boxes below enclose
+     * them, each triangle in one leaf) and that empty slots come last */
+    uint32_t child[4], count[4], empty = 0;
+    pb_bvh4_slots(n, child, count);
     for (uint32_t i = 0; i < 4; ++i) {
-        if (n->child[i] == PB_BVH4_EMPTY) {
-            c->bad += n->count[i] != 0;
+        if (child[i] == PB_BVH4_EMPTY) {
+            c->bad += count[i] != 0;
+            ++empty;
             continue;
         }
+        c->bad += empty != 0;
         float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        if (n->count[i]) {
-            for (uint32_t t = n->child[i]; t < n->child[i] + n->count[i]; ++t) {
+        if (count[i]) {
+            for (uint32_t t = child[i]; t < child[i] + count[i]; ++t) {
                 if (t >= c->b->triangle_count) {
                     ++c->bad;
                     continue;
@@ -93,11 +92,11 @@ static void check_wide_node(wide_check *c, uint32_t node, uint32_t depth, float 
                     chi[v % 3] = fmaxf(chi[v % 3], p[v]);
                 }
             }
-        } else if (n->child[i] <= node || n->child[i] >= c->b->wide_node_count) {
+        } else if (child[i] <= node || child[i] >= c->b->wide_node_count) {
             ++c->bad;
             continue;
         } else {
-            check_wide_node(c, n->child[i], depth + 1, clo, chi);
+            check_wide_node(c, child[i], depth + 1, clo, chi);
         }
         float qlo[3], qhi[3];
         pb_bvh4_child_box(n, i, qlo, qhi);

@@ -16,18 +16,23 @@
  * slot (a scene with one leaf) has count 0, child -1 and an inverted box.
  *
  * Traversals (GPU and the CPU reference) walk a 4-wide form of the same
- * tree (src/bvh/bvh_wide.c): each node (64 bytes) holds up to four child
+ * tree (src/bvh/bvh_wide.c): each node (48 bytes) holds up to four child
  * boxes quantized to 8 bits per bound in the node's frame:
  *
  *   float origin[3]            the frame's corner
  *   uint8 exponent[3]          axis scale 2^(exponent - 127)
  *   uint8 qbox[3][2][4]        [axis][lo, hi][child]: bound = origin + q * scale
- *   uint32 child[4]            node index (count 0), first triangle, or PB_BVH4_EMPTY
- *   uint8 count[4]             triangles in the leaf, 0 for an inner node
+ *   uint32 inner               index of the first inner child (24 bits)
+ *   uint32 leaf                first triangle of the first leaf child (28 bits)
+ *   slot codes, 5 bits each    0 empty, 1..16 a leaf of that many triangles,
+ *                              31 an inner node; in the spare bits above
  *
- * Decoded boxes enclose the exact ones; node 0 is the root, and a node's
- * inner children have consecutive indices in slot order (traversals name
- * pending siblings by the first one and their ranks).
+ * Decoded boxes enclose the exact ones; node 0 is the root. A node's inner
+ * children have consecutive indices in slot order from `inner`, and its
+ * leaves' triangles are consecutive in slot order from `leaf` (the build
+ * renumbers leaf order so), so a node names its children in 8 bytes: 48
+ * bytes is three 16-byte texels (docs/bvh.md). Traversals name pending
+ * siblings by the first one and their ranks.
  */
 #ifndef PROBEBAKE_BVH_H
 #define PROBEBAKE_BVH_H
@@ -51,14 +56,17 @@ typedef struct pb_bvh_node {
 
 #define PB_BVH4_EMPTY 0xffffffffu
 
+/* Slot codes of a 4-wide node (5 bits each): a leaf is its triangle count. */
+#define PB_BVH4_SLOT_EMPTY 0u
+#define PB_BVH4_SLOT_INNER 31u
+
 typedef struct pb_bvh4_node {
     float origin[3];
     uint8_t exponent[3];
-    uint8_t pad0;
+    uint8_t codes_lo;   /* slot codes, bits 0-7 */
     uint8_t qbox[3][2][4];
-    uint32_t child[4];
-    uint8_t count[4];
-    uint32_t pad1;
+    uint32_t inner;     /* first inner child | slot codes bits 8-15 << 24 */
+    uint32_t leaf;      /* first leaf triangle | slot codes bits 16-19 << 28 */
 } pb_bvh4_node;
 
 typedef struct pb_bvh_stats {
@@ -101,10 +109,12 @@ typedef struct pb_bvh_desc {
  * kernel is specialised with this, so overflow cannot happen. A group names
  * its first node in 24 bits, so a BVH has at most PB_BVH4_MAX_NODES 4-wide
  * nodes (about 100 M triangles; the build refuses more with TOO_LARGE,
- * pb_bvh_desc.max_wide_nodes). */
+ * pb_bvh_desc.max_wide_nodes), and a node names its first leaf triangle in
+ * 28 bits (PB_BVH4_MAX_TRIANGLES). */
 #define PB_BVH_MAX_DEPTH 64
 #define PB_BVH_STACK_SIZE(wide_depth) ((wide_depth) + 1u)
 #define PB_BVH4_MAX_NODES (1u << 24)
+#define PB_BVH4_MAX_TRIANGLES (1u << 28)
 
 /* Builds the BVH of `scene` (which must outlive nothing: the BVH copies the
  * positions it needs). Deterministic: the result does not depend on the

@@ -6,7 +6,7 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads sweep test_bake test_trace tests (default: compile
+# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads sweep test_bake test_trace traceab tests (default: compile
 # bake bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
@@ -99,6 +99,18 @@ for s in $steps; do
             say "bake, $b"
             timeout 60 $bin bake $crypt --counts 32,16,32 --rays 256 --passes 1 --bounces 3 \
                 --verbose -o /tmp/c16k.probes 2>&1 | grep -E "stages|^time" >>"$log"
+        done ;;
+    traceab) # the trace kernel of this build and of .dev/trace_bench-before (another build's
+        # binary, put there by hand), alternately, on The Crypt and the Cornell box
+        for b in before after before after before after; do
+            bin=build/bench/trace_bench
+            [ $b = before ] && bin=.dev/trace_bench-before
+            [ -x $bin ] || continue
+            say "trace, $b"
+            timeout 90 $bin --probes 16384 --rays 1024 --repeat 3 --json /tmp/traceab-$b-$SECONDS.json \
+                $crypt $cornell 2>&1 | grep -E "^(oacmpdm1|cornellBox)" >>"$log"
+            keep /tmp/traceab-$b-*.json
+            rm -f /tmp/traceab-*.json
         done ;;
     blocks) # a bake whose depth sums pass NVIDIA's 4 GiB allocation limit: 2.3M probes at 16x16,
         # 4.4 GiB in two blocks (src/bake/depth_sums.h); one short pass, no bounces

@@ -80,22 +80,26 @@ vec4 unpack_bytes(uint w)
     return vec4((uvec4(w) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu);
 }
 
-// A node's eight 64-bit words: origin.xy | origin.z, scale exponents | q[0]
-// | q[1] | q[2] | children 0-1 | children 2-3 | counts.
+// A node's six 64-bit words (include/probebake/bvh.h): origin.xy |
+// origin.z, scale exponents, slot codes 0-7 | q[0] | q[1] | q[2] | first
+// inner child, slot codes 8-15; first leaf triangle, slot codes 16-19.
+// Each slot code (5 bits) is 0 for an empty slot, 31 for an inner child,
+// else a leaf's triangle count; a node's inner children, and its leaves'
+// triangles, are consecutive in slot order. As C's pb_bvh4_slots.
 Node4 load_node4(pb_addr base, uint index)
 {
-    uvec2 wd[8];
+    uvec2 wd[6];
     if (PB_SCENE_TEXELS != 0u) {
-        int b = 4 * int(index);
-        for (int i = 0; i < 4; ++i) {
+        int b = 3 * int(index);
+        for (int i = 0; i < 3; ++i) {
             uvec4 x = imageLoad(pb_node_texels, b + i);
             wd[2 * i] = x.xy;
             wd[2 * i + 1] = x.zw;
         }
     } else {
         Words64 w = Words64(base);
-        for (uint i = 0u; i < 8u; ++i)
-            wd[i] = PB_WORD(w, 8u * index + i);
+        for (uint i = 0u; i < 6u; ++i)
+            wd[i] = PB_WORD(w, 6u * index + i);
     }
     Node4 n;
     n.origin = vec3(uintBitsToFloat(wd[0]), uintBitsToFloat(wd[1].x));
@@ -104,8 +108,15 @@ Node4 load_node4(pb_addr base, uint index)
         n.qlo[a] = unpack_bytes(wd[2u + a].x);
         n.qhi[a] = unpack_bytes(wd[2u + a].y);
     }
-    n.child = uvec4(wd[5], wd[6]);
-    n.count = (uvec4(wd[7].x) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu;
+    uint codes = wd[1].y >> 24u | (wd[5].x >> 24u) << 8u | (wd[5].y >> 28u) << 16u;
+    uint inner = wd[5].x & 0xffffffu, leaf = wd[5].y & 0xfffffffu;
+    for (int i = 0; i < 4; ++i) {
+        uint c = (codes >> (5u * uint(i))) & 31u;
+        n.count[i] = c == 31u ? 0u : c;
+        n.child[i] = c == 0u ? PB_BVH4_EMPTY : c == 31u ? inner : leaf;
+        inner += c == 31u ? 1u : 0u;
+        leaf += n.count[i];
+    }
     return n;
 }
 
@@ -150,7 +161,7 @@ Tri load_tri(pb_addr base, uint index)
 
 // Addresses of the uploaded scene, in leaf order (see bvh.h).
 struct SceneRefs {
-    pb_addr nodes;     // Node4[] (64 bytes each)
+    pb_addr nodes;     // Node4[] (48 bytes each)
     pb_addr tris;      // 10 words per triangle: 9 position floats, flags (material | PB_FLAG_ALPHA_MASK)
     pb_addr tri_uv;    // float[6] per triangle; then, with PB_SCENE_VERTEX_COLORS, float[12] per triangle (RGBA per corner)
     pb_addr materials; // Material[]

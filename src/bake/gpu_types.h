@@ -31,9 +31,9 @@ typedef struct gpu_texture {
 } gpu_texture;
 _Static_assert(sizeof(gpu_texture) == 16, "gpu_texture layout");
 
-_Static_assert(sizeof(pb_bvh4_node) == 64, "Node4 layout");
-_Static_assert(offsetof(pb_bvh4_node, qbox) == 16 && offsetof(pb_bvh4_node, child) == 40 &&
-                   offsetof(pb_bvh4_node, count) == 56,
+_Static_assert(sizeof(pb_bvh4_node) == 48, "Node4 layout");
+_Static_assert(offsetof(pb_bvh4_node, codes_lo) == 15 && offsetof(pb_bvh4_node, qbox) == 16 &&
+                   offsetof(pb_bvh4_node, inner) == 40 && offsetof(pb_bvh4_node, leaf) == 44,
                "Node4 layout");
 
 /* Leaf-ordered triangle record (Tri in scene.glsl), read as 64-bit words. */

@@ -483,6 +483,9 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH SAH costs must be positive");
     if (d.threads > 64)
         d.threads = 64;
+    if (scene->triangle_count > PB_BVH4_MAX_TRIANGLES)
+        return pb_fail(err, PB_ERROR_TOO_LARGE, "%u triangles are more than the %u a BVH node can address",
+                       scene->triangle_count, PB_BVH4_MAX_TRIANGLES);
 
     double t0 = pb_now_ms();
     uint32_t n = scene->triangle_count;
@@ -609,6 +612,6 @@ void pb_bvh_destroy(pb_bvh *bvh)
 
 uint64_t pb_bvh_gpu_bytes(const pb_bvh *bvh)
 {
-    /* 4-wide nodes + 36 bytes of positions + 4 bytes of flags per triangle */
+    /* 4-wide nodes (48 bytes) + 36 bytes of positions + 4 bytes of flags per triangle */
     return (uint64_t)bvh->wide_node_count * sizeof(pb_bvh4_node) + (uint64_t)bvh->triangle_count * 40u;
 }

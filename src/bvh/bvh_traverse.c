@@ -72,9 +72,8 @@ static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
         const pb_bvh4_node *nd = &bvh->wide_nodes[node];
         float d[4];
         uint32_t ch[4], cnt[4];
+        pb_bvh4_slots(nd, ch, cnt);
         for (uint32_t s = 0; s < 4; ++s) {
-            ch[s] = nd->child[s];
-            cnt[s] = nd->count[s];
             d[s] = INFINITY;
             if (ch[s] == PB_BVH4_EMPTY)
                 continue;
