@@ -69,15 +69,15 @@ static void check_wide_node(wide_check *c, uint32_t node, uint32_t depth, float 
      * triangles consecutive in slot order by construction, so what is
      * checked is that they are the right ones (the boxes below enclose
      * them, each triangle in one leaf) and that empty slots come last */
-    uint32_t child[4], count[4], empty = 0;
-    pb_bvh4_slots(n, child, count);
+    uint32_t child[4], count[4], used = pb_bvh4_slots(n, child, count);
+    c->bad += used < 2 && node != 0; /* a pair node's two children at least, but at the root */
     for (uint32_t i = 0; i < 4; ++i) {
-        if (child[i] == PB_BVH4_EMPTY) {
+        if (i >= used) {
             c->bad += count[i] != 0;
-            ++empty;
             continue;
         }
-        c->bad += empty != 0;
+        if (!count[i])
+            child[i] += pb_bvh4_first_inner(n);
         float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
         if (count[i]) {
             for (uint32_t t = child[i]; t < child[i] + count[i]; ++t) {

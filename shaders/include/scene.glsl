@@ -11,7 +11,6 @@
 #define PB_SCENE_VERTEX_COLORS 1u
 #define PB_INF uintBitsToFloat(0x7f800000u)
 
-#define PB_BVH4_EMPTY 0xffffffffu
 
 // 4-wide quantized BVH node (include/probebake/bvh.h), decoded: child i's
 // box on axis a is origin[a] + q[a][i] * scale[a], q from qlo / qhi.
@@ -20,8 +19,10 @@ struct Node4 {
     vec3 scale;
     vec4 qlo[3];
     vec4 qhi[3];
-    uvec4 child;
-    uvec4 count;
+    uvec4 child;  // a leaf's first triangle, an inner child's rank among the inner children
+    uvec4 count;  // a leaf's triangles; 0 for an inner or unused slot
+    uint first;   // the first inner child's node index
+    uint used;    // used slots (they come first)
 };
 
 struct Material { // alpha-test view of a material
@@ -85,7 +86,8 @@ vec4 unpack_bytes(uint w)
 // inner child, slot codes 8-15; first leaf triangle, slot codes 16-19.
 // Each slot code (5 bits) is 0 for an empty slot, 31 for an inner child,
 // else a leaf's triangle count; a node's inner children, and its leaves'
-// triangles, are consecutive in slot order. As C's pb_bvh4_slots.
+// triangles, are consecutive in slot order, so an inner child is named by
+// its rank and a leaf by its first triangle. As C's pb_bvh4_slots.
 Node4 load_node4(pb_addr base, uint index)
 {
     uvec2 wd[6];
@@ -109,13 +111,16 @@ Node4 load_node4(pb_addr base, uint index)
         n.qhi[a] = unpack_bytes(wd[2u + a].y);
     }
     uint codes = wd[1].y >> 24u | (wd[5].x >> 24u) << 8u | (wd[5].y >> 28u) << 16u;
-    uint inner = wd[5].x & 0xffffffu, leaf = wd[5].y & 0xfffffffu;
+    uint rank = 0u, leaf = wd[5].y & 0xfffffffu;
+    n.first = wd[5].x & 0xffffffu;
+    n.used = 0u;
     for (int i = 0; i < 4; ++i) {
         uint c = (codes >> (5u * uint(i))) & 31u;
         n.count[i] = c == 31u ? 0u : c;
-        n.child[i] = c == 0u ? PB_BVH4_EMPTY : c == 31u ? inner : leaf;
-        inner += c == 31u ? 1u : 0u;
+        n.child[i] = c == 31u ? rank : leaf;
+        rank += c == 31u ? 1u : 0u;
         leaf += n.count[i];
+        n.used += c != 0u ? 1u : 0u;
     }
     return n;
 }

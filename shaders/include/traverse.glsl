@@ -71,7 +71,7 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
             // (no `precise` needed; glslang also takes minutes marking it here)
             vec3 lo = nd.origin + vec3(nd.qlo[0][i], nd.qlo[1][i], nd.qlo[2][i]) * nd.scale;
             vec3 hi = nd.origin + vec3(nd.qhi[0][i], nd.qhi[1][i], nd.qhi[2][i]) * nd.scale;
-            d[i] = ch[i] == PB_BVH4_EMPTY ? PB_INF : ray_box(r, lo, hi, tmin, tmax);
+            d[i] = uint(i) < nd.used ? ray_box(r, lo, hi, tmin, tmax) : PB_INF;
         }
         // near to far (ties keep slot order): leaves tested in this order, inner children pushed far first
         PB_SORT2(0, 1);
@@ -126,13 +126,11 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
         // inner children (consecutive from `first`): the nearest is next,
         // the rest become the pending group, and the group they replace is
         // the one stack push of this step.
-        uint first = PB_BVH4_EMPTY;
-        for (int i = 0; i < 4; ++i)
-            first = cnt[i] == 0u ? min(first, ch[i]) : first; // empty slots are 0xffffffff
+        uint first = nd.first;
         uint n = 0u, ranks = 0u;
         for (int i = 0; i < 4; ++i) {
-            bool take = cnt[i] == 0u && d[i] < PB_INF && d[i] <= tmax; // a miss is +inf, tmax may be too
-            ranks |= take ? (ch[i] - first) << (2u * n) : 0u;
+            bool take = cnt[i] == 0u && d[i] < PB_INF && d[i] <= tmax; // a miss or unused slot is +inf, tmax may be too
+            ranks |= take ? ch[i] << (2u * n) : 0u;
             n += take ? 1u : 0u;
         }
         if (n != 0u) {

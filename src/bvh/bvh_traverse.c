@@ -72,10 +72,10 @@ static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
         const pb_bvh4_node *nd = &bvh->wide_nodes[node];
         float d[4];
         uint32_t ch[4], cnt[4];
-        pb_bvh4_slots(nd, ch, cnt);
+        uint32_t used = pb_bvh4_slots(nd, ch, cnt);
         for (uint32_t s = 0; s < 4; ++s) {
             d[s] = INFINITY;
-            if (ch[s] == PB_BVH4_EMPTY)
+            if (s >= used)
                 continue;
             float lo[3], hi[3];
             pb_bvh4_child_box(nd, s, lo, hi);
@@ -109,13 +109,11 @@ static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
         /* the hit inner children, near to far, as ranks among the node's inner
          * children (consecutive from `first`): the nearest is next, the rest
          * become the pending group, and the group they replace is pushed */
-        uint32_t first = PB_BVH4_EMPTY, n = 0, ranks = 0;
-        for (int s = 0; s < 4; ++s)
-            first = cnt[s] == 0 && ch[s] < first ? ch[s] : first;
+        uint32_t first = pb_bvh4_first_inner(nd), n = 0, ranks = 0;
         for (int s = 0; s < 4; ++s) {
-            if (cnt[s] != 0 || !(d[s] < INFINITY && d[s] <= tmax)) /* a miss is +inf, tmax may be too */
+            if (cnt[s] != 0 || !(d[s] < INFINITY && d[s] <= tmax)) /* a miss or unused slot is +inf, tmax may be too */
                 continue;
-            ranks |= (ch[s] - first) << (2 * n++);
+            ranks |= ch[s] << (2 * n++);
         }
         if (n != 0) {
             node = first + (ranks & 3);

@@ -18,21 +18,30 @@ static inline float pb_bvh4_scale(uint8_t e)
     return b.f;
 }
 
-/* Child slots of a node as the traversals use them: child[i] is the node
- * index of an inner child, the first triangle of a leaf or PB_BVH4_EMPTY;
- * count[i] the leaf's triangles, 0 for inner and empty slots. The kernels'
- * load_node4 (shaders/include/scene.glsl) decodes the same bits. */
-static inline void pb_bvh4_slots(const pb_bvh4_node *n, uint32_t child[4], uint32_t count[4])
+/* Child slots of a node as the traversals use them. Returns the used slots
+ * (they come first). child[i] is a leaf's first triangle or an inner
+ * child's rank among the node's inner children (its node index is
+ * pb_bvh4_first_inner + rank); count[i] the leaf's triangles, 0 for an inner
+ * or unused slot. The kernels' load_node4 (shaders/include/scene.glsl)
+ * decodes the same bits. */
+static inline uint32_t pb_bvh4_first_inner(const pb_bvh4_node *n)
+{
+    return n->inner & 0xffffffu;
+}
+
+static inline uint32_t pb_bvh4_slots(const pb_bvh4_node *n, uint32_t child[4], uint32_t count[4])
 {
     uint32_t codes = n->codes_lo | (n->inner >> 24) << 8 | (n->leaf >> 28) << 16;
-    uint32_t inner = n->inner & 0xffffffu, leaf = n->leaf & 0xfffffffu;
+    uint32_t rank = 0, leaf = n->leaf & 0xfffffffu, used = 0;
     for (int i = 0; i < 4; ++i) {
         uint32_t c = (codes >> (5 * i)) & 31u;
         count[i] = c == PB_BVH4_SLOT_INNER ? 0u : c;
-        child[i] = c == PB_BVH4_SLOT_EMPTY ? PB_BVH4_EMPTY : c == PB_BVH4_SLOT_INNER ? inner : leaf;
-        inner += c == PB_BVH4_SLOT_INNER;
+        child[i] = c == PB_BVH4_SLOT_INNER ? rank : leaf;
+        rank += c == PB_BVH4_SLOT_INNER;
         leaf += count[i];
+        used += c != PB_BVH4_SLOT_EMPTY;
     }
+    return used;
 }
 
 /* Decoded (conservative) box of child slot i. */
