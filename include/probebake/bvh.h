@@ -54,8 +54,6 @@ typedef struct pb_bvh_node {
     uint32_t count[2];
 } pb_bvh_node;
 
-#define PB_BVH4_EMPTY 0xffffffffu
-
 /* Slot codes of a 4-wide node (5 bits each): a leaf is its triangle count. */
 #define PB_BVH4_SLOT_EMPTY 0u
 #define PB_BVH4_SLOT_INNER 31u

@@ -24,6 +24,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#define SLOT_UNUSED 0xffffffffu /* wide_state.child of a slot past a node's children */
+
 typedef struct wide_slot {
     float lo[3], hi[3];
     uint32_t child; /* pair node index (count 0) or first triangle */
@@ -33,7 +35,7 @@ typedef struct wide_slot {
 typedef struct wide_state {
     const pb_bvh *bvh;
     pb_bvh4_node *out;
-    uint32_t (*child)[4]; /* per wide node: pair leaf's first triangle, wide node index or empty */
+    uint32_t (*child)[4]; /* per wide node: pair leaf's first triangle, wide node index or SLOT_UNUSED */
     uint8_t (*count)[4];  /* leaf triangles, 0 for an inner or empty slot */
     uint32_t next, depth;
 } wide_state;
@@ -130,7 +132,7 @@ static void emit(wide_state *ws, uint32_t pair, uint32_t index, uint32_t depth)
     }
     uint32_t *child = ws->child[index];
     for (uint32_t i = 0; i < 4; ++i) {
-        child[i] = PB_BVH4_EMPTY;
+        child[i] = SLOT_UNUSED;
         ws->count[index][i] = 0;
         if (i >= k)
             continue;
@@ -167,7 +169,7 @@ static int encode(pb_bvh *bvh, const wide_state *ws)
         uint32_t codes = 0, inner = 0, leaf = next, inners = 0;
         for (uint32_t i = 0; i < 4; ++i) {
             uint32_t c = ws->child[w][i], k = ws->count[w][i];
-            if (c == PB_BVH4_EMPTY)
+            if (c == SLOT_UNUSED)
                 continue;
             if (!k) {
                 inner = inners++ ? inner : c;
