@@ -53,8 +53,8 @@ typedef struct wide_check {
     uint32_t *seen, max_depth, bad, loose;
 } wide_check;
 
-/* The traced 4-wide form: every triangle in exactly one leaf, inner siblings
- * consecutive, each decoded child box encloses its subtree's triangles
+/* The traced 4-wide form: every triangle in exactly one leaf, used slots
+ * first, each decoded child box encloses its subtree's triangles
  * (conservative quantization) and overshoots them by at most one
  * quantization step per bound (tight).
  * Returns the exact bounds of the subtree's vertices. */
@@ -71,6 +71,10 @@ static void check_wide_node(wide_check *c, uint32_t node, uint32_t depth, float 
      * them, each triangle in one leaf) and that empty slots come last */
     uint32_t child[4], count[4], used = pb_bvh4_slots(n, child, count);
     c->bad += used < 2 && node != 0; /* a pair node's two children at least, but at the root */
+    /* traversals take the first `used` slots: no code may follow them (the
+     * layout of include/probebake/bvh.h, read here without the decoder) */
+    uint32_t codes = n->codes_lo | (n->inner >> 24) << 8 | (n->leaf >> 28) << 16;
+    c->bad += used < 4 && (codes >> (5 * used)) != 0;
     for (uint32_t i = 0; i < 4; ++i) {
         if (i >= used) {
             c->bad += count[i] != 0;
@@ -126,7 +130,7 @@ static void check_wide(const pb_bvh *b, const char *what)
     uint32_t once = 0;
     for (uint32_t t = 0; t < b->triangle_count; ++t)
         once += c.seen[t] == 1;
-    CHECKF(c.bad == 0, "%s: %u violations in the 4-wide BVH (a box not enclosing its triangles, or inner siblings not consecutive)", what, c.bad);
+    CHECKF(c.bad == 0, "%s: %u violations in the 4-wide BVH (a box not enclosing its triangles, or a slot code after the used ones)", what, c.bad);
     CHECKF(c.loose == 0, "%s: %u quantized bounds looser than one step or scales coarser than needed", what, c.loose);
     CHECKF(once == b->triangle_count, "%s: %u of %u triangles in exactly one 4-wide leaf", what, once,
            b->triangle_count);
@@ -333,6 +337,13 @@ static void bad_desc_is_refused(void)
     w.max_wide_nodes = nodes;
     CHECK(pb_bvh_build(s, &w, &b, &err) == PB_OK);
     pb_bvh_destroy(b);
+    /* more triangles than a node's 28-bit first leaf triangle names: refused
+     * before anything is read or allocated (the scene is a shallow copy that
+     * only claims them) */
+    pb_scene huge = *s;
+    huge.triangle_count = PB_BVH4_MAX_TRIANGLES + 1u;
+    CHECK(pb_bvh_build(&huge, NULL, &b, &err) == PB_ERROR_TOO_LARGE && b == NULL);
+    CHECKF(strstr(err.message, "triangles") && !strchr(err.message, '\n'), "%s", err.message);
     pb_scene_destroy(s);
 }
 

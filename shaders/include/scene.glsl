@@ -11,7 +11,6 @@
 #define PB_SCENE_VERTEX_COLORS 1u
 #define PB_INF uintBitsToFloat(0x7f800000u)
 
-
 // 4-wide quantized BVH node (include/probebake/bvh.h), decoded: child i's
 // box on axis a is origin[a] + q[a][i] * scale[a], q from qlo / qhi.
 struct Node4 {
