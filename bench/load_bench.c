@@ -1,7 +1,9 @@
 /* load_bench: what one divergent 16-byte load costs a Vulkan kernel, by the
  * way it reads: storage buffer, buffer reference (32- or 64-bit components),
  * uniform texel buffer (rgba32ui, or r32ui four times), storage texel buffer
- * (imageLoad of rgba32ui). Each kernel (load_bench/load_bench.comp) walks
+ * (imageLoad of rgba32ui), uniform buffer (the one that llvmpipe reads
+ * inline, lane by lane but without a mask or a call; at most 64 KiB there, so
+ * it runs only when the records fit: --records 1024 or fewer). Each kernel (load_bench/load_bench.comp) walks
  * random 64-byte records, four loads per step, so the loads of a SIMD
  * group's lanes diverge as a BVH traversal's do. The kinds run in
  * interleaved rounds (lavapipe's rate drifts between minutes), each the best
@@ -27,6 +29,7 @@
 #include "load_bench_3.spv.h"
 #include "load_bench_4.spv.h"
 #include "load_bench_5.spv.h"
+#include "load_bench_6.spv.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -34,14 +37,17 @@
 #include <sys/stat.h>
 #include <time.h>
 
-#define KINDS 6
+#define KINDS 7
+#define KIND_UNIFORM 6
+#define UNIFORM_BYTES 65536u /* the kernel's uniform block: 4,096 words */
 static const char *const kind_names[KINDS] = {
     "storage buffer uvec4", "buffer reference uvec4", "buffer reference u64vec2",
-    "uniform texel rgba32ui", "uniform texel r32ui x4", "storage texel rgba32ui"};
-static const uint32_t *const kind_spirv[KINDS] = {load_bench_0, load_bench_1, load_bench_2,
-                                                  load_bench_3, load_bench_4, load_bench_5};
+    "uniform texel rgba32ui", "uniform texel r32ui x4", "storage texel rgba32ui", "uniform buffer uvec4"};
+static const uint32_t *const kind_spirv[KINDS] = {load_bench_0, load_bench_1, load_bench_2, load_bench_3,
+                                                  load_bench_4, load_bench_5, load_bench_6};
 static const size_t kind_bytes[KINDS] = {sizeof load_bench_0, sizeof load_bench_1, sizeof load_bench_2,
-                                         sizeof load_bench_3, sizeof load_bench_4, sizeof load_bench_5};
+                                         sizeof load_bench_3, sizeof load_bench_4, sizeof load_bench_5,
+                                         sizeof load_bench_6};
 
 typedef struct bench {
     VkInstance instance;
@@ -257,38 +263,45 @@ int main(int argc, char **argv)
 
     /* the records: random words, so the walk's next record is random too */
     VkDeviceSize bytes = (VkDeviceSize)records * 64;
-    buffer data = make_buffer(&b, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT |
-                                             VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT);
+    /* the uniform kind needs its whole block bound, so the buffer has at
+     * least that many bytes; it runs only if the walk stays inside it */
+    int uniform_fits = bytes <= UNIFORM_BYTES && props.limits.maxUniformBufferRange >= UNIFORM_BYTES;
+    VkDeviceSize alloc = bytes < UNIFORM_BYTES ? UNIFORM_BYTES : bytes;
+    buffer data = make_buffer(&b, alloc, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT |
+                                             VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
+                                             VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
     buffer sums = make_buffer(&b, (VkDeviceSize)invocations * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
     uint32_t *w = data.mapped, x = 12345u;
-    for (VkDeviceSize i = 0; i < bytes / 4; ++i) {
+    for (VkDeviceSize i = 0; i < alloc / 4; ++i) {
         x ^= x << 13, x ^= x >> 17, x ^= x << 5;
         w[i] = x;
     }
     VkBufferView view4, view1;
     VkBufferViewCreateInfo bv = {VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
     bv.buffer = data.buffer;
-    bv.range = VK_WHOLE_SIZE;
+    bv.range = bytes;
     bv.format = VK_FORMAT_R32G32B32A32_UINT;
     VK(vkCreateBufferView(b.device, &bv, NULL, &view4));
     bv.format = VK_FORMAT_R32_UINT;
     VK(vkCreateBufferView(b.device, &bv, NULL, &view1));
-    VkDescriptorSetLayoutBinding lb[4] = {
+    VkDescriptorSetLayoutBinding lb[5] = {
         {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL},
         {1, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL},
         {2, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL},
-        {3, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL}};
+        {3, VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL},
+        {4, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, NULL}};
     VkDescriptorSetLayoutCreateInfo dl = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    dl.bindingCount = 4;
+    dl.bindingCount = 5;
     dl.pBindings = lb;
     VkDescriptorSetLayout set_layout;
     VK(vkCreateDescriptorSetLayout(b.device, &dl, NULL, &set_layout));
-    VkDescriptorPoolSize ps[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1},
+    VkDescriptorPoolSize ps[4] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1},
                                   {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, 2},
-                                  {VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1}};
+                                  {VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, 1},
+                                  {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1}};
     VkDescriptorPoolCreateInfo dp = {VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dp.maxSets = 1;
-    dp.poolSizeCount = 3;
+    dp.poolSizeCount = 4;
     dp.pPoolSizes = ps;
     VkDescriptorPool pool;
     VK(vkCreateDescriptorPool(b.device, &dp, NULL, &pool));
@@ -298,10 +311,10 @@ int main(int argc, char **argv)
     sa.pSetLayouts = &set_layout;
     VkDescriptorSet set;
     VK(vkAllocateDescriptorSets(b.device, &sa, &set));
-    VkDescriptorBufferInfo whole = {data.buffer, 0, VK_WHOLE_SIZE};
-    VkWriteDescriptorSet wr[4];
+    VkDescriptorBufferInfo whole = {data.buffer, 0, bytes}, block = {data.buffer, 0, UNIFORM_BYTES};
+    VkWriteDescriptorSet wr[5];
     memset(wr, 0, sizeof wr);
-    for (uint32_t i = 0; i < 4; ++i) {
+    for (uint32_t i = 0; i < 5; ++i) {
         wr[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
         wr[i].dstSet = set;
         wr[i].dstBinding = i;
@@ -312,7 +325,10 @@ int main(int argc, char **argv)
     wr[1].pTexelBufferView = &view4;
     wr[2].pTexelBufferView = &view1;
     wr[3].pTexelBufferView = &view4;
-    vkUpdateDescriptorSets(b.device, 4, wr, 0, NULL);
+    wr[4].pBufferInfo = &block;
+    /* a device under 64 KiB of uniform range gets no uniform descriptor
+     * (and no uniform kind) */
+    vkUpdateDescriptorSets(b.device, props.limits.maxUniformBufferRange >= UNIFORM_BYTES ? 5 : 4, wr, 0, NULL);
     VkPushConstantRange range = {VK_SHADER_STAGE_COMPUTE_BIT, 0, 24};
     VkPipelineLayoutCreateInfo pl = {VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     pl.setLayoutCount = 1;
@@ -323,7 +339,7 @@ int main(int argc, char **argv)
     VK(vkCreatePipelineLayout(b.device, &pl, NULL, &layout));
     VkPipeline pipes[KINDS] = {0};
     for (int k = 0; k < KINDS; ++k) {
-        if (k == 2 && !b.int64)
+        if ((k == 2 && !b.int64) || (k == KIND_UNIFORM && !uniform_fits))
             continue;
         VkShaderModuleCreateInfo sm = {VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
         sm.codeSize = kind_bytes[k];
@@ -422,7 +438,8 @@ int main(int argc, char **argv)
     printf("%-26s %12s %9s %9s %14s\n", "load", "ns / step", "min", "max", "vs u64vec2 ref");
     for (int k = 0; k < KINDS; ++k) {
         if (!pipes[k]) {
-            printf("%-26s %12s (no shaderInt64)\n", kind_names[k], "-");
+            printf("%-26s %12s %s\n", kind_names[k], "-",
+                   k == KIND_UNIFORM ? "(records over 64 KiB of uniform range)" : "(no shaderInt64)");
             continue;
         }
         printf("%-26s %12.2f %9.2f %9.2f %14.2f\n", kind_names[k], med[k], ns[k][0], ns[k][rounds - 1],

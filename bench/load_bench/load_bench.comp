@@ -24,6 +24,9 @@ layout(set = 0, binding = 0) readonly buffer Words { uvec4 w[]; } ssbo;
 layout(set = 0, binding = 1) uniform utextureBuffer texel4;
 layout(set = 0, binding = 2) uniform utextureBuffer texel1;
 layout(set = 0, binding = 3, rgba32ui) uniform readonly restrict uimageBuffer image4;
+// a uniform buffer holds 64 KiB (4,096 words) at most on lavapipe
+// (maxUniformBufferRange): the host binds the first 64 KiB of the records
+layout(set = 0, binding = 4, std140) uniform Uniforms { uvec4 w[4096]; } ubo;
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Ref4 { uvec4 v; };
 #if LOAD_KIND == 2
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Ref64 { u64vec2 v; };
@@ -47,8 +50,10 @@ uvec4 word(uint i)
     int j = 4 * int(i);
     return uvec4(texelFetch(texel1, j).x, texelFetch(texel1, j + 1).x, texelFetch(texel1, j + 2).x,
                  texelFetch(texel1, j + 3).x);
-#else // storage texel buffer, rgba32ui (the kernels' texel loads)
+#elif LOAD_KIND == 5 // storage texel buffer, rgba32ui (the kernels' texel loads)
     return imageLoad(image4, int(i));
+#else // uniform buffer: llvmpipe loads each lane's word unmasked, inline, no call
+    return ubo.w[i];
 #endif
 }
 
