@@ -13,7 +13,7 @@
 #include "exact_diff.glsl"
 
 #define PB_FLT_MIN 1.17549435e-38
-#define PB_BOX_FAR_SCALE 1.00000095 // 1 + 16u: conservative slabs with Vulkan's division error, see intersect.h
+#define PB_SLAB_MARGIN 1.9073486e-6 // 2^-19: node_boxes' slab widening, see intersect.h
 
 struct RayPre {
     vec3 org;
@@ -73,18 +73,37 @@ RayPre ray_prepare(vec3 org, vec3 dir)
     return r;
 }
 
-float ray_box(RayPre r, vec3 lo, vec3 hi, float tmin, float tmax)
+// Entry distances of a 4-wide node's child boxes, clipped to [tmin, tmax],
+// +inf for a miss or an unused slot: slab distances q * B + A in the node's
+// frame, widened by a bound on their rounding (intersect.h's
+// pb_ray_node_boxes, operation for operation, and why).
+void node_boxes(RayPre r, vec3 origin, vec3 scale, vec4 qlo[3], vec4 qhi[3], uint used, float tmin, float tmax,
+                out float d[4])
 {
-    float t0 = tmin, t1 = tmax;
+    vec3 an, af, b;
+    vec4 qn[3], qf[3];
     for (int k = 0; k < 3; ++k) {
-        precise float a = (lo[k] - r.org[k]) * r.idir[k];
-        precise float b = (hi[k] - r.org[k]) * r.idir[k];
-        float n = a < b ? a : b;
-        precise float f = (a < b ? b : a) * PB_BOX_FAR_SCALE;
-        t0 = n > t0 ? n : t0;
-        t1 = f < t1 ? f : t1;
+        precise float a = (origin[k] - r.org[k]) * r.idir[k];
+        precise float e = PB_SLAB_MARGIN * (abs(a) + (abs(origin[k]) + 256.0 * scale[k]) * abs(r.idir[k]));
+        precise float n = a - e;
+        precise float f = a + e;
+        an[k] = n;
+        af[k] = f;
+        b[k] = scale[k] * r.idir[k];
+        bool flip = r.idir[k] < 0.0; // the hi bound is the near one
+        qn[k] = flip ? qhi[k] : qlo[k];
+        qf[k] = flip ? qlo[k] : qhi[k];
     }
-    return t0 <= t1 ? t0 : PB_INF;
+    for (int i = 0; i < 4; ++i) {
+        float t0 = tmin, t1 = tmax;
+        for (int k = 0; k < 3; ++k) {
+            precise float tn = fma(qn[k][i], b[k], an[k]);
+            precise float tf = fma(qf[k][i], b[k], af[k]);
+            t0 = tn > t0 ? tn : t0;
+            t1 = tf < t1 ? tf : t1;
+        }
+        d[i] = uint(i) < used && t0 <= t1 ? t0 : PB_INF;
+    }
 }
 
 // On a hit with tmin < t < tmax: true, t, and barycentrics of v1 (u), v2 (v).

@@ -64,14 +64,10 @@ TraceResult trace_ray(SceneRefs s, vec3 org, vec3 dir, float tmin, float tmax, b
         Node4 nd = load_node4(s.nodes, node);
         float d[4];
         uint ch[4], cnt[4];
+        node_boxes(r, nd.origin, nd.scale, nd.qlo, nd.qhi, nd.used, tmin, tmax, d);
         for (int i = 0; i < 4; ++i) {
             ch[i] = nd.child[i];
             cnt[i] = nd.count[i];
-            // q * scale is exact, so the decoded bound is one rounding fused or not
-            // (no `precise` needed; glslang also takes minutes marking it here)
-            vec3 lo = nd.origin + vec3(nd.qlo[0][i], nd.qlo[1][i], nd.qlo[2][i]) * nd.scale;
-            vec3 hi = nd.origin + vec3(nd.qhi[0][i], nd.qhi[1][i], nd.qhi[2][i]) * nd.scale;
-            d[i] = uint(i) < nd.used ? ray_box(r, lo, hi, tmin, tmax) : PB_INF;
         }
         // near to far (ties keep slot order): leaves tested in this order, inner children pushed far first
         PB_SORT2(0, 1);

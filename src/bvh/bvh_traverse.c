@@ -73,14 +73,9 @@ static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
         float d[4];
         uint32_t ch[4], cnt[4];
         uint32_t used = pb_bvh4_slots(nd, ch, cnt);
-        for (uint32_t s = 0; s < 4; ++s) {
-            d[s] = INFINITY;
-            if (s >= used)
-                continue;
-            float lo[3], hi[3];
-            pb_bvh4_child_box(nd, s, lo, hi);
-            d[s] = pb_ray_box(&r, lo, hi, tmin, tmax);
-        }
+        float scale[3] = {pb_bvh4_scale(nd->exponent[0]), pb_bvh4_scale(nd->exponent[1]),
+                          pb_bvh4_scale(nd->exponent[2])};
+        pb_ray_node_boxes(&r, nd->origin, scale, nd->qbox, used, tmin, tmax, d);
         /* near to far: leaves are tested in that order, inner children pushed far first */
         PB_SORT2(0, 1);
         PB_SORT2(2, 3);

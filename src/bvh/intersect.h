@@ -17,8 +17,9 @@
  * (exact_diff.h, integer arithmetic: no double, no 64-bit integer on the
  * device). Both paths give the exact sign, so shared edges stay consistent.
  *
- * Box test: slabs with the far distance scaled (Ize, "Robust BVH Ray
- * Traversal", JCGT 2013) so rounding never culls a box the ray touches.
+ * Box test: the four child boxes of a 4-wide node in the node's frame, with
+ * slabs widened by a bound on every rounding (pb_ray_node_boxes), so rounding
+ * never culls a box the ray touches.
  *
  * No hit value depends on a division: a Vulkan device may divide with 2.5 ulp
  * of error, and drivers differ (an H100's 1/det moved u and v by an ulp, so
@@ -44,12 +45,9 @@ typedef struct pb_ray_pre {
     float sx, sy, sz;  /* shear constants */
 } pb_ray_pre;
 
-/* Each slab distance (lo - o) * idir carries a subtraction's and a product's
- * rounding (u each, u = 2^-24) and 1/dir's: 0.5 ulp in C, up to 2.5 ulp (5u)
- * in a Vulkan division. < 7u per side, < 14u for near and far together, and
- * scaling the far one costs another u. 1 + 16u (8 float ulps above 1) covers
- * it on every device. */
-#define PB_BOX_FAR_SCALE 1.00000095f
+/* Slab widening of pb_ray_node_boxes, 2^-19 = 32u (u = 2^-24): the
+ * roundings it bounds add up to under 10u (see there). */
+#define PB_SLAB_MARGIN 0x1p-19f
 
 /* 1/b the same on every device: an integer first guess (5 % off) and three
  * Newton steps y += y(1 - by), each operation correctly rounded in IEEE and
@@ -121,19 +119,59 @@ static inline float pb_edge_function(float a, float b, float c, float d)
     return pb_exact_diff(a, b, c, d);
 }
 
-/* Entry distance into the box [lo, hi] clipped to [tmin, tmax], or +inf. */
-static inline float pb_ray_box(const pb_ray_pre *r, const float lo[3], const float hi[3], float tmin, float tmax)
+/* Entry distances of a 4-wide node's child boxes, clipped to [tmin, tmax],
+ * +inf for a missed box or an unused slot (i >= used). Bound q of axis k
+ * decodes to origin + q * scale (pb_bvh4_child_box), so its slab distance is
+ * q * B + A with B = scale * idir and A = (origin - org) * idir, both per
+ * node: one fma per bound where the decoded box took a subtraction and a
+ * product, and the near and far bounds are picked once per axis by the sign
+ * of idir where each box took a min and a max (as Embree's nodes do). On
+ * lavapipe: 1.04-1.10x the trace kernel's probe rays, 0.94-0.96x the bake's
+ * GPU time (bench/RESULTS.md, "Box tests in the node's frame").
+ *
+ * That form cancels where a ray passes close to a box far from its node's
+ * origin, so its error is not relative to the distance: each axis widens
+ * near and far by E = PB_SLAB_MARGIN (|A| + (|origin| + 256 scale) |idir|).
+ * What E bounds, with u = 2^-24 and t the true distance to the decoded
+ * bound: A's two roundings (2u |A|), B's and the product's (2u q|B|; an fma
+ * split in two on some device), the fma's own (u |t|), A - E's (u |A|),
+ * 1/dir as a Vulkan division (5u |t|, and it differs per axis), and the
+ * decode's rounding of the bound itself (u (|origin| + 255 scale) |idir|,
+ * which the exact q * scale + origin does not carry). |t| <= |A| + 255 |B|,
+ * so under 10u times E's bracket. Conservative, not identical: devices may
+ * fuse differently, and 1/dir differs already; hits do not depend on it. */
+static inline void pb_ray_node_boxes_widened(const pb_ray_pre *r, const float origin[3], const float scale[3],
+                                             const uint8_t q[3][2][4], uint32_t used, float tmin, float tmax,
+                                             float margin, float d[4])
 {
-    float t0 = tmin, t1 = tmax;
+    float an[3], af[3], b[3];
+    int flip[3];
     for (int k = 0; k < 3; ++k) {
-        float a = (lo[k] - r->org[k]) * r->idir[k];
-        float b = (hi[k] - r->org[k]) * r->idir[k];
-        float n = a < b ? a : b, f = a < b ? b : a;
-        f *= PB_BOX_FAR_SCALE;
-        t0 = n > t0 ? n : t0;
-        t1 = f < t1 ? f : t1;
+        float a = (origin[k] - r->org[k]) * r->idir[k];
+        float e = margin * (fabsf(a) + (fabsf(origin[k]) + 256.f * scale[k]) * fabsf(r->idir[k]));
+        an[k] = a - e;
+        af[k] = a + e;
+        b[k] = scale[k] * r->idir[k];
+        flip[k] = r->idir[k] < 0.f; /* the hi bound is the near one */
     }
-    return t0 <= t1 ? t0 : INFINITY;
+    for (uint32_t i = 0; i < 4; ++i) {
+        float t0 = tmin, t1 = tmax;
+        for (int k = 0; k < 3; ++k) {
+            float tn = fmaf((float)q[k][flip[k]][i], b[k], an[k]);
+            float tf = fmaf((float)q[k][!flip[k]][i], b[k], af[k]);
+            t0 = tn > t0 ? tn : t0;
+            t1 = tf < t1 ? tf : t1;
+        }
+        d[i] = i < used && t0 <= t1 ? t0 : INFINITY;
+    }
+}
+
+/* The traversals' form; test_bvh also runs the one above with no margin, to
+ * show its rays need it. */
+static inline void pb_ray_node_boxes(const pb_ray_pre *r, const float origin[3], const float scale[3],
+                                     const uint8_t q[3][2][4], uint32_t used, float tmin, float tmax, float d[4])
+{
+    pb_ray_node_boxes_widened(r, origin, scale, q, used, tmin, tmax, PB_SLAB_MARGIN, d);
 }
 
 /* Watertight test of triangle (v0, v1, v2). On a hit with tmin < t < tmax
