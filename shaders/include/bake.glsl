@@ -38,7 +38,23 @@ struct Light {
     vec4 cone;              // x cos(outer), y 1 / max(1e-3, cos(inner) - cos(outer))
 };
 
-layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer ShadeMaterialBuf { ShadeMaterial m[]; };
+// Material `index` of the ShadeMaterial array at `materials`, read as six
+// 64-bit words (scene.glsl's PB_WORD): on lavapipe a divergent load is one
+// masked load per SIMD lane and component, so 64-bit components halve them
+// (bench/RESULTS.md, "Shading loads"). The same bits as a ShadeMaterial[]
+// buffer reference's.
+ShadeMaterial load_shade_material(pb_addr materials, uint index)
+{
+    Words64 w = Words64(materials);
+    uvec2 wd[6];
+    for (uint i = 0u; i < 6u; ++i)
+        wd[i] = PB_WORD(w, 6u * index + i);
+    ShadeMaterial m;
+    m.base_color = uintBitsToFloat(uvec4(wd[0], wd[1]));
+    m.emissive_metallic = uintBitsToFloat(uvec4(wd[2], wd[3]));
+    m.tex = ivec4(uvec4(wd[4], wd[5]));
+    return m;
+}
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer LightBuf { Light l[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Vec4Buf { vec4 v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4RW { vec4 v[]; };

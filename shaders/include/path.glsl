@@ -50,6 +50,18 @@ struct EmitterSample {
     float pdf;
 };
 
+// Texture coordinates at barycentrics (u, v) of leaf-ordered triangle tri.
+// Called only where a texture reads them: on lavapipe each of these six loads
+// is a branch per SIMD lane, skipped when no lane's material has a texture.
+vec2 surface_uv(SceneRefs s, uint tri, float u, float v)
+{
+    FloatBuf uvs = FloatBuf(s.tri_uv);
+    uint b = 6u * tri;
+    float w0 = 1.0 - u - v;
+    return w0 * vec2(uvs.v[b], uvs.v[b + 1u]) + u * vec2(uvs.v[b + 2u], uvs.v[b + 3u]) +
+           v * vec2(uvs.v[b + 4u], uvs.v[b + 5u]);
+}
+
 EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
 {
     SceneRefs s = P.scene;
@@ -76,16 +88,12 @@ EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
     EmitterSample es;
     es.dist = sqrt(d2);
     es.w = to / es.dist;
-    ShadeMaterial em = ShadeMaterialBuf(P.materials).m[et.flags & ~PB_FLAG_ALPHA_MASK];
+    ShadeMaterial em = load_shade_material(P.materials, et.flags & ~PB_FLAG_ALPHA_MASK);
     float cos_e = -dot(normalize(cross(ee1, ee2)), es.w);
     if (em.tex.z != 0)
         cos_e = abs(cos_e);
     es.pdf = cos_e > 0.0 && d2 > 0.0 ? FloatBuf(P.emit_pdf).v[etri] * ratio * d2 / cos_e : 0.0;
-    FloatBuf euv = FloatBuf(s.tri_uv);
-    uint eb = 6u * etri;
-    float ew0 = 1.0 - b1 - b2;
-    vec2 yuv = ew0 * vec2(euv.v[eb], euv.v[eb + 1u]) + b1 * vec2(euv.v[eb + 2u], euv.v[eb + 3u]) +
-               b2 * vec2(euv.v[eb + 4u], euv.v[eb + 5u]);
+    vec2 yuv = em.tex.y >= 0 ? surface_uv(s, etri, b1, b2) : vec2(0.0);
     es.Le = em.emissive_metallic.rgb * texture_rgb(s, em.tex.y, yuv);
     return es;
 }
@@ -234,7 +242,6 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
 {
     SceneRefs s = P.scene;
     Env env = bake_env(P);
-    ShadeMaterialBuf mats = ShadeMaterialBuf(P.materials);
     LightBuf lights = LightBuf(P.lights);
     PathResult res;
     res.L = vec3(0.0);
@@ -287,17 +294,13 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                 res.first_t = back ? -tr.t : tr.t;
             if (first_hit_only)
                 break;
-            ShadeMaterial m = mats.m[t.flags & ~PB_FLAG_ALPHA_MASK];
+            ShadeMaterial m = load_shade_material(P.materials, t.flags & ~PB_FLAG_ALPHA_MASK);
             if (back) {
                 if (m.tex.z == 0)
                     break; // inside a single-sided surface: no light
                 ng = -ng;
             }
-            FloatBuf uvs = FloatBuf(s.tri_uv);
-            uint b = 6u * tr.tri;
-            float w0 = 1.0 - tr.u - tr.v;
-            vec2 uv = w0 * vec2(uvs.v[b], uvs.v[b + 1u]) + tr.u * vec2(uvs.v[b + 2u], uvs.v[b + 3u]) +
-                      tr.v * vec2(uvs.v[b + 4u], uvs.v[b + 5u]);
+            vec2 uv = m.tex.x >= 0 || m.tex.y >= 0 ? surface_uv(s, tr.tri, tr.u, tr.v) : vec2(0.0);
             if ((bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
                 float w = 1.0;
                 // the density with which NEE at the ray's origin draws this point
