@@ -45,12 +45,8 @@ bool alpha_opaque(SceneRefs s, uint tri, uint f, float u, float v)
     float a = m.base_alpha;
     if (m.texture >= 0) {
         Texture tx = TextureBuf(s.textures).t[m.texture];
-        FloatBuf uv = FloatBuf(s.tri_uv);
-        uint b = 6u * tri;
-        precise float w0 = 1.0 - u - v;
-        precise float ts = w0 * uv.v[b + 0u] + u * uv.v[b + 2u] + v * uv.v[b + 4u];
-        precise float tt = w0 * uv.v[b + 1u] + u * uv.v[b + 3u] + v * uv.v[b + 5u];
-        uint texel = UintBuf(s.texels).v[tx.offset + texel_index(ts, tt, tx.width, tx.height, tx.wrap & 0xffu, tx.wrap >> 8)];
+        vec2 st = surface_uv(s, tri, u, v);
+        uint texel = UintBuf(s.texels).v[tx.offset + texel_index(st.x, st.y, tx.width, tx.height, tx.wrap & 0xffu, tx.wrap >> 8)];
         a *= float(texel >> 24) * (1.0 / 255.0);
     }
     if ((s.flags & PB_SCENE_VERTEX_COLORS) != 0u)

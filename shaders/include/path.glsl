@@ -50,18 +50,6 @@ struct EmitterSample {
     float pdf;
 };
 
-// Texture coordinates at barycentrics (u, v) of leaf-ordered triangle tri.
-// Called only where a texture reads them: on lavapipe each of these six loads
-// is a branch per SIMD lane, skipped when no lane's material has a texture.
-vec2 surface_uv(SceneRefs s, uint tri, float u, float v)
-{
-    FloatBuf uvs = FloatBuf(s.tri_uv);
-    uint b = 6u * tri;
-    float w0 = 1.0 - u - v;
-    return w0 * vec2(uvs.v[b], uvs.v[b + 1u]) + u * vec2(uvs.v[b + 2u], uvs.v[b + 3u]) +
-           v * vec2(uvs.v[b + 4u], uvs.v[b + 5u]);
-}
-
 EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
 {
     SceneRefs s = P.scene;

@@ -175,6 +175,20 @@ struct SceneRefs {
     uint flags;        // PB_SCENE_*
 };
 
+// Texture coordinates of leaf-ordered triangle `tri` at barycentrics (u, v),
+// in the CPU reference's order (bake_cpu.c, alpha.h), unfused. Shading and
+// the alpha test call it only where a texture reads them: on lavapipe each of
+// these six loads is a branch per SIMD lane, skipped when no lane needs it.
+vec2 surface_uv(SceneRefs s, uint tri, float u, float v)
+{
+    FloatBuf uv = FloatBuf(s.tri_uv);
+    uint b = 6u * tri;
+    precise float w0 = 1.0 - u - v;
+    precise float ts = w0 * uv.v[b + 0u] + u * uv.v[b + 2u] + v * uv.v[b + 4u];
+    precise float tt = w0 * uv.v[b + 1u] + u * uv.v[b + 3u] + v * uv.v[b + 5u];
+    return vec2(ts, tt);
+}
+
 // Vertex colour (glTF COLOR_0) of leaf-ordered triangle `tri` at (u, v):
 // linear RGBA, white when the scene has none (src/scene/vertex_color.h is
 // the CPU reference, same arithmetic in the same order).
