@@ -13,9 +13,19 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 static int t_failures, t_passed, t_failed, t_skipped, t_skip_current;
+
+/* Seconds on the monotonic clock: each behaviour's OK line says how long it
+ * took, so the suite's slow cases are named in every CI log. */
+static inline double t_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 #define CHECK(cond)                                                                                                  \
     do {                                                                                                             \
@@ -54,6 +64,7 @@ static inline void skip(const char *fmt, ...)
         int before = t_failures;                                                                                     \
         t_skip_current = 0;                                                                                          \
         fprintf(stderr, "[ RUN  ] %s\n", #fn);                                                                       \
+        double t_start = t_now();                                                                                    \
         fn();                                                                                                        \
         if (t_failures != before) {                                                                                  \
             t_failed++;                                                                                              \
@@ -63,7 +74,7 @@ static inline void skip(const char *fmt, ...)
             fprintf(stderr, "[ SKIP ] %s\n", #fn);                                                                   \
         } else {                                                                                                     \
             t_passed++;                                                                                              \
-            fprintf(stderr, "[  OK  ] %s\n", #fn);                                                                   \
+            fprintf(stderr, "[  OK  ] %s (%.1f s)\n", #fn, t_now() - t_start);                                       \
         }                                                                                                            \
     } while (0)
 
