@@ -184,6 +184,79 @@ static void structure_of_random_soups(void)
     }
 }
 
+/* The collapse by whole levels (each inner child of a pair node replaced by
+ * its two children): its summed wide-node area over the root's, from the
+ * pair tree. */
+static double level_area(const pb_bvh *b, uint32_t q)
+{
+    const pb_bvh_node *n = &b->nodes[q];
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, sum = 0;
+    for (int s = 0; s < 2; ++s) {
+        if (n->child[s] == -1)
+            continue;
+        const float *x = n->lo_hi_x, *y = n->lo_hi_y, *z = n->lo_hi_z;
+        double l[3] = {x[2 * s], y[2 * s], z[2 * s]}, h[3] = {x[2 * s + 1], y[2 * s + 1], z[2 * s + 1]};
+        for (int a = 0; a < 3; ++a)
+            lo[a] = fmin(lo[a], l[a]), hi[a] = fmax(hi[a], h[a]);
+        if (n->count[s])
+            continue;
+        const pb_bvh_node *m = &b->nodes[n->child[s]];
+        for (int t = 0; t < 2; ++t)
+            if (m->child[t] != -1 && !m->count[t])
+                sum += level_area(b, (uint32_t)m->child[t]);
+    }
+    float e0 = (float)hi[0] - (float)lo[0], e1 = (float)hi[1] - (float)lo[1], e2 = (float)hi[2] - (float)lo[2];
+    return sum + (e0 * e1 + e1 * e2 + e2 * e0);
+}
+
+/* The collapse minimises the expected node steps (summed wide-node area):
+ * never more than the collapse by whole levels, one of the covers it chose
+ * from, and at least the root's one step. */
+static void collapse_minimises_expected_steps(void)
+{
+    const char *shared[] = {"cornell/cornellBox.gltf", "openarena/oacmpdm1.glb"};
+    for (int i = 0; i < 6; ++i) {
+        pb_scene *s = NULL;
+        pb_error err;
+        char what[256];
+        if (i < 4) {
+            uint32_t n[] = {5, 100, 4096, scaled(30000)};
+            s = random_soup(n[i], 0.2f, 40 + i, NULL);
+            snprintf(what, sizeof what, "soup of %u", n[i]);
+        } else {
+            char path[1024];
+            snprintf(path, sizeof path, "%s/../shared/scenes/%s", PB_SOURCE_DIR, shared[i - 4]);
+            pb_scene_desc d = {{0}, 1};
+            if (access(path, R_OK) != 0 || pb_scene_load(path, &d, &s, &err) != PB_OK) {
+                fprintf(stderr, "  %s not present: skipped\n", shared[i - 4]);
+                continue;
+            }
+            snprintf(what, sizeof what, "%s", shared[i - 4]);
+        }
+        pb_bvh *b = NULL;
+        CHECK(pb_bvh_build(s, NULL, &b, &err) == PB_OK);
+        if (b) {
+            const pb_bvh_node *r = &b->nodes[0];
+            double lo[3], hi[3];
+            for (int a = 0; a < 3; ++a) {
+                const float *v = a == 0 ? r->lo_hi_x : a == 1 ? r->lo_hi_y : r->lo_hi_z;
+                lo[a] = fmin(v[0], r->child[1] != -1 ? v[2] : v[0]);
+                hi[a] = fmax(v[1], r->child[1] != -1 ? v[3] : v[1]);
+            }
+            float e0 = (float)hi[0] - (float)lo[0], e1 = (float)hi[1] - (float)lo[1], e2 = (float)hi[2] - (float)lo[2];
+            double level = level_area(b, 0) / (e0 * e1 + e1 * e2 + e2 * e0);
+            fprintf(stderr, "  %s: %u wide nodes, %.3f expected steps (by whole levels %.3f)\n", what,
+                    b->wide_node_count, b->stats.wide_steps, level);
+            /* both are sums of the same float areas; 1e-6 covers their rounding */
+            CHECKF(b->stats.wide_steps <= level * (1 + 1e-6), "%s: %.6f steps, more than by whole levels (%.6f)",
+                   what, b->stats.wide_steps, level);
+            CHECK(b->stats.wide_steps >= 1.0);
+        }
+        pb_bvh_destroy(b);
+        pb_scene_destroy(s);
+    }
+}
+
 static void empty_scene_builds_and_misses(void)
 {
     pb_scene *s = random_soup(0, 0.1f, 1, NULL);
@@ -723,6 +796,7 @@ static void node_boxes_are_conservative(void)
 int main(void)
 {
     RUN(structure_of_random_soups);
+    RUN(collapse_minimises_expected_steps);
     RUN(empty_scene_builds_and_misses);
     RUN(build_is_deterministic_across_threads);
     RUN(host_threads_follow_affinity);

@@ -74,6 +74,8 @@ typedef struct pb_bvh_stats {
     uint32_t max_leaf_size;   /* largest leaf actually built */
     uint32_t wide_nodes;      /* 4-wide nodes the traversals walk */
     uint32_t wide_depth;      /* their depth */
+    double wide_steps;        /* summed surface area of their boxes over the root's: expected node steps per ray
+                                 through the root box, rays spread evenly (what the collapse minimises) */
     double sah_cost;          /* expected cost per ray, traversal step = 1 */
     double build_ms;          /* wall time of the build (binning + flatten) */
     uint32_t threads;         /* host threads used */
