@@ -110,13 +110,7 @@ static inline void info_add(range_info *ri, const prim *p)
 
 static float box_area(const aabb *b)
 {
-    float d[3];
-    for (int k = 0; k < 3; ++k) {
-        d[k] = b->hi[k] - b->lo[k];
-        if (!(d[k] > 0.f))
-            d[k] = 0.f;
-    }
-    return 2.f * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
+    return pb_box_area(b->lo, b->hi);
 }
 
 typedef struct bin_set {

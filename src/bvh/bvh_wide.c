@@ -109,8 +109,7 @@ static uint8_t quantize_hi(float origin, float scale, float v)
  * cull it (a penalty for it measured worse). */
 static float slot_area(const wide_slot *c)
 {
-    float e0 = c->hi[0] - c->lo[0], e1 = c->hi[1] - c->lo[1], e2 = c->hi[2] - c->lo[2];
-    return e0 * e1 + e1 * e2 + e2 * e0;
+    return pb_box_area(c->lo, c->hi);
 }
 
 static double slot_cost(const wide_state *ws, const wide_slot *c, int j)

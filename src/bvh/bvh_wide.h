@@ -11,6 +11,19 @@
  * when out of host memory. */
 int pb_bvh_collapse_wide(pb_bvh *bvh);
 
+/* Surface area of the box [lo, hi] (0 for an empty axis): the probability
+ * weight of both the build's SAH and the collapse's expected steps. */
+static inline float pb_box_area(const float lo[3], const float hi[3])
+{
+    float d[3];
+    for (int k = 0; k < 3; ++k) {
+        d[k] = hi[k] - lo[k];
+        if (!(d[k] > 0.f))
+            d[k] = 0.f;
+    }
+    return 2.f * (d[0] * d[1] + d[1] * d[2] + d[2] * d[0]);
+}
+
 /* Scale of a quantized axis: 2^(e - 127), built from its bits as the kernel does. */
 static inline float pb_bvh4_scale(uint8_t e)
 {
