@@ -103,8 +103,8 @@ static uint8_t quantize_hi(float origin, float scale, float v)
  * cheapest cover by 2-4 slots; a leaf slot costs nothing here (each leaf is
  * tested when its box is hit, wherever it sits). Bottom-up over the pair
  * tree, then read top-down by `emit`. Against the collapse by whole levels
- * it had before: The Crypt 7,411 wide nodes instead of 8,672 and 10 % fewer
- * steps per ray (bench/RESULTS.md). What the area leaves out: a leaf moved
+ * it had before, at leaves of 8: The Crypt 7,411 wide nodes instead of 8,672
+ * and 10 % fewer steps per ray (bench/RESULTS.md). What the area leaves out: a leaf moved
  * up beside a nearer inner sibling is tested before that sibling's hits can
  * cull it (a penalty for it measured worse). */
 static float slot_area(const wide_slot *c)
