@@ -2,8 +2,10 @@
  * loop in C (shaders/include/traverse.glsl): 4-wide quantized nodes, child
  * boxes sorted near to far, hit leaves tested in that order, the nearest hit
  * inner child next and the others a pending group, whose predecessor goes on
- * the stack (at most one entry per level). */
+ * the stack (at most one entry per level). Written as a walker (bvh_walk.h)
+ * so that a model can run rays side by side as SIMD lanes do. */
 #include "bvh/alpha.h"
+#include "bvh/bvh_walk.h"
 #include "bvh/bvh_wide.h"
 #include "bvh/intersect.h"
 #include "common/common.h"
@@ -54,81 +56,100 @@ static void finish_hit(const pb_scene *s, const pb_ray *ray, uint32_t tri, float
 #define PB_GROUP(first, count, ranks) ((first) << 8 | (count) << 6 | (ranks))
 #define PB_GROUP_COUNT(g) (((g) >> 6) & 3)
 
+void pb_bvh_walk_start(pb_bvh_walk *w, const pb_ray *ray)
+{
+    pb_ray_prepare(ray->origin, ray->direction, &w->r);
+    w->tmin = ray->tmin, w->tmax = ray->tmax;
+    w->best = PB_NO_HIT;
+    w->u = w->v = 0.f;
+    w->node = w->group = w->sp = 0; /* the root, no group pending */
+    w->run = 0;
+}
+
+void pb_bvh_walk_step(pb_bvh_walk *w, const pb_bvh *bvh)
+{
+    const pb_bvh4_node *nd = &bvh->wide_nodes[w->node];
+    float *d = w->d;
+    uint32_t *ch = w->ch, *cnt = w->cnt;
+    uint32_t used = pb_bvh4_slots(nd, ch, cnt);
+    float scale[3] = {pb_bvh4_scale(nd->exponent[0]), pb_bvh4_scale(nd->exponent[1]), pb_bvh4_scale(nd->exponent[2])};
+    pb_ray_node_boxes(&w->r, nd->origin, scale, nd->qbox, used, w->tmin, w->tmax, d);
+    /* near to far: leaves are tested in that order, inner children pushed far first */
+    PB_SORT2(0, 1);
+    PB_SORT2(2, 3);
+    PB_SORT2(0, 2);
+    PB_SORT2(1, 3);
+    PB_SORT2(1, 2);
+    /* the hit leaves, near to far, as one run of triangles (one loop in the kernel) */
+    w->run = 0;
+    for (int s = 0; s < 4; ++s) {
+        w->run += cnt[s] != 0 && d[s] < INFINITY && d[s] <= w->tmax ? cnt[s] : 0;
+        w->e[s] = w->run;
+    }
+    w->first = pb_bvh4_first_inner(nd);
+}
+
+int pb_bvh_walk_test(pb_bvh_walk *w, const pb_scene *scene, const pb_bvh *bvh, uint32_t i)
+{
+    const uint32_t *ch = w->ch, *e = w->e;
+    uint32_t k = i < e[0] ? ch[0] + i : i < e[1] ? ch[1] + (i - e[0]) : i < e[2] ? ch[2] + (i - e[1]) : ch[3] + (i - e[2]);
+    const float *p = bvh->tri_positions + 9 * (size_t)k;
+    float t, u, v;
+    if (!pb_ray_triangle(&w->r, p, p + 3, p + 6, w->tmin, w->tmax, &t, &u, &v))
+        return 0;
+    if (!pb_alpha_opaque(scene, bvh->tri_order[k], u, v))
+        return 0;
+    w->tmax = t, w->best = k, w->u = u, w->v = v;
+    return 1;
+}
+
+int pb_bvh_walk_next(pb_bvh_walk *w)
+{
+    /* the hit inner children, near to far, as ranks among the node's inner
+     * children (consecutive from `first`): the nearest is next, the rest
+     * become the pending group, and the group they replace is pushed */
+    uint32_t n = 0, ranks = 0;
+    for (int s = 0; s < 4; ++s) {
+        if (w->cnt[s] != 0 || !(w->d[s] < INFINITY && w->d[s] <= w->tmax)) /* a miss or unused slot is +inf, tmax may be too */
+            continue;
+        ranks |= w->ch[s] << (2 * n++);
+    }
+    if (n != 0) {
+        w->node = w->first + (ranks & 3);
+        if (n > 1) {
+            if (PB_GROUP_COUNT(w->group) != 0)
+                w->stack[w->sp++] = w->group;
+            w->group = PB_GROUP(w->first, n - 1, ranks >> 2);
+        }
+        return 1;
+    }
+    if (PB_GROUP_COUNT(w->group) == 0) {
+        if (w->sp == 0)
+            return 0;
+        w->group = w->stack[--w->sp];
+    }
+    w->node = (w->group >> 8) + (w->group & 3);
+    w->group = PB_GROUP(w->group >> 8, PB_GROUP_COUNT(w->group) - 1, (w->group & 63) >> 2);
+    return 1;
+}
+
 static void trace_bvh_one(const trace_job *j, const pb_ray *ray, pb_hit *hit)
 {
     const pb_bvh *bvh = j->bvh;
-    pb_ray_pre r;
-    pb_ray_prepare(ray->origin, ray->direction, &r);
-    float tmin = ray->tmin, tmax = ray->tmax;
-    uint32_t best = PB_NO_HIT;
-    float bu = 0.f, bv = 0.f;
-    uint32_t stack[PB_BVH_STACK_SIZE(PB_BVH_MAX_DEPTH)]; /* pending groups */
-    uint32_t sp = 0, node = 0, group = 0;                 /* no group pending */
     if (bvh->triangle_count == 0) {
         finish_hit(j->scene, ray, PB_NO_HIT, 0.f, 0.f, 0.f, hit);
         return;
     }
-    for (;;) {
-        const pb_bvh4_node *nd = &bvh->wide_nodes[node];
-        float d[4];
-        uint32_t ch[4], cnt[4];
-        uint32_t used = pb_bvh4_slots(nd, ch, cnt);
-        float scale[3] = {pb_bvh4_scale(nd->exponent[0]), pb_bvh4_scale(nd->exponent[1]),
-                          pb_bvh4_scale(nd->exponent[2])};
-        pb_ray_node_boxes(&r, nd->origin, scale, nd->qbox, used, tmin, tmax, d);
-        /* near to far: leaves are tested in that order, inner children pushed far first */
-        PB_SORT2(0, 1);
-        PB_SORT2(2, 3);
-        PB_SORT2(0, 2);
-        PB_SORT2(1, 3);
-        PB_SORT2(1, 2);
-        /* the hit leaves, near to far, as one run of triangles (one loop in the kernel) */
-        uint32_t e[4], run = 0;
-        for (int s = 0; s < 4; ++s) {
-            run += cnt[s] != 0 && d[s] < INFINITY && d[s] <= tmax ? cnt[s] : 0;
-            e[s] = run;
-        }
-        for (uint32_t i = 0; i < run; ++i) {
-            uint32_t k = i < e[0] ? ch[0] + i : i < e[1] ? ch[1] + (i - e[0]) : i < e[2] ? ch[2] + (i - e[1]) : ch[3] + (i - e[2]);
-            const float *p = bvh->tri_positions + 9 * (size_t)k;
-            float t, u, v;
-            if (!pb_ray_triangle(&r, p, p + 3, p + 6, tmin, tmax, &t, &u, &v))
-                continue;
-            uint32_t tri = bvh->tri_order[k];
-            if (!pb_alpha_opaque(j->scene, tri, u, v))
-                continue;
-            tmax = t, best = tri, bu = u, bv = v;
-            if (j->mode == PB_TRACE_ANY)
+    pb_bvh_walk w;
+    pb_bvh_walk_start(&w, ray);
+    do {
+        pb_bvh_walk_step(&w, bvh);
+        for (uint32_t i = 0; i < w.run; ++i)
+            if (pb_bvh_walk_test(&w, j->scene, bvh, i) && j->mode == PB_TRACE_ANY)
                 goto done;
-        }
-        /* the hit inner children, near to far, as ranks among the node's inner
-         * children (consecutive from `first`): the nearest is next, the rest
-         * become the pending group, and the group they replace is pushed */
-        uint32_t first = pb_bvh4_first_inner(nd), n = 0, ranks = 0;
-        for (int s = 0; s < 4; ++s) {
-            if (cnt[s] != 0 || !(d[s] < INFINITY && d[s] <= tmax)) /* a miss or unused slot is +inf, tmax may be too */
-                continue;
-            ranks |= ch[s] << (2 * n++);
-        }
-        if (n != 0) {
-            node = first + (ranks & 3);
-            if (n > 1) {
-                if (PB_GROUP_COUNT(group) != 0)
-                    stack[sp++] = group;
-                group = PB_GROUP(first, n - 1, ranks >> 2);
-            }
-        } else {
-            if (PB_GROUP_COUNT(group) == 0) {
-                if (sp == 0)
-                    break;
-                group = stack[--sp];
-            }
-            node = (group >> 8) + (group & 3);
-            group = PB_GROUP(group >> 8, PB_GROUP_COUNT(group) - 1, (group & 63) >> 2);
-        }
-    }
+    } while (pb_bvh_walk_next(&w));
 done:
-    finish_hit(j->scene, ray, best, tmax, bu, bv, hit);
+    finish_hit(j->scene, ray, w.best == PB_NO_HIT ? PB_NO_HIT : bvh->tri_order[w.best], w.tmax, w.u, w.v, hit);
 }
 
 static void trace_bvh_range(void *user, uint64_t b, uint64_t e)
