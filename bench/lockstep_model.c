@@ -67,6 +67,22 @@ static void lane_test(const model *m, lane *l)
         l->done = 1; /* postponed: the node chosen at the step was the last */
 }
 
+/* the triangle loop: one test per lane holding one, until none does */
+static void triangle_loop(const model *m, lane *g, uint32_t n)
+{
+    for (;;) {
+        int any = 0;
+        for (uint32_t l = 0; l < n; ++l)
+            if (holds_tests(&g[l])) {
+                lane_test(m, &g[l]);
+                any = 1;
+            }
+        if (!any)
+            return;
+        m->c->tri_iters++;
+    }
+}
+
 /* the kernel's schedule: node step for every live lane, then the longest run */
 static void run_kernel(const model *m, lane *g, uint32_t n)
 {
@@ -82,19 +98,7 @@ static void run_kernel(const model *m, lane *g, uint32_t n)
         if (!live)
             return;
         m->c->node_iters++;
-        for (;;) {
-            int any = 0;
-            for (uint32_t l = 0; l < n; ++l)
-                if (holds_tests(&g[l])) {
-                    if (pb_bvh_walk_test(&g[l].w, m->scene, m->bvh, g[l].next_test++) && g[l].any_hit)
-                        g[l].done = 1;
-                    m->c->tests++;
-                    any = 1;
-                }
-            if (!any)
-                break;
-            m->c->tri_iters++;
-        }
+        triangle_loop(m, g, n); /* `more` stays 1 here: the next node is chosen after */
         for (uint32_t l = 0; l < n; ++l)
             if (!g[l].done && !pb_bvh_walk_next(&g[l].w))
                 g[l].done = 1;
@@ -125,18 +129,8 @@ static void run_postponed(const model *m, lane *g, uint32_t n)
                 break;
             m->c->node_iters++;
         }
+        triangle_loop(m, g, n);
         int live = 0;
-        for (;;) {
-            int any = 0;
-            for (uint32_t l = 0; l < n; ++l)
-                if (holds_tests(&g[l])) {
-                    lane_test(m, &g[l]);
-                    any = 1;
-                }
-            if (!any)
-                break;
-            m->c->tri_iters++;
-        }
         for (uint32_t l = 0; l < n; ++l)
             live |= !g[l].done;
         if (!live)
