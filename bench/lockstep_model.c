@@ -186,7 +186,9 @@ int main(int argc, char **argv)
     }
     if (!scene_count)
         scenes[scene_count++] = "tests/scenes/demo.gltf";
-    FILE *f = fopen(json, "w");
+    char tmp[4096];
+    snprintf(tmp, sizeof tmp, "%s.tmp", json);
+    FILE *f = fopen(tmp, "w"); /* renamed to `json` once every scene is in */
     if (!f) {
         fprintf(stderr, "lockstep_model: %s: cannot write\n", json);
         return 1;
@@ -216,6 +218,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "lockstep_model: %s: out of host memory for %u rays\n", scenes[si], n);
             free(rays), free(rays2), free(hits);
             pb_bvh_destroy(bvh), pb_scene_destroy(s);
+            fclose(f), remove(tmp);
             return 1;
         }
         pb_trace_cpu(s, bvh, rays, n, PB_TRACE_CLOSEST, hits, 0);
@@ -263,7 +266,12 @@ int main(int argc, char **argv)
         pb_scene_destroy(s);
     }
     fprintf(f, "\n  ]\n}\n");
-    fclose(f);
+    if (fclose(f) != 0 || status != 0 || rename(tmp, json) != 0) {
+        remove(tmp);
+        if (status == 0)
+            fprintf(stderr, "lockstep_model: %s: cannot write\n", json);
+        return 1;
+    }
     printf("wrote %s\n", json);
-    return status;
+    return 0;
 }
