@@ -22,8 +22,10 @@
  * a point below the middle of the scene's top (any hit ends a ray). Per ray:
  * node steps and triangle tests; per group: the iterations of each loop;
  * lane use = per-ray work x lanes / group iterations. Which schedule is faster
- * depends on what a step and a test cost (bench/RESULTS.md, "Postponed
- * leaves"); the counts are exact for this BVH and these rays. */
+ * depends on what a step and a test cost (bench/RESULTS.md, "SIMD lanes
+ * counted"); the counts are exact for this BVH and these rays. The probe rays'
+ * hits under the kernel's schedule are checked against pb_trace_cpu's (exit
+ * 1 on a difference): side by side, the lanes walk as the reference does. */
 #define _POSIX_C_SOURCE 200809L
 #include "bvh/bvh_walk.h"
 #include "probebake/probebake.h"
@@ -138,9 +140,13 @@ static void run_postponed(const model *m, lane *g, uint32_t n)
     }
 }
 
-static void model_rays(const pb_scene *s, const pb_bvh *bvh, const pb_ray *rays, uint32_t count, uint32_t lanes,
-                       int any_hit, counts out[SCHEDULES])
+/* Counts both schedules over rays[0..count) in groups of `lanes`; returns
+ * how many closest hits of the kernel's schedule differ from `ref`
+ * (pb_trace_cpu's, where given): the lanes must walk as the reference does. */
+static uint32_t model_rays(const pb_scene *s, const pb_bvh *bvh, const pb_ray *rays, uint32_t count, uint32_t lanes,
+                           int any_hit, const pb_hit *ref, counts out[SCHEDULES])
 {
+    uint32_t wrong = 0;
     for (int sc = 0; sc < SCHEDULES; ++sc) {
         model m = {s, bvh, &out[sc]};
         memset(&out[sc], 0, sizeof out[sc]);
@@ -154,8 +160,15 @@ static void model_rays(const pb_scene *s, const pb_bvh *bvh, const pb_ray *rays,
                 run_kernel(&m, g, lanes);
             else
                 run_postponed(&m, g, lanes);
+            for (uint32_t l = 0; sc == 0 && ref && l < lanes; ++l) {
+                const pb_bvh_walk *w = &g[l].w;
+                uint32_t tri = w->best == PB_NO_HIT ? PB_NO_HIT : bvh->tri_order[w->best];
+                const pb_hit *h = &ref[g0 + l];
+                wrong += tri != h->triangle || (tri != PB_NO_HIT && (w->tmax != h->t || w->u != h->u || w->v != h->v));
+            }
         }
     }
+    return wrong;
 }
 
 int main(int argc, char **argv)
@@ -243,7 +256,12 @@ int main(int argc, char **argv)
                 }
             }
             counts c[SCHEDULES];
-            model_rays(s, bvh, kr, kn, lanes, kind == 2, c);
+            uint32_t wrong = model_rays(s, bvh, kr, kn, lanes, kind == 2, kind == 0 ? hits : NULL, c);
+            if (wrong) {
+                fprintf(stderr, "lockstep_model: %s: %u of %u probe rays' hits differ from pb_trace_cpu's\n",
+                        scenes[si], wrong, kn);
+                status = 1;
+            }
             double rays_in = (double)(kn / lanes * lanes), groups = rays_in / lanes;
             double steps = c[0].steps / rays_in, tests = c[0].tests / rays_in;
             printf("%-22.22s %-7s %8.0f %7.2f %7.2f |", name, kind_names[kind], rays_in, steps, tests);
