@@ -67,6 +67,9 @@ static void check_three_ways(const char *what, const pb_scene *s, const pb_ray *
     if (brute) {
         pb_ray *sub = malloc(nb * sizeof *sub);
         pb_hit *cs = malloc(nb * sizeof *cs);
+        CHECK(sub && cs);
+        if (!sub || !cs)
+            nb = 0;
         for (uint32_t i = 0; i < nb; ++i)
             sub[i] = rays[i * BRUTE_STRIDE], cs[i] = c[i * BRUTE_STRIDE];
         pb_trace_brute(s, sub, nb, PB_TRACE_CLOSEST, b, 0);
