@@ -14,7 +14,11 @@
  *   postponed  a lane takes node steps until it holds triangles (or is done),
  *              and the triangle loop runs once no lane still needs a step
  *              (Aila and Laine 2009's postponed leaves); a node's inner
- *              children are chosen at its step, before its triangles.
+ *              children are chosen at its step, before its triangles;
+ *   shared     the kernel's node loop, then the triangles of all lanes' runs
+ *              as one list, one test per lane per iteration (a lane tests
+ *              another lane's triangle against that lane's ray);
+ *   pairs, quads  the same within groups of 2 or 4 neighbouring lanes.
  *
  * Rays: probe rays as trace_bench makes them (pb_probe_rays), their bounce
  * rays (bench/bounce_rays.c: one cosine bounce from each first front hit, as
@@ -37,9 +41,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { MAX_LANES = 64, KINDS = 3, SCHEDULES = 2 };
+enum { MAX_LANES = 64, KINDS = 3, SCHEDULES = 5 };
 static const char *kind_names[KINDS] = {"probe", "bounce", "shadow"};
-static const char *schedule_names[SCHEDULES] = {"kernel", "postponed"};
+static const char *schedule_names[SCHEDULES] = {"kernel", "postponed", "shared", "pairs", "quads"};
 
 typedef struct lane {
     pb_bvh_walk w;
@@ -107,6 +111,40 @@ static void run_kernel(const model *m, lane *g, uint32_t n)
     }
 }
 
+/* shared triangle tests: the kernel's node loop, then each `width` lanes'
+ * runs of triangles as one list (lane order), `width` tests per iteration,
+ * any lane testing any of its group's triangles against that lane's ray */
+static void run_shared(const model *m, lane *g, uint32_t n, uint32_t width)
+{
+    for (;;) {
+        int live = 0;
+        for (uint32_t l = 0; l < n; ++l)
+            if (!g[l].done) {
+                pb_bvh_walk_step(&g[l].w, m->bvh);
+                g[l].next_test = 0;
+                m->c->steps++;
+                live = 1;
+            }
+        if (!live)
+            return;
+        m->c->node_iters++;
+        uint32_t most = 0; /* the busiest group's iterations */
+        for (uint32_t a = 0; a < n; a += width) {
+            uint32_t sum = 0;
+            for (uint32_t l = a; l < a + width && l < n; ++l)
+                sum += g[l].done ? 0 : g[l].w.run;
+            most = (sum + width - 1) / width > most ? (sum + width - 1) / width : most;
+        }
+        m->c->tri_iters += most;
+        for (uint32_t l = 0; l < n; ++l)
+            while (holds_tests(&g[l]))
+                lane_test(m, &g[l]);
+        for (uint32_t l = 0; l < n; ++l)
+            if (!g[l].done && !pb_bvh_walk_next(&g[l].w))
+                g[l].done = 1;
+    }
+}
+
 /* postponed leaves, inner children chosen at the step */
 static void run_postponed(const model *m, lane *g, uint32_t n)
 {
@@ -158,8 +196,10 @@ static uint32_t model_rays(const pb_scene *s, const pb_bvh *bvh, const pb_ray *r
             }
             if (sc == 0)
                 run_kernel(&m, g, lanes);
-            else
+            else if (sc == 1)
                 run_postponed(&m, g, lanes);
+            else
+                run_shared(&m, g, lanes, sc == 2 ? lanes : sc == 3 ? 2 : 4);
             for (uint32_t l = 0; sc == 0 && ref && l < lanes; ++l) {
                 const pb_bvh_walk *w = &g[l].w;
                 uint32_t tri = w->best == PB_NO_HIT ? PB_NO_HIT : bvh->tri_order[w->best];
@@ -208,8 +248,13 @@ int main(int argc, char **argv)
     }
     fprintf(f, "{\n  \"lanes\": %u, \"probes\": %u, \"rays_per_probe\": %u,\n  \"results\": [", lanes, probes, per_probe);
     printf("%u lanes; per ray: node steps, triangle tests; per group: loop iterations (lane use)\n", lanes);
-    printf("%-22s %-7s %8s %7s %7s | %-22s | %-22s\n", "scene", "rays", "count", "steps", "tests", "kernel: nodes / tris",
-           "postponed: nodes / tris");
+    printf("%-22s %-7s %8s %7s %7s |", "scene", "rays", "count", "steps", "tests");
+    for (int sc = 0; sc < SCHEDULES; ++sc) {
+        char label[64];
+        snprintf(label, sizeof label, "%s: nodes / tris", schedule_names[sc]);
+        printf(" %-25s |", label);
+    }
+    printf("\n");
     int first = 1, status = 0;
     for (int si = 0; si < scene_count; ++si) {
         pb_scene *s = NULL;
