@@ -94,7 +94,7 @@ typedef struct pb_bvh {
 
 /* Zero fields mean the defaults listed on each line. */
 typedef struct pb_bvh_desc {
-    uint32_t max_leaf_size;   /* default 4; 1..16 */
+    uint32_t max_leaf_size;   /* default 2; 1..16 */
     uint32_t bins;            /* default 16; 4..64 */
     uint32_t threads;         /* default: every host core this process may use (affinity mask) */
     float traversal_cost;     /* SAH cost of one node step, default 2.0 (see docs/bvh.md) */

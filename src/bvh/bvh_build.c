@@ -463,7 +463,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     memset(&d, 0, sizeof d);
     if (desc_in)
         d = *desc_in;
-    if (!d.max_leaf_size) d.max_leaf_size = 4;
+    if (!d.max_leaf_size) d.max_leaf_size = 2;
     if (!d.bins) d.bins = 16;
     if (!d.threads) d.threads = pb_host_threads();
     if (d.traversal_cost == 0.f) d.traversal_cost = 2.f;
