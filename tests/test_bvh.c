@@ -162,7 +162,7 @@ static void check_structure(const pb_scene *s, const pb_bvh *b, const char *what
         CHECKF(order_seen[t] == 1, "%s: tri_order is not a permutation at %u", what, t);
     CHECKF(max_depth == b->stats.depth, "%s: depth %u, stats say %u", what, max_depth, b->stats.depth);
     CHECK(b->stats.depth <= PB_BVH_MAX_DEPTH);
-    CHECK(b->stats.max_leaf_size <= 4); /* the default bound */
+    CHECK(b->stats.max_leaf_size <= 2); /* the default bound */
     free(seen);
     free(order_seen);
 }

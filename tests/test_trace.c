@@ -21,12 +21,12 @@ typedef struct traced {
     pb_gpu_scene *gs;
 } traced;
 
-static int prepare(const pb_scene *s, traced *t)
+static int prepare(const pb_scene *s, const pb_bvh_desc *bd, traced *t)
 {
     pb_error err;
     t->bvh = NULL;
     t->gs = NULL;
-    if (pb_bvh_build(s, NULL, &t->bvh, &err) != PB_OK || pb_gpu_scene_create(ctx, s, t->bvh, &t->gs, &err) != PB_OK) {
+    if (pb_bvh_build(s, bd, &t->bvh, &err) != PB_OK || pb_gpu_scene_create(ctx, s, t->bvh, &t->gs, &err) != PB_OK) {
         fprintf(stderr, "  prepare: %s\n", err.message);
         t_failures++;
         return 0;
@@ -47,12 +47,14 @@ static void release(traced *t)
  * on two AVX2 cores when it checked every ray). */
 enum { BRUTE_STRIDE = 4 };
 
-static void check_three_ways(const char *what, const pb_scene *s, const pb_ray *rays, uint32_t n, int brute)
+/* `bd`: the BVH's build options (NULL: the defaults) */
+static void check_three_ways(const char *what, const pb_scene *s, const pb_bvh_desc *bd, const pb_ray *rays, uint32_t n,
+                             int brute)
 {
     if (brute && test_portable_kernels())
         brute = 0;
     traced t;
-    if (!prepare(s, &t))
+    if (!prepare(s, bd, &t))
         return;
     pb_hit *g = malloc(n * sizeof *g), *c = malloc(n * sizeof *c), *b = malloc(n * sizeof *b);
     pb_error err;
@@ -112,10 +114,63 @@ static void random_soups_gpu_cpu_brute(void)
         pb_ray *rays = random_rays(s->bounds_min, s->bounds_max, 100000, 200 + i);
         char what[64];
         snprintf(what, sizeof what, "soup %u", cases[i].tris);
-        check_three_ways(what, s, rays, 100000, 1);
+        check_three_ways(what, s, NULL, rays, 100000, 1);
         free(rays);
         pb_scene_destroy(s);
     }
+}
+
+/* Leaves other than the default (2), up to the builder's bound (16): the
+ * kernel's run of a node's hit-leaf triangles is long only with long leaves,
+ * and the default BVH no longer has any. */
+static void leaf_sizes_gpu_cpu_brute(void)
+{
+    /* 2000 random triangles, then 4 fans of 40 around shared centres, which
+     * splits hardly separate: leaves of 9 or more at the bound 16 */
+    enum { SOUP = 2000, FANS = 4, FAN = 40 };
+    pb_scene *soup = random_soup(SOUP, 0.6f, 150, NULL);
+    double *p = malloc((size_t)(SOUP + FANS * FAN) * 9 * sizeof(double));
+    CHECK(soup && p);
+    if (!soup || !p) {
+        pb_scene_destroy(soup), free(p);
+        return;
+    }
+    for (size_t i = 0; i < (size_t)SOUP * 9; ++i)
+        p[i] = soup->positions[i];
+    for (int f = 0; f < FANS; ++f)
+        for (int k = 0; k < FAN; ++k) {
+            double *t = p + 9 * (size_t)(SOUP + f * FAN + k), a = 6.283185307179586 * k / FAN;
+            for (int v = 0; v < 3; ++v) {
+                double b = a + 2.0943951023931953 * v;
+                t[3 * v + 0] = -0.6 + 0.4 * f + 0.3 * cos(b);
+                t[3 * v + 1] = 0.3 * sin(b);
+                t[3 * v + 2] = (v - 1) * 0.05 * sin(a);
+            }
+        }
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_from_triangles(p, SOUP + FANS * FAN, NULL, NULL, 0, &s, &err) == PB_OK, "%s", err.message);
+    pb_scene_destroy(soup);
+    free(p);
+    if (!s)
+        return;
+    uint32_t sizes[] = {1, 8, 16};
+    pb_ray *rays = random_rays(s->bounds_min, s->bounds_max, 50000, 250);
+    for (int i = 0; i < 3; ++i) {
+        pb_bvh_desc bd = {0};
+        bd.max_leaf_size = sizes[i];
+        pb_bvh *b = NULL;
+        CHECK(pb_bvh_build(s, &bd, &b, &err) == PB_OK);
+        if (b)
+            CHECKF(sizes[i] < 16 ? b->stats.max_leaf_size == sizes[i] : b->stats.max_leaf_size > 8,
+                   "leaves of at most %u: the largest built has %u triangles", sizes[i], b->stats.max_leaf_size);
+        pb_bvh_destroy(b);
+        char what[64];
+        snprintf(what, sizeof what, "soup, leaves of %u", sizes[i]);
+        check_three_ways(what, s, &bd, rays, 50000, 1);
+    }
+    free(rays);
+    pb_scene_destroy(s);
 }
 
 /* Probe-style rays over a scene's bounds plus random rays inside them. */
@@ -138,7 +193,7 @@ static void demo_scene_gpu_cpu_brute(void)
     if (!s)
         return;
     pb_ray *rays = scene_rays(s, 100000, 3);
-    check_three_ways("demo", s, rays, 100000, 1);
+    check_three_ways("demo", s, NULL, rays, 100000, 1);
     free(rays);
     pb_scene_destroy(s);
 }
@@ -162,7 +217,7 @@ static void shared_scenes_gpu_cpu_brute(void)
         if (!s)
             continue;
         pb_ray *rays = scene_rays(s, 100000, 7 + i);
-        check_three_ways(scenes[i], s, rays, 100000, 1);
+        check_three_ways(scenes[i], s, NULL, rays, 100000, 1);
         free(rays);
         pb_scene_destroy(s);
     }
@@ -176,7 +231,7 @@ static void watertight_sphere_gpu(void)
     uint32_t nv;
     pb_scene *s = closed_sphere(48, 96, &verts, &nv);
     traced t;
-    if (!prepare(s, &t))
+    if (!prepare(s, NULL, &t))
         return;
     uint32_t n = 1000000;
     pb_ray *rays = sphere_probe_rays(s, n, 9);
@@ -223,7 +278,7 @@ static void far_from_origin_same_hits(void)
         CHECK(b->origin[0] == 1e6 && b->origin[1] == 1.5 - 250000.0 && b->origin[2] == 1e6);
         CHECK(a->triangle_count == b->triangle_count);
         traced ta, tb;
-        if (prepare(a, &ta) && prepare(b, &tb)) {
+        if (prepare(a, NULL, &ta) && prepare(b, NULL, &tb)) {
             uint32_t n = 100000;
             pb_ray *rays = scene_rays(a, n, 17);
             pb_hit *ha = malloc(n * sizeof *ha), *hb = malloc(n * sizeof *hb);
@@ -308,7 +363,7 @@ static void alpha_mask_cuts_out(void)
         return;
     CHECK(s->texture_count == 1 && s->materials[0].alpha_mode == PB_ALPHA_MASK);
     traced t;
-    if (!prepare(s, &t)) {
+    if (!prepare(s, NULL, &t)) {
         pb_scene_destroy(s);
         return;
     }
@@ -372,7 +427,7 @@ static void alpha_blend_stochastic(void)
     pb_error err;
     CHECKF(pb_scene_from_triangles(p, 4, mat, m, 2, &s, &err) == PB_OK, "%s", err.message);
     traced t;
-    if (!s || !prepare(s, &t)) {
+    if (!s || !prepare(s, NULL, &t)) {
         pb_scene_destroy(s);
         return;
     }
@@ -810,6 +865,7 @@ int main(void)
         return 1;
     fprintf(stderr, "device: %s (%s)\n", pb_context_device(ctx)->name, pb_context_device(ctx)->driver);
     RUN(random_soups_gpu_cpu_brute);
+    RUN(leaf_sizes_gpu_cpu_brute);
     RUN(demo_scene_gpu_cpu_brute);
     RUN(shared_scenes_gpu_cpu_brute);
     RUN(watertight_sphere_gpu);
