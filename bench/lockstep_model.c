@@ -89,32 +89,27 @@ static void triangle_loop(const model *m, lane *g, uint32_t n)
     }
 }
 
-/* the kernel's schedule: node step for every live lane, then the longest run */
-static void run_kernel(const model *m, lane *g, uint32_t n)
+/* shared triangle tests: each `width` lanes' runs of triangles as one list
+ * (lane order), `width` tests per iteration, any lane testing any of its
+ * group's triangles against that lane's ray */
+static void shared_tests(const model *m, lane *g, uint32_t n, uint32_t width)
 {
-    for (;;) {
-        int live = 0;
-        for (uint32_t l = 0; l < n; ++l)
-            if (!g[l].done) {
-                pb_bvh_walk_step(&g[l].w, m->bvh);
-                g[l].next_test = 0;
-                m->c->steps++;
-                live = 1;
-            }
-        if (!live)
-            return;
-        m->c->node_iters++;
-        triangle_loop(m, g, n); /* `more` stays 1 here: the next node is chosen after */
-        for (uint32_t l = 0; l < n; ++l)
-            if (!g[l].done && !pb_bvh_walk_next(&g[l].w))
-                g[l].done = 1;
+    uint32_t most = 0; /* the busiest group's iterations */
+    for (uint32_t a = 0; a < n; a += width) {
+        uint32_t sum = 0;
+        for (uint32_t l = a; l < a + width && l < n; ++l)
+            sum += g[l].done ? 0 : g[l].w.run;
+        most = (sum + width - 1) / width > most ? (sum + width - 1) / width : most;
     }
+    m->c->tri_iters += most;
+    for (uint32_t l = 0; l < n; ++l)
+        while (holds_tests(&g[l]))
+            lane_test(m, &g[l]);
 }
 
-/* shared triangle tests: the kernel's node loop, then each `width` lanes'
- * runs of triangles as one list (lane order), `width` tests per iteration,
- * any lane testing any of its group's triangles against that lane's ray */
-static void run_shared(const model *m, lane *g, uint32_t n, uint32_t width)
+/* the kernel's schedule: node step for every live lane, then the longest run
+ * (width 0), or the runs shared by groups of `width` lanes */
+static void run_kernel(const model *m, lane *g, uint32_t n, uint32_t width)
 {
     for (;;) {
         int live = 0;
@@ -128,17 +123,10 @@ static void run_shared(const model *m, lane *g, uint32_t n, uint32_t width)
         if (!live)
             return;
         m->c->node_iters++;
-        uint32_t most = 0; /* the busiest group's iterations */
-        for (uint32_t a = 0; a < n; a += width) {
-            uint32_t sum = 0;
-            for (uint32_t l = a; l < a + width && l < n; ++l)
-                sum += g[l].done ? 0 : g[l].w.run;
-            most = (sum + width - 1) / width > most ? (sum + width - 1) / width : most;
-        }
-        m->c->tri_iters += most;
-        for (uint32_t l = 0; l < n; ++l)
-            while (holds_tests(&g[l]))
-                lane_test(m, &g[l]);
+        if (width)
+            shared_tests(m, g, n, width);
+        else
+            triangle_loop(m, g, n); /* `more` stays 1 here: the next node is chosen after */
         for (uint32_t l = 0; l < n; ++l)
             if (!g[l].done && !pb_bvh_walk_next(&g[l].w))
                 g[l].done = 1;
@@ -194,12 +182,10 @@ static uint32_t model_rays(const pb_scene *s, const pb_bvh *bvh, const pb_ray *r
                 pb_bvh_walk_start(&g[l].w, &rays[g0 + l]);
                 g[l].next_test = 0, g[l].any_hit = any_hit, g[l].more = 1, g[l].done = bvh->triangle_count == 0;
             }
-            if (sc == 0)
-                run_kernel(&m, g, lanes);
-            else if (sc == 1)
+            if (sc == 1)
                 run_postponed(&m, g, lanes);
-            else
-                run_shared(&m, g, lanes, sc == 2 ? lanes : sc == 3 ? 2 : 4);
+            else /* kernel, shared by all lanes, pairs, quads */
+                run_kernel(&m, g, lanes, sc == 0 ? 0 : sc == 2 ? lanes : sc == 3 ? 2 : 4);
             for (uint32_t l = 0; sc == 0 && ref && l < lanes; ++l) {
                 const pb_bvh_walk *w = &g[l].w;
                 uint32_t tri = w->best == PB_NO_HIT ? PB_NO_HIT : bvh->tri_order[w->best];
