@@ -108,8 +108,8 @@ typedef struct pb_bvh_desc {
  * so its stack needs wide_depth + 1 entries (PB_BVH_STACK_SIZE); the GPU
  * kernel is specialised with this, so overflow cannot happen. A group names
  * its first node in 24 bits, so a BVH has at most PB_BVH4_MAX_NODES 4-wide
- * nodes (about 100 M triangles; the build refuses more with TOO_LARGE,
- * pb_bvh_desc.max_wide_nodes), and a node names its first leaf triangle in
+ * nodes (about 75 M triangles at the default leaves of 2; the build refuses
+ * more with TOO_LARGE, pb_bvh_desc.max_wide_nodes), and a node names its first leaf triangle in
  * 28 bits (PB_BVH4_MAX_TRIANGLES). */
 #define PB_BVH_MAX_DEPTH 64
 #define PB_BVH_STACK_SIZE(wide_depth) ((wide_depth) + 1u)
