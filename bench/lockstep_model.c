@@ -29,7 +29,9 @@
  * depends on what a step and a test cost (bench/RESULTS.md, "SIMD lanes
  * counted"); the counts are exact for this BVH and these rays. The probe rays'
  * hits under the kernel's schedule are checked against pb_trace_cpu's (exit
- * 1 on a difference): side by side, the lanes walk as the reference does. */
+ * 1 on a difference): side by side, the lanes walk as the reference does; and
+ * the shared schedules must take the kernel's node steps and tests in no more
+ * triangle-loop iterations. */
 #define _POSIX_C_SOURCE 200809L
 #include "bvh/bvh_walk.h"
 #include "probebake/probebake.h"
@@ -293,6 +295,16 @@ int main(int argc, char **argv)
                         scenes[si], wrong, kn);
                 status = 1;
             }
+            /* sharing moves triangle tests between lanes, never node steps, and a
+             * group's shared tests never take more iterations than its longest run */
+            for (int sc = 2; sc < SCHEDULES; ++sc)
+                if (c[sc].node_iters != c[0].node_iters || c[sc].steps != c[0].steps ||
+                    c[sc].tests != c[0].tests || c[sc].tri_iters > c[0].tri_iters) {
+                    fprintf(stderr, "lockstep_model: %s, %s rays: the %s schedule counts %.0f / %.0f iterations "
+                                    "against the kernel's %.0f / %.0f\n", scenes[si], kind_names[kind],
+                            schedule_names[sc], c[sc].node_iters, c[sc].tri_iters, c[0].node_iters, c[0].tri_iters);
+                    status = 1;
+                }
             double rays_in = (double)(kn / lanes * lanes), groups = rays_in / lanes;
             double steps = c[0].steps / rays_in, tests = c[0].tests / rays_in;
             printf("%-22.22s %-7s %8.0f %7.2f %7.2f |", name, kind_names[kind], rays_in, steps, tests);
