@@ -1,6 +1,6 @@
 /* The trace kernel against its CPU references, on a Vulkan device with the
- * validation layer on: random soups, the demo scene and the shared real
- * scenes; watertightness; far offsets; alpha masks; any-hit; bounded
+ * validation layer on: random soups (also with leaves of 1 to 16), the demo
+ * scene and the shared real scenes; watertightness; far offsets; alpha masks; any-hit; bounded
  * submissions; refusals. The last test fails on any validation message. */
 #include "scenes_gen.h"
 #include "bake/gpu_scene.h"

@@ -109,8 +109,8 @@ typedef struct pb_bvh_desc {
  * kernel is specialised with this, so overflow cannot happen. A group names
  * its first node in 24 bits, so a BVH has at most PB_BVH4_MAX_NODES 4-wide
  * nodes (about 75 M triangles at the default leaves of 2; the build refuses
- * more with TOO_LARGE, pb_bvh_desc.max_wide_nodes), and a node names its first leaf triangle in
- * 28 bits (PB_BVH4_MAX_TRIANGLES). */
+ * more with TOO_LARGE, pb_bvh_desc.max_wide_nodes), and a node names its
+ * first leaf triangle in 28 bits (PB_BVH4_MAX_TRIANGLES). */
 #define PB_BVH_MAX_DEPTH 64
 #define PB_BVH_STACK_SIZE(wide_depth) ((wide_depth) + 1u)
 #define PB_BVH4_MAX_NODES (1u << 24)
