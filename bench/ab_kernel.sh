@@ -17,8 +17,9 @@
 # --bake: the pairs are `probebake bake SCENE ARGS` instead (default ARGS
 # `--counts 16,8,16 --rays 256 --passes 1 --bounces 3`), and the ratio is of
 # the bake's GPU trace time (relocation and passes), B/A: below 1 is faster.
-# No Embree peer there. Run a new build once before timing it: llvmpipe
-# compiles a kernel at its first dispatch (cached on disk afterwards).
+# No Embree peer there. Each build runs once per scene before the pairs,
+# untimed: llvmpipe compiles a kernel at its first dispatch (cached on disk
+# afterwards), and each scene's stack depth is a specialisation of its own.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 pairs=20
@@ -82,6 +83,10 @@ run() {
 for s in "${scenes[@]}"; do
     name=$(basename "$s")
     echo "ab_kernel: $name, $pairs pairs (A $a, B $b)" >&2
+    # one untimed run of each build first: llvmpipe compiles each new
+    # specialisation (a scene's stack depth) at its first dispatch
+    run "$a" "$s" >/dev/null
+    run "$b" "$s" >/dev/null
     for i in $(seq "$pairs"); do
         read -r ka ea < <(run "$a" "$s")
         read -r kb eb < <(run "$b" "$s")
