@@ -2,11 +2,12 @@
  *
  *   lockstep_model [--probes N] [--rays N] [--lanes N] [--json FILE] [SCENE ...]
  *
- * llvmpipe runs 8 invocations as the lanes of one AVX2 vector (16 with
- * AVX-512; --lanes): a loop runs until its last lane leaves, and lanes that
- * left wait. This drives the reference traversal (src/bvh/bvh_walk.h, the
- * kernel's loop in C) for groups of consecutive rays side by side and counts
- * the iterations a group runs, under two schedules of the same per-ray work:
+ * llvmpipe runs 8 invocations as the lanes of one 256-bit vector (on AVX-512
+ * CPUs too, unless LP_NATIVE_VECTOR_WIDTH=512 asks for 16; --lanes): a loop
+ * runs until its last lane leaves, and lanes that left wait. This drives the
+ * reference traversal (src/bvh/bvh_walk.h, the kernel's loop in C) for groups
+ * of consecutive rays side by side and counts the iterations a group runs,
+ * under five schedules of the same per-ray work:
  *
  *   kernel     every live lane takes a node step, then the triangle loop runs
  *              to the longest run of hit-leaf triangles among the lanes
