@@ -5,6 +5,8 @@
  * foreign, missing, duplicated and misplaced parts; a bake on two devices
  * (two logical devices of one driver here) equals the one-device bake. */
 #include "test_util.h"
+#include "bake/gpu_scene.h"
+#include "bake/guide_cache.h"
 
 static pb_context *ctx;
 
@@ -41,7 +43,8 @@ static void teardown(setup *su)
 /* 8 x 6 x 10 = 480 probes in the demo scene's cells, as bake --counts
  * places them (more than the floor sample's 256, so the sample is every
  * second probe; a few stay inside its boxes, so dilation crosses parts),
- * and a target error that stops some probes early. */
+ * and a target error that stops some probes early. Path guiding on: each
+ * part learns the same guide (it depends on the scene and seed only). */
 static pb_bake_desc demo_desc(const pb_scene *s)
 {
     pb_bake_desc d = {0};
@@ -52,7 +55,7 @@ static pb_bake_desc demo_desc(const pb_scene *s)
         d.grid.origin[k] = s->bounds_min[k] + 0.5f * d.grid.spacing[k];
     }
     d.rays_per_probe = 32, d.passes = 8, d.target_error = 0.08f, d.bounces = 2, d.octmap_res = 4, d.seed = 1;
-    d.probe_nee = 1, d.light_cells = 1;
+    d.probe_nee = 1, d.light_cells = 1, d.guide_paths = 1u << 14;
     return d;
 }
 
@@ -270,7 +273,7 @@ static pb_bake_desc sparse_demo_desc(const pb_scene *s)
         d.grid.origin[k] = s->bounds_min[k];
     }
     d.rays_per_probe = 32, d.passes = 2, d.bounces = 1, d.octmap_res = 4, d.seed = 1;
-    d.probe_nee = 1, d.light_cells = 1;
+    d.probe_nee = 1, d.light_cells = 1, d.guide_paths = 1u << 14;
     return d;
 }
 
@@ -386,14 +389,25 @@ static void sparse_parts_merge_to_the_whole_bake(void)
     teardown(&su);
 }
 
+/* The second device's log: counts the lines that say it learned a guide. */
+static void count_guides_learned(pb_log_level level, const char *msg, void *user)
+{
+    test_log_line(level, msg, NULL);
+    if (strstr(msg, "entries learned"))
+        ++*(unsigned *)user;
+}
+
 /* Two logical devices of the driver the tests run on: pb_bake_devices
- * (part i on device i, a thread each, merged in memory) is the bake of one. */
+ * (part i on device i, a thread each, merged in memory) is the bake of one.
+ * The parts share the first device's path guiding cache: the second device
+ * learns no guide (guide_cache.h), the first none beyond its own bakes'. */
 static void two_devices_bake_like_one(void)
 {
     setup su;
     if (!setup_demo(&su))
         return;
-    pb_context_desc cd = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {test_log_line, NULL}};
+    unsigned learned_on_second = 0;
+    pb_context_desc cd = {getenv("PB_TEST_DEVICE"), 1, 0, 0, {count_guides_learned, &learned_on_second}};
     cd.portable_kernels = pb_context_native64(ctx) ? 0u : 1u;
     pb_context *second = NULL;
     pb_gpu_scene *gs2 = NULL;
@@ -409,8 +423,11 @@ static void two_devices_bake_like_one(void)
         if (pb_bake(ctx, su.scene, su.gs, &d, &whole, &err) == PB_OK &&
             pb_bake_devices(ctxs, scenes, 2, su.scene, &d, NULL, &both, &err) == PB_OK) {
             int same = same_but_timings(&whole, &both);
-            fprintf(stderr, "  2 devices: %s bytes as 1\n", same ? "the same" : "DIFFERENT");
+            const pb_guide_cache *gc = su.gs->guide_cache;
+            fprintf(stderr, "  2 devices: %s bytes as 1; guides learned: %u on device 0, %u on device 1\n",
+                    same ? "the same" : "DIFFERENT", gc ? gc->learns : 0u, learned_on_second);
             CHECK(same);
+            CHECK(gc && gc->learns == 1 && learned_on_second == 0);
             CHECK(pb_context_validation_messages(second) == 0);
             pb_volume_free(&both);
         } else {
@@ -425,6 +442,7 @@ static void two_devices_bake_like_one(void)
             int same = same_but_timings(&whole, &both);
             fprintf(stderr, "  sparse on 2 devices: %s bytes as 1\n", same ? "the same" : "DIFFERENT");
             CHECK(same);
+            CHECK(su.gs->guide_cache->learns == 2 && learned_on_second == 0); /* one bounce: another key */
             pb_volume_free(&both);
         } else {
             CHECKF(0, "%s", err.message);

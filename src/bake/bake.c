@@ -19,6 +19,7 @@
 #include "bake/depth_lists.h"
 #include "bake/depth_sums.h"
 #include "bake/guide.h"
+#include "bake/guide_cache.h"
 #include "bake/light_cells.h"
 #include "bake/light_cells_gpu.h"
 #include "bake/shading.h"
@@ -147,10 +148,12 @@ static pb_result make_buffer(pb_context *ctx, pb_buffer *b, uint64_t bytes, pb_m
     return r;
 }
 
-/* Path guiding's stage: the cache learned on the host from training paths
+/* Path guiding's stage: the guide learned on the host from training paths
  * that start on the surfaces (src/bake/guide.c: they depend on the scene and
- * seed only), then uploaded. Needs the host BVH the GPU scene was made from. */
-static pb_result learn_guide(pb_context *ctx, const pb_scene *scene, const pb_gpu_scene *gs, const pb_bake_desc *d,
+ * seed only), then uploaded. Needs the host BVH the GPU scene was made from.
+ * The GPU scene keeps the guide for later bakes with the same key
+ * (guide_cache.h): a sparse bake's levels learn it once. */
+static pb_result learn_guide(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *d,
                              bake_buffers *B, pb_error *err)
 {
     pb_bake_pass tp;
@@ -162,11 +165,19 @@ static pb_result learn_guide(pb_context *ctx, const pb_scene *scene, const pb_gp
     tp.max_distance = d->max_distance, tp.indirect_clamp = d->indirect_clamp;
     double t0 = pb_now_ms();
     pb_guide *g = &B->guide_host;
-    pb_result r = pb_guide_build(&tp, d->guide_paths, g, err);
+    pb_result r = gs->guide_cache ? PB_OK : pb_guide_cache_create(&gs->guide_cache, err);
+    pb_guide_key key = pb_guide_key_make(d, &tp);
+    int learned = 0;
+    if (r == PB_OK)
+        r = pb_guide_cache_get(gs->guide_cache, &key, &tp, d->guide_paths, g, &learned, err);
     if (r != PB_OK || !g->table)
         return r;
-    pb_logf(&ctx->desc.log, PB_LOG_INFO, "path guiding: %u training paths, %u of %u entries learned (%.0f ms)",
-            d->guide_paths, g->learned, g->entries, pb_now_ms() - t0);
+    if (learned)
+        pb_logf(&ctx->desc.log, PB_LOG_INFO, "path guiding: %u training paths, %u of %u entries learned (%.0f ms)",
+                d->guide_paths, g->learned, g->entries, pb_now_ms() - t0);
+    else
+        pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "path guiding: reused (seed %u, %u of %u entries)", d->seed, g->learned,
+                g->entries);
     r = make_buffer(ctx, &B->guide_slots, (uint64_t)g->entries * 4, PB_MEMORY_DEVICE, "path guiding index", g->slot,
                     err);
     if (r == PB_OK)

@@ -1,6 +1,7 @@
 /* Upload of the scene and its BVH, in leaf order, and the trace pipelines.
  * Sizes are checked against the device before anything is allocated. */
 #include "bake/gpu_scene.h"
+#include "bake/guide_cache.h"
 #include "bake/light_cells_gpu.h"
 #include "common/common.h"
 #include "probebake/scene.h"
@@ -173,6 +174,7 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
 void pb_gpu_scene_destroy_ctx(pb_context *ctx, pb_gpu_scene *gs)
 {
     pb_light_cells_gpu_free(ctx, gs->light_cells);
+    pb_guide_cache_destroy(gs->guide_cache);
     pb_pipeline_destroy(ctx, &gs->trace_closest);
     pb_pipeline_destroy(ctx, &gs->trace_any);
     pb_buffer *bufs[8] = {&gs->nodes, &gs->tris, &gs->tri_uv, &gs->materials, &gs->textures, &gs->texels,

@@ -27,6 +27,8 @@ struct pb_gpu_scene {
     VkDescriptorSet set;
     uint32_t texel_loads;
     struct pb_light_cells_gpu *light_cells; /* the bakes' light cells, learned once per seed (light_cells_gpu.h) */
+    struct pb_guide_cache *guide_cache;     /* path guiding's guide, learned once per key (guide_cache.h); owned,
+                                               but pb_bake_devices points it at a shared one for a bake */
 };
 
 /* Frees the scene's device objects on `ctx`. */

@@ -2,7 +2,10 @@
  * i, one host thread each, then pb_volume_merge in memory. Every random
  * number is keyed by seed, probe, pass and ray, so on devices of one driver
  * the result is the bytes of a one-device bake (timings aside); on different
- * hardware each part is what that device computes. */
+ * hardware each part is what that device computes. Path guiding's guide is
+ * host work: the parts share one (guide_cache.h). */
+#include "bake/gpu_scene.h"
+#include "bake/guide_cache.h"
 #include "common/common.h"
 #include "probebake/bake.h"
 
@@ -79,12 +82,21 @@ pb_result pb_bake_devices(pb_context *const *ctxs, pb_gpu_scene *const *scenes, 
                       : pb_bake(ctxs[0], scene, scenes[0], desc, out, err);
     device_part *parts = calloc(count, sizeof *parts);
     pthread_t *threads = calloc(count, sizeof *threads);
+    struct pb_guide_cache **own_guides = calloc(count, sizeof *own_guides);
     progress_share share = {PTHREAD_MUTEX_INITIALIZER, calloc(count, sizeof(float)), count, desc->progress,
                             desc->progress_user, 0};
-    if (!parts || !threads || !share.fraction) {
-        free(parts), free(threads), free(share.fraction);
+    if (!parts || !threads || !own_guides || !share.fraction) {
+        free(parts), free(threads), free(own_guides), free(share.fraction);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u devices", count);
     }
+    /* the guide is host work, the same for every part: the parts share the
+     * first device's cache, so one learns it while the others wait for it */
+    if (!scenes[0]->guide_cache && pb_guide_cache_create(&scenes[0]->guide_cache, err) != PB_OK) {
+        free(parts), free(threads), free(own_guides), free(share.fraction);
+        return err->code;
+    }
+    for (uint32_t i = 1; i < count; ++i)
+        own_guides[i] = scenes[i]->guide_cache, scenes[i]->guide_cache = scenes[0]->guide_cache;
     uint32_t started = 0;
     for (uint32_t i = 0; i < count; ++i) {
         device_part *p = &parts[i];
@@ -100,6 +112,8 @@ pb_result pb_bake_devices(pb_context *const *ctxs, pb_gpu_scene *const *scenes, 
     }
     for (uint32_t i = 0; i < started; ++i)
         pthread_join(threads[i], NULL);
+    for (uint32_t i = 1; i < count; ++i)
+        scenes[i]->guide_cache = own_guides[i];
     /* the first real failure, before the cancellations it caused */
     int pick = -1;
     for (uint32_t i = 0; i < count && pick < 0; ++i)
@@ -130,6 +144,6 @@ pb_result pb_bake_devices(pb_context *const *ctxs, pb_gpu_scene *const *scenes, 
     for (uint32_t i = 0; i < count; ++i)
         pb_volume_free(&parts[i].vol);
     pthread_mutex_destroy(&share.lock);
-    free(parts), free(threads), free(share.fraction);
+    free(parts), free(threads), free(own_guides), free(share.fraction);
     return r;
 }
