@@ -90,7 +90,8 @@ typedef struct pb_bake_desc {
     uint32_t guide_paths;         /* > 0: path guiding, learned before the bake from this many training paths
                                      started on the scene's surfaces; bounce directions are drawn from a
                                      mixture of the learned distribution and the cosine lobe (unbiased;
-                                     docs/bake.md, "Estimators"); 0: off */
+                                     docs/bake.md, "Estimators"); 0: off. The GPU scene keeps what it
+                                     learned for later bakes with the same settings */
     uint32_t light_cells;         /* 1: next-event estimation draws emitters per region of space by the light
                                      shadow rays measured from there, mixed with their power (unbiased;
                                      docs/bake.md, "Estimators"); 0: by power alone */
@@ -157,7 +158,9 @@ typedef struct pb_sparse_desc pb_sparse_desc;
  * one-device bake's, byte for byte apart from the timings. desc->progress
  * hears the mean fraction of all parts, from any of their threads (one at a
  * time); its cancel stops every part. sparse: NULL for a grid (or points),
- * else a sparse bake split by coarsest brick (pb_bake_sparse's parts). */
+ * else a sparse bake split by coarsest brick (pb_bake_sparse's parts). The
+ * parts share scenes[0]'s path guiding cache for the call: the guide is
+ * learned once, on the host, and scenes[0] keeps it. */
 pb_result pb_bake_devices(pb_context *const *ctxs, pb_gpu_scene *const *scenes, uint32_t count, const pb_scene *scene,
                           const pb_bake_desc *desc, const pb_sparse_desc *sparse, pb_volume *out, pb_error *err);
 
