@@ -214,7 +214,7 @@ int main(int argc, char **argv)
                 r->vs_bounce = bench_median(vs_bounce, repeat);
                 double probe_rays = (double)r->probes * r->rays, gpu_ms = r->trace_ms + r->sh_ms + r->depth_ms;
                 double mtrav = gpu_ms > 0 ? (double)r->traversals / (gpu_ms * 1e3) : 0.0;
-                printf("%-18.18s %6u %6u %9.1f %8.1f %8.1f %9.1f %9.3f %9.3f %7.2f %7.2f %8.4f\n", name, r->rays, 1,
+                printf("%-18.18s %6u %6u %9.1f %8.1f %8.1f %9.1f %9.3f %9.3f %7.2f %7.2f %8.4f\n", name, r->rays, 1u,
                        r->trace_ms, r->sh_ms, r->depth_ms, r->wall_ms, r->trace_ms > 0 ? probe_rays / (r->trace_ms * 1e3) : 0.0,
                        mtrav, r->vs_trace, r->vs_bounce, r->rmse);
                 fflush(stdout);

@@ -224,7 +224,7 @@ static void reference_converges(void)
         double e = pb_image_relative_rmse(img, truth, W, H);
 
         lx[i] = log((double)spps[i]), ly[i] = log(e);
-        fprintf(stderr, "  %3u spp: relative RMSE %.4f against %u spp\n", spps[i], e, 1024);
+        fprintf(stderr, "  %3u spp: relative RMSE %.4f against %u spp\n", spps[i], e, 1024u);
     }
     double mx = (lx[0] + lx[1] + lx[2]) / 3, my = (ly[0] + ly[1] + ly[2]) / 3, sxy = 0, sxx = 0;
     for (int i = 0; i < 3; ++i)

@@ -1,5 +1,6 @@
 /* --indirect volume's bounce loop (indirect_volume.h). */
 #include "bake/indirect_volume.h"
+#include "bake/timings.h"
 
 #include <string.h>
 
@@ -25,10 +26,7 @@ pb_result pb_indirect_volume_bounces(const pb_scene *scene, const pb_bake_desc *
         r = bake(user, &d, k ? &fb : NULL, &v, err);
         if (r != PB_OK)
             break;
-        double *sum = &t.load;
-        const double *tv = &v.timings.load;
-        for (int i = 0; i < 8; ++i)
-            sum[i] += tv[i];
+        pb_volume_timings_add(&t, &v.timings);
         rays += v.rays_traced, traversals += v.traversals, relocation_rays += v.relocation_rays;
         pb_sample_volume_free(&fb);
         if (k < desc->bounces) {

@@ -1,5 +1,6 @@
 /* Shard ranges and the floor sample (shard.h). */
 #include "bake/shard.h"
+#include "bake/timings.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -20,10 +21,7 @@ void pb_shard_account(pb_volume *whole, const pb_volume *part)
 {
     if (part->settings.passes > whole->settings.passes)
         whole->settings.passes = part->settings.passes;
-    const double *t = &part->timings.load;
-    double *o = &whole->timings.load;
-    for (int i = 0; i < 8; ++i)
-        o[i] += t[i];
+    pb_volume_timings_add(&whole->timings, &part->timings);
     whole->rays_traced += part->rays_traced, whole->traversals += part->traversals;
     whole->relocation_rays += part->relocation_rays;
     if (strcmp(part->device, whole->device) && !strstr(whole->device, part->device)) {

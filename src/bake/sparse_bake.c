@@ -24,6 +24,7 @@
 #include "bake/sparse_compact.h"
 #include "bake/sparse_stitch.h"
 #include "bake/sparse_surface_tests.h"
+#include "bake/timings.h"
 #include "common/common.h"
 #include "common/key_map.h"
 #include "probebake/bake.h"
@@ -138,10 +139,7 @@ static pb_result account(sparse_job *j, const pb_volume *v, int kept, pb_error *
     j->relocation_rays += v->relocation_rays;
     if (kept && v->settings.passes > j->passes_max)
         j->passes_max = v->settings.passes;
-    double *t = &j->timings.load;
-    const double *tv = &v->timings.load;
-    for (int i = 0; i < 8; ++i)
-        t[i] += tv[i];
+    pb_volume_timings_add(&j->timings, &v->timings);
     if (j->stats.bakes == 1) { /* the header every part shares; the arrays stay v's */
         j->first = *v;
         j->first.base = j->first.offset = j->first.sh = j->first.probe_std_error = NULL;

@@ -248,7 +248,8 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     put_u64(b + 168, l.depth);
     put_u32(b + 176, v->octmap_res + 2);
     put_f32(b + 180, v->depth_unit);
-    const double *t = &v->timings.load;
+    const pb_volume_timings *tm = &v->timings; /* in the file's order (docs/format.md) */
+    const double t[8] = {tm->load, tm->bvh, tm->upload, tm->trace, tm->sh, tm->octmap, tm->relocate, tm->total};
     for (int i = 0; i < 8; ++i)
         put_f64(b + 184 + 8 * i, t[i]);
     memcpy(b + 248, v->device, strnlen(v->device, sizeof v->device - 1));
@@ -488,9 +489,10 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     v->settings.indirect_mode = get_u32(h + 116);
     v->settings.target_error = get_f32(h + 120);
     v->settings.max_distance = get_f32(h + 124);
-    double *t = &v->timings.load;
+    pb_volume_timings *tm = &v->timings; /* in the file's order (docs/format.md) */
+    double *t[8] = {&tm->load, &tm->bvh, &tm->upload, &tm->trace, &tm->sh, &tm->octmap, &tm->relocate, &tm->total};
     for (int i = 0; i < 8; ++i)
-        t[i] = get_f64(h + 184 + 8 * i);
+        *t[i] = get_f64(h + 184 + 8 * i);
     memcpy(v->device, h + 248, sizeof v->device - 1);
     v->device[sizeof v->device - 1] = '\0';
     /* zero in files written before these fields: none, default, off */
