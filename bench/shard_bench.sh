@@ -8,25 +8,36 @@
 #   N, J at a time   the same N processes, J running at once
 #   N devices        bake --devices with N logical devices of device 0, one
 #                    process (a thread per part), merged in memory
+#   a farm of W      what W machines would take for the N parts, from the
+#                    parts' measured times: each part goes, in index order,
+#                    to the first machine free (a Slurm job array limited to
+#                    W tasks at a time, --array=0-(N-1)%W), then the merge;
+#                    against the one-process bake split perfectly over W
+#                    machines (peer / W). Uneven parts (probes in rock
+#                    stop early, converged probes drop out at their own
+#                    pass) show here as a farm slower than peer / W.
 # Every merged file must equal the one-process file outside the timings
 # block (it is checked and reported: sharding costs no error). Prints a
 # table, writes CSV and JSON.
 #
-#   bench/shard_bench.sh [--probebake P] [--parts N] [--jobs J] [--out DIR] [SCENE [bake options...]]
+#   bench/shard_bench.sh [--probebake P] [--parts N] [--jobs J] [--workers W] [--out DIR]
+#                        [SCENE [bake options...]]
 #
 # Default: the demo scene at --quality production with 2,048 probes, 4 parts,
-# 2 at a time, into bench/results/shard_bench/.
+# 2 at a time, a farm of 4, into bench/results/shard_bench/.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 pb=$root/build/probebake
 n=4
 jobs=2
+workers=4
 out=$root/bench/results/shard_bench
 while [ $# -gt 0 ]; do
     case $1 in
         --probebake) pb=$2; shift 2 ;;
         --parts) n=$2; shift 2 ;;
         --jobs) jobs=$2; shift 2 ;;
+        --workers) workers=$2; shift 2 ;;
         --out) out=$2; shift 2 ;;
         *) break ;;
     esac
@@ -64,6 +75,11 @@ sequential=$(($(now_ms) - t))
 seq_same=$(same "$tmp/whole.probes" "$tmp/seq.probes")
 longest=0
 for m in "${parts_ms[@]}"; do [ "$m" -gt "$longest" ] && longest=$m; done
+# list schedule in index order over W machines, then the merge
+farm=$(printf '%s\n' "${parts_ms[@]}" | awk -v w="$workers" -v merge="$merge" '
+    BEGIN { for (i = 0; i < w; ++i) free[i] = 0 }
+    { k = 0; for (i = 1; i < w; ++i) if (free[i] < free[k]) k = i; free[k] += $1 }
+    END { m = 0; for (i = 0; i < w; ++i) if (free[i] > m) m = free[i]; print m + merge }')
 
 t=$(now_ms)
 for i in $(seq 0 $((n - 1))); do
@@ -87,6 +103,10 @@ printf '%-34s %10d %9s %10s\n' "  of which the longest part" "$longest" "$(ratio
 printf '%-34s %10d %9s %10s\n' "  of which merge" "$merge" "$(ratio "$merge" "$whole")" ""
 printf '%-34s %10d %9s %10s\n' "$n parts, $jobs at a time + merge" "$parallel" "$(ratio "$parallel" "$whole")" "$par_same"
 printf '%-34s %10d %9s %10s\n' "--devices: $n logical devices" "$devices" "$(ratio "$devices" "$whole")" "$dev_same"
+ideal=$((whole / workers))
+printf '%-34s %10d %9s %10s\n' "a farm of $workers: one process / $workers" "$ideal" "$(ratio "$ideal" "$whole")" "-"
+printf '%-34s %10d %9s %10s\n' "a farm of $workers: $n parts + merge" "$farm" "$(ratio "$farm" "$whole")" "$seq_same"
+printf '%-34s %10s %9s\n' "  farm / (one process / $workers)" "" "$(ratio "$farm" "$ideal")"
 
 stem=$out/$(basename "$scene" | sed 's/\.[^.]*$//')-$n-parts
 {
@@ -97,11 +117,14 @@ stem=$out/$(basename "$scene" | sed 's/\.[^.]*$//')-$n-parts
     echo "merge,$merge,$(ratio "$merge" "$whole"),"
     echo "parts_${jobs}_at_a_time_with_merge,$parallel,$(ratio "$parallel" "$whole"),$par_same"
     echo "devices_${n}_logical,$devices,$(ratio "$devices" "$whole"),$dev_same"
+    echo "farm_${workers}_ideal,$ideal,$(ratio "$ideal" "$whole"),"
+    echo "farm_${workers}_parts_with_merge,$farm,$(ratio "$farm" "$whole"),$seq_same"
 } >"$stem.csv"
 cat >"$stem.json" <<EOF
 {"scene": "$(basename "$scene")", "args": "${args[*]}", "parts": $n, "jobs": $jobs, "cores": $(nproc), "device": "$device",
  "one_process_ms": $whole, "parts_sequential_ms": $sequential, "part_ms": [$(IFS=,; echo "${parts_ms[*]}")],
  "merge_ms": $merge, "parts_parallel_ms": $parallel, "devices_ms": $devices,
+ "workers": $workers, "farm_ms": $farm, "farm_ideal_ms": $ideal, "farm_vs_ideal": $(ratio "$farm" "$ideal"),
  "identical": {"sequential": "$seq_same", "parallel": "$par_same", "devices": "$dev_same"}}
 EOF
 echo

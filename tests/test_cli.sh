@@ -490,8 +490,8 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
             "$pb" bake "$demo" "${shard_args[@]}" --shard "$i/3" -o "$tmp/part$i.probes"
     done
     same_but_timings() { cmp -s <(head -c 184 "$1") <(head -c 184 "$2") && cmp -s <(tail -c +249 "$1") <(tail -c +249 "$2") && echo same || echo different; }
-    expect inspect-shard 0 '^part        1 of 3: probes 70..139 of 210, undilated' -- "$pb" inspect "$tmp/part1.probes"
-    expect inspect-shard-json 0 '"shard": \{"index": 1, "count": 3, "first": 70, "total": 210\}' -- \
+    expect inspect-shard 0 '^part        1 of 3: probes 1, 4, ... every 3 of 210, undilated' -- "$pb" inspect "$tmp/part1.probes"
+    expect inspect-shard-json 0 '"shard": \{"index": 1, "count": 3, "first": 1, "step": 3, "total": 210\}' -- \
         "$pb" inspect "$tmp/part1.probes" --json
     expect render-refuses-shard 1 'part 1 of 3 of a sharded bake: probebake merge joins the parts first' -- \
         "$pb" render "$demo" --volume "$tmp/part1.probes" --size 16x12 -o "$tmp/s.png"

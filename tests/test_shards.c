@@ -227,11 +227,11 @@ static void merge_refuses_foreign_missing_duplicated_parts(void)
             fprintf(stderr, "  %s: %s\n", cases[k].what, err.message);
             CHECK(out.probe_count == 0 && out.sh == NULL);
         }
-        /* a part whose range is not its index's, and a whole volume */
+        /* a part whose probes are not its index's, and a whole volume */
         pb_volume moved[3] = {parts[0], parts[1], parts[2]};
         moved[1].shard.first += 1;
         CHECK(pb_volume_merge(moved, names, 3, &out, &err) == PB_ERROR_INVALID_ARGUMENT &&
-              strstr(err.message, "b.probes") && strstr(err.message, "holds probes"));
+              strstr(err.message, "b.probes") && strstr(err.message, "every 3"));
         pb_volume whole = parts[0];
         whole.flags &= ~PB_VOLUME_SHARD;
         CHECK(pb_volume_merge(&whole, names, 1, &out, &err) == PB_ERROR_INVALID_ARGUMENT &&
@@ -240,6 +240,116 @@ static void merge_refuses_foreign_missing_duplicated_parts(void)
     for (uint32_t i = 0; i < 3; ++i)
         pb_volume_free(&parts[i]);
     pb_volume_free(&other);
+    teardown(&su);
+}
+
+/* A copy of part v's header (and shard) for n probes, arrays allocated. */
+static int part_like(const pb_volume *v, uint32_t n, pb_volume_shard shard, pb_volume *out)
+{
+    *out = *v;
+    out->base = out->offset = out->sh = out->probe_std_error = NULL;
+    out->probe_flags = out->probe_paths = NULL;
+    out->depth = NULL;
+    out->probe_count = n, out->shard = shard;
+    pb_error err;
+    CHECKF(pb_volume_alloc(out, &err) == PB_OK, "%s", err.message);
+    return out->sh != NULL;
+}
+
+/* Parts are dealt: part i of n holds probes i, i + n, ... And contiguous
+ * parts, as probebake wrote them before, still merge to the same volume;
+ * a mix of the two, or a file whose step is not its count, is refused. */
+static void parts_are_dealt_and_older_ranges_still_merge(void)
+{
+    setup su;
+    if (!setup_demo(&su))
+        return;
+    pb_bake_desc d = demo_desc(su.scene);
+    enum { N = 3 };
+    pb_volume dealt[N], ranges[N] = {{0}}, merged, merged_ranges;
+    const char *names[N] = {"p0", "p1", "p2"};
+    pb_error err;
+    uint32_t made = 0;
+    for (uint32_t i = 0; i < N; ++i)
+        made += bake_part(&su, &d, i, N, &dealt[made]);
+    if (made == N && pb_volume_merge(dealt, names, N, &merged, &err) == PB_OK) {
+        uint32_t total = merged.probe_count, undilated = 0, agree = 0;
+        uint64_t halves = pb_volume_tile_halves(merged.octmap_res);
+        for (uint32_t i = 0; i < N; ++i) {
+            CHECK(dealt[i].shard.first == i && dealt[i].shard.step == N && dealt[i].shard.total == total);
+            CHECK(dealt[i].probe_count == (total - i + N - 1) / N);
+            for (uint32_t k = 0; k < dealt[i].probe_count; ++k) {
+                uint32_t g = i + k * N;
+                agree += !memcmp(dealt[i].base + 3 * k, merged.base + 3 * g, 12);
+                if (!(merged.probe_flags[g] & PB_PROBE_DILATED))
+                    ++undilated, agree += !memcmp(dealt[i].sh + 27 * k, merged.sh + 27 * g, 108);
+            }
+        }
+        CHECKF(agree == total + undilated, "%u of %u positions and SH where the part has probe i + kN", agree,
+               total + undilated);
+        /* contiguous ranges cut from the same probes, through a file (step 0 there) */
+        uint32_t built = 0;
+        for (uint32_t i = 0; i < N; ++i) {
+            uint32_t first = total * i / N, n = total * (i + 1) / N - first;
+            if (!part_like(&dealt[0], n, (pb_volume_shard){i, N, first, total, 1}, &ranges[i]))
+                continue;
+            for (uint32_t k = 0; k < n; ++k) {
+                uint32_t g = first + k, from = g % N, at = g / N;
+                const pb_volume *v = &dealt[from];
+                memcpy(ranges[i].base + 3 * k, v->base + 3 * at, 12);
+                memcpy(ranges[i].offset + 3 * k, v->offset + 3 * at, 12);
+                ranges[i].probe_flags[k] = v->probe_flags[at];
+                memcpy(ranges[i].sh + 27 * k, v->sh + 27 * at, 108);
+                memcpy(ranges[i].depth + halves * k, v->depth + halves * at, 2 * halves);
+                ranges[i].probe_paths[k] = v->probe_paths[at];
+                ranges[i].probe_std_error[k] = v->probe_std_error[at];
+            }
+            char path[512];
+            snprintf(path, sizeof path, "%s/range%u.probes", temp_dir(), i);
+            pb_volume back;
+            if (pb_volume_write(path, &ranges[i], &err) == PB_OK && pb_volume_read(path, &back, &err) == PB_OK) {
+                CHECK(back.shard.step == 1 && back.shard.first == first);
+                pb_volume_free(&ranges[i]);
+                ranges[i] = back;
+                ++built;
+            } else {
+                CHECKF(0, "%s", err.message);
+            }
+        }
+        if (built == N && pb_volume_merge(ranges, names, N, &merged_ranges, &err) == PB_OK) {
+            CHECK(same_but_timings(&merged, &merged_ranges));
+            pb_volume_free(&merged_ranges);
+        } else {
+            CHECKF(0, "contiguous parts: %s", err.message);
+        }
+        if (built == N) {
+            pb_volume mixed[N] = {ranges[0], dealt[1], dealt[2]};
+            CHECK(pb_volume_merge(mixed, names, N, &merged_ranges, &err) == PB_ERROR_INVALID_ARGUMENT &&
+                  strstr(err.message, "p1") && strstr(err.message, "split"));
+            fprintf(stderr, "  mixed: %s\n", err.message);
+        }
+        /* a dealt part's file whose step is not its count */
+        char path[512];
+        snprintf(path, sizeof path, "%s/part1.probes", temp_dir());
+        FILE *f = fopen(path, "r+b");
+        unsigned char two[4] = {2, 0, 0, 0};
+        CHECK(f && fseek(f, 444, SEEK_SET) == 0 && fwrite(two, 1, 4, f) == 4);
+        if (f)
+            fclose(f);
+        pb_volume bad;
+        CHECK(pb_volume_read(path, &bad, &err) != PB_OK && strstr(err.message, "shard part out of range") &&
+              strstr(err.message, "part1.probes"));
+        fprintf(stderr, "  step 2 in a part of 3: %s\n", err.message);
+        fprintf(stderr, "  %u probes in %u dealt parts: each probe where i + kN says; contiguous parts merge to the "
+                        "same bytes\n", total, N);
+        pb_volume_free(&merged);
+    } else if (made == N) {
+        CHECKF(0, "%s", err.message);
+    }
+    for (uint32_t i = 0; i < made; ++i)
+        pb_volume_free(&dealt[i]);
+    for (uint32_t i = 0; i < N; ++i)
+        pb_volume_free(&ranges[i]);
     teardown(&su);
 }
 
@@ -462,6 +572,7 @@ int main(void)
         return 1;
     RUN(parts_merge_to_the_whole_bake);
     RUN(merge_refuses_foreign_missing_duplicated_parts);
+    RUN(parts_are_dealt_and_older_ranges_still_merge);
     RUN(shard_parameters_refused);
     RUN(sparse_parts_merge_to_the_whole_bake);
     RUN(two_devices_bake_like_one);

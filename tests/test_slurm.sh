@@ -2,7 +2,8 @@
 # A one-node Slurm cluster on localhost, from Debian's slurm-wlm and munge,
 # every file in a temporary directory (keys, config, state, logs; nothing in
 # /etc is touched): scripts/slurm/submit.sh bakes the demo scene in 3 parts
-# as a job array and merges them in a job that waits for the array; the
+# as a job array, at most 2 at a time (--at-once 2, checked in the array's
+# record), and merges them in a job that waits for the array; the
 # merged file must equal a one-process bake's outside the timings block.
 # When the sandbox cannot run the daemons, the test says why and skips.
 # Usage: test_slurm.sh PROBEBAKE SOURCE_DIR
@@ -99,10 +100,14 @@ echo "  one-node cluster up: $host, $cpus CPUs, ports $port/$((port + 1))"
 # the bake, one process, then through Slurm in 3 parts
 args=(--counts 6,5,7 --rays 32 --passes 6 --target-error 0.05 --octmap-res 4 --quiet)
 "$pb" bake "$demo" "${args[@]}" -o "$t/whole.probes" >/dev/null || fail "one-process bake failed"
-out=$(bash "$src/scripts/slurm/submit.sh" --probebake "$pb" --parts "$t/jobs" "$demo" "$t/merged.probes" 3 "${args[@]}") ||
-    fail "submit.sh: $out"
+out=$(bash "$src/scripts/slurm/submit.sh" --probebake "$pb" --parts "$t/jobs" --at-once 2 "$demo" "$t/merged.probes" 3 \
+    "${args[@]}") || fail "submit.sh: $out"
 echo "  $out"
 merge_job=$(sed -n 's/.*merge: job \([0-9]*\).*/\1/p' <<<"$out")
+array_job=$(sed -n 's/.*job array \([0-9]*\).*/\1/p' <<<"$out")
+# --at-once 2: Slurm holds the array to 2 running tasks (the %2 of --array)
+scontrol show job "$array_job" 2>/dev/null | grep -q 'ArrayTaskThrottle=2' ||
+    fail "--at-once 2 did not throttle the array: $(scontrol show job "$array_job" 2>&1 | grep -o 'ArrayTaskThrottle=[0-9]*' | head -n 1)"
 # wait for the merge job to leave the queue, at most 240 s
 for _ in $(seq 1 480); do
     [ -z "$(squeue -h -j "$merge_job" 2>/dev/null)" ] && break

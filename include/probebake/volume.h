@@ -38,13 +38,24 @@ enum {
 };
 
 /* The part of a bake a shard file holds (bake --shard I/N): probes
- * first .. first + probe_count - 1 of `total`, undilated (dilation needs
- * neighbours across parts: pb_volume_merge runs it). count 0: a whole
+ * first, first + step, ... (probe_count of them) of `total`, undilated
+ * (dilation needs neighbours across parts: pb_volume_merge runs it).
+ * A grid's or points' part I is dealt (first I, step N), so every part holds
+ * a share of every region; step 1 is a contiguous range (parts written
+ * before 2026-11-27, and a sparse part's coarsest bricks). count 0: a whole
  * volume. */
 typedef struct pb_volume_shard {
     uint32_t index, count;              /* part `index` of `count` (0-based) */
     uint32_t first, total;              /* its first probe, and the whole bake's probe count */
+    uint32_t step;                      /* between its probes: count (dealt), or 0 or 1 (contiguous) */
 } pb_volume_shard;
+
+/* How many of `total` probes part `index` of `count` holds when they are
+ * dealt: those p < total with p mod count == index. */
+static inline uint32_t pb_shard_dealt_count(uint32_t total, uint32_t index, uint32_t count)
+{
+    return index < total ? (uint32_t)(((uint64_t)total - index + count - 1) / count) : 0u;
+}
 
 enum {
     PB_PROBE_VALID = 1u << 0,

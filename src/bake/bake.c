@@ -463,7 +463,8 @@ typedef struct bake_job {
     const pb_scene *scene;
     pb_gpu_scene *gs;
     pb_bake_desc d;                /* checked, defaults filled */
-    uint32_t total, first, own, P; /* the bake's probes; this run's part; traced here (own + samples) */
+    uint32_t total, first, step, own, P; /* the bake's probes; this run's part (first, first + step, ...,
+                                            own of them); traced here (own + samples) */
     uint32_t stride;               /* of the floor sample (shard.h) */
     uint32_t rpp, n, chunk;
     uint64_t reduced_floats;
@@ -478,8 +479,14 @@ typedef struct bake_job {
     bake_run run;
 } bake_job;
 
-/* Stage 1, the probe set and its budget: every probe, or a part's range
- * followed, under --target-error, by the floor sample's probes outside it
+/* Whether global probe p is one of this run's part's own. */
+static int bake_job_holds(const bake_job *j, uint64_t p)
+{
+    return p >= j->first && (p - j->first) % j->step == 0 && (p - j->first) / j->step < j->own;
+}
+
+/* Stage 1, the probe set and its budget: every probe, or a part's dealt
+ * probes followed, under --target-error, by the floor sample's probes outside it
  * (traced for the 4 passes the floor needs, never written); device and host
  * memory checked before anything is allocated. */
 static pb_result stage_probe_set(bake_job *j, pb_error *err)
@@ -487,15 +494,16 @@ static pb_result stage_probe_set(bake_job *j, pb_error *err)
     const pb_bake_desc *d = &j->d;
     pb_context *ctx = j->ctx;
     j->total = d->points ? d->points->count : d->grid.counts[0] * d->grid.counts[1] * d->grid.counts[2];
-    j->first = 0, j->own = j->total, j->stride = pb_floor_stride(j->total);
+    j->first = 0, j->step = 1, j->own = j->total, j->stride = pb_floor_stride(j->total);
     if (d->shard_count && (d->shard_index >= d->shard_count || d->shard_count > j->total))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "shard %u/%u: need 0 <= I < N <= the %u probes",
                        d->shard_index, d->shard_count, j->total);
-    if (d->shard_count)
-        pb_shard_range(j->total, d->shard_index, d->shard_count, &j->first, &j->own);
+    if (d->shard_count) /* dealt: probes I, I + N, ... (shard.h) */
+        j->first = d->shard_index, j->step = d->shard_count,
+        j->own = pb_shard_dealt_count(j->total, d->shard_index, d->shard_count);
     uint32_t samples = 0;
     for (uint64_t s = 0; d->target_error > 0.f && s < j->total; s += j->stride)
-        samples += d->shard_count && (s < j->first || s >= (uint64_t)j->first + j->own);
+        samples += !bake_job_holds(j, s);
     uint32_t P = j->P = j->own + samples;
     uint32_t rpp = j->rpp = d->rays_per_probe, n = j->n = d->octmap_res, texels = n * n;
     uint32_t chunk = ctx->desc.rays_per_submit / rpp;
@@ -552,12 +560,12 @@ static pb_result stage_place(bake_job *j, pb_error *err)
         !pb_convergence_init(&j->conv, P) || pb_sf_directions(rpp, j->directions) != PB_OK)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
     for (uint32_t i = 0; i < j->own; ++i)
-        j->global[i] = j->first + i;
+        j->global[i] = pb_shard_probe(j->first, j->step, i);
     for (uint64_t s = 0, extra = j->own; j->d.target_error > 0.f && s < j->total; s += j->stride) {
-        int mine = s >= j->first && s < (uint64_t)j->first + j->own;
+        int mine = bake_job_holds(j, s);
         if (!mine)
             j->global[extra] = (uint32_t)s;
-        j->floor_list[j->floor_count++] = mine ? (uint32_t)s - j->first : (uint32_t)extra++;
+        j->floor_list[j->floor_count++] = mine ? (uint32_t)(s - j->first) / j->step : (uint32_t)extra++;
     }
     for (uint32_t p = 0; p < P; ++p) {
         uint32_t id;
@@ -803,7 +811,7 @@ static pb_result stage_volume(bake_job *j, pb_volume *out, pb_error *err)
                  (d->shard_count ? PB_VOLUME_SHARD : 0u);
     out->probe_count = own;
     if (d->shard_count)
-        out->shard = (pb_volume_shard){d->shard_index, d->shard_count, j->first, j->total};
+        out->shard = (pb_volume_shard){d->shard_index, d->shard_count, j->first, j->total, j->step};
     if (d->points) {
         out->counts[0] = j->total, out->counts[1] = out->counts[2] = 1;
     } else {

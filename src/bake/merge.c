@@ -22,6 +22,8 @@ static const char *differs(const pb_volume *a, const pb_volume *b)
         return "kind (grid or points, direct light, irradiance)";
     if (a->shard.count != b->shard.count || a->shard.total != b->shard.total)
         return "number of parts or probes";
+    if ((a->shard.step > 1) != (b->shard.step > 1))
+        return "split (dealt probes, or a contiguous range from a probebake before 2026-11-27)";
     /* a sparse part's counts are its own probes' (P, 1, 1) */
     if ((!(a->flags & PB_VOLUME_SPARSE) && memcmp(a->counts, b->counts, sizeof a->counts)) ||
         memcmp(a->origin, b->origin, sizeof a->origin) || memcmp(a->spacing, b->spacing, sizeof a->spacing))
@@ -61,7 +63,7 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
                            names[i], names[0], d);
     }
     uint32_t N = parts[0].shard.count, total = parts[0].shard.total;
-    /* each part once: by index, then its range must be the one its index gives */
+    /* each part once: by index, then its probes must be the ones its index gives */
     const pb_volume **by_index = calloc(N, sizeof *by_index);
     const char **name_of = calloc(N, sizeof *name_of);
     if (!by_index || !name_of) {
@@ -80,7 +82,14 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
             /* a sparse part: a range of coarsest bricks (`total` of them), checked brick by brick in sparse_merge.c */
             r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: part %u/%u starts at coarsest brick %u, not %u as a part "
                         "of %u must", names[i], s->index, N, s->first, first, total);
-        else if (!(parts[i].flags & PB_VOLUME_SPARSE) && (s->first != first || parts[i].probe_count != n))
+        else if (!(parts[i].flags & PB_VOLUME_SPARSE) && s->step > 1 &&
+                 (s->step != N || s->first != s->index ||
+                  parts[i].probe_count != pb_shard_dealt_count(total, s->index, N)))
+            r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                        "%s: part %u/%u holds %u probes from %u every %u, not %u from %u every %u as a part of %u "
+                        "probes must", names[i], s->index, N, parts[i].probe_count, s->first, s->step,
+                        pb_shard_dealt_count(total, s->index, N), s->index, N, total);
+        else if (!(parts[i].flags & PB_VOLUME_SPARSE) && s->step <= 1 && (s->first != first || parts[i].probe_count != n))
             r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                         "%s: part %u/%u holds probes %u..%u, not %u..%u as a part of %u probes must", names[i],
                         s->index, N, s->first, s->first + parts[i].probe_count - 1, first, first + n - 1, total);
@@ -119,14 +128,17 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
     uint64_t halves = pb_volume_tile_halves(out->octmap_res);
     for (uint32_t k = 0; k < N; ++k) {
         const pb_volume *v = by_index[k];
-        size_t f = v->shard.first, n = v->probe_count;
-        memcpy(out->base + 3 * f, v->base, 12 * n);
-        memcpy(out->offset + 3 * f, v->offset, 12 * n);
-        memcpy(out->probe_flags + f, v->probe_flags, 4 * n);
-        memcpy(out->sh + 27 * f, v->sh, 108 * n);
-        memcpy(out->depth + halves * f, v->depth, 2 * halves * n);
-        memcpy(out->probe_paths + f, v->probe_paths, 4 * n);
-        memcpy(out->probe_std_error + f, v->probe_std_error, 4 * n);
+        size_t step = v->shard.step > 1 ? v->shard.step : 1; /* dealt, or contiguous (older parts) */
+        for (size_t i = 0; i < v->probe_count; ++i) {
+            size_t g = v->shard.first + i * step;
+            memcpy(out->base + 3 * g, v->base + 3 * i, 12);
+            memcpy(out->offset + 3 * g, v->offset + 3 * i, 12);
+            out->probe_flags[g] = v->probe_flags[i];
+            memcpy(out->sh + 27 * g, v->sh + 27 * i, 108);
+            memcpy(out->depth + halves * g, v->depth + halves * i, 2 * halves);
+            out->probe_paths[g] = v->probe_paths[i];
+            out->probe_std_error[g] = v->probe_std_error[i];
+        }
         pb_shard_account(out, v);
     }
     free(by_index), free(name_of);

@@ -9,9 +9,21 @@
 
 #include "probebake/volume.h"
 
-/* Part `index` of `count` of `total` probes: a contiguous range, sizes
- * within one of each other (first = floor(total x index / count)). */
+/* Part `index` of `count` of `total` items: a contiguous range, sizes
+ * within one of each other (first = floor(total x index / count)). How a
+ * sparse bake splits its coarsest bricks, and how grid parts were split
+ * before they were dealt. */
 void pb_shard_range(uint32_t total, uint32_t index, uint32_t count, uint32_t *first, uint32_t *n);
+
+/* A grid's or points' part `index` of `count`: probes index, index + count,
+ * index + 2 count, ... (pb_shard_dealt_count of them, volume.h). Dealt, not
+ * cut into slabs, because work per probe follows the scene: probes in rock
+ * stop early, converged probes drop out at their own pass, and The Crypt's
+ * four slabs took 0.77-1.22x their mean (bench/RESULTS.md, "Shards"). */
+static inline uint32_t pb_shard_probe(uint32_t index, uint32_t count, uint32_t k)
+{
+    return index + k * count;
+}
 
 /* --target-error's floor (convergence.h) is taken from these probes' first 4
  * passes: every stride-th probe, at most PB_FLOOR_SAMPLE of them, the same

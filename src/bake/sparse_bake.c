@@ -757,7 +757,7 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
         r = assemble(&j, out, err);
     if (r == PB_OK && desc->shard_count) { /* merge dilates and stitches the whole (sparse_merge.c) */
         out->flags |= PB_VOLUME_SHARD;
-        out->shard = (pb_volume_shard){desc->shard_index, desc->shard_count, first, (uint32_t)C};
+        out->shard = (pb_volume_shard){desc->shard_index, desc->shard_count, first, (uint32_t)C, 1};
         if (stats)
             *stats = j.stats;
         store_free(&j.ps);

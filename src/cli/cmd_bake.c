@@ -3,7 +3,6 @@
  * what was baked, and the file written atomically (Ctrl-C leaves the old
  * one). */
 #include "cli/cli.h"
-#include "bake/shard.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -201,15 +200,18 @@ int cmd_bake(const options *o)
         snprintf(where, sizeof where, "%u x %u x %u = %llu probes, spacing %.3g m", d.grid.counts[0], d.grid.counts[1],
                  d.grid.counts[2], (unsigned long long)probes, d.grid.spacing[0]);
     if (o->shard_count) {
-        uint32_t first, count;
-        pb_shard_range((uint32_t)probes, o->shard_index, o->shard_count, &first, &count);
         if (o->shard_count > probes) {
             snprintf(err.message, sizeof err.message, "--shard %u/%u: only %llu probes to share", o->shard_index,
                      o->shard_count, (unsigned long long)probes);
             goto out;
         }
-        snprintf(part, sizeof part, ", part %u of %u (probes %u..%u)", o->shard_index, o->shard_count, first,
-                 first + count - 1);
+        if (o->sparse)
+            snprintf(part, sizeof part, ", part %u of %u (a range of coarsest bricks)", o->shard_index,
+                     o->shard_count);
+        else /* dealt (shard.h) */
+            snprintf(part, sizeof part, ", part %u of %u (probes %u, %u, ... every %u: %u of them)", o->shard_index,
+                     o->shard_count, o->shard_index, o->shard_index + o->shard_count, o->shard_count,
+                     pb_shard_dealt_count((uint32_t)probes, o->shard_index, o->shard_count));
     }
     if (!o->log.quiet)
         fprintf(stderr,

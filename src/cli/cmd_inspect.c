@@ -151,8 +151,8 @@ int cmd_inspect(const options *o)
                J(s->indirect_clamp).s, technique_list(s->techniques, techniques));
         json_string(v.device);
         if (v.flags & PB_VOLUME_SHARD)
-            printf(",\n  \"shard\": {\"index\": %u, \"count\": %u, \"first\": %u, \"total\": %u}", v.shard.index,
-                   v.shard.count, v.shard.first, v.shard.total);
+            printf(",\n  \"shard\": {\"index\": %u, \"count\": %u, \"first\": %u, \"step\": %u, \"total\": %u}",
+                   v.shard.index, v.shard.count, v.shard.first, v.shard.step > 1 ? v.shard.step : 1u, v.shard.total);
         if (v.sparse) {
             sparse_census c = census(&v);
             printf(",\n  \"sparse\": {\"levels\": %u, \"cells\": [%u, %u, %u], \"bricks\": [%u, %u, %u], "
@@ -221,6 +221,10 @@ int cmd_inspect(const options *o)
         if ((v.flags & PB_VOLUME_SHARD) && v.sparse)
             printf("part        %u of %u: bricks grown from coarsest brick %u on (of %u), undilated, unstitched "
                    "(probebake merge joins the parts)\n", v.shard.index, v.shard.count, v.shard.first, v.shard.total);
+        else if ((v.flags & PB_VOLUME_SHARD) && v.shard.step > 1)
+            printf("part        %u of %u: probes %u, %u, ... every %u of %u, undilated (probebake merge joins the "
+                   "parts)\n", v.shard.index, v.shard.count, v.shard.first, v.shard.first + v.shard.step, v.shard.step,
+                   v.shard.total);
         else if (v.flags & PB_VOLUME_SHARD)
             printf("part        %u of %u: probes %u..%u of %u, undilated (probebake merge joins the parts)\n",
                    v.shard.index, v.shard.count, v.shard.first, v.shard.first + v.probe_count - 1, v.shard.total);

@@ -263,6 +263,7 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
         put_u32(b + 404, v->shard.count);
         put_u32(b + 408, v->shard.first);
         put_u32(b + 412, v->shard.total);
+        put_u32(b + 444, v->shard.step > 1 ? v->shard.step : 0u); /* 0: contiguous, as files before it */
     }
     size_t n = v->probe_count;
     for (size_t i = 0; i < 3 * n; ++i) {
@@ -507,7 +508,8 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     v->settings.seam_error = (v->flags & PB_VOLUME_SPARSE) ? get_f32(h + 440) : 0.f;
     memset(&v->shard, 0, sizeof v->shard);
     if (v->flags & PB_VOLUME_SHARD)
-        v->shard = (pb_volume_shard){get_u32(h + 400), get_u32(h + 404), get_u32(h + 408), get_u32(h + 412)};
+        v->shard = (pb_volume_shard){get_u32(h + 400), get_u32(h + 404), get_u32(h + 408), get_u32(h + 412),
+                                     get_u32(h + 444) ? get_u32(h + 444) : 1u};
     uint64_t grid_probes = v->flags & PB_VOLUME_SHARD ? v->shard.total : v->probe_count;
 
     const char *bad = NULL;
@@ -524,8 +526,11 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         bad = "depth unit not a positive finite number";
     else if ((v->flags & PB_VOLUME_SHARD) &&
              (v->shard.index >= v->shard.count || v->shard.total > MAX_PROBES ||
-              ((v->flags & PB_VOLUME_SPARSE) ? v->shard.first >= v->shard.total /* coarsest bricks */
-                                             : (uint64_t)v->shard.first + v->probe_count > v->shard.total)))
+              ((v->flags & PB_VOLUME_SPARSE) ? v->shard.step > 1 || v->shard.first >= v->shard.total /* bricks */
+               : v->shard.step <= 1 ? (uint64_t)v->shard.first + v->probe_count > v->shard.total
+                                    : v->shard.step != v->shard.count || v->shard.first != v->shard.index ||
+                                          v->probe_count != pb_shard_dealt_count(v->shard.total, v->shard.index,
+                                                                          v->shard.count))))
         bad = "shard part out of range";
     else if ((v->flags & PB_VOLUME_GRID) && (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != grid_probes)
         bad = "grid counts do not match the probe count";
