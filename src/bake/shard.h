@@ -19,7 +19,7 @@ void pb_shard_range(uint32_t total, uint32_t index, uint32_t count, uint32_t *fi
  * index + 2 count, ... (pb_shard_dealt_count of them, volume.h). Dealt, not
  * cut into slabs, because work per probe follows the scene: probes in rock
  * stop early, converged probes drop out at their own pass, and The Crypt's
- * four slabs took 0.77-1.22x their mean (bench/RESULTS.md, "Shards"). */
+ * four slabs took 0.78-1.21x their mean (bench/RESULTS.md, "Shards"). */
 static inline uint32_t pb_shard_probe(uint32_t index, uint32_t count, uint32_t k)
 {
     return index + k * count;
