@@ -411,10 +411,22 @@ static void sparse_parts_merge_to_the_whole_bake(void)
     for (uint32_t i = 0; i < 3; ++i)
         made += bake_layout_part(&su, &d, &sd, i, 3, &parts[made]);
     if (made == 3) {
+        uint32_t dealt = 0;
         for (uint32_t i = 0; i < 3; ++i) {
-            part_probes += parts[i].probe_count, part_bricks += parts[i].sparse->brick_count;
-            CHECK((parts[i].flags & PB_VOLUME_SHARD) && parts[i].sparse && parts[i].shard.total == 36);
+            const pb_sparse_layout *l = parts[i].sparse;
+            part_probes += parts[i].probe_count, part_bricks += l->brick_count;
+            CHECK((parts[i].flags & PB_VOLUME_SHARD) && l && parts[i].shard.total == 36);
+            CHECK(parts[i].shard.first == i && parts[i].shard.step == 3);
+            /* every brick grew from one of the part's dealt coarsest bricks i, i + 3, ... */
+            for (uint32_t b = 0; b < l->brick_count; ++b) {
+                uint32_t per = 1;
+                for (uint32_t k = 0; k < l->bricks[b].level; ++k)
+                    per *= 3;
+                const uint32_t *c = l->bricks[b].coord;
+                dealt += (c[0] / per + l->cells[0] * (c[1] / per + l->cells[1] * (c[2] / per))) % 3 == i;
+            }
         }
+        CHECKF(dealt == part_bricks, "%u of %u bricks in their part's dealt coarsest bricks", dealt, part_bricks);
         CHECK(pb_volume_merge(parts, names, 3, &merged, &err) == PB_OK);
         int same = same_but_timings(&whole, &merged);
         fprintf(stderr, "  sparse: %u bricks, %u probes; parts %u bricks, %u probes (faces shared): merged file %s\n",
@@ -422,11 +434,12 @@ static void sparse_parts_merge_to_the_whole_bake(void)
                 same ? "the same as the whole bake's" : "DIFFERENT");
         CHECK(same && part_bricks == whole.sparse->brick_count && part_probes > whole.probe_count);
         pb_volume_free(&merged);
-        /* a shared probe changed in one part: named */
+        /* a probe parts 1 and 0 both hold (a face between their bricks), changed in part 1: named */
         uint32_t shared = UINT32_MAX;
-        for (uint32_t b = 0; b < parts[1].sparse->brick_count && shared == UINT32_MAX; ++b)
-            if (parts[1].sparse->bricks[b].level == 0 && parts[1].sparse->bricks[b].coord[0] == 0)
-                shared = parts[1].sparse->brick_probes[64 * (size_t)b + 0]; /* a corner on part 0's bricks too */
+        for (uint32_t p = 0; p < parts[1].probe_count && shared == UINT32_MAX; ++p)
+            for (uint32_t q = 0; q < parts[0].probe_count && shared == UINT32_MAX; ++q)
+                if (!memcmp(parts[1].base + 3 * (size_t)p, parts[0].base + 3 * (size_t)q, 12))
+                    shared = p;
         if (shared != UINT32_MAX) {
             float keep = parts[1].sh[27 * (size_t)shared];
             parts[1].sh[27 * (size_t)shared] += 1.f;

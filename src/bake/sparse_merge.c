@@ -21,6 +21,31 @@ static uint32_t pow3(uint32_t e)
     return p;
 }
 
+/* The coarsest brick (cell) a brick grew from, x fastest. */
+static uint64_t coarsest_cell(const pb_sparse_layout *l, const pb_sparse_brick *br)
+{
+    uint32_t per = pow3(br->level);
+    return br->coord[0] / per + (uint64_t)l->cells[0] * (br->coord[1] / per + (uint64_t)l->cells[1] * (br->coord[2] / per));
+}
+
+/* A brick's place in the one-process order: level, then coarsest cell (as
+ * sparse_bake.c's sort_bricks), then its place in its part, which holds
+ * every brick of that cell in the whole bake's order. */
+typedef struct brick_key {
+    uint64_t level_cell;
+    uint32_t part, brick;
+} brick_key;
+
+static int brick_key_order(const void *a, const void *b)
+{
+    const brick_key *x = a, *y = b;
+    if (x->level_cell != y->level_cell)
+        return x->level_cell < y->level_cell ? -1 : 1;
+    if (x->part != y->part)
+        return x->part < y->part ? -1 : 1;
+    return (x->brick > y->brick) - (x->brick < y->brick);
+}
+
 /* Every probe's record in part a at index p equals part b's at q. */
 static int same_probe(const pb_volume *a, uint32_t p, const pb_volume *b, uint32_t q, uint64_t halves)
 {
@@ -48,12 +73,14 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
                            names[k], names[0]);
         uint32_t first, n;
         pb_shard_range((uint32_t)C, k, N, &first, &n);
+        int dealt = parts[k]->shard.step > 1; /* cells k, k + N, ...; else the range (older parts) */
         for (uint32_t b = 0; b < l->brick_count; ++b) {
-            const pb_sparse_brick *br = &l->bricks[b];
-            uint32_t per = pow3(br->level);
-            uint64_t c = br->coord[0] / per +
-                         (uint64_t)l0->cells[0] * (br->coord[1] / per + (uint64_t)l0->cells[1] * (br->coord[2] / per));
-            if (c < first || c >= (uint64_t)first + n)
+            uint64_t c = coarsest_cell(l0, &l->bricks[b]);
+            if (dealt && c % N != k)
+                return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                               "%s: part %u/%u holds a brick of coarsest brick %llu, not one of %u, %u, ... every %u",
+                               names[k], k, N, (unsigned long long)c, k, k + N, N);
+            if (!dealt && (c < first || c >= (uint64_t)first + n))
                 return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                                "%s: part %u/%u holds a brick of coarsest brick %llu, outside its range %u..%u",
                                names[k], k, N, (unsigned long long)c, first, first + n - 1);
@@ -63,25 +90,29 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
     if (bricks > (1u << 22))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%llu bricks in the parts: too many",
                        (unsigned long long)bricks);
-    /* bricks level by level, parts in order; where each came from */
+    /* bricks in the one-process order; where each came from */
     pb_sparse_brick *all = malloc((size_t)(bricks ? bricks : 1) * sizeof *all);
     uint32_t *from_part = malloc((size_t)(bricks ? bricks : 1) * sizeof *from_part);
     uint32_t *from_brick = malloc((size_t)(bricks ? bricks : 1) * sizeof *from_brick);
+    brick_key *keys = malloc((size_t)(bricks ? bricks : 1) * sizeof *keys);
     pb_sparse_layout *sp = calloc(1, sizeof *sp);
-    if (!all || !from_part || !from_brick || !sp) {
-        free(all), free(from_part), free(from_brick), free(sp);
+    if (!all || !from_part || !from_brick || !keys || !sp) {
+        free(all), free(from_part), free(from_brick), free(keys), free(sp);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory merging %llu bricks",
                        (unsigned long long)bricks);
     }
     uint32_t B = 0;
-    for (uint32_t level = 0; level < L; ++level)
-        for (uint32_t k = 0; k < N; ++k)
-            for (uint32_t b = 0; b < parts[k]->sparse->brick_count; ++b)
-                if (parts[k]->sparse->bricks[b].level == level) {
-                    all[B] = parts[k]->sparse->bricks[b];
-                    from_part[B] = k, from_brick[B] = b;
-                    B++;
-                }
+    for (uint32_t k = 0; k < N; ++k)
+        for (uint32_t b = 0; b < parts[k]->sparse->brick_count; ++b) {
+            const pb_sparse_brick *br = &parts[k]->sparse->bricks[b];
+            keys[B++] = (brick_key){br->level * C + coarsest_cell(l0, br), k, b};
+        }
+    qsort(keys, B, sizeof *keys, brick_key_order);
+    for (uint32_t m = 0; m < B; ++m) {
+        all[m] = parts[keys[m].part]->sparse->bricks[keys[m].brick];
+        from_part[m] = keys[m].part, from_brick[m] = keys[m].brick;
+    }
+    free(keys);
     uint32_t P = 0;
     pb_result r = pb_sparse_layout_build(L, l0->cells, all, B, sp, &P, NULL, err);
     free(all);
