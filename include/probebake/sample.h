@@ -58,6 +58,11 @@ void pb_sample_cpu(const pb_sample_volume *s, const float p[3], const float n[3]
  * p): what tests check "no probe inside geometry is sampled" with. */
 void pb_sample_cage_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3],
                         float rgb[3], int probes[8], float weights[8]);
+/* The brick of a sparse volume that pb_sample_cpu reads at p, or -1 where
+ * none covers the biased point (and for a grid); *cell: the coarsest cell,
+ * x fastest, the biased point falls in (clamped to the layout). */
+int pb_sample_brick_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3],
+                        uint32_t *cell);
 
 /* The Chebyshev visibility weight pb_sample_cpu gives probe `probe` for the
  * (already biased) point q, in [0, 1]: the part of the weight that the depth

@@ -420,6 +420,15 @@ static pb_cell_test_desc cell_test_desc(const sparse_job *j, uint32_t level)
  * surface as the sampler biases, seen along the normal); the cell is
  * refined where the level's sampler mispredicts the irradiance there. The
  * test probes are thrown away. A cell no surface crosses is not refined. */
+/* The coarsest brick (x fastest) a brick lies in. */
+static uint64_t coarsest_of(const sparse_job *j, const pb_sparse_brick *br)
+{
+    uint32_t up = pb_sparse_step(j->levels, 0) / pb_sparse_step(j->levels, br->level), c[3];
+    for (int k = 0; k < 3; ++k)
+        c[k] = br->coord[k] / up;
+    return c[0] + (uint64_t)j->cells[0] * (c[1] + (uint64_t)j->cells[1] * c[2]);
+}
+
 static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const pb_sample_volume *sv,
                                  const pb_sparse_brick *cells, uint32_t count, uint8_t *refine, pb_error *err)
 {
@@ -463,26 +472,42 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
     }
     /* mispredicted by more than the refine error of the larger of the two
      * values (so in [0, 1]: a dark wall predicted bright counts as much as a
-     * bright one predicted dark), and by 3 standard errors; where both are
-     * below 1 % of the tests' mean, not judged */
-    double mean = 0.0;
-    float *baked = r == PB_OK ? malloc((size_t)ct.count * 2 * sizeof *baked) : NULL;
+     * bright one predicted dark), and by 3 standard errors. Not judged: where
+     * both are below 1 % of the mean of the tests in the same coarsest brick,
+     * and where the lookup (at the biased point) reads another coarsest
+     * brick, whose cage refining this cell would not change. So every
+     * decision rests on the cell's own coarsest brick, and a part of a
+     * sharded bake, which holds only some, decides as the whole does (the
+     * tests come grouped by coarsest brick: the bricks they refine are
+     * sorted so, sort_bricks). */
+    float *baked = r == PB_OK ? malloc((size_t)ct.count * 3 * sizeof *baked) : NULL;
     if (r == PB_OK && !baked)
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u surface tests", ct.count);
     for (uint32_t i = 0; r == PB_OK && i < ct.count; ++i) {
         float rgb[3];
         const float *n = ct.n + 3 * (size_t)i;
-        baked[2 * i] = irradiance_lum(v.sh + 27 * (size_t)i, n);
+        baked[3 * i] = irradiance_lum(v.sh + 27 * (size_t)i, n);
         pb_sample_cpu(sv, ct.x + 3 * (size_t)i, n, n, rgb);
-        baked[2 * i + 1] = pb_luminance(rgb);
-        mean += baked[2 * i] / ct.count;
+        baked[3 * i + 1] = pb_luminance(rgb);
+    }
+    for (uint32_t i = 0, end; r == PB_OK && i < ct.count; i = end) {
+        uint64_t cell = coarsest_of(j, &cells[ct.cell[i]]);
+        double sum = 0.0;
+        for (end = i; end < ct.count && coarsest_of(j, &cells[ct.cell[end]]) == cell; ++end)
+            sum += baked[3 * end];
+        for (uint32_t t = i; t < end; ++t)
+            baked[3 * t + 2] = (float)(sum / (end - i));
     }
     for (uint32_t i = 0; r == PB_OK && i < ct.count; ++i) {
         if (!(v.probe_flags[i] & PB_PROBE_VALID))
             continue; /* the biased point is inside geometry: no renderer samples there */
-        float e = baked[2 * i], p = baked[2 * i + 1];
+        uint32_t read_from;
+        if (pb_sample_brick_cpu(sv, ct.x + 3 * (size_t)i, ct.n + 3 * (size_t)i, ct.n + 3 * (size_t)i, &read_from) < 0 ||
+            read_from != coarsest_of(j, &cells[ct.cell[i]]))
+            continue;
+        float e = baked[3 * i], p = baked[3 * i + 1], mean = baked[3 * i + 2];
         float big = fmaxf(e, p);
-        if (!(big > 0.01f * (float)mean))
+        if (!(big > 0.01f * mean))
             continue;
         float rel = fabsf(e - p) / big;
         float noise = v.probe_std_error[i] > 0.f ? 3.f * v.probe_std_error[i] : 0.f;
@@ -612,11 +637,7 @@ static pb_result sort_bricks(sparse_job *j, pb_error *err)
     }
     uint64_t C = (uint64_t)j->cells[0] * j->cells[1] * j->cells[2];
     for (uint32_t b = 0; b < j->brick_count; ++b) {
-        const pb_sparse_brick *br = &j->bricks[b];
-        uint32_t up = pb_sparse_step(j->levels, 0) / pb_sparse_step(j->levels, br->level), r3[3];
-        for (int k = 0; k < 3; ++k)
-            r3[k] = br->coord[k] / up;
-        order[2 * b] = br->level * C + r3[0] + (uint64_t)j->cells[0] * (r3[1] + (uint64_t)j->cells[1] * r3[2]);
+        order[2 * b] = j->bricks[b].level * C + coarsest_of(j, &j->bricks[b]);
         order[2 * b + 1] = b;
     }
     qsort(order, j->brick_count, 2 * sizeof *order, brick_order);

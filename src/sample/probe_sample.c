@@ -221,7 +221,7 @@ static void sample_cage(const pb_sample_volume *s, const cage_grid *g, const flo
 }
 
 /* pb_sample_sparse_brick of probe_sample_core.glsl: the brick serving p. */
-static int sparse_brick_at(const pb_sample_volume *s, const float u[3])
+static int sparse_brick_at(const pb_sample_volume *s, const float u[3], uint32_t *cell)
 {
     const uint32_t *w = s->sparse_words;
     float f[3];
@@ -231,7 +231,8 @@ static int sparse_brick_at(const pb_sample_volume *s, const float u[3])
         f[k] = clampf(u[k] - c, 0.f, 1.f);
         ci[k] = (int)c;
     }
-    uint32_t e = w[w[0] + (uint32_t)(ci[0] + s->counts[0] * (ci[1] + s->counts[1] * ci[2]))];
+    *cell = (uint32_t)(ci[0] + s->counts[0] * (ci[1] + s->counts[1] * ci[2]));
+    uint32_t e = w[w[0] + *cell];
     uint32_t d = e >> PB_SPARSE_DEPTH_SHIFT, b = e & PB_SPARSE_EMPTY;
     if (d != 0) {
         int m = d == 1 ? 3 : 9, q[3];
@@ -242,6 +243,25 @@ static int sparse_brick_at(const pb_sample_volume *s, const float u[3])
         b = w[w[1] + b + (uint32_t)(q[0] + m * (q[1] + m * q[2]))];
     }
     return b == PB_SPARSE_EMPTY ? -1 : (int)b;
+}
+
+int pb_sample_brick_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3],
+                        uint32_t *cell)
+{
+    *cell = 0;
+    if (s->levels == 0)
+        return -1;
+    int span = s->levels == 1 ? 3 : (s->levels == 2 ? 9 : 27);
+    /* the brick is looked up where its cage is interpolated, at the biased
+     * point: looked up at p, a point near a brick face would be served by a
+     * cage it lies outside of (clamped), a seam across level boundaries */
+    float fmin = fminf(s->spacing[0], fminf(s->spacing[1], s->spacing[2])), u[3];
+    for (int k = 0; k < 3; ++k) {
+        float size = s->spacing[k] * (float)span;
+        float pb = p[k] + (n[k] * s->normal_bias + view[k] * s->view_bias) * fmin;
+        u[k] = (pb - s->origin[k]) / size;
+    }
+    return sparse_brick_at(s, u, cell);
 }
 
 void pb_sample_cage_cpu(const pb_sample_volume *s, const float p[3], const float n[3], const float view[3],
@@ -260,17 +280,8 @@ void pb_sample_cage_cpu(const pb_sample_volume *s, const float p[3], const float
         sample_cage(s, &g, p, n, view, rgb, probes, weights);
         return;
     }
-    int levels = (int)s->levels, span = levels == 1 ? 3 : (levels == 2 ? 9 : 27);
-    /* the brick is looked up where its cage is interpolated, at the biased
-     * point: looked up at p, a point near a brick face would be served by a
-     * cage it lies outside of (clamped), a seam across level boundaries */
-    float fmin = fminf(s->spacing[0], fminf(s->spacing[1], s->spacing[2])), u[3];
-    for (int k = 0; k < 3; ++k) {
-        float cell = s->spacing[k] * (float)span;
-        float pb = p[k] + (n[k] * s->normal_bias + view[k] * s->view_bias) * fmin;
-        u[k] = (pb - s->origin[k]) / cell;
-    }
-    int b = sparse_brick_at(s, u);
+    uint32_t cell;
+    int b = pb_sample_brick_cpu(s, p, n, view, &cell), levels = (int)s->levels;
     if (b < 0) {
         rgb[0] = rgb[1] = rgb[2] = 0.f;
         return;
