@@ -48,6 +48,10 @@ typedef struct pb_sparse_layout {
 /* Lattice steps of level `level` in finest-lattice units: 3^(levels - 1 - level). */
 uint32_t pb_sparse_step(uint32_t levels, uint32_t level);
 
+/* The coarsest brick (cell, x fastest, of cells[3]) that brick br lies in:
+ * what a sparse bake sorts bricks by, and splits into parts by. */
+uint64_t pb_sparse_coarsest_cell(const uint32_t cells[3], const pb_sparse_brick *br);
+
 /* Builds the layout of `count` bricks (any order, no duplicates, each inside
  * the grid of cells): brick probes keyed by their finest-lattice index and
  * numbered in order of first use (brick by brick, x fastest), the

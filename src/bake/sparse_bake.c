@@ -420,15 +420,6 @@ static pb_cell_test_desc cell_test_desc(const sparse_job *j, uint32_t level)
  * surface as the sampler biases, seen along the normal); the cell is
  * refined where the level's sampler mispredicts the irradiance there. The
  * test probes are thrown away. A cell no surface crosses is not refined. */
-/* The coarsest brick (x fastest) a brick lies in. */
-static uint64_t coarsest_of(const sparse_job *j, const pb_sparse_brick *br)
-{
-    uint32_t up = pb_sparse_step(j->levels, 0) / pb_sparse_step(j->levels, br->level), c[3];
-    for (int k = 0; k < 3; ++k)
-        c[k] = br->coord[k] / up;
-    return c[0] + (uint64_t)j->cells[0] * (c[1] + (uint64_t)j->cells[1] * c[2]);
-}
-
 static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const pb_sample_volume *sv,
                                  const pb_sparse_brick *cells, uint32_t count, uint8_t *refine, pb_error *err)
 {
@@ -491,9 +482,9 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
         baked[3 * i + 1] = pb_luminance(rgb);
     }
     for (uint32_t i = 0, end; r == PB_OK && i < ct.count; i = end) {
-        uint64_t cell = coarsest_of(j, &cells[ct.cell[i]]);
+        uint64_t cell = pb_sparse_coarsest_cell(j->cells, &cells[ct.cell[i]]);
         double sum = 0.0;
-        for (end = i; end < ct.count && coarsest_of(j, &cells[ct.cell[end]]) == cell; ++end)
+        for (end = i; end < ct.count && pb_sparse_coarsest_cell(j->cells, &cells[ct.cell[end]]) == cell; ++end)
             sum += baked[3 * end];
         for (uint32_t t = i; t < end; ++t)
             baked[3 * t + 2] = (float)(sum / (end - i));
@@ -503,7 +494,7 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
             continue; /* the biased point is inside geometry: no renderer samples there */
         uint32_t read_from;
         if (pb_sample_brick_cpu(sv, ct.x + 3 * (size_t)i, ct.n + 3 * (size_t)i, ct.n + 3 * (size_t)i, &read_from) < 0 ||
-            read_from != coarsest_of(j, &cells[ct.cell[i]]))
+            read_from != pb_sparse_coarsest_cell(j->cells, &cells[ct.cell[i]]))
             continue;
         float e = baked[3 * i], p = baked[3 * i + 1], mean = baked[3 * i + 2];
         float big = fmaxf(e, p);
@@ -637,7 +628,7 @@ static pb_result sort_bricks(sparse_job *j, pb_error *err)
     }
     uint64_t C = (uint64_t)j->cells[0] * j->cells[1] * j->cells[2];
     for (uint32_t b = 0; b < j->brick_count; ++b) {
-        order[2 * b] = j->bricks[b].level * C + coarsest_of(j, &j->bricks[b]);
+        order[2 * b] = j->bricks[b].level * C + pb_sparse_coarsest_cell(j->cells, &j->bricks[b]);
         order[2 * b + 1] = b;
     }
     qsort(order, j->brick_count, 2 * sizeof *order, brick_order);

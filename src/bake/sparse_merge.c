@@ -13,21 +13,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static uint32_t pow3(uint32_t e)
-{
-    uint32_t p = 1;
-    while (e--)
-        p *= 3;
-    return p;
-}
-
-/* The coarsest brick (cell) a brick grew from, x fastest. */
-static uint64_t coarsest_cell(const pb_sparse_layout *l, const pb_sparse_brick *br)
-{
-    uint32_t per = pow3(br->level);
-    return br->coord[0] / per + (uint64_t)l->cells[0] * (br->coord[1] / per + (uint64_t)l->cells[1] * (br->coord[2] / per));
-}
-
 /* A brick's place in the one-process order: level, then coarsest cell (as
  * sparse_bake.c's sort_bricks), then its place in its part, which holds
  * every brick of that cell in the whole bake's order. */
@@ -75,7 +60,7 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
         pb_shard_range((uint32_t)C, k, N, &first, &n);
         int dealt = parts[k]->shard.step > 1; /* cells k, k + N, ...; else the range (older parts) */
         for (uint32_t b = 0; b < l->brick_count; ++b) {
-            uint64_t c = coarsest_cell(l0, &l->bricks[b]);
+            uint64_t c = pb_sparse_coarsest_cell(l0->cells, &l->bricks[b]);
             if (dealt && c % N != k)
                 return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                                "%s: part %u/%u holds a brick of coarsest brick %llu, not one of %u, %u, ... every %u",
@@ -105,7 +90,7 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
     for (uint32_t k = 0; k < N; ++k)
         for (uint32_t b = 0; b < parts[k]->sparse->brick_count; ++b) {
             const pb_sparse_brick *br = &parts[k]->sparse->bricks[b];
-            keys[B++] = (brick_key){br->level * C + coarsest_cell(l0, br), k, b};
+            keys[B++] = (brick_key){br->level * C + pb_sparse_coarsest_cell(l0->cells, br), k, b};
         }
     qsort(keys, B, sizeof *keys, brick_key_order);
     for (uint32_t m = 0; m < B; ++m) {
