@@ -508,7 +508,7 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
         expect "bake-sparse-shard-$i" 0 "wrote $tmp/spart$i.probes: part $i of 2, [0-9]+ probes in [0-9]+ bricks grown from coarsest brick" -- \
             "$pb" bake "$demo" "${sparse_args[@]}" --shard "$i/2" -o "$tmp/spart$i.probes"
     done
-    expect inspect-sparse-shard 0 '^part        1 of 2: bricks grown from coarsest bricks 1, 3, ... every 2 \(of [0-9]+\)' -- "$pb" inspect "$tmp/spart1.probes"
+    expect inspect-sparse-shard 0 '^part        1 of 2: bricks grown from coarsest brick [0-9]+ on' -- "$pb" inspect "$tmp/spart1.probes"
     expect merge-sparse-parts 0 "wrote $tmp/smerged.probes: 2 parts, [0-9]+ probes in sparse bricks, level seams stitched" -- \
         "$pb" merge "$tmp/smerged.probes" "$tmp/spart1.probes" "$tmp/spart0.probes"
     expect merge-sparse-same-bytes 0 '^same$' -- bash -c "$(declare -f same_but_timings); same_but_timings '$tmp/swhole.probes' '$tmp/smerged.probes'"

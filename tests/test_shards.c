@@ -411,22 +411,10 @@ static void sparse_parts_merge_to_the_whole_bake(void)
     for (uint32_t i = 0; i < 3; ++i)
         made += bake_layout_part(&su, &d, &sd, i, 3, &parts[made]);
     if (made == 3) {
-        uint32_t dealt = 0;
         for (uint32_t i = 0; i < 3; ++i) {
-            const pb_sparse_layout *l = parts[i].sparse;
-            part_probes += parts[i].probe_count, part_bricks += l->brick_count;
-            CHECK((parts[i].flags & PB_VOLUME_SHARD) && l && parts[i].shard.total == 36);
-            CHECK(parts[i].shard.first == i && parts[i].shard.step == 3);
-            /* every brick grew from one of the part's dealt coarsest bricks i, i + 3, ... */
-            for (uint32_t b = 0; b < l->brick_count; ++b) {
-                uint32_t per = 1;
-                for (uint32_t k = 0; k < l->bricks[b].level; ++k)
-                    per *= 3;
-                const uint32_t *c = l->bricks[b].coord;
-                dealt += (c[0] / per + l->cells[0] * (c[1] / per + l->cells[1] * (c[2] / per))) % 3 == i;
-            }
+            part_probes += parts[i].probe_count, part_bricks += parts[i].sparse->brick_count;
+            CHECK((parts[i].flags & PB_VOLUME_SHARD) && parts[i].sparse && parts[i].shard.total == 36);
         }
-        CHECKF(dealt == part_bricks, "%u of %u bricks in their part's dealt coarsest bricks", dealt, part_bricks);
         CHECK(pb_volume_merge(parts, names, 3, &merged, &err) == PB_OK);
         int same = same_but_timings(&whole, &merged);
         fprintf(stderr, "  sparse: %u bricks, %u probes; parts %u bricks, %u probes (faces shared): merged file %s\n",

@@ -41,9 +41,9 @@ enum {
  * first, first + step, ... (probe_count of them) of `total`, undilated
  * (dilation needs neighbours across parts: pb_volume_merge runs it).
  * A grid's or points' part I is dealt (first I, step N), so every part holds
- * a share of every region; a sparse part deals coarsest bricks the same way
- * (first and total count those). Step 0 or 1 is a contiguous range (parts
- * written before 2026-11-27). count 0: a whole volume. */
+ * a share of every region; step 1 is a contiguous range (parts written
+ * before 2026-11-27, and a sparse part's coarsest bricks). count 0: a whole
+ * volume. */
 typedef struct pb_volume_shard {
     uint32_t index, count;              /* part `index` of `count` (0-based) */
     uint32_t first, total;              /* its first probe, and the whole bake's probe count */

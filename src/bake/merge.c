@@ -78,11 +78,10 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
         if (by_index[s->index])
             r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: part %u/%u is given twice (also %s)", names[i], s->index,
                         N, name_of[s->index]);
-        else if ((parts[i].flags & PB_VOLUME_SPARSE) && s->first != (s->step > 1 ? s->index : first))
-            /* a sparse part: coarsest bricks (`total` of them), dealt or a range; checked brick by brick in
-             * sparse_merge.c */
+        else if ((parts[i].flags & PB_VOLUME_SPARSE) && s->first != first)
+            /* a sparse part: a range of coarsest bricks (`total` of them), checked brick by brick in sparse_merge.c */
             r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: part %u/%u starts at coarsest brick %u, not %u as a part "
-                        "of %u must", names[i], s->index, N, s->first, s->step > 1 ? s->index : first, total);
+                        "of %u must", names[i], s->index, N, s->first, first, total);
         else if (!(parts[i].flags & PB_VOLUME_SPARSE) && s->step > 1 &&
                  (s->step != N || s->first != s->index ||
                   parts[i].probe_count != pb_shard_dealt_count(total, s->index, N)))

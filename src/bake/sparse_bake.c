@@ -714,7 +714,7 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
     j.test_pass_scale = sd.test == PB_REFINE_TEST_SURFACE ? sd.test_pass_scale : 0u;
     j.seam_rounds = sd.seam_rounds;
     j.seam_error = sd.seam_rounds ? sd.seam_error : 0.f;
-    j.d.shard_index = j.d.shard_count = 0; /* a part is a set of coarsest bricks, its bakes whole */
+    j.d.shard_index = j.d.shard_count = 0; /* a part is a range of coarsest bricks, its bakes whole */
     uint32_t span = pow3u(sd.levels);
     for (int k = 0; k < 3; ++k) {
         if (desc->grid.counts[k] == 0 || !(desc->grid.spacing[k] > 0.f) || !isfinite(desc->grid.spacing[k]))
@@ -732,14 +732,13 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
     pb_sparse_brick *cand = NULL;
     pb_result r = pb_key_map_init(&j.ps.index, 4096) ? PB_OK
                                                       : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
-    /* level 0: every cell (a part: its cells I, I + N, ..., dealt as a
-     * grid's probes are, shard.h; refinement stays inside a coarsest brick,
-     * so parts place as the whole does) */
+    /* level 0: every cell (a part: its range of cells; refinement stays
+     * inside a coarsest brick, so parts place as the whole does) */
     uint64_t C = (uint64_t)j.cells[0] * j.cells[1] * j.cells[2];
     if (r == PB_OK && C > (1u << 22))
         r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: %llu coarsest bricks is too many (raise the spacing)",
                     (unsigned long long)C);
-    uint32_t first = 0, step = 1, count = (uint32_t)C;
+    uint32_t first = 0, count = (uint32_t)C;
     if (r == PB_OK && desc->shard_count) {
         if (desc->shard_index >= desc->shard_count || desc->shard_count > C)
             r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
@@ -747,14 +746,13 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
                         "parts, index below the count", desc->shard_index, desc->shard_count, (unsigned long long)C,
                         (unsigned long long)C);
         else
-            first = desc->shard_index, step = desc->shard_count,
-            count = pb_shard_dealt_count((uint32_t)C, desc->shard_index, desc->shard_count);
+            pb_shard_range((uint32_t)C, desc->shard_index, desc->shard_count, &first, &count);
     }
     if (r == PB_OK && !(cand = malloc((size_t)count * sizeof *cand)))
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %llu bricks", (unsigned long long)C);
     if (r == PB_OK) {
         for (uint64_t i = 0; i < count; ++i) {
-            uint64_t c = first + i * step;
+            uint64_t c = first + i;
             cand[i] = (pb_sparse_brick){0, {(uint32_t)(c % j.cells[0]), (uint32_t)((c / j.cells[0]) % j.cells[1]),
                                             (uint32_t)(c / ((uint64_t)j.cells[0] * j.cells[1]))}};
         }
@@ -771,7 +769,7 @@ static pb_result place(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs,
         r = assemble(&j, out, err);
     if (r == PB_OK && desc->shard_count) { /* merge dilates and stitches the whole (sparse_merge.c) */
         out->flags |= PB_VOLUME_SHARD;
-        out->shard = (pb_volume_shard){desc->shard_index, desc->shard_count, first, (uint32_t)C, step};
+        out->shard = (pb_volume_shard){desc->shard_index, desc->shard_count, first, (uint32_t)C, 1};
         if (stats)
             *stats = j.stats;
         store_free(&j.ps);

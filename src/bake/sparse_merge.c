@@ -13,24 +13,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* A brick's place in the one-process order: level, then coarsest cell (as
- * sparse_bake.c's sort_bricks), then its place in its part, which holds
- * every brick of that cell in the whole bake's order. */
-typedef struct brick_key {
-    uint64_t level_cell;
-    uint32_t part, brick;
-} brick_key;
-
-static int brick_key_order(const void *a, const void *b)
-{
-    const brick_key *x = a, *y = b;
-    if (x->level_cell != y->level_cell)
-        return x->level_cell < y->level_cell ? -1 : 1;
-    if (x->part != y->part)
-        return x->part < y->part ? -1 : 1;
-    return (x->brick > y->brick) - (x->brick < y->brick);
-}
-
 /* Every probe's record in part a at index p equals part b's at q. */
 static int same_probe(const pb_volume *a, uint32_t p, const pb_volume *b, uint32_t q, uint64_t halves)
 {
@@ -58,14 +40,9 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
                            names[k], names[0]);
         uint32_t first, n;
         pb_shard_range((uint32_t)C, k, N, &first, &n);
-        int dealt = parts[k]->shard.step > 1; /* cells k, k + N, ...; else the range (older parts) */
         for (uint32_t b = 0; b < l->brick_count; ++b) {
             uint64_t c = pb_sparse_coarsest_cell(l0->cells, &l->bricks[b]);
-            if (dealt && c % N != k)
-                return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                               "%s: part %u/%u holds a brick of coarsest brick %llu, not one of %u, %u, ... every %u",
-                               names[k], k, N, (unsigned long long)c, k, k + N, N);
-            if (!dealt && (c < first || c >= (uint64_t)first + n))
+            if (c < first || c >= (uint64_t)first + n)
                 return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                                "%s: part %u/%u holds a brick of coarsest brick %llu, outside its range %u..%u",
                                names[k], k, N, (unsigned long long)c, first, first + n - 1);
@@ -75,29 +52,25 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
     if (bricks > (1u << 22))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%llu bricks in the parts: too many",
                        (unsigned long long)bricks);
-    /* bricks in the one-process order; where each came from */
+    /* bricks level by level, parts in order; where each came from */
     pb_sparse_brick *all = malloc((size_t)(bricks ? bricks : 1) * sizeof *all);
     uint32_t *from_part = malloc((size_t)(bricks ? bricks : 1) * sizeof *from_part);
     uint32_t *from_brick = malloc((size_t)(bricks ? bricks : 1) * sizeof *from_brick);
-    brick_key *keys = malloc((size_t)(bricks ? bricks : 1) * sizeof *keys);
     pb_sparse_layout *sp = calloc(1, sizeof *sp);
-    if (!all || !from_part || !from_brick || !keys || !sp) {
-        free(all), free(from_part), free(from_brick), free(keys), free(sp);
+    if (!all || !from_part || !from_brick || !sp) {
+        free(all), free(from_part), free(from_brick), free(sp);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory merging %llu bricks",
                        (unsigned long long)bricks);
     }
     uint32_t B = 0;
-    for (uint32_t k = 0; k < N; ++k)
-        for (uint32_t b = 0; b < parts[k]->sparse->brick_count; ++b) {
-            const pb_sparse_brick *br = &parts[k]->sparse->bricks[b];
-            keys[B++] = (brick_key){br->level * C + pb_sparse_coarsest_cell(l0->cells, br), k, b};
-        }
-    qsort(keys, B, sizeof *keys, brick_key_order);
-    for (uint32_t m = 0; m < B; ++m) {
-        all[m] = parts[keys[m].part]->sparse->bricks[keys[m].brick];
-        from_part[m] = keys[m].part, from_brick[m] = keys[m].brick;
-    }
-    free(keys);
+    for (uint32_t level = 0; level < L; ++level)
+        for (uint32_t k = 0; k < N; ++k)
+            for (uint32_t b = 0; b < parts[k]->sparse->brick_count; ++b)
+                if (parts[k]->sparse->bricks[b].level == level) {
+                    all[B] = parts[k]->sparse->bricks[b];
+                    from_part[B] = k, from_brick[B] = b;
+                    B++;
+                }
     uint32_t P = 0;
     pb_result r = pb_sparse_layout_build(L, l0->cells, all, B, sp, &P, NULL, err);
     free(all);

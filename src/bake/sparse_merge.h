@@ -5,14 +5,12 @@
 #include "probebake/volume.h"
 
 /* parts[k] is part k of N (pb_volume_merge has checked that they are one
- * bake's, each once). Part k holds the bricks grown from its coarsest
- * bricks: k, k + N, ... (dealt, shard.h), or a range (pb_shard_range; parts
- * written before 2026-11-27); probes on the faces between parts are in
- * both, and must be equal where both parts name the same device (else the
- * lower part's are kept). The whole: bricks by level, then coarsest brick,
- * then their order in their part (the order a one-process bake sorts them
- * into), probes as pb_sparse_layout_build numbers them, then dilation and
- * stitching. */
+ * bake's, each once). Part k holds the bricks grown from its range of
+ * coarsest bricks (pb_shard_range over them); probes on the faces between
+ * parts are in both, and must be equal where both parts name the same
+ * device (else the lower part's are kept). The whole: bricks level by level,
+ * parts in order (the order a one-process bake appends them), probes as
+ * pb_sparse_layout_build numbers them, then dilation and stitching. */
 pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *names, uint32_t N, pb_volume *out,
                           pb_error *err);
 

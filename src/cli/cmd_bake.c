@@ -206,8 +206,8 @@ int cmd_bake(const options *o)
             goto out;
         }
         if (o->sparse)
-            snprintf(part, sizeof part, ", part %u of %u (coarsest bricks %u, %u, ... every %u)", o->shard_index,
-                     o->shard_count, o->shard_index, o->shard_index + o->shard_count, o->shard_count);
+            snprintf(part, sizeof part, ", part %u of %u (a range of coarsest bricks)", o->shard_index,
+                     o->shard_count);
         else /* dealt (shard.h) */
             snprintf(part, sizeof part, ", part %u of %u (probes %u, %u, ... every %u: %u of them)", o->shard_index,
                      o->shard_count, o->shard_index, o->shard_index + o->shard_count, o->shard_count,
@@ -322,10 +322,10 @@ int cmd_bake(const options *o)
         fprintf(report, "\n");
     }
     if (o->shard_count && o->sparse)
-        fprintf(report, "wrote %s: part %u of %u, %u probes in %u bricks grown from coarsest bricks %u, %u, ... "
-                "(of %u), undilated (probebake merge joins the parts) (%u valid, %u relocated, %u invalid, %u outside",
+        fprintf(report, "wrote %s: part %u of %u, %u probes in %u bricks grown from coarsest brick %u on (of %u), "
+                "undilated (probebake merge joins the parts) (%u valid, %u relocated, %u invalid, %u outside",
                 o->output, o->shard_index, o->shard_count, vol.probe_count, vol.sparse->brick_count, vol.shard.first,
-                vol.shard.first + vol.shard.step, vol.shard.total, valid, relocated, vol.probe_count - valid, outside);
+                vol.shard.total, valid, relocated, vol.probe_count - valid, outside);
     else if (o->shard_count)
         fprintf(report, "wrote %s: part %u of %u, %u of %llu probes, undilated (probebake merge joins the parts) (%u "
                 "valid, %u relocated, %u invalid, %u outside", o->output, o->shard_index, o->shard_count,

@@ -218,11 +218,7 @@ int cmd_inspect(const options *o)
                 printf("refined     not recorded (a file written before it)\n");
         } else
             printf("probes      %u placed points\n", v.probe_count);
-        if ((v.flags & PB_VOLUME_SHARD) && v.sparse && v.shard.step > 1)
-            printf("part        %u of %u: bricks grown from coarsest bricks %u, %u, ... every %u (of %u), undilated, "
-                   "unstitched (probebake merge joins the parts)\n", v.shard.index, v.shard.count, v.shard.first,
-                   v.shard.first + v.shard.step, v.shard.step, v.shard.total);
-        else if ((v.flags & PB_VOLUME_SHARD) && v.sparse)
+        if ((v.flags & PB_VOLUME_SHARD) && v.sparse)
             printf("part        %u of %u: bricks grown from coarsest brick %u on (of %u), undilated, unstitched "
                    "(probebake merge joins the parts)\n", v.shard.index, v.shard.count, v.shard.first, v.shard.total);
         else if ((v.flags & PB_VOLUME_SHARD) && v.shard.step > 1)

@@ -526,9 +526,7 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         bad = "depth unit not a positive finite number";
     else if ((v->flags & PB_VOLUME_SHARD) &&
              (v->shard.index >= v->shard.count || v->shard.total > MAX_PROBES ||
-              ((v->flags & PB_VOLUME_SPARSE) /* first and total count coarsest bricks */
-                   ? v->shard.first >= v->shard.total ||
-                         (v->shard.step > 1 && (v->shard.step != v->shard.count || v->shard.first != v->shard.index))
+              ((v->flags & PB_VOLUME_SPARSE) ? v->shard.step > 1 || v->shard.first >= v->shard.total /* bricks */
                : v->shard.step <= 1 ? (uint64_t)v->shard.first + v->probe_count > v->shard.total
                                     : v->shard.step != v->shard.count || v->shard.first != v->shard.index ||
                                           v->probe_count != pb_shard_dealt_count(v->shard.total, v->shard.index,
