@@ -374,12 +374,12 @@ static void shard_parameters_refused(void)
 /* A sparse lattice over the demo scene: 0.15 m finest, two levels, so
  * 3 x 3 x 4 coarsest bricks of 1.35 m; fixed passes (a target error's
  * floor would tie each level's probes together and is refused). */
-static pb_bake_desc sparse_demo_desc(const pb_scene *s)
+static pb_bake_desc sparse_demo_desc(const pb_scene *s, float spacing)
 {
     pb_bake_desc d = {0};
     for (int k = 0; k < 3; ++k) {
-        d.grid.spacing[k] = 0.15f;
-        d.grid.counts[k] = (uint32_t)((s->bounds_max[k] - s->bounds_min[k]) / 0.15f) + 1;
+        d.grid.spacing[k] = spacing;
+        d.grid.counts[k] = (uint32_t)((s->bounds_max[k] - s->bounds_min[k]) / spacing) + 1;
         d.grid.origin[k] = s->bounds_min[k];
     }
     d.rays_per_probe = 32, d.passes = 2, d.bounces = 1, d.octmap_res = 4, d.seed = 1;
@@ -397,7 +397,7 @@ static void sparse_parts_merge_to_the_whole_bake(void)
     setup su;
     if (!setup_demo(&su))
         return;
-    pb_bake_desc d = sparse_demo_desc(su.scene);
+    pb_bake_desc d = sparse_demo_desc(su.scene, 0.15f);
     pb_sparse_desc sd = {2, 0.1f};
     pb_volume whole, parts[3], merged;
     pb_error err;
@@ -522,12 +522,8 @@ static void sparse_parts_of_any_count_merge_to_the_whole(void)
     setup su;
     if (!setup_demo(&su))
         return;
-    pb_bake_desc d = sparse_demo_desc(su.scene);
+    pb_bake_desc d = sparse_demo_desc(su.scene, 0.12f); /* where 2, 3 and 5 parts all differed before */
     d.rays_per_probe = 16, d.passes = 1;
-    for (int k = 0; k < 3; ++k) { /* a spacing at which 2, 3 and 5 parts all differed before */
-        d.grid.spacing[k] = 0.12f;
-        d.grid.counts[k] = (uint32_t)((su.scene->bounds_max[k] - su.scene->bounds_min[k]) / 0.12f) + 1;
-    }
     pb_sparse_desc sd = {2, 0.1f};
     pb_volume whole;
     pb_error err;
@@ -593,7 +589,7 @@ static void two_devices_bake_like_one(void)
         }
         pb_volume_free(&whole);
         /* a sparse bake on two devices: parts by coarsest brick, merged */
-        pb_bake_desc ds = sparse_demo_desc(su.scene);
+        pb_bake_desc ds = sparse_demo_desc(su.scene, 0.15f);
         pb_sparse_desc sd = {2, 0.1f};
         if (pb_bake_sparse(ctx, su.scene, su.gs, &ds, &sd, &whole, NULL, &err) == PB_OK &&
             pb_bake_devices(ctxs, scenes, 2, su.scene, &ds, &sd, &both, &err) == PB_OK) {

@@ -476,10 +476,14 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u surface tests", ct.count);
     for (uint32_t i = 0; r == PB_OK && i < ct.count; ++i) {
         float rgb[3];
-        const float *n = ct.n + 3 * (size_t)i;
+        const float *x = ct.x + 3 * (size_t)i, *n = ct.n + 3 * (size_t)i;
         baked[3 * i] = irradiance_lum(v.sh + 27 * (size_t)i, n);
-        pb_sample_cpu(sv, ct.x + 3 * (size_t)i, n, n, rgb);
-        baked[3 * i + 1] = pb_luminance(rgb);
+        uint32_t read_from;
+        int own = pb_sample_brick_cpu(sv, x, n, n, &read_from) >= 0 &&
+                  read_from == pb_sparse_coarsest_cell(j->cells, &cells[ct.cell[i]]);
+        if (own)
+            pb_sample_cpu(sv, x, n, n, rgb);
+        baked[3 * i + 1] = own ? pb_luminance(rgb) : -1.f; /* -1: another coarsest brick's lookup */
     }
     for (uint32_t i = 0, end; r == PB_OK && i < ct.count; i = end) {
         uint64_t cell = pb_sparse_coarsest_cell(j->cells, &cells[ct.cell[i]]);
@@ -492,11 +496,9 @@ static pb_result test_by_surface(sparse_job *j, const pb_sparse_desc *sd, const 
     for (uint32_t i = 0; r == PB_OK && i < ct.count; ++i) {
         if (!(v.probe_flags[i] & PB_PROBE_VALID))
             continue; /* the biased point is inside geometry: no renderer samples there */
-        uint32_t read_from;
-        if (pb_sample_brick_cpu(sv, ct.x + 3 * (size_t)i, ct.n + 3 * (size_t)i, ct.n + 3 * (size_t)i, &read_from) < 0 ||
-            read_from != pb_sparse_coarsest_cell(j->cells, &cells[ct.cell[i]]))
-            continue;
         float e = baked[3 * i], p = baked[3 * i + 1], mean = baked[3 * i + 2];
+        if (p < 0.f)
+            continue; /* its lookup reads another coarsest brick */
         float big = fmaxf(e, p);
         if (!(big > 0.01f * mean))
             continue;

@@ -17,22 +17,20 @@ uint32_t pb_sparse_step(uint32_t levels, uint32_t level)
     return s;
 }
 
-uint64_t pb_sparse_coarsest_cell(const uint32_t cells[3], const pb_sparse_brick *br)
-{
-    uint32_t per = 1, c[3];
-    for (uint32_t l = 0; l < br->level; ++l)
-        per *= 3;
-    for (int k = 0; k < 3; ++k)
-        c[k] = br->coord[k] / per;
-    return c[0] + (uint64_t)cells[0] * (c[1] + (uint64_t)cells[1] * c[2]);
-}
-
 static uint32_t pow3(uint32_t e)
 {
     uint32_t p = 1;
     while (e--)
         p *= 3;
     return p;
+}
+
+uint64_t pb_sparse_coarsest_cell(const uint32_t cells[3], const pb_sparse_brick *br)
+{
+    uint32_t per = pow3(br->level), c[3];
+    for (int k = 0; k < 3; ++k)
+        c[k] = br->coord[k] / per;
+    return c[0] + (uint64_t)cells[0] * (c[1] + (uint64_t)cells[1] * c[2]);
 }
 
 /* (level, brick coordinates) as one key: coordinates below 2^20 per axis */
