@@ -6,12 +6,12 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads sweep test_bake test_trace traceab tests (default: compile
-# bake bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
+# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads sweep test_bake test_trace traceab tests
+# vsbake (default: compile bake vsbake bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
 out=${OUT:?OUT must name the folder that comes back}
-steps=${*:-compile bake bench clocks loads tests}
+steps=${*:-compile bake vsbake bench clocks loads tests}
 log=$out/log.txt
 say() { echo "== $(date +%T) $*" | tee -a "$log"; }
 run() { local limit=$1; shift; say "$*"; timeout "$limit" "$@" >>"$log" 2>&1; local rc=$?; [ $rc = 0 ] || say "rc $rc"; }
@@ -90,6 +90,13 @@ for s in $steps; do
                 --verbose -o /tmp/c16k.probes >>"$log" 2>&1
             say "rc $? wall $(( ($(date +%s%N) - start) / 1000000 )) ms"
         done ;;
+    vsbake) # issue 11's bake ratio on the device, at a size that fills it: bake_bench's "vs trc"
+        # (bake traversals per second of GPU time over the trace kernel's probe-ray rate on the same
+        # grid, next to it in the same process) and "vs bnc", at 16k probes and 3 bounces. bake_bench's
+        # default 240 probes leave an H100 idle (2026-11-24: "says nothing about the kernel there").
+        run 240 build/bench/bake_bench --probes 16384 --reference-passes 8 --bounces 3 --repeat 3 \
+            --json /tmp/bake-vs-trace-16k.json $crypt $cornell
+        keep /tmp/bake-vs-trace-16k.json ;;
     bakeab) # the issue's bake by this build and by .dev/probebake-before (another build's
         # binary, put there by hand), alternately: the stages' wall and GPU times of each
         for b in before after before after before after; do
