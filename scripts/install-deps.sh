@@ -3,8 +3,10 @@
 # (nodejs, npm, chromium: the web runtime, runtime/, is tested with node's runner
 # and in headless Chromium, and uses three.js from npm at a pinned version;
 # clang: the glTF loader's libFuzzer harness; libdraco-dev and
-# libmeshoptimizer-dev: compressed glTF geometry; slurm-wlm and munge: the
-# cluster path, tested on a one-node cluster the test starts itself).
+# libmeshoptimizer-dev: compressed glTF geometry; libopenexr-dev: OpenEXR
+# environment maps, whose DWA and other codecs no single-header reader decodes;
+# slurm-wlm and munge: the cluster path, tested on a one-node cluster the test
+# starts itself).
 # Everything comes from bookworm except Mesa's Vulkan drivers (lavapipe), which
 # come from bookworm-backports at a pinned version: Mesa 25's llvmpipe runs our
 # kernels several times faster than bookworm's 22.3 (bench/RESULTS.md) and has
@@ -21,6 +23,7 @@ pkgs=(
   glslang-tools spirv-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev
   libdraco-dev libmeshoptimizer-dev
+  libopenexr-dev
   clang
   slurm-wlm munge
   libvulkan-volk-dev

@@ -1,8 +1,11 @@
 /* Scene loader: hierarchy transforms, primitive modes, file forms, attribute
- * encodings, dropped triangles, and every malformed-file error. CPU only. */
+ * encodings, dropped triangles, and every malformed-file error; and the
+ * environment maps a scene is lit by (.hdr and OpenEXR). CPU only. */
 #define _DEFAULT_SOURCE /* mknod, makedev */
 #include "bvh/alpha.h"
 #include "compressed_variants.h"
+#include "exr_pattern.h"
+#include "io/environment_exr.h"
 #include "test_util.h"
 
 #include <sys/sysmacros.h>
@@ -977,6 +980,152 @@ static void corrupt_compressed_data_refused(void)
     }
 }
 
+/* ------------------------------------------------------------ environment maps */
+
+/* An EXR file of `kind` (tests/exr_write.cpp). */
+static const char *exr_file(const char *kind)
+{
+    static char paths[4][512];
+    static int slot;
+    char *out = paths[slot++ & 3], cmd[1200];
+    snprintf(out, 512, "%s/env_%s.exr", temp_dir(), kind);
+    snprintf(cmd, sizeof cmd, "'%s' %s '%s'", PB_EXR_WRITE, kind, out);
+    int rc = system(cmd);
+    CHECKF(rc == 0, "%s failed (%d)", cmd, rc);
+    return out;
+}
+
+/* Expects failure with `code` and a one-line message naming the file and
+ * holding `needle`, with nothing left allocated. */
+static void environment_fails(const char *path, pb_result code, const char *needle)
+{
+    pb_environment env;
+    pb_error err;
+    pb_result r = pb_environment_load(path, 1.f, 0.f, &env, &err);
+    CHECKF(r == code, "%s: got %s (%s), want %s", path, pb_result_name(r), err.message, pb_result_name(code));
+    CHECK(env.rgb == NULL);
+    CHECKF(strstr(err.message, path) != NULL, "message does not name the file: %s", err.message);
+    CHECKF(strstr(err.message, needle) != NULL, "message '%s' lacks '%s'", err.message, needle);
+    CHECK(strchr(err.message, '\n') == NULL);
+    pb_environment_free(&env);
+}
+
+/* OpenEXR maps, written by the OpenEXR library and read back exactly: float
+ * and half channels, scanline (ZIP) and tiled (PIZ) files, a grey Y channel,
+ * and a data window that is not the display window (the display window is
+ * the map; texels only it covers are 0). Intensity 2 scales every texel. A
+ * negative value reads as 0 and is counted. NaN, luminance-chroma and
+ * colourless files, an oversized window, truncated files and a file of
+ * neither format get one-line errors naming the file. */
+static void exr_environment_maps_read_exactly(void)
+{
+    static const struct {
+        const char *kind;
+        int grey, window, negative;
+    } ok[] = {{"float", 0, 0, 0}, {"half-tiled", 0, 0, 0}, {"grey", 1, 0, 0}, {"window", 0, 1, 0}, {"negative", 0, 0, 1}};
+    for (size_t i = 0; i < sizeof ok / sizeof ok[0]; ++i) {
+        const char *path = exr_file(ok[i].kind);
+        pb_environment env;
+        pb_error err;
+        pb_result r = pb_environment_load(path, 2.f, 0.f, &env, &err);
+        CHECKF(r == PB_OK, "%s: %s", ok[i].kind, err.message);
+        if (r != PB_OK)
+            continue;
+        CHECKF(env.width == EXR_PATTERN_W && env.height == EXR_PATTERN_H, "%s: %ux%u", ok[i].kind, env.width,
+               env.height);
+        uint32_t wrong = 0;
+        for (int y = 0; y < EXR_PATTERN_H && env.width == EXR_PATTERN_W; ++y)
+            for (int x = 0; x < EXR_PATTERN_W; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    /* the window case's data window covers display texels x 2..7, y 1..2 */
+                    int outside = ok[i].window && (x < 2 || y < 1 || y > 2);
+                    int clamped = ok[i].negative && x == 3 && y == 1 && c == 1;
+                    float want = outside || clamped ? 0.f : 2.f * exr_pattern(x, y, ok[i].grey ? 0 : c);
+                    wrong += env.rgb[3 * (y * EXR_PATTERN_W + x) + c] != want;
+                }
+        CHECKF(wrong == 0, "%s: %u values differ from the pattern", ok[i].kind, wrong);
+        CHECKF(env.negative_values == (uint64_t)ok[i].negative, "%s: %llu negative values counted", ok[i].kind,
+               (unsigned long long)env.negative_values);
+        CHECK(env.most_negative == (ok[i].negative ? -0.5f : 0.f));
+        pb_environment_free(&env);
+    }
+    environment_fails(exr_file("nan"), PB_ERROR_INVALID_ARGUMENT, "texel 21 is NaN");
+    environment_fails(exr_file("chroma"), PB_ERROR_UNSUPPORTED, "luminance-chroma");
+    environment_fails(exr_file("no-colour"), PB_ERROR_PARSE, "no R, G, B or Y channel");
+    environment_fails(exr_file("huge"), PB_ERROR_PARSE, "EXR windows of 1048576x1048576 (display)");
+    /* cut inside the header, the offset table and the last chunk */
+    char *whole = read_text(exr_file("float"));
+    struct stat st;
+    stat(exr_file("float"), &st);
+    const size_t cuts[3] = {40, (size_t)st.st_size / 2, (size_t)st.st_size - 8};
+    for (int k = 0; k < 3; ++k) {
+        char name[64];
+        snprintf(name, sizeof name, "env_cut%d.exr", k);
+        environment_fails(write_file(name, whole, cuts[k]), PB_ERROR_PARSE, "cannot decode the EXR file");
+    }
+    free(whole);
+    environment_fails(source_path("tests/scenes/demo.gltf"), PB_ERROR_PARSE,
+                      "neither a Radiance .hdr nor an OpenEXR file");
+}
+
+/* The shared folder's courtyard map as DWAB-compressed EXR and as the .hdr
+ * oiiotool made of it agree to RGBE's precision: a texel's largest channel
+ * in [2^(e-1), 2^e) is stored in steps of 2^(e-8), so every channel is
+ * within 2^-7 of the texel's largest. Texels where the EXR holds a negative
+ * value (DWA's near-black noise) are left out, since RGBE cannot store one;
+ * the loader reads exactly those values as 0, and counts them. */
+static void exr_and_hdr_of_one_map_agree(void)
+{
+    const char *exr = source_path("../shared/scenes/env/courtyard.exr"), *hdr = source_path("../shared/scenes/env/courtyard.hdr");
+    if (!file_exists(exr) || !file_exists(hdr)) {
+        skip("%s or %s absent", exr, hdr);
+        return;
+    }
+    float *raw = NULL;
+    uint32_t w = 0, h = 0;
+    pb_environment from_exr, from_hdr;
+    pb_error err;
+    CHECKF(pb_exr_read_rgb(exr, 1u << 28, &raw, &w, &h, &err) == PB_OK, "%s", err.message);
+    CHECKF(pb_environment_load(exr, 1.f, 0.f, &from_exr, &err) == PB_OK, "%s", err.message);
+    CHECKF(pb_environment_load(hdr, 1.f, 0.f, &from_hdr, &err) == PB_OK, "%s", err.message);
+    if (!raw || !from_exr.rgb || !from_hdr.rgb) {
+        free(raw);
+        pb_environment_free(&from_exr), pb_environment_free(&from_hdr);
+        return;
+    }
+    CHECK(w == 1024 && h == 512 && from_hdr.width == w && from_hdr.height == h && from_exr.width == w);
+    uint64_t negatives = 0, compared = 0, far = 0, exr_differs = 0;
+    double worst = 0.0;
+    for (size_t t = 0; t < (size_t)w * h && from_hdr.width == w && from_exr.width == w; ++t) {
+        const float *e = raw + 3 * t, *d = from_hdr.rgb + 3 * t, *l = from_exr.rgb + 3 * t;
+        int neg = 0;
+        float top = 0.f;
+        for (int c = 0; c < 3; ++c) {
+            neg += e[c] < 0.f;
+            top = fmaxf(top, e[c]);
+            exr_differs += l[c] != (e[c] < 0.f ? 0.f : e[c]);
+        }
+        negatives += (uint64_t)neg;
+        if (neg)
+            continue;
+        for (int c = 0; c < 3; ++c) {
+            double diff = fabs((double)e[c] - d[c]);
+            far += diff > top * 0x1p-7;
+            worst = fmax(worst, top > 0.f ? diff / top : diff);
+        }
+        ++compared;
+    }
+    fprintf(stderr, "  %llu texels compared, %llu negative values: worst difference %.3f x 2^-7 of the largest channel\n",
+            (unsigned long long)compared, (unsigned long long)negatives, worst * 128.0);
+    CHECKF(far == 0, "%llu values further from the .hdr than RGBE's step", (unsigned long long)far);
+    CHECKF(exr_differs == 0, "%llu loaded values differ from the file's (negatives as 0)", (unsigned long long)exr_differs);
+    CHECK(from_exr.negative_values == negatives && negatives > 0 && from_hdr.negative_values == 0);
+    CHECK(compared > (uint64_t)w * h * 99 / 100);
+    free(raw);
+    pb_environment_free(&from_exr);
+    pb_environment_free(&from_hdr);
+}
+
 int main(void)
 {
     RUN(demo_scene_loads_everything);
@@ -998,5 +1147,7 @@ int main(void)
     RUN(shared_scenes_load);
     RUN(compressed_variants_match_originals);
     RUN(corrupt_compressed_data_refused);
+    RUN(exr_environment_maps_read_exactly);
+    RUN(exr_and_hdr_of_one_map_agree);
     return test_summary();
 }

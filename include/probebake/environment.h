@@ -33,13 +33,19 @@ typedef struct pb_environment {
     float *rgb;                  /* 3 floats per texel, linear radiance (intensity applied), row 0 = up */
     float rotation_deg;          /* about +Y, counter-clockwise seen from above */
     char path[1024];             /* file it came from, "" for a uniform colour */
+    uint64_t negative_values;    /* channel values below 0 in the file, read as 0 (lossy EXR compression) */
+    float most_negative;         /* the lowest of them (0 if none) */
 } pb_environment;
 
-/* Reads a Radiance .hdr (RGBE) map, scales it by `intensity` and box-filters
- * it to at most PB_ENVIRONMENT_MAX_WIDTH. Returns PB_ERROR_IO (cannot read),
- * PB_ERROR_PARSE (not a Radiance file, or a bad size), or
- * PB_ERROR_INVALID_ARGUMENT (intensity not finite and >= 0, NaN / negative /
- * infinite texels), each naming the file. */
+/* Reads a Radiance .hdr (RGBE) or OpenEXR map (the first part's display
+ * window; R, G, B or a grey Y channel; any compression), scales it by
+ * `intensity` and box-filters it to at most PB_ENVIRONMENT_MAX_WIDTH.
+ * Negative values, which lossy EXR compression leaves near black, read as 0
+ * and are counted. Returns PB_ERROR_IO (cannot read), PB_ERROR_PARSE
+ * (neither format, undecodable, no colour channel, a bad size),
+ * PB_ERROR_UNSUPPORTED (luminance-chroma or deep EXR) or
+ * PB_ERROR_INVALID_ARGUMENT (intensity not finite and >= 0, NaN or infinite
+ * texels), each naming the file. */
 pb_result pb_environment_load(const char *path, float intensity, float rotation_deg, pb_environment *out,
                               pb_error *err);
 

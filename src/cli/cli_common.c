@@ -80,7 +80,13 @@ pb_result cli_environment(const options *o, pb_environment *env, pb_error *err)
         snprintf(err->message, sizeof err->message, "--sky and --env both give the environment: choose one");
         return err->code = PB_ERROR_INVALID_ARGUMENT;
     }
-    return o->env ? pb_environment_load(o->env, o->env_intensity, o->env_rotation, env, err) : PB_OK;
+    if (!o->env)
+        return PB_OK;
+    pb_result r = pb_environment_load(o->env, o->env_intensity, o->env_rotation, env, err);
+    if (r == PB_OK && env->negative_values)
+        fprintf(stderr, "probebake: warning: %s: %llu channel values below 0 (down to %g; lossy compression) read as 0\n",
+                o->env, (unsigned long long)env->negative_values, env->most_negative);
+    return r;
 }
 
 int cli_usage_error(const char *fmt, const char *arg)

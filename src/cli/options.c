@@ -57,7 +57,7 @@ void cli_print_help(void)
            "  --points FILE.json             probes at given positions instead of a grid:\n"
            "                                 {\"spacing\": S, \"points\": [[x,y,z] | {\"id\": I, \"position\": [x,y,z]}]}\n"
            "  --sky R,G,B                    uniform sky radiance (default black)\n"
-           "  --env FILE.hdr                 equirectangular Radiance environment map instead of --sky\n"
+           "  --env FILE.hdr|FILE.exr        equirectangular environment map (Radiance or OpenEXR) instead of --sky\n"
            "  --env-intensity K              scale of the map (default 1)\n"
            "  --env-rotation DEG             turn the map about +Y, counter-clockwise from above (default 0)\n"
            "  --direct include|exclude       light straight from lights, emitters and sky (default include)\n"
@@ -99,7 +99,7 @@ void cli_print_help(void)
            "                  same camera and size) instead of tracing a 16x-spp reference\n"
            "  --seams-of SPARSE.probes   diff: the seam and per-level metrics on the pixels where that sparse\n"
            "                  volume's levels meet (e.g. a grid's error where a sparse volume has its seams)\n"
-           "  --sky R,G,B | --env FILE.hdr [...]   the environment, as for bake\n",
+           "  --sky R,G,B | --env FILE.hdr|.exr [...]   the environment, as for bake\n",
            PB_VERSION_STRING);
 }
 
@@ -317,7 +317,7 @@ static int apply(options *o, const char *a, const char *next)
         o->show_probes = 1;
     } else if (!strcmp(a, "--env")) {
         if (!next)
-            return cli_usage_error("%s needs a .hdr file", a);
+            return cli_usage_error("%s needs a .hdr or .exr file", a);
         o->env = next;
     } else if (!strcmp(a, "--max-lights-per-hit")) {
         if (!next || !parse_u32(next, 1, 1u << 20, &o->max_lights_per_hit)) {
