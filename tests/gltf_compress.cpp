@@ -1,7 +1,7 @@
 // Test helper: writes compressed variants of a glTF file with the libraries
 // Debian packages (no glTF-level encoder is packaged: draco_encoder reads
 // OBJ/PLY, gltfpack is not in Debian). Usage:
-//   gltf_compress draco|meshopt|meshopt-exp|quantize IN OUT.gltf|OUT.glb
+//   gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken IN OUT.gltf|OUT.glb
 // draco        every triangle primitive as KHR_draco_mesh_compression
 //              (positions 14 bits, normals 10, texcoords 12, colours 10)
 // meshopt      vertex and index views as EXT_meshopt_compression, no filter
@@ -11,6 +11,10 @@
 // quantize     KHR_mesh_quantization: positions as normalized SHORT with a
 //              dequantizing node, normals as normalized BYTE, texcoords in
 //              [0,1] as normalized USHORT
+// webp         every image as lossless WebP (libwebp) read through
+//              EXT_texture_webp, required: no texture keeps a core source
+// webp-broken  as webp, but each WebP image cut to half its bytes, and every
+//              texture keeps its core source as the fallback (not required)
 // Every bufferView of IN is copied into one new buffer (external .bin for
 // .gltf, the BIN chunk for .glb); the JSON is IN's, edited.
 #include <tiny_gltf.h>
@@ -20,6 +24,7 @@
 #include <draco/mesh/mesh.h>
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
+#include <webp/encode.h>
 
 #include <algorithm>
 #include <array>
@@ -338,6 +343,73 @@ void to_quantized(const tinygltf::Model &m, out_file &o)
     o.use("KHR_mesh_quantization", true);
 }
 
+void to_webp(const tinygltf::Model &m, out_file &o, bool broken, const std::string &in_dir)
+{
+    copy_views(m, o);
+    // the core images from external files go into the buffer, so that OUT stands alone
+    for (size_t i = 0; i < m.images.size(); ++i) {
+        const std::string &uri = m.images[i].uri;
+        if (uri.empty() || uri.compare(0, 5, "data:") == 0)
+            continue;
+        std::ifstream f(in_dir + "/" + uri, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+        if (!f.good() && !f.eof())
+            die("cannot read image " + uri);
+        json &ji = o.j["images"][i];
+        ji.erase("uri");
+        ji["bufferView"] = o.add_view(bytes.data(), bytes.size());
+        ji["mimeType"] = uri.size() > 4 && (uri.substr(uri.size() - 4) == ".jpg" || uri.substr(uri.size() - 5) == ".jpeg")
+                             ? "image/jpeg"
+                             : "image/png";
+    }
+    std::vector<int> webp_of(m.images.size(), -1);
+    for (size_t i = 0; i < m.images.size(); ++i) {
+        const tinygltf::Image &img = m.images[i];
+        int w = img.width, h = img.height, c = img.component;
+        if (w <= 0 || h <= 0 || img.bits != 8 || (c != 3 && c != 4) || img.image.size() != (size_t)w * h * c)
+            die("image " + std::to_string(i) + " is not 8-bit RGB or RGBA");
+        std::vector<uint8_t> rgba((size_t)w * h * 4, 255);
+        for (size_t p = 0; p < (size_t)w * h; ++p)
+            memcpy(&rgba[4 * p], &img.image[c * p], (size_t)c);
+        // lossless and exact: the colour under alpha 0 is kept too (the simple
+        // WebPEncodeLosslessRGBA of libwebp 1.2 zeroes it)
+        WebPConfig config;
+        WebPPicture pic;
+        WebPMemoryWriter mem;
+        if (!WebPConfigInit(&config) || !WebPPictureInit(&pic))
+            die("libwebp version mismatch");
+        config.lossless = 1;
+        config.exact = 1;
+        config.method = 0; // the fastest: these are test files
+        config.quality = 0.f;
+        pic.use_argb = 1;
+        pic.width = w;
+        pic.height = h;
+        WebPMemoryWriterInit(&mem);
+        pic.writer = WebPMemoryWrite;
+        pic.custom_ptr = &mem;
+        bool ok = WebPPictureImportRGBA(&pic, rgba.data(), w * 4) && WebPEncode(&config, &pic);
+        WebPPictureFree(&pic);
+        if (!ok)
+            die("libwebp could not encode image " + std::to_string(i));
+        int view = o.add_view(mem.mem, broken ? mem.size / 2 : mem.size);
+        WebPMemoryWriterClear(&mem);
+        o.j["images"].push_back({{"bufferView", view}, {"mimeType", "image/webp"}});
+        webp_of[i] = (int)o.j["images"].size() - 1;
+    }
+    for (size_t t = 0; t < m.textures.size(); ++t) {
+        json &jt = o.j["textures"][t];
+        int src = m.textures[t].source;
+        if (src < 0 || webp_of[src] < 0)
+            continue;
+        jt["extensions"]["EXT_texture_webp"] = {{"source", webp_of[src]}};
+        if (!broken)
+            jt.erase("source");
+    }
+    if (!m.images.empty())
+        o.use("EXT_texture_webp", !broken);
+}
+
 void write(out_file &o, const std::string &path)
 {
     bool glb = path.size() > 4 && path.substr(path.size() - 4) == ".glb";
@@ -373,7 +445,7 @@ void write(out_file &o, const std::string &path)
 int main(int argc, char **argv)
 {
     if (argc != 4)
-        die("usage: gltf_compress draco|meshopt|meshopt-exp|quantize IN OUT.gltf|OUT.glb");
+        die("usage: gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken IN OUT.gltf|OUT.glb");
     std::string mode = argv[1], in = argv[2], out = argv[3];
     tinygltf::TinyGLTF loader;
     tinygltf::Model m;
@@ -400,6 +472,8 @@ int main(int argc, char **argv)
         to_meshopt(m, o, mode == "meshopt-exp");
     } else if (mode == "quantize") {
         to_quantized(m, o);
+    } else if (mode == "webp" || mode == "webp-broken") {
+        to_webp(m, o, mode == "webp-broken", in.find('/') == std::string::npos ? "." : in.substr(0, in.rfind('/')));
     } else {
         die("unknown mode " + mode);
     }

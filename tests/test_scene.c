@@ -629,6 +629,54 @@ static void corrupt_texture_is_a_warning(void)
     pb_scene *s = load_ok(write_gltf("badpng.gltf", json, tri_pos, 36));
     CHECK(s && s->triangle_count == 1 && s->materials[0].base_color_texture == -1);
     pb_scene_destroy(s);
+    /* a WebP header over no image data, the only source of a texture
+     * (EXT_texture_webp required): the factor again */
+    const char *webp =
+        "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"EXT_texture_webp\"],"
+        "\"extensionsRequired\":[\"EXT_texture_webp\"],\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}],"
+        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],"
+        "\"textures\":[{\"extensions\":{\"EXT_texture_webp\":{\"source\":0}}}],"
+        "\"images\":[{\"uri\":\"data:image/webp;base64,UklGRgwAAABXRUJQVlA4IAAAAAA=\"}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
+    s = load_ok(write_gltf("badwebp.gltf", webp, tri_pos, 36));
+    CHECK(s && s->triangle_count == 1 && s->materials[0].base_color_texture == -1);
+    pb_scene_destroy(s);
+}
+
+static int warned_views;
+static void count_view_warnings(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    if (level == PB_LOG_WARN && strstr(msg, "lies outside its buffer"))
+        warned_views++;
+}
+
+/* An image in a bufferView that reaches past its buffer (4,000 bytes into a
+ * 36-byte one). tinygltf hands such bytes to the image decoder unchecked, and
+ * the fuzzer's WebP seed led the decoder to read past the buffer
+ * (tests/fuzz/corpus/image-view-outside-buffer.glb). The view is now checked
+ * first: a warning, and the material keeps its factor. */
+static void image_view_outside_its_buffer_is_a_warning(void)
+{
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}],"
+        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],"
+        "\"textures\":[{\"source\":0}],\"images\":[{\"bufferView\":1,\"mimeType\":\"image/png\"}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":4000,\"byteLength\":52}],"
+        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
+    const char *path = write_gltf("image-view-outside.gltf", json, tri_pos, 36);
+    warned_views = 0;
+    pb_scene_desc d = {{count_view_warnings, NULL}, 0, 0, 0};
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(path, &d, &s, &err) == PB_OK, "%s", err.message);
+    CHECK(s && s->triangle_count == 1 && s->materials[0].base_color_texture == -1 && warned_views == 1);
+    pb_scene_destroy(s);
 }
 
 /* A baseline greyscale JPEG of w x h pixels in 144 bytes: one Huffman code
@@ -980,6 +1028,88 @@ static void corrupt_compressed_data_refused(void)
     }
 }
 
+/* ------------------------------------------------------------ WebP textures */
+
+static int webp_warnings;
+static void count_webp_warnings(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    if (level == PB_LOG_WARN && strstr(msg, "corrupt WebP"))
+        webp_warnings++;
+}
+
+/* Every material's texture indices, and every texture's size, wrap modes,
+ * colour space and texels, equal in a and b. */
+static void same_textures(const pb_scene *a, const pb_scene *b, const char *what)
+{
+    CHECKF(a->texture_count == b->texture_count && a->material_count == b->material_count,
+           "%s: %u textures, %u materials against %u, %u", what, b->texture_count, b->material_count,
+           a->texture_count, a->material_count);
+    if (a->texture_count != b->texture_count || a->material_count != b->material_count)
+        return;
+    uint32_t differ = 0;
+    for (uint32_t m = 0; m < a->material_count; ++m)
+        differ += a->materials[m].base_color_texture != b->materials[m].base_color_texture ||
+                  a->materials[m].emissive_texture != b->materials[m].emissive_texture;
+    for (uint32_t t = 0; t < a->texture_count; ++t) {
+        const pb_texture *x = &a->textures[t], *y = &b->textures[t];
+        differ += x->width != y->width || x->height != y->height || x->wrap_s != y->wrap_s ||
+                  x->wrap_t != y->wrap_t || x->srgb != y->srgb ||
+                  (x->width == y->width && x->height == y->height &&
+                   memcmp(a->texels + x->offset, b->texels + y->offset, (size_t)x->width * x->height * 4) != 0);
+    }
+    CHECKF(differ == 0, "%s: %u materials or textures differ from the original's", what, differ);
+}
+
+/* EXT_texture_webp: each sample's images as lossless WebP (tests/gltf_compress
+ * webp, libwebp's encoder), reachable only through the extension, load to the
+ * original's texels bit for bit (alpha and the colour under alpha 0
+ * included: AlphaBlendModeTest). With every WebP image cut in half and the
+ * core images kept as fallbacks (webp-broken), each WebP image is a warning
+ * and the textures read their fallbacks, again bit for bit. */
+static void webp_textures_read_as_their_originals(void)
+{
+    static const char *const sources[] = {
+        "tests/scenes/demo.gltf", "../shared/scenes/samples/Duck/Duck.gltf",
+        "../shared/scenes/samples/TextureTransformTest/TextureTransformTest.gltf",
+        "../shared/scenes/samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf"};
+    static const pb_variant webp = {"webp", "glb", 1}, broken = {"webp-broken", "glb", 1};
+    for (size_t i = 0; i < sizeof sources / sizeof sources[0]; ++i) {
+        const char *path = source_path(sources[i]);
+        if (!file_exists(path)) {
+            skip("%s absent", path);
+            continue;
+        }
+        char tag[32];
+        snprintf(tag, sizeof tag, "webp%zu", i);
+        pb_scene *orig = load_ok(path);
+        const char *w = compressed_variant(path, tag, &webp), *wb = compressed_variant(path, tag, &broken);
+        if (!orig || !w || !wb) {
+            pb_scene_destroy(orig);
+            continue;
+        }
+        CHECKF(orig->texture_count > 0, "%s has no texture to test", path);
+        pb_scene *s = load_ok(w);
+        if (s) {
+            same_textures(orig, s, w);
+            CHECK(strstr(s->stats.extensions_applied, "EXT_texture_webp") != NULL);
+        }
+        pb_scene_destroy(s);
+        webp_warnings = 0;
+        pb_scene_desc d = {{count_webp_warnings, NULL}, 0, 0, 0};
+        s = NULL;
+        pb_error err;
+        CHECKF(pb_scene_load(wb, &d, &s, &err) == PB_OK, "%s: %s", wb, err.message);
+        if (s)
+            same_textures(orig, s, wb);
+        CHECKF(webp_warnings > 0, "%s: %d warnings about corrupt WebP images", wb, webp_warnings);
+        fprintf(stderr, "  %s: %u textures read from WebP as from the original; %d cut WebP images fell back\n",
+                sources[i], orig->texture_count, webp_warnings);
+        pb_scene_destroy(s);
+        pb_scene_destroy(orig);
+    }
+}
+
 /* ------------------------------------------------------------ environment maps */
 
 /* An EXR file of `kind` (tests/exr_write.cpp). */
@@ -1143,10 +1273,12 @@ int main(void)
     RUN(malformed_files_get_clear_errors);
     RUN(hostile_inputs_refused);
     RUN(corrupt_texture_is_a_warning);
+    RUN(image_view_outside_its_buffer_is_a_warning);
     RUN(oversized_texture_refused_unread);
     RUN(shared_scenes_load);
     RUN(compressed_variants_match_originals);
     RUN(corrupt_compressed_data_refused);
+    RUN(webp_textures_read_as_their_originals);
     RUN(exr_environment_maps_read_exactly);
     RUN(exr_and_hdr_of_one_map_agree);
     return test_summary();

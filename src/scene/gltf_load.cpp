@@ -16,6 +16,7 @@ extern "C" {
 #include <nlohmann/json.hpp>
 #include <stb_image.h>
 #include <tiny_gltf.h>
+#include <webp/decode.h>
 
 #include <array>
 #include <cerrno>
@@ -51,16 +52,90 @@ struct reader {
     std::map<int, decoded_accessor> draco_accessors;
 };
 
-// Custom image loader: stb_image to RGBA8. A texture that fails to decode, or
-// whose header claims more pixels than the limits allow, is a warning (the
-// material falls back to its factor), never a failed load.
+// Custom image loader: stb_image (PNG, JPEG, ...) or libwebp (WebP, for
+// EXT_texture_webp) to RGBA8. A texture that fails to decode, or whose header
+// claims more pixels than the limits allow, is a warning (the material falls
+// back to its factor), never a failed load.
 struct image_ctx {
     const char *path;
     pb_log log;
     int skip;
     uint64_t max_pixels;  // per image
     uint64_t left_pixels; // what the file's images may still decode to
+    const tinygltf::Model *model; // being filled: its buffers and views are read before images in views
 };
+
+// tinygltf hands an image stored in a bufferView to the loader without
+// checking that the view lies inside its buffer: a view past the end would
+// have the decoder read past it. So the view is checked here first.
+bool image_bytes_inside(const image_ctx *ctx, const tinygltf::Image *image, int index, const unsigned char *bytes,
+                        int size)
+{
+    if (image->bufferView < 0)
+        return true; // a data URI or a file: tinygltf decoded or read exactly those bytes
+    const tinygltf::Model &m = *ctx->model;
+    bool inside = false;
+    if ((size_t)image->bufferView < m.bufferViews.size()) {
+        const tinygltf::BufferView &v = m.bufferViews[(size_t)image->bufferView];
+        if (v.buffer >= 0 && (size_t)v.buffer < m.buffers.size()) {
+            const std::vector<unsigned char> &data = m.buffers[(size_t)v.buffer].data;
+            inside = v.byteOffset <= data.size() && v.byteLength <= data.size() - v.byteOffset && size >= 0 &&
+                     (size_t)size == v.byteLength && bytes == data.data() + v.byteOffset;
+        }
+    }
+    if (!inside)
+        pb_logf(&ctx->log, PB_LOG_WARN, "%s: image %d: bufferView %d lies outside its buffer; its factor is used",
+                ctx->path, index, image->bufferView);
+    return inside;
+}
+
+// Whether an image's pixel count fits the limits; warns when it does not.
+bool image_fits(const image_ctx *ctx, int index, int w, int h)
+{
+    uint64_t n = (uint64_t)w * (uint64_t)h;
+    if (n <= ctx->max_pixels && n <= ctx->left_pixels)
+        return true;
+    pb_logf(&ctx->log, PB_LOG_WARN, "%s: image %d is %d x %d pixels, more than the %llu pixels %s; its factor is used",
+            ctx->path, index, w, h, (unsigned long long)(n > ctx->max_pixels ? ctx->max_pixels : ctx->left_pixels),
+            n > ctx->max_pixels ? "an image may decode to" : "the file's images may still decode to");
+    return false;
+}
+
+// RIFF container of a WebP image
+bool is_webp(const unsigned char *bytes, int size)
+{
+    return size >= 12 && memcmp(bytes, "RIFF", 4) == 0 && memcmp(bytes + 8, "WEBP", 4) == 0;
+}
+
+bool load_webp(tinygltf::Image *image, int index, const unsigned char *bytes, int size, image_ctx *ctx)
+{
+    int w = 0, h = 0;
+    unsigned char *px = nullptr;
+    // the header first, as for stb: nothing is allocated for a size past the limits
+    if (WebPGetInfo(bytes, (size_t)size, &w, &h) && w > 0 && h > 0) {
+        if (!image_fits(ctx, index, w, h))
+            return true;
+        int iw = w, ih = h;
+        px = WebPDecodeRGBA(bytes, (size_t)size, &w, &h);
+        if (px && (w != iw || h != ih)) {
+            WebPFree(px);
+            px = nullptr;
+        }
+    }
+    if (!px) {
+        pb_logf(&ctx->log, PB_LOG_WARN,
+                "%s: image %d could not be decoded (corrupt WebP); a texture reading it falls back to its core "
+                "image if it has one, else to its material's factor",
+                ctx->path, index);
+        return true;
+    }
+    ctx->left_pixels -= (uint64_t)w * (uint64_t)h;
+    image->width = w;
+    image->height = h;
+    image->image.assign(px, px + (size_t)w * h * 4);
+    WebPFree(px);
+    return true;
+}
 
 bool load_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
                 const unsigned char *bytes, int size, void *user)
@@ -71,20 +146,16 @@ bool load_image(tinygltf::Image *image, const int index, std::string *, std::str
     image->bits = 8;
     image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
     image->image.clear();
-    if (ctx->skip)
+    if (ctx->skip || !image_bytes_inside(ctx, image, index, bytes, size))
         return true;
+    if (is_webp(bytes, size))
+        return load_webp(image, index, bytes, size, ctx);
     // the header first: stb allocates what it claims before reading the data
     int w = 0, h = 0, c = 0;
     unsigned char *px = nullptr;
     if (stbi_info_from_memory(bytes, size, &w, &h, &c) && w > 0 && h > 0) {
-        uint64_t n = (uint64_t)w * (uint64_t)h;
-        if (n > ctx->max_pixels || n > ctx->left_pixels) {
-            pb_logf(&ctx->log, PB_LOG_WARN,
-                    "%s: image %d is %d x %d pixels, more than the %llu pixels %s; its factor is used", ctx->path,
-                    index, w, h, (unsigned long long)(n > ctx->max_pixels ? ctx->max_pixels : ctx->left_pixels),
-                    n > ctx->max_pixels ? "an image may decode to" : "the file's images may still decode to");
+        if (!image_fits(ctx, index, w, h))
             return true;
-        }
         int iw = w, ih = h;
         px = stbi_load_from_memory(bytes, size, &w, &h, &c, 4);
         if (px && (w != iw || h != ih)) { // never past what the header said
@@ -520,6 +591,26 @@ int base_texture_index(const tinygltf::Material &mt)
     return mt.pbrMetallicRoughness.baseColorTexture.index;
 }
 
+// The image a texture reads: EXT_texture_webp's source where it names an
+// image that decoded, else the core source (the extension's fallback, or -1).
+int texture_source(const reader &r, size_t i)
+{
+    const tinygltf::Texture &t = r.m.textures[i];
+    auto ext = t.extensions.find("EXT_texture_webp");
+    if (ext != t.extensions.end() && ext->second.IsObject() && ext->second.Has("source") &&
+        ext->second.Get("source").IsInt()) {
+        int s = ext->second.Get("source").GetNumberAsInt();
+        if (s >= 0 && s < (int)r.m.images.size() && r.m.images[s].width > 0)
+            return s;
+        if (t.source >= 0)
+            pb_logf(&r.b->log, PB_LOG_INFO, "%s: texture %zu: its WebP image %d is unusable; the fallback image %d is read",
+                    r.path, i, s, t.source);
+        else
+            return s; // warned about as a missing or undecoded image
+    }
+    return t.source;
+}
+
 pb_result read_textures(reader &r, int skip)
 {
     const tinygltf::Model &m = r.m;
@@ -535,11 +626,12 @@ pb_result read_textures(reader &r, int skip)
     }
     for (size_t i = 0; i < m.textures.size(); ++i) {
         const tinygltf::Texture &t = m.textures[i];
-        if (t.source < 0 || t.source >= (int)m.images.size()) {
-            pb_logf(&r.b->log, PB_LOG_WARN, "%s: texture %zu refers to missing image %d; ignored", r.path, i, t.source);
+        int source = texture_source(r, i);
+        if (source < 0 || source >= (int)m.images.size()) {
+            pb_logf(&r.b->log, PB_LOG_WARN, "%s: texture %zu refers to missing image %d; ignored", r.path, i, source);
             continue;
         }
-        const tinygltf::Image &img = m.images[t.source];
+        const tinygltf::Image &img = m.images[source];
         if (img.width <= 0 || img.height <= 0 || img.component != 4 || img.bits != 8 ||
             img.image.size() != (size_t)img.width * img.height * 4)
             continue; // warned by load_image
@@ -1010,8 +1102,9 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
         return pb_fail(err, PB_ERROR_PARSE, "%s: JSON nested deeper than %d levels", path, PB_GLTF_MAX_NESTING);
 
     tinygltf::TinyGLTF loader;
+    tinygltf::Model model;
     image_ctx ictx = {path, b->log, desc->skip_textures ? 1 : 0, desc->max_texture_pixels,
-                      desc->max_texture_total_pixels};
+                      desc->max_texture_total_pixels, &model};
     loader.SetImageLoader(load_image, &ictx);
     tinygltf::FsCallbacks fs = {fs_exists, fs_expand, fs_read, fs_write, nullptr};
     loader.SetFsCallbacks(fs);
@@ -1024,7 +1117,6 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
             return pb_fail(err, PB_ERROR_PARSE, "%s: file too large", path);
         bytes = patched.data(), size = patched.size();
     }
-    tinygltf::Model model;
     std::string gerr, gwarn;
     bool ok;
     try {
@@ -1047,7 +1139,7 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     if (!gwarn.empty())
         pb_logf(&b->log, PB_LOG_DEBUG, "%s: tinygltf: %s", path, first_line(gwarn).c_str());
 
-    static const char *const supported[] = {"EXT_meshopt_compression", "KHR_draco_mesh_compression",
+    static const char *const supported[] = {"EXT_meshopt_compression", "EXT_texture_webp", "KHR_draco_mesh_compression",
                                             "KHR_lights_punctual", "KHR_materials_emissive_strength",
                                             "KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit",
                                             "KHR_mesh_quantization", "KHR_texture_transform"};
