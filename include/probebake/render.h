@@ -65,7 +65,9 @@ void pb_camera_from_scene(const pb_camera *c, pb_camera_view *out);
 float pb_tonemap_aces(float x);
 float pb_srgb_encode(float linear);
 /* Exposure (EV) that maps the log-average luminance of the surface pixels
- * (alpha > 0; all pixels if none) to middle grey 0.18. */
+ * (alpha > 0; all pixels if none) to middle grey 0.18, but no higher than
+ * puts their 99th-percentile luminance at 4 (so that a mostly black image's
+ * lit parts do not clip). */
 float pb_auto_exposure(const float *rgba, uint32_t width, uint32_t height);
 void pb_tonemap_image(const float *rgba, uint32_t width, uint32_t height, float exposure_ev, unsigned char *rgb8);
 

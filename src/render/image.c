@@ -25,19 +25,44 @@ float pb_srgb_encode(float l)
     return l <= 0.0031308f ? 12.92f * l : 1.055f * powf(l, 1.f / 2.4f) - 0.055f;
 }
 
+static int compare_floats(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
 float pb_auto_exposure(const float *rgba, uint32_t width, uint32_t height)
 {
     double sum = 0;
     uint64_t n = 0, pixels = (uint64_t)width * height;
+    int all = 0;
     for (int pass = 0; pass < 2 && n == 0; ++pass)
         for (uint64_t i = 0; i < pixels; ++i)
             if (pass == 1 || rgba[4 * i + 3] > 0.f) {
                 float l = pb_luminance(rgba + 4 * i);
                 sum += log(1e-4 + (l > 0.f ? l : 0.f)); /* negative (SH ringing) or NaN counts as black */
-                ++n;
+                ++n, all = pass;
             }
     double avg = n ? exp(sum / n) : 0.18;
-    return (float)log2(0.18 / avg);
+    double ev = log2(0.18 / avg);
+    /* A mostly black image (metal surfaces in a diffuse bake, unlit rooms) has a
+     * log-average near the floor, and would be pushed until its lit parts clip:
+     * cap the exposure where the 99th-percentile luminance reaches 4 (ACES 0.91). */
+    float *l = n ? malloc(n * sizeof *l) : NULL;
+    if (l) {
+        uint64_t k = 0;
+        for (uint64_t i = 0; i < pixels; ++i)
+            if (all || rgba[4 * i + 3] > 0.f) {
+                float v = pb_luminance(rgba + 4 * i);
+                l[k++] = v > 0.f ? v : 0.f; /* NaN too */
+            }
+        qsort(l, n, sizeof *l, compare_floats);
+        float top = l[(n - 1) * 99 / 100];
+        if (top > 0.f && ev > log2(4.0 / top))
+            ev = log2(4.0 / top);
+        free(l);
+    }
+    return (float)ev;
 }
 
 void pb_tonemap_image(const float *rgba, uint32_t width, uint32_t height, float exposure_ev, unsigned char *rgb8)
