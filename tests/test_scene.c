@@ -10,6 +10,8 @@
 
 #include <sys/sysmacros.h>
 
+#include <stb_image_write.h>
+
 /* ------------------------------------------------------------ helpers */
 
 /* Writes `json` with each "@BUF@" replaced by a data URI of `bin`. */
@@ -795,8 +797,9 @@ static void shared_scenes_load(void)
                 masked += s->materials[m].alpha_mode == PB_ALPHA_MASK;
             CHECK(masked == 3);
         }
-        if (s && !strcmp(cases[i].path, "samples/DamagedHelmet/DamagedHelmet.gltf"))
-            CHECK(s->materials[0].emissive_texture >= 0 && s->texture_count == 5);
+        if (s && !strcmp(cases[i].path, "samples/DamagedHelmet/DamagedHelmet.gltf")) /* 5, and its metallic */
+            CHECK(s->materials[0].emissive_texture >= 0 && s->texture_count == 6 && s->materials[0].metallic == 0.f &&
+                  s->materials[0].base_color_texture == 5); /* folded into the colour: the 6th */
         pb_scene_destroy(s);
     }
     char bad[1024];
@@ -1026,6 +1029,113 @@ static void corrupt_compressed_data_refused(void)
         CHECK(truncate(bin, 40) == 0);
         load_fails(path, PB_ERROR_PARSE, "size mismatch");
     }
+}
+
+/* ------------------------------------------------------------ metallic textures */
+
+static double srgb_dec(double c)
+{
+    return c > 0.04045 ? pow((c + 0.055) / 1.055, 2.4) : c / 12.92;
+}
+
+static double srgb_enc(double l)
+{
+    return l <= 0.0031308 ? 12.92 * l : 1.055 * pow(l, 1.0 / 2.4) - 0.055;
+}
+
+/* glTF's metallic is metallicFactor x the metallicRoughness texture's blue
+ * channel; the bake reflects base colour x (1 - metallic), and a metallic
+ * texture is folded into the colour texture (metallic_fold.h). Known texels:
+ * a 2 x 1 base colour texture and a 4 x 2 metallic one (blue 0, 255, 128, 0 /
+ * 255, 0, 64, 255; red and green set, and ignored). Each folded texel is the
+ * nearest base texel's linear colour x (1 - factor x blue / 255), within one
+ * sRGB step of the double-precision value (exact where blue is 0 or 255),
+ * with the base's alpha. A material without a colour texture gets a grey one;
+ * a metallic texture read through another transform is a warning and the
+ * factor alone; two materials with the same pair share one folded texture;
+ * factor 0 folds nothing. */
+static void metallic_texture_folded_into_the_colour(void)
+{
+    const unsigned char base[2][4] = {{200, 100, 50, 255}, {10, 20, 30, 128}};
+    const unsigned char blue[8] = {0, 255, 128, 0, 255, 0, 64, 255};
+    unsigned char mr[8][4];
+    for (int i = 0; i < 8; ++i)
+        mr[i][0] = 77, mr[i][1] = 200, mr[i][2] = blue[i], mr[i][3] = 255;
+    char path[600];
+    snprintf(path, sizeof path, "%s/fold-base.png", temp_dir());
+    CHECK(stbi_write_png(path, 2, 1, 4, base, 8) != 0);
+    snprintf(path, sizeof path, "%s/fold-mr.png", temp_dir());
+    CHECK(stbi_write_png(path, 4, 2, 4, mr, 16) != 0);
+    unsigned char bin[36 + 24];
+    memcpy(bin, tri_pos, 36);
+    float uv[6] = {0, 0, 1, 0, 0, 1};
+    memcpy(bin + 36, uv, 24);
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1,2,3,4,5]}],"
+        "\"nodes\":[{\"mesh\":0},{\"mesh\":1},{\"mesh\":2},{\"mesh\":3},{\"mesh\":4},{\"mesh\":5}],"
+        "\"extensionsUsed\":[\"KHR_texture_transform\"],"
+        "\"materials\":["
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1}}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1},"
+        "\"metallicFactor\":0.5}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorFactor\":[0.5,0.5,0.5,1],\"metallicRoughnessTexture\":{\"index\":1}}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1,"
+        "\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.5,0]}}}}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1}}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1},"
+        "\"metallicFactor\":0}}],"
+        "\"textures\":[{\"source\":0},{\"source\":1}],"
+        "\"images\":[{\"uri\":\"fold-base.png\"},{\"uri\":\"fold-mr.png\"}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":0}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":1}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":2}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":3}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":4}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":5}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":24}],"
+        "\"buffers\":[{\"byteLength\":60,\"uri\":\"@BUF@\"}]}";
+    pb_scene *s = load_ok(write_gltf("metallic-fold.gltf", json, bin, sizeof bin));
+    if (!s)
+        return;
+    const pb_material *m = s->materials;
+    CHECKF(s->material_count == 7 && s->texture_count == 5, "%u materials, %u textures", s->material_count,
+           s->texture_count);
+    if (s->material_count != 7 || s->texture_count != 5) {
+        pb_scene_destroy(s);
+        return;
+    }
+    /* folded: 0 (factor 1), 1 (0.5), 2 (no colour texture, grey); 3 and 5 as loaded; 4 shares 0's */
+    CHECK(m[0].metallic == 0.f && m[1].metallic == 0.f && m[2].metallic == 0.f && m[4].metallic == 0.f);
+    CHECK(m[3].metallic == 1.f && m[3].base_color_texture == 0 && m[5].metallic == 0.f && m[5].base_color_texture == 0);
+    CHECK(m[4].base_color_texture == m[0].base_color_texture && m[2].base_color[0] == 0.5f);
+    const int mats[3] = {0, 1, 2};
+    const double factor[3] = {1.0, 0.5, 1.0};
+    int worst = 0, exact = 1, alpha = 1;
+    for (int i = 0; i < 3; ++i) {
+        int32_t id = m[mats[i]].base_color_texture;
+        CHECKF(id >= 2 && s->textures[id].width == 4 && s->textures[id].height == 2 && s->textures[id].srgb == 1,
+               "material %d: texture %d", mats[i], id);
+        if (id < 2 || s->textures[id].width != 4 || s->textures[id].height != 2)
+            continue;
+        for (int t = 0; t < 8; ++t) {
+            uint32_t texel = s->texels[s->textures[id].offset + (uint32_t)t];
+            const unsigned char *c = i == 2 ? (const unsigned char[4]){255, 255, 255, 255} : base[(t % 4) / 2];
+            double keep = 1.0 - factor[i] * blue[t] / 255.0;
+            for (int k = 0; k < 3; ++k) {
+                int want = (int)lround(srgb_enc(srgb_dec(c[k] / 255.0) * keep) * 255.0);
+                int got = (int)((texel >> (8 * k)) & 0xffu);
+                worst = abs(got - want) > worst ? abs(got - want) : worst;
+                if (blue[t] == 0 || (blue[t] == 255 && factor[i] == 1.0))
+                    exact &= got == want;
+            }
+            alpha &= (texel >> 24) == c[3];
+        }
+    }
+    fprintf(stderr, "  folded texels within %d sRGB step of the double-precision product\n", worst);
+    CHECK(worst <= 1 && exact && alpha);
+    pb_scene_destroy(s);
 }
 
 /* ------------------------------------------------------------ WebP textures */
@@ -1278,6 +1388,7 @@ int main(void)
     RUN(shared_scenes_load);
     RUN(compressed_variants_match_originals);
     RUN(corrupt_compressed_data_refused);
+    RUN(metallic_texture_folded_into_the_colour);
     RUN(webp_textures_read_as_their_originals);
     RUN(exr_environment_maps_read_exactly);
     RUN(exr_and_hdr_of_one_map_agree);

@@ -12,6 +12,7 @@
 #include "bake/path_cpu.h"
 #include "bvh/alpha.h"
 #include "common/common.h"
+#include "common/srgb.h"
 #include "probebake/bake.h"
 #include "probebake/octahedral.h"
 #include "probebake/sh.h"
@@ -58,11 +59,6 @@ static void probe_ray_direction(const pb_bake_pass *p, uint32_t probe, uint32_t 
     }
 }
 
-static float srgb_to_linear(float c)
-{
-    return c > 0.04045f ? powf((c + 0.055f) / 1.055f, 2.4f) : c / 12.92f;
-}
-
 static void texture_rgb(const pb_scene *s, int32_t tex, float u, float v, float rgb[3])
 {
     if (tex < 0) {
@@ -72,7 +68,7 @@ static void texture_rgb(const pb_scene *s, int32_t tex, float u, float v, float 
     const pb_texture *t = &s->textures[tex];
     uint32_t texel = s->texels[t->offset + pb_texel_index(u, v, t->width, t->height, t->wrap_s, t->wrap_t)];
     for (int k = 0; k < 3; ++k)
-        rgb[k] = srgb_to_linear((float)((texel >> (8 * k)) & 0xffu) / 255.f);
+        rgb[k] = pb_srgb_to_linear((float)((texel >> (8 * k)) & 0xffu) / 255.f);
 }
 
 typedef struct hit {

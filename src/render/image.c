@@ -1,6 +1,7 @@
 /* Display and comparison of rendered images: exposure, ACES tone curve,
  * sRGB, error heat maps and metrics, PNG (stb_image_write) and PFM files. */
 #include "common/common.h"
+#include "common/srgb.h"
 #include "probebake/files.h"
 #include "probebake/render.h"
 
@@ -21,8 +22,7 @@ float pb_tonemap_aces(float x)
 
 float pb_srgb_encode(float l)
 {
-    l = l < 0.f ? 0.f : (l > 1.f ? 1.f : l);
-    return l <= 0.0031308f ? 12.92f * l : 1.055f * powf(l, 1.f / 2.4f) - 0.055f;
+    return pb_linear_to_srgb(l);
 }
 
 static int compare_floats(const void *a, const void *b)

@@ -4,6 +4,7 @@
 // / fans with or without indices, and hands world-space data to the C scene
 // builder. Nothing here outlives the call.
 #include "scene/gltf_compression.h"
+#include "scene/metallic_fold.h"
 #include "scene/scene_builder.h"
 
 extern "C" {
@@ -50,6 +51,8 @@ struct reader {
         size_t count;
     };
     std::map<int, decoded_accessor> draco_accessors;
+    // colour textures with a metallic texture folded in: (base, metallic texture, factor bits) -> texture
+    std::map<std::array<int64_t, 3>, int32_t> folded;
 };
 
 // Custom image loader: stb_image (PNG, JPEG, ...) or libwebp (WebP, for
@@ -651,6 +654,47 @@ pb_result read_textures(reader &r, int skip)
     return PB_OK;
 }
 
+// glTF: metallic = metallicFactor x the metallicRoughness texture's blue
+// channel. The kernels read one colour texture, so a metallic texture is
+// folded into it (metallic_fold.h) and the material's metallic becomes 0.
+// It must be read with the UVs the material's colour texture is read with
+// (TEXCOORD_0 under the material's one transform); else the factor alone
+// stands, with a warning.
+void fold_metallic(reader &r, const tinygltf::TextureInfo &info, const std::array<double, 6> &xf, pb_material &pm)
+{
+    if (info.index < 0 || !(pm.metallic > 0.f))
+        return; // no texture, or nothing metallic (spec-gloss and unlit set 0)
+    int32_t mr = texture_of(r, info.index, pm.name);
+    if (mr < 0)
+        return; // not decoded (warned), or textures skipped: the factor alone
+    std::array<double, 6> xm = {1, 0, 0, 0, 1, 0};
+    int tc = info.texCoord;
+    if (const tinygltf::Value *tm = transform_of(info.extensions)) {
+        int over = -1;
+        texture_transform(*tm, xm, &over);
+        tc = over >= 0 ? over : tc;
+    }
+    if (tc != 0 || xm != xf) {
+        pb_logf(&r.b->log, PB_LOG_WARN,
+                "%s: material '%s': its metallicRoughness texture is read with other UVs than its base colour "
+                "(TEXCOORD_%d or another KHR_texture_transform); metallic is its factor alone",
+                r.path, pm.name, tc);
+        return;
+    }
+    uint32_t bits;
+    memcpy(&bits, &pm.metallic, 4);
+    std::array<int64_t, 3> key = {pm.base_color_texture, mr, bits};
+    auto it = r.folded.find(key);
+    int32_t id = it != r.folded.end() ? it->second : pb_sb_fold_metallic(r.b, pm.base_color_texture, mr, pm.metallic);
+    if (id < 0)
+        return; // out of host memory: the builder reports it
+    r.folded[key] = id;
+    pb_logf(&r.b->log, PB_LOG_DEBUG, "%s: material '%s': metallic texture folded into its colour (texture %d)",
+            r.path, pm.name, id);
+    pm.base_color_texture = id;
+    pm.metallic = 0.f;
+}
+
 void read_materials(reader &r)
 {
     for (const tinygltf::Material &mt : r.m.materials) {
@@ -716,6 +760,7 @@ void read_materials(reader &r)
         if (tc_base > 0)
             pb_logf(&r.b->log, PB_LOG_WARN, "%s: material '%s': KHR_texture_transform selects TEXCOORD_%d; "
                     "only TEXCOORD_0 is read", r.path, pm.name, tc_base);
+        fold_metallic(r, pbr.metallicRoughnessTexture, xf, pm);
         r.uv_transform.push_back(xf);
         pb_sb_add_material(r.b, &pm);
     }

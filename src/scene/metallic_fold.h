@@ -1,0 +1,26 @@
+/* glTF's metallic is metallicFactor x the metallicRoughness texture's blue
+ * channel (linear), and a Lambertian bake reflects base colour x
+ * (1 - metallic). The kernels read one colour texture per material, so the
+ * metallic texture is folded into it on the host, once per material. */
+#ifndef PB_SCENE_METALLIC_FOLD_H
+#define PB_SCENE_METALLIC_FOLD_H
+
+#include "scene/scene_builder.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Adds an sRGB texture holding base x (1 - factor x metallic): at each texel
+ * of the finer of the two sizes, the nearest texels of both (as the kernels
+ * sample, at the texel's centre), linear products rounded back to sRGB, the
+ * base's alpha and wrap modes. base < 0: no base colour texture, so the
+ * texture is (1 - factor x metallic) alone, grey, opaque, with the metallic
+ * texture's size and wrap modes. Returns its index, or -1 out of host memory. */
+int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_roughness, float factor);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
