@@ -1031,6 +1031,72 @@ static void corrupt_compressed_data_refused(void)
     }
 }
 
+/* ------------------------------------------------------------ instancing */
+
+/* EXT_mesh_gpu_instancing (what glTF-Transform's instance writes, required):
+ * a node at x = 10 draws its one-triangle mesh three times, at TRANSLATION x
+ * ROTATION x SCALE of each instance, the rotation as normalized SHORTs (a
+ * quarter turn about +Z for the second): the three world triangles below.
+ * Accessors of different counts, no attribute at all, and 2^24 instances of
+ * a 17-triangle mesh (zero-filled translations: past 2^28 triangles, refused
+ * before anything is read) are one-line errors naming the file. */
+static void gpu_instancing_draws_each_instance(void)
+{
+    unsigned char bin[36 + 36 + 24 + 36 + 204] = {0}; /* the last: 51 zero indices */
+    const float t[9] = {0, 0, 0, 2, 0, 0, 0, 3, 0}, s[9] = {1, 1, 1, 1, 1, 1, 2, 2, 2};
+    const int16_t q[12] = {0, 0, 0, 32767, 0, 0, 23170, 23170, 0, 0, 0, 32767};
+    memcpy(bin, tri_pos, 36);
+    memcpy(bin + 36, t, 36);
+    memcpy(bin + 72, q, 24);
+    memcpy(bin + 96, s, 36);
+    const char *fmt =
+        "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"EXT_mesh_gpu_instancing\"],"
+        "\"extensionsRequired\":[\"EXT_mesh_gpu_instancing\"],\"scenes\":[{\"nodes\":[0]}],"
+        "\"nodes\":[{\"mesh\":0,\"translation\":[10,0,0],\"extensions\":{\"EXT_mesh_gpu_instancing\":"
+        "{\"attributes\":{%s}}}}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}%s}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":2,\"componentType\":5122,\"normalized\":true,\"count\":3,\"type\":\"VEC4\"},"
+        "{\"bufferView\":3,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":3,\"componentType\":5126,\"count\":2,\"type\":\"VEC3\"},"
+        "{\"componentType\":5126,\"count\":16777216,\"type\":\"VEC3\"},"
+        "{\"bufferView\":4,\"componentType\":5125,\"count\":51,\"type\":\"SCALAR\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":36},"
+        "{\"buffer\":0,\"byteOffset\":72,\"byteLength\":24},{\"buffer\":0,\"byteOffset\":96,\"byteLength\":36},"
+        "{\"buffer\":0,\"byteOffset\":132,\"byteLength\":204}],"
+        "\"buffers\":[{\"byteLength\":336,\"uri\":\"@BUF@\"}]}";
+    char json[4096];
+    snprintf(json, sizeof json, fmt, "\"TRANSLATION\":1,\"ROTATION\":2,\"SCALE\":3", "");
+    pb_scene *sc = load_ok(write_gltf("instanced.gltf", json, bin, sizeof bin));
+    if (sc) {
+        const double want[3][9] = {{10, 0, 0, 11, 0, 0, 10, 1, 0},
+                                   {12, 0, 0, 12, 1, 0, 11, 0, 0},
+                                   {10, 3, 0, 12, 3, 0, 10, 5, 0}};
+        int found[3] = {0, 0, 0};
+        for (uint32_t tr = 0; tr < sc->triangle_count; ++tr)
+            for (int i = 0; i < 3; ++i) {
+                double a[3], b[3], c[3];
+                world(sc, tr, 0, a), world(sc, tr, 1, b), world(sc, tr, 2, c);
+                found[i] += near3(a, want[i][0], want[i][1], want[i][2], 1e-5) &&
+                            near3(b, want[i][3], want[i][4], want[i][5], 1e-5) &&
+                            near3(c, want[i][6], want[i][7], want[i][8], 1e-5);
+            }
+        CHECKF(sc->triangle_count == 3 && found[0] == 1 && found[1] == 1 && found[2] == 1,
+               "%u triangles; instances found %d %d %d", sc->triangle_count, found[0], found[1], found[2]);
+        CHECK(strstr(sc->stats.extensions_applied, "EXT_mesh_gpu_instancing") != NULL);
+    }
+    pb_scene_destroy(sc);
+    snprintf(json, sizeof json, fmt, "\"TRANSLATION\":1,\"SCALE\":4", "");
+    load_fails(write_gltf("instanced-counts.gltf", json, bin, sizeof bin), PB_ERROR_PARSE, "accessors differ in count");
+    snprintf(json, sizeof json, fmt, "", "");
+    load_fails(write_gltf("instanced-none.gltf", json, bin, sizeof bin), PB_ERROR_PARSE,
+               "has no TRANSLATION, ROTATION or SCALE");
+    snprintf(json, sizeof json, fmt, "\"TRANSLATION\":5", ",\"indices\":6");
+    load_fails(write_gltf("instanced-huge.gltf", json, bin, sizeof bin), PB_ERROR_PARSE,
+               "16777216 instances of 17 triangles");
+}
+
 /* ------------------------------------------------------------ metallic textures */
 
 static double srgb_dec(double c)
@@ -1388,6 +1454,7 @@ int main(void)
     RUN(shared_scenes_load);
     RUN(compressed_variants_match_originals);
     RUN(corrupt_compressed_data_refused);
+    RUN(gpu_instancing_draws_each_instance);
     RUN(metallic_texture_folded_into_the_colour);
     RUN(webp_textures_read_as_their_originals);
     RUN(exr_environment_maps_read_exactly);

@@ -200,6 +200,25 @@ void mat_mul(const mat4 a, const mat4 b, mat4 o)
     memcpy(o, r, sizeof r);
 }
 
+// T x R x S, the quaternion normalised
+void trs_matrix(const double t[3], const double q_in[4], const double s[3], mat4 o)
+{
+    double q[4] = {q_in[0], q_in[1], q_in[2], q_in[3]};
+    double ql = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (ql > 0)
+        for (double &c : q)
+            c /= ql;
+    double x = q[0], y = q[1], z = q[2], w = q[3];
+    double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
+                   2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
+                   2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)}; // columns
+    mat_identity(o);
+    for (int c = 0; c < 3; ++c)
+        for (int rr = 0; rr < 3; ++rr)
+            o[c * 4 + rr] = r[c * 3 + rr] * s[c];
+    o[12] = t[0], o[13] = t[1], o[14] = t[2];
+}
+
 void node_local(const tinygltf::Node &n, mat4 o)
 {
     if (n.matrix.size() == 16) {
@@ -217,19 +236,7 @@ void node_local(const tinygltf::Node &n, mat4 o)
     if (n.rotation.size() == 4)
         for (int i = 0; i < 4; ++i)
             q[i] = n.rotation[i];
-    double ql = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (ql > 0)
-        for (double &c : q)
-            c /= ql;
-    double x = q[0], y = q[1], z = q[2], w = q[3];
-    double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
-                   2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
-                   2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)}; // columns
-    mat_identity(o);
-    for (int c = 0; c < 3; ++c)
-        for (int rr = 0; rr < 3; ++rr)
-            o[c * 4 + rr] = r[c * 3 + rr] * s[c];
-    o[12] = t[0], o[13] = t[1], o[14] = t[2];
+    trs_matrix(t, q, s, o);
 }
 
 void xform_point(const mat4 m, const double p[3], double o[3])
@@ -899,6 +906,90 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
     return PB_OK;
 }
 
+// More triangles than this after instancing (nodes or EXT_mesh_gpu_instancing)
+// is refused: a small file can instance a large mesh millions of times.
+const uint64_t PB_GLTF_MAX_TRIANGLES = uint64_t(1) << 28;
+
+pb_result triangles_bounded(reader &r)
+{
+    if (r.b->stats.triangles_in <= PB_GLTF_MAX_TRIANGLES)
+        return PB_OK;
+    return fail(r, PB_ERROR_PARSE, "more than " + std::to_string(PB_GLTF_MAX_TRIANGLES) +
+                                       " triangles after instancing: refused");
+}
+
+// EXT_mesh_gpu_instancing: the node's mesh once per instance, at the node's
+// world transform x the instance's TRANSLATION x ROTATION x SCALE (each
+// optional; float, or normalized integers for ROTATION as the extension
+// allows). The node's children are not instanced.
+pb_result read_instances(reader &r, int node_index, const tinygltf::Value &ext, const mat4 world,
+                         const tinygltf::Mesh &mesh)
+{
+    std::string where = "node " + std::to_string(node_index) + " (EXT_mesh_gpu_instancing)";
+    if (!ext.IsObject() || !ext.Has("attributes") || !ext.Get("attributes").IsObject())
+        return fail(r, PB_ERROR_PARSE, where + " has no TRANSLATION, ROTATION or SCALE");
+    const tinygltf::Value &at = ext.Get("attributes");
+    static const char *const names[3] = {"TRANSLATION", "ROTATION", "SCALE"};
+    const int comps[3] = {3, 4, 3};
+    int acc[3] = {-1, -1, -1};
+    size_t count = 0;
+    bool any = false;
+    for (int k = 0; k < 3; ++k) {
+        if (!at.Has(names[k]))
+            continue;
+        acc[k] = at.Get(names[k]).IsInt() ? at.Get(names[k]).GetNumberAsInt() : -1;
+        if (acc[k] < 0 || acc[k] >= (int)r.m.accessors.size())
+            return fail(r, PB_ERROR_PARSE, where + ": " + names[k] + " is not an accessor");
+        size_t n = r.m.accessors[(size_t)acc[k]].count;
+        if (any && n != count)
+            return fail(r, PB_ERROR_PARSE, where + ": its accessors differ in count");
+        count = n, any = true;
+    }
+    if (!any)
+        return fail(r, PB_ERROR_PARSE, where + " has no TRANSLATION, ROTATION or SCALE");
+    // the triangles the instances would add, from the accessors' declared
+    // counts, before anything is read or allocated
+    uint64_t per = 0;
+    for (const tinygltf::Primitive &p : mesh.primitives) {
+        auto pos = p.attributes.find("POSITION");
+        int a = p.indices >= 0 ? p.indices : pos != p.attributes.end() ? pos->second : -1;
+        uint64_t n = a >= 0 && a < (int)r.m.accessors.size() ? r.m.accessors[(size_t)a].count : 0;
+        per += p.mode == TINYGLTF_MODE_TRIANGLE_STRIP || p.mode == TINYGLTF_MODE_TRIANGLE_FAN ? (n > 2 ? n - 2 : 0)
+                                                                                               : n / 3;
+    }
+    if (per && (uint64_t)count > (PB_GLTF_MAX_TRIANGLES - r.b->stats.triangles_in) / per)
+        return fail(r, PB_ERROR_PARSE, where + ": " + std::to_string(count) + " instances of " + std::to_string(per) +
+                                           " triangles: more than " + std::to_string(PB_GLTF_MAX_TRIANGLES) +
+                                           " triangles in all, refused");
+    std::vector<double> v[3];
+    for (int k = 0; k < 3; ++k)
+        if (acc[k] >= 0) {
+            pb_result res = read_accessor(r, acc[k], comps[k], v[k], names[k]);
+            if (res != PB_OK)
+                return res;
+        }
+    for (size_t i = 0; i < count; ++i) {
+        double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1};
+        for (int c = 0; c < 3 && !v[0].empty(); ++c)
+            t[c] = v[0][3 * i + c];
+        for (int c = 0; c < 4 && !v[1].empty(); ++c)
+            q[c] = v[1][4 * i + c];
+        for (int c = 0; c < 3 && !v[2].empty(); ++c)
+            s[c] = v[2][3 * i + c];
+        mat4 inst, w;
+        trs_matrix(t, q, s, inst);
+        mat_mul(world, inst, w);
+        for (const tinygltf::Primitive &p : mesh.primitives) {
+            pb_result res = read_primitive(r, p, w, mesh.name.c_str());
+            if (res == PB_OK)
+                res = triangles_bounded(r);
+            if (res != PB_OK)
+                return res;
+        }
+    }
+    return PB_OK;
+}
+
 pb_result visit(reader &r, int node_index, const mat4 parent, int depth)
 {
     const tinygltf::Model &m = r.m;
@@ -917,10 +1008,19 @@ pb_result visit(reader &r, int node_index, const mat4 parent, int depth)
             return fail(r, PB_ERROR_PARSE, "node " + std::to_string(node_index) + " refers to missing mesh " +
                                                std::to_string(n.mesh));
         const tinygltf::Mesh &mesh = m.meshes[n.mesh];
-        for (const tinygltf::Primitive &p : mesh.primitives) {
-            pb_result res = read_primitive(r, p, world, mesh.name.c_str());
+        auto inst = n.extensions.find("EXT_mesh_gpu_instancing");
+        if (inst != n.extensions.end()) {
+            pb_result res = read_instances(r, node_index, inst->second, world, mesh);
             if (res != PB_OK)
                 return res;
+        } else {
+            for (const tinygltf::Primitive &p : mesh.primitives) {
+                pb_result res = read_primitive(r, p, world, mesh.name.c_str());
+                if (res == PB_OK)
+                    res = triangles_bounded(r);
+                if (res != PB_OK)
+                    return res;
+            }
         }
     }
     const double origin[3] = {0, 0, 0}, neg_z[3] = {0, 0, -1}, pos_y[3] = {0, 1, 0};
@@ -1184,7 +1284,8 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     if (!gwarn.empty())
         pb_logf(&b->log, PB_LOG_DEBUG, "%s: tinygltf: %s", path, first_line(gwarn).c_str());
 
-    static const char *const supported[] = {"EXT_meshopt_compression", "EXT_texture_webp", "KHR_draco_mesh_compression",
+    static const char *const supported[] = {"EXT_mesh_gpu_instancing", "EXT_meshopt_compression", "EXT_texture_webp",
+                                            "KHR_draco_mesh_compression",
                                             "KHR_lights_punctual", "KHR_materials_emissive_strength",
                                             "KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit",
                                             "KHR_mesh_quantization", "KHR_texture_transform"};
