@@ -1097,6 +1097,92 @@ static void gpu_instancing_draws_each_instance(void)
                "16777216 instances of 17 triangles");
 }
 
+/* ------------------------------------------------------------ transmission */
+
+static int warned_transmission;
+static void count_transmission_warnings(pb_log_level level, const char *msg, void *user)
+{
+    (void)user;
+    warned_transmission += level == PB_LOG_WARN && (strstr(msg, "transmissionTexture is not read") ||
+                                                    strstr(msg, "transmission on an alpha-masked material"));
+}
+
+/* KHR_materials_transmission (thin): a ray passes a surface of transmission t
+ * with probability t (1 - metallic), so the material becomes alpha-blended
+ * with alpha x (1 - t (1 - metallic)): factor 0.75 on an opaque material gives
+ * alpha 0.25 (and pb_alpha_opaque keeps 25 % of 20,000 hashed points, within
+ * 4 sigma), 0.5 on a blended alpha of 0.5 gives 0.25, an all-metal material
+ * lets nothing through and stays opaque, an alpha mask is left as it is (a
+ * warning), an opaque material's texture alpha stops counting (its copy is
+ * opaque), and a transmissionTexture is a warning with the factor applied. */
+static void transmission_is_coverage(void)
+{
+    unsigned char px[2 * 4] = {200, 200, 200, 0, 100, 100, 100, 0}; /* alpha 0: ignored while opaque */
+    char png[600];
+    snprintf(png, sizeof png, "%s/transmission-base.png", temp_dir());
+    CHECK(stbi_write_png(png, 2, 1, 4, px, 8) != 0);
+    const char *mats[6] = {
+        "{\"pbrMetallicRoughness\":{\"metallicFactor\":0},"
+        "\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":0.75}}}",
+        "{\"alphaMode\":\"BLEND\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1,1,1,0.5],\"metallicFactor\":0},"
+        "\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":0.5}}}",
+        "{\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":1}}}",
+        "{\"alphaMode\":\"MASK\",\"pbrMetallicRoughness\":{\"metallicFactor\":0},"
+        "\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":1}}}",
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicFactor\":0},"
+        "\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":0.5}}}",
+        "{\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"extensions\":{\"KHR_materials_transmission\":"
+        "{\"transmissionFactor\":0.5,\"transmissionTexture\":{\"index\":0}}}}"};
+    char json[4096];
+    int n = snprintf(json, sizeof json,
+                     "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_materials_transmission\"],"
+                     "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[");
+    for (int i = 0; i < 6; ++i)
+        n += snprintf(json + n, sizeof json - (size_t)n, "%s{\"attributes\":{\"POSITION\":0},\"material\":%d}",
+                      i ? "," : "", i);
+    n += snprintf(json + n, sizeof json - (size_t)n, "]}],\"materials\":[%s,%s,%s,%s,%s,%s],", mats[0], mats[1],
+                  mats[2], mats[3], mats[4], mats[5]);
+    snprintf(json + n, sizeof json - (size_t)n,
+             "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"transmission-base.png\"}],"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}");
+    warned_transmission = 0;
+    pb_scene_desc d = {{count_transmission_warnings, NULL}, 0, 0, 0};
+    pb_scene *s = NULL;
+    pb_error err;
+    const char *path = write_gltf("transmission.gltf", json, tri_pos, 36);
+    CHECKF(pb_scene_load(path, &d, &s, &err) == PB_OK, "%s", err.message);
+    if (!s || s->material_count < 6)
+        return;
+    const pb_material *m = s->materials;
+    CHECK(m[0].alpha_mode == PB_ALPHA_BLEND && fabsf(m[0].base_color[3] - 0.25f) < 1e-6f);
+    CHECK(m[1].alpha_mode == PB_ALPHA_BLEND && fabsf(m[1].base_color[3] - 0.25f) < 1e-6f);
+    CHECK(m[2].alpha_mode == PB_ALPHA_OPAQUE && m[2].base_color[3] == 1.f); /* glTF's default metallic is 1 */
+    CHECK(m[3].alpha_mode == PB_ALPHA_MASK && m[3].base_color[3] == 1.f);
+    CHECK(m[4].alpha_mode == PB_ALPHA_BLEND && fabsf(m[4].base_color[3] - 0.5f) < 1e-6f &&
+          m[4].base_color_texture >= 1);
+    if (m[4].base_color_texture >= 1) {
+        const pb_texture *tx = &s->textures[m[4].base_color_texture];
+        CHECK(tx->width == 2 && (s->texels[tx->offset] >> 24) == 255 && (s->texels[tx->offset + 1] >> 24) == 255 &&
+              (s->texels[tx->offset] & 0xffffffu) == 0xc8c8c8u);
+    }
+    CHECK(m[5].alpha_mode == PB_ALPHA_BLEND && fabsf(m[5].base_color[3] - 0.5f) < 1e-6f);
+    CHECKF(warned_transmission == 2, "%d warnings", warned_transmission);
+    /* material 0's triangle (the first): the hashed blend keeps a quarter */
+    uint32_t kept = 0, N = 20000;
+    test_rng r = {21};
+    for (uint32_t i = 0; i < N; ++i) {
+        float u = (float)rng_uniform(&r), v = (float)rng_uniform(&r);
+        if (u + v > 1.f)
+            u = 1.f - u, v = 1.f - v;
+        kept += (uint32_t)pb_alpha_opaque(s, 0, u, v);
+    }
+    double sigma = sqrt(N * 0.25 * 0.75);
+    fprintf(stderr, "  transmission 0.75: %u of %u hashed points opaque (want %g +- %.0f)\n", kept, N, N * 0.25, sigma);
+    CHECK(s->material[0] == 0 && fabs(kept - N * 0.25) < 4 * sigma);
+    pb_scene_destroy(s);
+}
+
 /* ------------------------------------------------------------ metallic textures */
 
 static double srgb_dec(double c)
@@ -1455,6 +1541,7 @@ int main(void)
     RUN(compressed_variants_match_originals);
     RUN(corrupt_compressed_data_refused);
     RUN(gpu_instancing_draws_each_instance);
+    RUN(transmission_is_coverage);
     RUN(metallic_texture_folded_into_the_colour);
     RUN(webp_textures_read_as_their_originals);
     RUN(exr_environment_maps_read_exactly);

@@ -702,6 +702,44 @@ void fold_metallic(reader &r, const tinygltf::TextureInfo &info, const std::arra
     pm.metallic = 0.f;
 }
 
+// KHR_materials_transmission without KHR_materials_volume: a thin surface
+// that lets a share t of the light meeting its dielectric part straight
+// through. To the bake that is coverage: a ray passes with probability
+// t (1 - metallic) and otherwise meets the surface as before, which the
+// hashed alpha blend already does, so the material becomes alpha-blended
+// with alpha x (1 - t (1 - metallic)). Not modelled: the base colour's tint of
+// the light let through, the surface's specular reflection, refraction.
+void apply_transmission(reader &r, const tinygltf::Material &mt, pb_material &pm)
+{
+    auto ext = mt.extensions.find("KHR_materials_transmission");
+    if (ext == mt.extensions.end() || !ext->second.IsObject() || !ext->second.Has("transmissionFactor"))
+        return;
+    double t = ext->second.Get("transmissionFactor").GetNumberAsDouble();
+    t = t < 1.0 ? t : 1.0;
+    double pass = t * (1.0 - pm.metallic);
+    if (!(pass > 0.0))
+        return; // nothing passes (no factor, NaN, or all metal): as it was
+    if (ext->second.Has("transmissionTexture"))
+        pb_logf(&r.b->log, PB_LOG_WARN,
+                "%s: material '%s': its transmissionTexture is not read; its transmissionFactor stands alone",
+                r.path, pm.name);
+    if (pm.alpha_mode == PB_ALPHA_MASK) {
+        pb_logf(&r.b->log, PB_LOG_WARN,
+                "%s: material '%s': transmission on an alpha-masked material is not modelled; it stays opaque "
+                "where the mask keeps it", r.path, pm.name);
+        return;
+    }
+    if (pm.alpha_mode == PB_ALPHA_OPAQUE && pm.base_color_texture >= 0) {
+        // glTF ignores an opaque material's alpha; blended, its texture's would count
+        int32_t id = pb_sb_opaque_texture(r.b, pm.base_color_texture);
+        if (id < 0)
+            return; // out of host memory: the builder reports it
+        pm.base_color_texture = id;
+    }
+    pm.alpha_mode = PB_ALPHA_BLEND;
+    pm.base_color[3] = (float)(pm.base_color[3] * (1.0 - pass));
+}
+
 void read_materials(reader &r)
 {
     for (const tinygltf::Material &mt : r.m.materials) {
@@ -739,6 +777,8 @@ void read_materials(reader &r)
                 pm.emissive[k] = pm.base_color[k], pm.base_color[k] = 0.f;
             pm.emissive_texture = pm.base_color_texture;
             pm.metallic = 0.f;
+        } else {
+            apply_transmission(r, mt, pm);
         }
         /* KHR_texture_transform: the scene keeps one UV set per triangle, so a
          * material's UVs take its base colour texture's transform (else its
@@ -1285,7 +1325,7 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
         pb_logf(&b->log, PB_LOG_DEBUG, "%s: tinygltf: %s", path, first_line(gwarn).c_str());
 
     static const char *const supported[] = {"EXT_mesh_gpu_instancing", "EXT_meshopt_compression", "EXT_texture_webp",
-                                            "KHR_draco_mesh_compression",
+                                            "KHR_draco_mesh_compression", "KHR_materials_transmission",
                                             "KHR_lights_punctual", "KHR_materials_emissive_strength",
                                             "KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit",
                                             "KHR_mesh_quantization", "KHR_texture_transform"};

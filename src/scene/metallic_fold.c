@@ -37,3 +37,23 @@ int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_
     free(out);
     return id;
 }
+
+int32_t pb_sb_opaque_texture(pb_scene_builder *b, int32_t tex)
+{
+    const pb_texture t = b->textures[tex];
+    uint64_t n = (uint64_t)t.width * t.height, i = 0;
+    while (i < n && (b->texels[t.offset + i] >> 24) == 0xffu)
+        ++i;
+    if (i == n)
+        return tex;
+    uint32_t *out = malloc((size_t)n * sizeof *out);
+    if (!out) {
+        b->out_of_memory = 1;
+        return -1;
+    }
+    for (i = 0; i < n; ++i)
+        out[i] = b->texels[t.offset + i] | 0xff000000u;
+    int32_t id = pb_sb_add_texture(b, out, t.width, t.height, t.wrap_s, t.wrap_t, t.srgb);
+    free(out);
+    return id;
+}

@@ -1,7 +1,8 @@
-/* glTF's metallic is metallicFactor x the metallicRoughness texture's blue
- * channel (linear), and a Lambertian bake reflects base colour x
- * (1 - metallic). The kernels read one colour texture per material, so the
- * metallic texture is folded into it on the host, once per material. */
+/* Colour textures rewritten on the host for what the kernels read: glTF's
+ * metallic is metallicFactor x the metallicRoughness texture's blue channel
+ * (linear), and a Lambertian bake reflects base colour x (1 - metallic). The
+ * kernels read one colour texture per material, so the metallic texture is
+ * folded into it, once per material. */
 #ifndef PB_SCENE_METALLIC_FOLD_H
 #define PB_SCENE_METALLIC_FOLD_H
 
@@ -18,6 +19,11 @@ extern "C" {
  * texture is (1 - factor x metallic) alone, grey, opaque, with the metallic
  * texture's size and wrap modes. Returns its index, or -1 out of host memory. */
 int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_roughness, float factor);
+
+/* Texture `tex` as it reads under alpha mode OPAQUE, for a material that
+ * becomes alpha-blended (KHR_materials_transmission): itself when every texel
+ * has alpha 255, else a copy with alpha 255. -1 out of host memory. */
+int32_t pb_sb_opaque_texture(pb_scene_builder *b, int32_t tex);
 
 #ifdef __cplusplus
 }
