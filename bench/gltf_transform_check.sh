@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# Real glTF-Transform outputs against their originals, in the same run: the
+# shared samples rewritten by the tool people use to compress glTF (npm
+# @gltf-transform/cli at a pinned version: meshopt geometry, quantized
+# attributes, simplified meshes, lossy WebP textures; GPU instancing), each
+# loaded by probebake and baked on the same grid as its original. The peer is
+# the original file; the error is the probes' irradiance (DC, mean of RGB)
+# relative to the original's: what compressing an asset costs the bake.
+#
+#   bench/gltf_transform_check.sh [--probebake P] [--out DIR]
+#
+# Needs npm and the npm registry (the tool and its sharp/libvips come from
+# there), and ../shared/scenes. Not part of the test suite: CI has neither
+# the tool nor, by rule, a network step in its tests. Prints a table, writes
+# CSV and JSON into bench/results/gltf_transform/.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+pb=$root/build/probebake
+out=$root/bench/results/gltf_transform
+version=4.5.1
+while [ $# -gt 0 ]; do
+    case $1 in
+        --probebake) pb=$2; shift 2 ;;
+        --out) out=$2; shift 2 ;;
+        *) echo "gltf_transform_check: unknown option $1" >&2; exit 2 ;;
+    esac
+done
+shared=$root/../shared/scenes
+[ -d "$shared/samples" ] || { echo "gltf_transform_check: $shared/samples absent" >&2; exit 1; }
+command -v npm >/dev/null || { echo "gltf_transform_check: npm not found" >&2; exit 1; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+echo "gltf_transform_check: installing @gltf-transform/cli@$version into $work"
+npm install --prefix "$work" --no-audit --no-fund "@gltf-transform/cli@$version" >"$work/npm.log" 2>&1 ||
+    { tail -5 "$work/npm.log"; echo "gltf_transform_check: npm install failed" >&2; exit 1; }
+gt=$work/node_modules/.bin/gltf-transform
+mkdir -p "$out"
+
+# name | source under shared/scenes | gltf-transform command and options
+cases=(
+    "helmet-optimize|samples/DamagedHelmet/DamagedHelmet.gltf|optimize --texture-compress webp"
+    "duck-optimize|samples/Duck/Duck.gltf|optimize --texture-compress webp"
+    "alpha-blend-optimize|samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf|optimize --texture-compress webp"
+    "texture-transform-instance|samples/TextureTransformTest/TextureTransformTest.gltf|instance --min 2"
+)
+bake() { # scene bounds output
+    "$pb" bake "$1" --sky 1,1,1 --counts 8,8,8 --rays 512 --passes 4 --bounds "$2" --quiet -o "$3" >/dev/null
+}
+rows="$work/rows.jsonl"
+: >"$rows"
+for c in "${cases[@]}"; do
+    IFS='|' read -r name src cmd <<<"$c"
+    orig=$shared/$src
+    [ -f "$orig" ] || { echo "skip $name: $orig absent"; continue; }
+    # shellcheck disable=SC2086 # the command's words
+    "$gt" $cmd "$orig" "$work/$name.glb" >"$work/$name.log" 2>&1 ||
+        { tail -3 "$work/$name.log"; echo "gltf_transform_check: $name: gltf-transform failed" >&2; exit 1; }
+    bounds=$("$pb" info "$orig" --json | python3 -c \
+        'import json,sys; d=json.load(sys.stdin); o=d["origin"]
+print(",".join("%.6g" % (o[k % 3] + v) for k, v in enumerate(d["bounds_min"] + d["bounds_max"])))')
+    bake "$orig" "$bounds" "$work/$name-orig.probes"
+    bake "$work/$name.glb" "$bounds" "$work/$name.probes"
+    "$pb" inspect "$work/$name-orig.probes" --json >"$work/a.json"
+    "$pb" inspect "$work/$name.probes" --json >"$work/b.json"
+    "$pb" info "$work/$name.glb" --json >"$work/info.json"
+    "$pb" info "$orig" --json >"$work/info0.json"
+    python3 - "$name" "$cmd" "$orig" "$work" "$(stat -c %s "$work/$name.glb")" >>"$rows" <<'EOF'
+import json, sys
+name, cmd, orig, work, size = sys.argv[1:6]
+a = json.load(open(work + "/a.json"))["probe_list"]
+b = json.load(open(work + "/b.json"))["probe_list"]
+i0, i1 = json.load(open(work + "/info0.json")), json.load(open(work + "/info.json"))
+rel = []
+for x, y in zip(a, b):
+    la, lb = sum(x["sh"][0:3]) / 3, sum(y["sh"][0:3]) / 3
+    if la > 0:
+        rel.append(abs(lb - la) / la)
+rel.sort()
+pick = lambda q: rel[min(len(rel) - 1, int(q * len(rel)))] if rel else float("nan")
+print(json.dumps({"case": name, "command": "gltf-transform " + cmd, "source": orig.split("/scenes/")[-1],
+                  "triangles_original": i0["triangles"], "triangles": i1["triangles"],
+                  "extensions_applied": i1["extensions_applied"], "bytes": int(size), "probes": len(rel),
+                  "rel_dc_median": pick(0.5), "rel_dc_p95": pick(0.95), "rel_dc_max": rel[-1] if rel else None}))
+EOF
+done
+python3 - "$rows" "$out" "$version" "$("$pb" --version | head -1)" <<'EOF'
+import json, sys
+rows_path, out, version, pbv = sys.argv[1:5]
+rows = [json.loads(l) for l in open(rows_path) if l.strip()]
+print("glTF-Transform %s outputs against their originals (%s); sky 1, 8x8x8 probes over the original's bounds,"
+      " 512 rays x 4 passes; |irradiance DC difference| / original" % (version, pbv))
+print("%-28s %10s %10s %9s %9s %9s  %s" % ("case", "tris orig", "tris", "median", "p95", "max", "extensions applied"))
+for r in rows:
+    print("%-28s %10d %10d %9.4f %9.4f %9.4f  %s" % (r["case"], r["triangles_original"], r["triangles"],
+          r["rel_dc_median"], r["rel_dc_p95"], r["rel_dc_max"], ", ".join(r["extensions_applied"])))
+json.dump({"gltf_transform": version, "probebake": pbv, "rows": rows}, open(out + "/gltf_transform_check.json", "w"),
+          indent=1)
+with open(out + "/gltf_transform_check.csv", "w") as f:
+    f.write("case,command,triangles_original,triangles,rel_dc_median,rel_dc_p95,rel_dc_max,extensions_applied\n")
+    for r in rows:
+        f.write('%s,"%s",%d,%d,%.6f,%.6f,%.6f,"%s"\n' % (r["case"], r["command"], r["triangles_original"],
+                r["triangles"], r["rel_dc_median"], r["rel_dc_p95"], r["rel_dc_max"], " ".join(r["extensions_applied"])))
+print("wrote %s/gltf_transform_check.{json,csv}" % out)
+EOF
