@@ -5,7 +5,10 @@
 # attributes, simplified meshes, lossy WebP textures; GPU instancing), each
 # loaded by probebake and baked on the same grid as its original. The peer is
 # the original file; the error is the probes' irradiance (DC, mean of RGB)
-# relative to the original's: what compressing an asset costs the bake.
+# relative to the original's: what compressing an asset costs the bake. Its
+# floor is printed beside it: the original baked again with another seed
+# (a compressed file may reorder triangles, which changes which emitter a
+# random number draws, so its paths decorrelate from the original's).
 #
 #   bench/gltf_transform_check.sh [--probebake P] [--out DIR]
 #
@@ -42,9 +45,11 @@ cases=(
     "duck-optimize|samples/Duck/Duck.gltf|optimize --texture-compress webp"
     "alpha-blend-optimize|samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf|optimize --texture-compress webp"
     "texture-transform-instance|samples/TextureTransformTest/TextureTransformTest.gltf|instance --min 2"
+    "crypt-optimize|openarena/oacmpdm1.glb|optimize"
+    "crypt-draco-no-simplify|openarena/oacmpdm1.glb|optimize --compress draco --simplify false"
 )
-bake() { # scene bounds output
-    "$pb" bake "$1" --sky 1,1,1 --counts 8,8,8 --rays 512 --passes 4 --bounds "$2" --quiet -o "$3" >/dev/null
+bake() { # scene bounds output [options]
+    "$pb" bake "$1" --sky 1,1,1 --counts 8,8,8 --rays 512 --passes 4 --bounds "$2" --quiet -o "$3" "${@:4}" >/dev/null
 }
 rows="$work/rows.jsonl"
 : >"$rows"
@@ -60,8 +65,10 @@ for c in "${cases[@]}"; do
 print(",".join("%.6g" % (o[k % 3] + v) for k, v in enumerate(d["bounds_min"] + d["bounds_max"])))')
     bake "$orig" "$bounds" "$work/$name-orig.probes"
     bake "$work/$name.glb" "$bounds" "$work/$name.probes"
+    bake "$orig" "$bounds" "$work/$name-seed2.probes" --seed 2
     "$pb" inspect "$work/$name-orig.probes" --json >"$work/a.json"
     "$pb" inspect "$work/$name.probes" --json >"$work/b.json"
+    "$pb" inspect "$work/$name-seed2.probes" --json >"$work/c.json"
     "$pb" info "$work/$name.glb" --json >"$work/info.json"
     "$pb" info "$orig" --json >"$work/info0.json"
     python3 - "$name" "$cmd" "$orig" "$work" "$(stat -c %s "$work/$name.glb")" >>"$rows" <<'EOF'
@@ -69,18 +76,23 @@ import json, sys
 name, cmd, orig, work, size = sys.argv[1:6]
 a = json.load(open(work + "/a.json"))["probe_list"]
 b = json.load(open(work + "/b.json"))["probe_list"]
+c = json.load(open(work + "/c.json"))["probe_list"]
 i0, i1 = json.load(open(work + "/info0.json")), json.load(open(work + "/info.json"))
-rel = []
-for x, y in zip(a, b):
-    la, lb = sum(x["sh"][0:3]) / 3, sum(y["sh"][0:3]) / 3
-    if la > 0:
-        rel.append(abs(lb - la) / la)
-rel.sort()
-pick = lambda q: rel[min(len(rel) - 1, int(q * len(rel)))] if rel else float("nan")
+def diffs(p, q):
+    out = []
+    for x, y in zip(p, q):
+        lx, ly = sum(x["sh"][0:3]) / 3, sum(y["sh"][0:3]) / 3
+        if lx > 0:
+            out.append(abs(ly - lx) / lx)
+    return sorted(out)
+rel, floor = diffs(a, b), diffs(a, c)
+def pick(v, q):
+    return v[min(len(v) - 1, int(q * len(v)))] if v else float("nan")
 print(json.dumps({"case": name, "command": "gltf-transform " + cmd, "source": orig.split("/scenes/")[-1],
                   "triangles_original": i0["triangles"], "triangles": i1["triangles"],
                   "extensions_applied": i1["extensions_applied"], "bytes": int(size), "probes": len(rel),
-                  "rel_dc_median": pick(0.5), "rel_dc_p95": pick(0.95), "rel_dc_max": rel[-1] if rel else None}))
+                  "rel_dc_median": pick(rel, 0.5), "rel_dc_p95": pick(rel, 0.95), "rel_dc_max": rel[-1] if rel else None,
+                  "seed_floor_median": pick(floor, 0.5), "seed_floor_p95": pick(floor, 0.95)}))
 EOF
 done
 python3 - "$rows" "$out" "$version" "$("$pb" --version | head -1)" <<'EOF'
@@ -89,16 +101,20 @@ rows_path, out, version, pbv = sys.argv[1:5]
 rows = [json.loads(l) for l in open(rows_path) if l.strip()]
 print("glTF-Transform %s outputs against their originals (%s); sky 1, 8x8x8 probes over the original's bounds,"
       " 512 rays x 4 passes; |irradiance DC difference| / original" % (version, pbv))
-print("%-28s %10s %10s %9s %9s %9s  %s" % ("case", "tris orig", "tris", "median", "p95", "max", "extensions applied"))
+print("%-28s %10s %10s %9s %9s %9s %11s %9s  %s" % ("case", "tris orig", "tris", "median", "p95", "max",
+      "seed median", "seed p95", "extensions applied"))
 for r in rows:
-    print("%-28s %10d %10d %9.4f %9.4f %9.4f  %s" % (r["case"], r["triangles_original"], r["triangles"],
-          r["rel_dc_median"], r["rel_dc_p95"], r["rel_dc_max"], ", ".join(r["extensions_applied"])))
+    print("%-28s %10d %10d %9.4f %9.4f %9.4f %11.4f %9.4f  %s" % (r["case"], r["triangles_original"], r["triangles"],
+          r["rel_dc_median"], r["rel_dc_p95"], r["rel_dc_max"], r["seed_floor_median"], r["seed_floor_p95"],
+          ", ".join(r["extensions_applied"])))
 json.dump({"gltf_transform": version, "probebake": pbv, "rows": rows}, open(out + "/gltf_transform_check.json", "w"),
           indent=1)
 with open(out + "/gltf_transform_check.csv", "w") as f:
-    f.write("case,command,triangles_original,triangles,rel_dc_median,rel_dc_p95,rel_dc_max,extensions_applied\n")
+    f.write("case,command,triangles_original,triangles,rel_dc_median,rel_dc_p95,rel_dc_max,seed_floor_median,"
+            "seed_floor_p95,extensions_applied\n")
     for r in rows:
-        f.write('%s,"%s",%d,%d,%.6f,%.6f,%.6f,"%s"\n' % (r["case"], r["command"], r["triangles_original"],
-                r["triangles"], r["rel_dc_median"], r["rel_dc_p95"], r["rel_dc_max"], " ".join(r["extensions_applied"])))
+        f.write('%s,"%s",%d,%d,%.6f,%.6f,%.6f,%.6f,%.6f,"%s"\n' % (r["case"], r["command"], r["triangles_original"],
+                r["triangles"], r["rel_dc_median"], r["rel_dc_p95"], r["rel_dc_max"], r["seed_floor_median"],
+                r["seed_floor_p95"], " ".join(r["extensions_applied"])))
 print("wrote %s/gltf_transform_check.{json,csv}" % out)
 EOF
