@@ -1,9 +1,11 @@
-// The one C++ file: wraps tinygltf. Parses the file, checks every index and
+// Wraps tinygltf (its images are decoded in gltf_images.cpp, compressed
+// geometry in gltf_compression.cpp). Parses the file, checks every index and
 // byte range before touching data, walks the default scene's node hierarchy
 // composing transforms in double, assembles triangles from triangles / strips
 // / fans with or without indices, and hands world-space data to the C scene
 // builder. Nothing here outlives the call.
 #include "scene/gltf_compression.h"
+#include "scene/gltf_images.h"
 #include "scene/metallic_fold.h"
 #include "scene/scene_builder.h"
 
@@ -15,9 +17,7 @@ extern "C" {
 #include <sys/stat.h>
 
 #include <nlohmann/json.hpp>
-#include <stb_image.h>
 #include <tiny_gltf.h>
-#include <webp/decode.h>
 
 #include <array>
 #include <cerrno>
@@ -54,132 +54,6 @@ struct reader {
     // colour textures with a metallic texture folded in: (base, metallic texture, factor bits) -> texture
     std::map<std::array<int64_t, 3>, int32_t> folded;
 };
-
-// Custom image loader: stb_image (PNG, JPEG, ...) or libwebp (WebP, for
-// EXT_texture_webp) to RGBA8. A texture that fails to decode, or whose header
-// claims more pixels than the limits allow, is a warning (the material falls
-// back to its factor), never a failed load.
-struct image_ctx {
-    const char *path;
-    pb_log log;
-    int skip;
-    uint64_t max_pixels;  // per image
-    uint64_t left_pixels; // what the file's images may still decode to
-    const tinygltf::Model *model; // being filled: its buffers and views are read before images in views
-};
-
-// tinygltf hands an image stored in a bufferView to the loader without
-// checking that the view lies inside its buffer: a view past the end would
-// have the decoder read past it. So the view is checked here first.
-bool image_bytes_inside(const image_ctx *ctx, const tinygltf::Image *image, int index, const unsigned char *bytes,
-                        int size)
-{
-    if (image->bufferView < 0)
-        return true; // a data URI or a file: tinygltf decoded or read exactly those bytes
-    const tinygltf::Model &m = *ctx->model;
-    bool inside = false;
-    if ((size_t)image->bufferView < m.bufferViews.size()) {
-        const tinygltf::BufferView &v = m.bufferViews[(size_t)image->bufferView];
-        if (v.buffer >= 0 && (size_t)v.buffer < m.buffers.size()) {
-            const std::vector<unsigned char> &data = m.buffers[(size_t)v.buffer].data;
-            inside = v.byteOffset <= data.size() && v.byteLength <= data.size() - v.byteOffset && size >= 0 &&
-                     (size_t)size == v.byteLength && bytes == data.data() + v.byteOffset;
-        }
-    }
-    if (!inside)
-        pb_logf(&ctx->log, PB_LOG_WARN, "%s: image %d: bufferView %d lies outside its buffer; its factor is used",
-                ctx->path, index, image->bufferView);
-    return inside;
-}
-
-// Whether an image's pixel count fits the limits; warns when it does not.
-bool image_fits(const image_ctx *ctx, int index, int w, int h)
-{
-    uint64_t n = (uint64_t)w * (uint64_t)h;
-    if (n <= ctx->max_pixels && n <= ctx->left_pixels)
-        return true;
-    pb_logf(&ctx->log, PB_LOG_WARN, "%s: image %d is %d x %d pixels, more than the %llu pixels %s; its factor is used",
-            ctx->path, index, w, h, (unsigned long long)(n > ctx->max_pixels ? ctx->max_pixels : ctx->left_pixels),
-            n > ctx->max_pixels ? "an image may decode to" : "the file's images may still decode to");
-    return false;
-}
-
-// RIFF container of a WebP image
-bool is_webp(const unsigned char *bytes, int size)
-{
-    return size >= 12 && memcmp(bytes, "RIFF", 4) == 0 && memcmp(bytes + 8, "WEBP", 4) == 0;
-}
-
-bool load_webp(tinygltf::Image *image, int index, const unsigned char *bytes, int size, image_ctx *ctx)
-{
-    int w = 0, h = 0;
-    unsigned char *px = nullptr;
-    // the header first, as for stb: nothing is allocated for a size past the limits
-    if (WebPGetInfo(bytes, (size_t)size, &w, &h) && w > 0 && h > 0) {
-        if (!image_fits(ctx, index, w, h))
-            return true;
-        int iw = w, ih = h;
-        px = WebPDecodeRGBA(bytes, (size_t)size, &w, &h);
-        if (px && (w != iw || h != ih)) {
-            WebPFree(px);
-            px = nullptr;
-        }
-    }
-    if (!px) {
-        pb_logf(&ctx->log, PB_LOG_WARN,
-                "%s: image %d could not be decoded (corrupt WebP); a texture reading it falls back to its core "
-                "image if it has one, else to its material's factor",
-                ctx->path, index);
-        return true;
-    }
-    ctx->left_pixels -= (uint64_t)w * (uint64_t)h;
-    image->width = w;
-    image->height = h;
-    image->image.assign(px, px + (size_t)w * h * 4);
-    WebPFree(px);
-    return true;
-}
-
-bool load_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
-                const unsigned char *bytes, int size, void *user)
-{
-    image_ctx *ctx = static_cast<image_ctx *>(user);
-    image->width = image->height = 0;
-    image->component = 4;
-    image->bits = 8;
-    image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
-    image->image.clear();
-    if (ctx->skip || !image_bytes_inside(ctx, image, index, bytes, size))
-        return true;
-    if (is_webp(bytes, size))
-        return load_webp(image, index, bytes, size, ctx);
-    // the header first: stb allocates what it claims before reading the data
-    int w = 0, h = 0, c = 0;
-    unsigned char *px = nullptr;
-    if (stbi_info_from_memory(bytes, size, &w, &h, &c) && w > 0 && h > 0) {
-        if (!image_fits(ctx, index, w, h))
-            return true;
-        int iw = w, ih = h;
-        px = stbi_load_from_memory(bytes, size, &w, &h, &c, 4);
-        if (px && (w != iw || h != ih)) { // never past what the header said
-            stbi_image_free(px);
-            px = nullptr;
-        }
-    }
-    if (!px || w <= 0 || h <= 0) {
-        pb_logf(&ctx->log, PB_LOG_WARN, "%s: image %d could not be decoded (%s); its factor is used", ctx->path,
-                index, stbi_failure_reason() ? stbi_failure_reason() : "unknown");
-        if (px)
-            stbi_image_free(px);
-        return true;
-    }
-    ctx->left_pixels -= (uint64_t)w * (uint64_t)h;
-    image->width = w;
-    image->height = h;
-    image->image.assign(px, px + (size_t)w * h * 4);
-    stbi_image_free(px);
-    return true;
-}
 
 void mat_identity(mat4 o)
 {
@@ -1288,9 +1162,9 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
 
     tinygltf::TinyGLTF loader;
     tinygltf::Model model;
-    image_ctx ictx = {path, b->log, desc->skip_textures ? 1 : 0, desc->max_texture_pixels,
+    pb_gltf::image_ctx ictx = {path, b->log, desc->skip_textures ? 1 : 0, desc->max_texture_pixels,
                       desc->max_texture_total_pixels, &model};
-    loader.SetImageLoader(load_image, &ictx);
+    loader.SetImageLoader(pb_gltf::load_image, &ictx);
     tinygltf::FsCallbacks fs = {fs_exists, fs_expand, fs_read, fs_write, nullptr};
     loader.SetFsCallbacks(fs);
     std::string p(path), base = p.find('/') == std::string::npos ? std::string(".") : p.substr(0, p.rfind('/'));
