@@ -2,7 +2,7 @@
 # Real glTF-Transform outputs against their originals, in the same run: the
 # shared samples rewritten by the tool people use to compress glTF (npm
 # @gltf-transform/cli at a pinned version: meshopt geometry, quantized
-# attributes, simplified meshes, lossy WebP textures; GPU instancing), each
+# attributes, simplified meshes, lossy WebP or AVIF textures; GPU instancing), each
 # loaded by probebake and baked on the same grid as its original. The peer is
 # the original file; the error is the probes' irradiance (DC, mean of RGB)
 # relative to the original's: what compressing an asset costs the bake. Its
@@ -42,6 +42,7 @@ mkdir -p "$out"
 # name | source under shared/scenes | gltf-transform command and options
 cases=(
     "helmet-optimize|samples/DamagedHelmet/DamagedHelmet.gltf|optimize --texture-compress webp"
+    "helmet-optimize-avif|samples/DamagedHelmet/DamagedHelmet.gltf|optimize --texture-compress avif"
     "duck-optimize|samples/Duck/Duck.gltf|optimize --texture-compress webp"
     "alpha-blend-optimize|samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf|optimize --texture-compress webp"
     "texture-transform-instance|samples/TextureTransformTest/TextureTransformTest.gltf|instance --min 2"

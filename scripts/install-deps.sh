@@ -3,8 +3,8 @@
 # (nodejs, npm, chromium: the web runtime, runtime/, is tested with node's runner
 # and in headless Chromium, and uses three.js from npm at a pinned version;
 # clang: the glTF loader's libFuzzer harness; libdraco-dev and
-# libmeshoptimizer-dev: compressed glTF geometry; libwebp-dev: EXT_texture_webp
-# textures; libopenexr-dev: OpenEXR
+# libmeshoptimizer-dev: compressed glTF geometry; libwebp-dev and libavif-dev:
+# EXT_texture_webp and EXT_texture_avif textures; libopenexr-dev: OpenEXR
 # environment maps, whose DWA and other codecs no single-header reader decodes;
 # slurm-wlm and munge: the cluster path, tested on a one-node cluster the test
 # starts itself).
@@ -24,7 +24,7 @@ pkgs=(
   glslang-tools spirv-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev
   libdraco-dev libmeshoptimizer-dev
-  libwebp-dev libopenexr-dev
+  libwebp-dev libavif-dev libopenexr-dev
   clang
   slurm-wlm munge
   libvulkan-volk-dev

@@ -1,7 +1,7 @@
 // Test helper: writes compressed variants of a glTF file with the libraries
 // Debian packages (no glTF-level encoder is packaged: draco_encoder reads
 // OBJ/PLY, gltfpack is not in Debian). Usage:
-//   gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken IN OUT.gltf|OUT.glb
+//   gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken|avif|avif-broken IN OUT.gltf|OUT.glb
 // draco        every triangle primitive as KHR_draco_mesh_compression
 //              (positions 14 bits, normals 10, texcoords 12, colours 10)
 // meshopt      vertex and index views as EXT_meshopt_compression, no filter
@@ -15,6 +15,8 @@
 //              EXT_texture_webp, required: no texture keeps a core source
 // webp-broken  as webp, but each WebP image cut to half its bytes, and every
 //              texture keeps its core source as the fallback (not required)
+// avif, avif-broken  the same with lossless AVIF (libavif, libaom; 4:4:4,
+//              identity matrix) through EXT_texture_avif
 // Every bufferView of IN is copied into one new buffer (external .bin for
 // .gltf, the BIN chunk for .glb); the JSON is IN's, edited.
 #include <tiny_gltf.h>
@@ -24,6 +26,7 @@
 #include <draco/mesh/mesh.h>
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
+#include <avif/avif.h>
 #include <webp/encode.h>
 
 #include <algorithm>
@@ -343,8 +346,68 @@ void to_quantized(const tinygltf::Model &m, out_file &o)
     o.use("KHR_mesh_quantization", true);
 }
 
-void to_webp(const tinygltf::Model &m, out_file &o, bool broken, const std::string &in_dir)
+// RGBA8 as lossless and exact WebP (libwebp): the colour under alpha 0 is
+// kept too (the simple WebPEncodeLosslessRGBA of libwebp 1.2 zeroes it)
+std::vector<uint8_t> encode_webp(const std::vector<uint8_t> &rgba, int w, int h)
 {
+    WebPConfig config;
+    WebPPicture pic;
+    WebPMemoryWriter mem;
+    if (!WebPConfigInit(&config) || !WebPPictureInit(&pic))
+        die("libwebp version mismatch");
+    config.lossless = 1;
+    config.exact = 1;
+    config.method = 0; // the fastest: these are test files
+    config.quality = 0.f;
+    pic.use_argb = 1;
+    pic.width = w;
+    pic.height = h;
+    WebPMemoryWriterInit(&mem);
+    pic.writer = WebPMemoryWrite;
+    pic.custom_ptr = &mem;
+    bool ok = WebPPictureImportRGBA(&pic, rgba.data(), w * 4) && WebPEncode(&config, &pic);
+    WebPPictureFree(&pic);
+    std::vector<uint8_t> out(mem.mem, mem.mem + (ok ? mem.size : 0));
+    WebPMemoryWriterClear(&mem);
+    if (!ok)
+        die("libwebp could not encode an image");
+    return out;
+}
+
+// RGBA8 as lossless AVIF (libavif with libaom): 4:4:4, the identity matrix
+// (G, B, R as the planes), full range, quantizer 0 for colour and alpha
+std::vector<uint8_t> encode_avif(const std::vector<uint8_t> &rgba, int w, int h)
+{
+    avifImage *img = avifImageCreate((uint32_t)w, (uint32_t)h, 8, AVIF_PIXEL_FORMAT_YUV444);
+    avifEncoder *enc = avifEncoderCreate();
+    if (!img || !enc)
+        die("libavif: out of memory");
+    img->matrixCoefficients = AVIF_MATRIX_COEFFICIENTS_IDENTITY;
+    img->yuvRange = AVIF_RANGE_FULL;
+    avifRGBImage rgb;
+    avifRGBImageSetDefaults(&rgb, img);
+    rgb.format = AVIF_RGB_FORMAT_RGBA;
+    rgb.depth = 8;
+    rgb.pixels = const_cast<uint8_t *>(rgba.data());
+    rgb.rowBytes = (uint32_t)w * 4;
+    enc->codecChoice = AVIF_CODEC_CHOICE_AOM;
+    enc->minQuantizer = enc->maxQuantizer = AVIF_QUANTIZER_LOSSLESS;
+    enc->minQuantizerAlpha = enc->maxQuantizerAlpha = AVIF_QUANTIZER_LOSSLESS;
+    enc->speed = AVIF_SPEED_FASTEST;
+    avifRWData out = AVIF_DATA_EMPTY;
+    bool ok = avifImageRGBToYUV(img, &rgb) == AVIF_RESULT_OK && avifEncoderWrite(enc, img, &out) == AVIF_RESULT_OK;
+    std::vector<uint8_t> bytes(out.data, out.data + (ok ? out.size : 0));
+    avifRWDataFree(&out);
+    avifEncoderDestroy(enc);
+    avifImageDestroy(img);
+    if (!ok)
+        die("libavif could not encode an image");
+    return bytes;
+}
+
+void to_images(const tinygltf::Model &m, out_file &o, const std::string &codec, bool broken, const std::string &in_dir)
+{
+    const std::string ext = "EXT_texture_" + codec;
     copy_views(m, o);
     // the core images from external files go into the buffer, so that OUT stands alone
     for (size_t i = 0; i < m.images.size(); ++i) {
@@ -362,7 +425,7 @@ void to_webp(const tinygltf::Model &m, out_file &o, bool broken, const std::stri
                              ? "image/jpeg"
                              : "image/png";
     }
-    std::vector<int> webp_of(m.images.size(), -1);
+    std::vector<int> coded_of(m.images.size(), -1);
     for (size_t i = 0; i < m.images.size(); ++i) {
         const tinygltf::Image &img = m.images[i];
         int w = img.width, h = img.height, c = img.component;
@@ -371,43 +434,22 @@ void to_webp(const tinygltf::Model &m, out_file &o, bool broken, const std::stri
         std::vector<uint8_t> rgba((size_t)w * h * 4, 255);
         for (size_t p = 0; p < (size_t)w * h; ++p)
             memcpy(&rgba[4 * p], &img.image[c * p], (size_t)c);
-        // lossless and exact: the colour under alpha 0 is kept too (the simple
-        // WebPEncodeLosslessRGBA of libwebp 1.2 zeroes it)
-        WebPConfig config;
-        WebPPicture pic;
-        WebPMemoryWriter mem;
-        if (!WebPConfigInit(&config) || !WebPPictureInit(&pic))
-            die("libwebp version mismatch");
-        config.lossless = 1;
-        config.exact = 1;
-        config.method = 0; // the fastest: these are test files
-        config.quality = 0.f;
-        pic.use_argb = 1;
-        pic.width = w;
-        pic.height = h;
-        WebPMemoryWriterInit(&mem);
-        pic.writer = WebPMemoryWrite;
-        pic.custom_ptr = &mem;
-        bool ok = WebPPictureImportRGBA(&pic, rgba.data(), w * 4) && WebPEncode(&config, &pic);
-        WebPPictureFree(&pic);
-        if (!ok)
-            die("libwebp could not encode image " + std::to_string(i));
-        int view = o.add_view(mem.mem, broken ? mem.size / 2 : mem.size);
-        WebPMemoryWriterClear(&mem);
-        o.j["images"].push_back({{"bufferView", view}, {"mimeType", "image/webp"}});
-        webp_of[i] = (int)o.j["images"].size() - 1;
+        std::vector<uint8_t> bytes = codec == "avif" ? encode_avif(rgba, w, h) : encode_webp(rgba, w, h);
+        int view = o.add_view(bytes.data(), broken ? bytes.size() / 2 : bytes.size());
+        o.j["images"].push_back({{"bufferView", view}, {"mimeType", "image/" + codec}});
+        coded_of[i] = (int)o.j["images"].size() - 1;
     }
     for (size_t t = 0; t < m.textures.size(); ++t) {
         json &jt = o.j["textures"][t];
         int src = m.textures[t].source;
-        if (src < 0 || webp_of[src] < 0)
+        if (src < 0 || coded_of[src] < 0)
             continue;
-        jt["extensions"]["EXT_texture_webp"] = {{"source", webp_of[src]}};
+        jt["extensions"][ext] = {{"source", coded_of[src]}};
         if (!broken)
             jt.erase("source");
     }
     if (!m.images.empty())
-        o.use("EXT_texture_webp", !broken);
+        o.use(ext.c_str(), !broken);
 }
 
 void write(out_file &o, const std::string &path)
@@ -445,7 +487,7 @@ void write(out_file &o, const std::string &path)
 int main(int argc, char **argv)
 {
     if (argc != 4)
-        die("usage: gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken IN OUT.gltf|OUT.glb");
+        die("usage: gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken|avif|avif-broken IN OUT.gltf|OUT.glb");
     std::string mode = argv[1], in = argv[2], out = argv[3];
     tinygltf::TinyGLTF loader;
     tinygltf::Model m;
@@ -472,8 +514,9 @@ int main(int argc, char **argv)
         to_meshopt(m, o, mode == "meshopt-exp");
     } else if (mode == "quantize") {
         to_quantized(m, o);
-    } else if (mode == "webp" || mode == "webp-broken") {
-        to_webp(m, o, mode == "webp-broken", in.find('/') == std::string::npos ? "." : in.substr(0, in.rfind('/')));
+    } else if (mode == "webp" || mode == "webp-broken" || mode == "avif" || mode == "avif-broken") {
+        to_images(m, o, mode.substr(0, 4), mode.size() > 4,
+                  in.find('/') == std::string::npos ? "." : in.substr(0, in.rfind('/')));
     } else {
         die("unknown mode " + mode);
     }

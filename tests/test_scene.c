@@ -1315,29 +1315,35 @@ static void same_textures(const pb_scene *a, const pb_scene *b, const char *what
     CHECKF(differ == 0, "%s: %u materials or textures differ from the original's", what, differ);
 }
 
-/* EXT_texture_webp: each sample's images as lossless WebP (tests/gltf_compress
- * webp, libwebp's encoder), reachable only through the extension, load to the
- * original's texels bit for bit (alpha and the colour under alpha 0
- * included: AlphaBlendModeTest). With every WebP image cut in half and the
- * core images kept as fallbacks (webp-broken), each WebP image is a warning
+/* EXT_texture_webp and EXT_texture_avif: each sample's images as lossless
+ * WebP (libwebp) or AVIF (libavif with libaom, 4:4:4, identity matrix), written
+ * by tests/gltf_compress and reachable only through the extension, load to
+ * the original's texels bit for bit (alpha and the colour under alpha 0
+ * included: AlphaBlendModeTest). With every such image cut in half and the
+ * core images kept as fallbacks (webp-broken, avif-broken), each is a warning
  * and the textures read their fallbacks, again bit for bit. */
-static void webp_textures_read_as_their_originals(void)
+static void webp_and_avif_textures_read_as_their_originals(void)
 {
     static const char *const sources[] = {
         "tests/scenes/demo.gltf", "../shared/scenes/samples/Duck/Duck.gltf",
         "../shared/scenes/samples/TextureTransformTest/TextureTransformTest.gltf",
         "../shared/scenes/samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf"};
-    static const pb_variant webp = {"webp", "glb", 1}, broken = {"webp-broken", "glb", 1};
+    static const pb_variant coded[2][2] = {{{"webp", "glb", 1}, {"webp-broken", "glb", 1}},
+                                           {{"avif", "glb", 1}, {"avif-broken", "glb", 1}}};
+    static const char *const names[2] = {"WebP", "AVIF"}, *const ext[2] = {"EXT_texture_webp", "EXT_texture_avif"};
+    for (size_t ci = 0; ci < 2; ++ci)
     for (size_t i = 0; i < sizeof sources / sizeof sources[0]; ++i) {
         const char *path = source_path(sources[i]);
         if (!file_exists(path)) {
             skip("%s absent", path);
             continue;
         }
-        char tag[32];
-        snprintf(tag, sizeof tag, "webp%zu", i);
+        const pb_variant *webp = &coded[ci][0], *broken = &coded[ci][1];
+        char tag[32], needle[32];
+        snprintf(tag, sizeof tag, "coded%zu", i);
+        snprintf(needle, sizeof needle, "corrupt %s", names[ci]);
         pb_scene *orig = load_ok(path);
-        const char *w = compressed_variant(path, tag, &webp), *wb = compressed_variant(path, tag, &broken);
+        const char *w = compressed_variant(path, tag, webp), *wb = compressed_variant(path, tag, broken);
         if (!orig || !w || !wb) {
             pb_scene_destroy(orig);
             continue;
@@ -1346,19 +1352,19 @@ static void webp_textures_read_as_their_originals(void)
         pb_scene *s = load_ok(w);
         if (s) {
             same_textures(orig, s, w);
-            CHECK(strstr(s->stats.extensions_applied, "EXT_texture_webp") != NULL);
+            CHECK(strstr(s->stats.extensions_applied, ext[ci]) != NULL);
         }
         pb_scene_destroy(s);
-        warning_counter cut = {{"corrupt WebP", NULL}, 0};
+        warning_counter cut = {{needle, NULL}, 0};
         pb_scene_desc d = {{count_warnings, &cut}, 0, 0, 0};
         s = NULL;
         pb_error err;
         CHECKF(pb_scene_load(wb, &d, &s, &err) == PB_OK, "%s: %s", wb, err.message);
         if (s)
             same_textures(orig, s, wb);
-        CHECKF(cut.count > 0, "%s: %d warnings about corrupt WebP images", wb, cut.count);
-        fprintf(stderr, "  %s: %u textures read from WebP as from the original; %d cut WebP images fell back\n",
-                sources[i], orig->texture_count, cut.count);
+        CHECKF(cut.count > 0, "%s: %d warnings about corrupt %s images", wb, cut.count, names[ci]);
+        fprintf(stderr, "  %s: %u textures read from %s as from the original; %d cut images fell back\n",
+                sources[i], orig->texture_count, names[ci], cut.count);
         pb_scene_destroy(s);
         pb_scene_destroy(orig);
     }
@@ -1535,7 +1541,7 @@ int main(void)
     RUN(gpu_instancing_draws_each_instance);
     RUN(transmission_is_coverage);
     RUN(metallic_texture_folded_into_the_colour);
-    RUN(webp_textures_read_as_their_originals);
+    RUN(webp_and_avif_textures_read_as_their_originals);
     RUN(exr_environment_maps_read_exactly);
     RUN(exr_and_hdr_of_one_map_agree);
     return test_summary();

@@ -5,6 +5,7 @@ extern "C" {
 #include "common/common.h"
 }
 
+#include <avif/avif.h>
 #include <stb_image.h>
 #include <webp/decode.h>
 
@@ -85,6 +86,65 @@ bool load_webp(tinygltf::Image *image, int index, const unsigned char *bytes, in
     return true;
 }
 
+// AVIF (ISOBMFF with an AVIF brand), for EXT_texture_avif
+bool is_avif(const unsigned char *bytes, int size)
+{
+    avifROData data = {bytes, (size_t)size};
+    return size >= 12 && avifPeekCompatibleFileType(&data);
+}
+
+// libavif with its AV1 decoder: the header is parsed first (sizes checked
+// against the limits before any frame is decoded), then the first frame,
+// converted to 8-bit RGBA (alpha 255 where the file has none).
+bool load_avif(tinygltf::Image *image, int index, const unsigned char *bytes, int size, image_ctx *ctx)
+{
+    avifDecoder *dec = avifDecoderCreate();
+    bool ok = false;
+    uint32_t w = 0, h = 0;
+    if (dec) {
+        dec->maxThreads = 1;
+        dec->ignoreExif = dec->ignoreXMP = AVIF_TRUE;
+        ok = avifDecoderSetIOMemory(dec, bytes, (size_t)size) == AVIF_RESULT_OK &&
+             avifDecoderParse(dec) == AVIF_RESULT_OK && dec->image->width > 0 && dec->image->height > 0 &&
+             dec->image->width <= INT32_MAX && dec->image->height <= INT32_MAX;
+        if (ok) {
+            w = dec->image->width, h = dec->image->height;
+            if (!image_fits(ctx, index, (int)w, (int)h)) {
+                avifDecoderDestroy(dec);
+                return true;
+            }
+            ok = avifDecoderNextImage(dec) == AVIF_RESULT_OK && dec->image->width == w && dec->image->height == h;
+        }
+        if (ok) {
+            avifRGBImage rgb;
+            avifRGBImageSetDefaults(&rgb, dec->image);
+            rgb.format = AVIF_RGB_FORMAT_RGBA;
+            rgb.depth = 8;
+            avifRGBImageAllocatePixels(&rgb);
+            ok = rgb.pixels && avifImageYUVToRGB(dec->image, &rgb) == AVIF_RESULT_OK;
+            if (ok) {
+                image->image.resize((size_t)w * h * 4);
+                for (uint32_t y = 0; y < h; ++y)
+                    memcpy(image->image.data() + (size_t)y * w * 4, rgb.pixels + (size_t)y * rgb.rowBytes, (size_t)w * 4);
+            }
+            avifRGBImageFreePixels(&rgb);
+        }
+        avifDecoderDestroy(dec);
+    }
+    if (!ok) {
+        image->image.clear();
+        pb_logf(&ctx->log, PB_LOG_WARN,
+                "%s: image %d could not be decoded (corrupt AVIF); a texture reading it falls back to its core "
+                "image if it has one, else to its material's factor",
+                ctx->path, index);
+        return true;
+    }
+    ctx->left_pixels -= (uint64_t)w * (uint64_t)h;
+    image->width = (int)w;
+    image->height = (int)h;
+    return true;
+}
+
 } // namespace
 
 bool load_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
@@ -100,6 +160,8 @@ bool load_image(tinygltf::Image *image, const int index, std::string *, std::str
         return true;
     if (is_webp(bytes, size))
         return load_webp(image, index, bytes, size, ctx);
+    if (is_avif(bytes, size))
+        return load_avif(image, index, bytes, size, ctx);
     // the header first: stb allocates what it claims before reading the data
     int w = 0, h = 0, c = 0;
     unsigned char *px = nullptr;

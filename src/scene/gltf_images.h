@@ -1,5 +1,6 @@
 // Images of a glTF file decoded to RGBA8 for tinygltf's image callback:
-// stb_image (PNG, JPEG, ...) or libwebp (WebP, for EXT_texture_webp). An
+// stb_image (PNG, JPEG, ...), libwebp (WebP, for EXT_texture_webp) or libavif
+// (AVIF, for EXT_texture_avif). An
 // image that fails to decode, reaches past its buffer, or whose header claims
 // more pixels than the limits allow is a warning (the material falls back to
 // its factor), never a failed load.

@@ -475,24 +475,27 @@ int base_texture_index(const tinygltf::Material &mt)
     return mt.pbrMetallicRoughness.baseColorTexture.index;
 }
 
-// The image a texture reads: EXT_texture_webp's source where it names an
-// image that decoded, else the core source (the extension's fallback, or -1).
+// The image a texture reads: the source of EXT_texture_avif or
+// EXT_texture_webp where it names an image that decoded, else the core source
+// (the extensions' fallback, or -1).
 int texture_source(const reader &r, size_t i)
 {
     const tinygltf::Texture &t = r.m.textures[i];
-    auto ext = t.extensions.find("EXT_texture_webp");
-    if (ext != t.extensions.end() && ext->second.IsObject() && ext->second.Has("source") &&
-        ext->second.Get("source").IsInt()) {
+    int unusable = -1;
+    for (const char *name : {"EXT_texture_avif", "EXT_texture_webp"}) {
+        auto ext = t.extensions.find(name);
+        if (ext == t.extensions.end() || !ext->second.IsObject() || !ext->second.Has("source") ||
+            !ext->second.Get("source").IsInt())
+            continue;
         int s = ext->second.Get("source").GetNumberAsInt();
         if (s >= 0 && s < (int)r.m.images.size() && r.m.images[s].width > 0)
             return s;
         if (t.source >= 0)
-            pb_logf(&r.b->log, PB_LOG_INFO, "%s: texture %zu: its WebP image %d is unusable; the fallback image %d is read",
-                    r.path, i, s, t.source);
-        else
-            return s; // warned about as a missing or undecoded image
+            pb_logf(&r.b->log, PB_LOG_INFO, "%s: texture %zu: its %s image %d is unusable; the fallback image %d is read",
+                    r.path, i, name + 12, s, t.source);
+        unusable = s;
     }
-    return t.source;
+    return t.source >= 0 || unusable < 0 ? t.source : unusable; // a missing or undecoded image is warned about
 }
 
 pb_result read_textures(reader &r, int skip)
@@ -1198,7 +1201,8 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     if (!gwarn.empty())
         pb_logf(&b->log, PB_LOG_DEBUG, "%s: tinygltf: %s", path, first_line(gwarn).c_str());
 
-    static const char *const supported[] = {"EXT_mesh_gpu_instancing", "EXT_meshopt_compression", "EXT_texture_webp",
+    static const char *const supported[] = {"EXT_mesh_gpu_instancing", "EXT_meshopt_compression", "EXT_texture_avif",
+                                            "EXT_texture_webp",
                                             "KHR_draco_mesh_compression", "KHR_materials_transmission",
                                             "KHR_lights_punctual", "KHR_materials_emissive_strength",
                                             "KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit",
