@@ -1,0 +1,297 @@
+// glTF materials and textures to the scene's (gltf_materials.h).
+#include "scene/gltf_materials.h"
+#include "scene/metallic_fold.h"
+
+extern "C" {
+#include "common/common.h"
+}
+
+#include <cmath>
+#include <cstring>
+
+namespace pb_gltf {
+namespace {
+
+int32_t texture_of(reader &r, int gltf_texture, const char *material)
+{
+    if (gltf_texture < 0)
+        return -1;
+    if (gltf_texture >= (int)r.texture_map.size()) {
+        pb_logf(&r.b->log, PB_LOG_WARN, "%s: material '%s' refers to missing texture %d; ignored", r.path, material,
+                gltf_texture);
+        return -1;
+    }
+    return r.texture_map[gltf_texture];
+}
+
+// KHR_materials_pbrSpecularGlossiness (archived, still in many exported
+// assets): the bake needs only the diffuse albedo, diffuseFactor x
+// diffuseTexture; specular and glossiness do not enter a Lambertian bake.
+const tinygltf::Value *spec_gloss(const tinygltf::Material &mt)
+{
+    auto ext = mt.extensions.find("KHR_materials_pbrSpecularGlossiness");
+    return ext != mt.extensions.end() && ext->second.IsObject() ? &ext->second : nullptr;
+}
+
+// KHR_texture_transform of a textureInfo (the extension object `t`) as
+// u' = a u + b v + c, v' = d u + e v + f: offset x rotation x scale with
+// u' = cos u + sin v, v' = -sin u + cos v before the offset. That is the
+// direction the Khronos sample TextureTransformTest marks correct (its
+// arrow points at the green marker; with the matrix of columns (cos, sin),
+// (-sin, cos) that some copies of the extension's text show, it points at
+// the red "applied in the opposite direction" one). texCoord: the set it
+// overrides to (-1: none).
+void texture_transform(const tinygltf::Value &t, std::array<double, 6> &xf, int *texcoord)
+{
+    double off[2] = {0, 0}, sc[2] = {1, 1}, rot = 0;
+    for (int k = 0; k < 2; ++k) {
+        if (t.Has("offset") && t.Get("offset").IsArray() && (int)t.Get("offset").ArrayLen() > k)
+            off[k] = t.Get("offset").Get(k).GetNumberAsDouble();
+        if (t.Has("scale") && t.Get("scale").IsArray() && (int)t.Get("scale").ArrayLen() > k)
+            sc[k] = t.Get("scale").Get(k).GetNumberAsDouble();
+    }
+    if (t.Has("rotation"))
+        rot = t.Get("rotation").GetNumberAsDouble();
+    *texcoord = t.Has("texCoord") ? t.Get("texCoord").GetNumberAsInt() : -1;
+    double c = std::cos(rot), sn = std::sin(rot);
+    xf = {c * sc[0], sn * sc[1], off[0], -sn * sc[0], c * sc[1], off[1]};
+}
+
+const tinygltf::Value *transform_of(const tinygltf::ExtensionMap &ext)
+{
+    auto it = ext.find("KHR_texture_transform");
+    return it != ext.end() && it->second.IsObject() ? &it->second : nullptr;
+}
+
+// The texture a material's base (diffuse) colour comes from: core or spec-gloss.
+int base_texture_index(const tinygltf::Material &mt)
+{
+    const tinygltf::Value *sg = spec_gloss(mt);
+    if (sg && sg->Has("diffuseTexture") && sg->Get("diffuseTexture").Has("index"))
+        return sg->Get("diffuseTexture").Get("index").GetNumberAsInt();
+    return mt.pbrMetallicRoughness.baseColorTexture.index;
+}
+
+// The image a texture reads: the source of EXT_texture_avif or
+// EXT_texture_webp where it names an image that decoded, else the core source
+// (the extensions' fallback, or -1).
+int texture_source(const reader &r, size_t i)
+{
+    const tinygltf::Texture &t = r.m.textures[i];
+    int unusable = -1;
+    for (const char *name : {"EXT_texture_avif", "EXT_texture_webp"}) {
+        auto ext = t.extensions.find(name);
+        if (ext == t.extensions.end() || !ext->second.IsObject() || !ext->second.Has("source") ||
+            !ext->second.Get("source").IsInt())
+            continue;
+        int s = ext->second.Get("source").GetNumberAsInt();
+        if (s >= 0 && s < (int)r.m.images.size() && r.m.images[s].width > 0)
+            return s;
+        if (t.source >= 0)
+            pb_logf(&r.b->log, PB_LOG_INFO, "%s: texture %zu: its %s image %d is unusable; the fallback image %d is read",
+                    r.path, i, name + 12, s, t.source);
+        unusable = s;
+    }
+    return t.source >= 0 || unusable < 0 ? t.source : unusable; // a missing or undecoded image is warned about
+}
+
+
+// glTF: metallic = metallicFactor x the metallicRoughness texture's blue
+// channel. The kernels read one colour texture, so a metallic texture is
+// folded into it (metallic_fold.h) and the material's metallic becomes 0.
+// It must be read with the UVs the material's colour texture is read with
+// (TEXCOORD_0 under the material's one transform); else the factor alone
+// stands, with a warning.
+void fold_metallic(reader &r, const tinygltf::TextureInfo &info, const std::array<double, 6> &xf, pb_material &pm)
+{
+    if (info.index < 0 || !(pm.metallic > 0.f))
+        return; // no texture, or nothing metallic (spec-gloss and unlit set 0)
+    int32_t mr = texture_of(r, info.index, pm.name);
+    if (mr < 0)
+        return; // not decoded (warned), or textures skipped: the factor alone
+    std::array<double, 6> xm = {1, 0, 0, 0, 1, 0};
+    int tc = info.texCoord;
+    if (const tinygltf::Value *tm = transform_of(info.extensions)) {
+        int over = -1;
+        texture_transform(*tm, xm, &over);
+        tc = over >= 0 ? over : tc;
+    }
+    if (tc != 0 || xm != xf) {
+        pb_logf(&r.b->log, PB_LOG_WARN,
+                "%s: material '%s': its metallicRoughness texture is read with other UVs than its base colour "
+                "(TEXCOORD_%d or another KHR_texture_transform); metallic is its factor alone",
+                r.path, pm.name, tc);
+        return;
+    }
+    uint32_t bits;
+    memcpy(&bits, &pm.metallic, 4);
+    std::array<int64_t, 3> key = {pm.base_color_texture, mr, bits};
+    auto it = r.folded.find(key);
+    int32_t id = it != r.folded.end() ? it->second : pb_sb_fold_metallic(r.b, pm.base_color_texture, mr, pm.metallic);
+    if (id < 0)
+        return; // out of host memory: the builder reports it
+    r.folded[key] = id;
+    pb_logf(&r.b->log, PB_LOG_DEBUG, "%s: material '%s': metallic texture folded into its colour (texture %d)",
+            r.path, pm.name, id);
+    pm.base_color_texture = id;
+    pm.metallic = 0.f;
+}
+
+// KHR_materials_transmission without KHR_materials_volume: a thin surface
+// that lets a share t of the light meeting its dielectric part straight
+// through. To the bake that is coverage: a ray passes with probability
+// t (1 - metallic) and otherwise meets the surface as before, which the
+// hashed alpha blend already does, so the material becomes alpha-blended
+// with alpha x (1 - t (1 - metallic)). Not modelled: the base colour's tint of
+// the light let through, the surface's specular reflection, refraction.
+void apply_transmission(reader &r, const tinygltf::Material &mt, pb_material &pm)
+{
+    auto ext = mt.extensions.find("KHR_materials_transmission");
+    if (ext == mt.extensions.end() || !ext->second.IsObject() || !ext->second.Has("transmissionFactor"))
+        return;
+    double t = ext->second.Get("transmissionFactor").GetNumberAsDouble();
+    t = t < 1.0 ? t : 1.0;
+    double pass = t * (1.0 - pm.metallic);
+    if (!(pass > 0.0))
+        return; // nothing passes (no factor, NaN, or all metal): as it was
+    if (ext->second.Has("transmissionTexture"))
+        pb_logf(&r.b->log, PB_LOG_WARN,
+                "%s: material '%s': its transmissionTexture is not read; its transmissionFactor stands alone",
+                r.path, pm.name);
+    if (pm.alpha_mode == PB_ALPHA_MASK) {
+        pb_logf(&r.b->log, PB_LOG_WARN,
+                "%s: material '%s': transmission on an alpha-masked material is not modelled; it stays opaque "
+                "where the mask keeps it", r.path, pm.name);
+        return;
+    }
+    if (pm.alpha_mode == PB_ALPHA_OPAQUE && pm.base_color_texture >= 0) {
+        // glTF ignores an opaque material's alpha; blended, its texture's would count
+        int32_t id = pb_sb_opaque_texture(r.b, pm.base_color_texture);
+        if (id < 0)
+            return; // out of host memory: the builder reports it
+        pm.base_color_texture = id;
+    }
+    pm.alpha_mode = PB_ALPHA_BLEND;
+    pm.base_color[3] = (float)(pm.base_color[3] * (1.0 - pass));
+}
+
+} // namespace
+
+pb_result read_textures(reader &r, int skip)
+{
+    const tinygltf::Model &m = r.m;
+    r.texture_map.assign(m.textures.size(), -1);
+    if (skip)
+        return PB_OK;
+    // colour textures are sRGB: note which ones the materials use that way
+    std::vector<int> srgb(m.textures.size(), 0);
+    for (const tinygltf::Material &mt : m.materials) {
+        int t0 = base_texture_index(mt), t1 = mt.emissiveTexture.index;
+        if (t0 >= 0 && t0 < (int)srgb.size()) srgb[t0] = 1;
+        if (t1 >= 0 && t1 < (int)srgb.size()) srgb[t1] = 1;
+    }
+    for (size_t i = 0; i < m.textures.size(); ++i) {
+        const tinygltf::Texture &t = m.textures[i];
+        int source = texture_source(r, i);
+        if (source < 0 || source >= (int)m.images.size()) {
+            pb_logf(&r.b->log, PB_LOG_WARN, "%s: texture %zu refers to missing image %d; ignored", r.path, i, source);
+            continue;
+        }
+        const tinygltf::Image &img = m.images[source];
+        if (img.width <= 0 || img.height <= 0 || img.component != 4 || img.bits != 8 ||
+            img.image.size() != (size_t)img.width * img.height * 4)
+            continue; // warned by load_image
+        uint32_t wrap[2] = {PB_WRAP_REPEAT, PB_WRAP_REPEAT};
+        if (t.sampler >= 0 && t.sampler < (int)m.samplers.size()) {
+            int w[2] = {m.samplers[t.sampler].wrapS, m.samplers[t.sampler].wrapT};
+            for (int k = 0; k < 2; ++k)
+                wrap[k] = w[k] == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE     ? PB_WRAP_CLAMP
+                          : w[k] == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? PB_WRAP_MIRROR
+                                                                          : PB_WRAP_REPEAT;
+        }
+        std::vector<uint32_t> texels((size_t)img.width * img.height);
+        memcpy(texels.data(), img.image.data(), texels.size() * 4);
+        r.texture_map[i] = pb_sb_add_texture(r.b, texels.data(), (uint32_t)img.width, (uint32_t)img.height, wrap[0],
+                                             wrap[1], (uint32_t)srgb[i]);
+    }
+    return PB_OK;
+}
+
+void read_materials(reader &r)
+{
+    for (const tinygltf::Material &mt : r.m.materials) {
+        pb_material pm = pb_material_default();
+        snprintf(pm.name, sizeof pm.name, "%s", mt.name.c_str());
+        const tinygltf::PbrMetallicRoughness &pbr = mt.pbrMetallicRoughness;
+        for (int k = 0; k < 4 && k < (int)pbr.baseColorFactor.size(); ++k)
+            pm.base_color[k] = (float)pbr.baseColorFactor[k];
+        pm.metallic = (float)pbr.metallicFactor;
+        pm.roughness = (float)pbr.roughnessFactor;
+        double strength = 1.0;
+        auto ext = mt.extensions.find("KHR_materials_emissive_strength");
+        if (ext != mt.extensions.end() && ext->second.Has("emissiveStrength"))
+            strength = ext->second.Get("emissiveStrength").GetNumberAsDouble();
+        for (int k = 0; k < 3 && k < (int)mt.emissiveFactor.size(); ++k)
+            pm.emissive[k] = (float)(mt.emissiveFactor[k] * strength);
+        pm.alpha_mode = mt.alphaMode == "MASK" ? PB_ALPHA_MASK : mt.alphaMode == "BLEND" ? PB_ALPHA_BLEND : PB_ALPHA_OPAQUE;
+        pm.alpha_cutoff = (float)mt.alphaCutoff;
+        pm.double_sided = mt.doubleSided ? 1u : 0u;
+        pm.base_color_texture = texture_of(r, base_texture_index(mt), pm.name);
+        pm.emissive_texture = texture_of(r, mt.emissiveTexture.index, pm.name);
+        if (const tinygltf::Value *sg = spec_gloss(mt)) {
+            pm.metallic = 0.f; /* the diffuse colour is the albedo as it stands */
+            for (int k = 0; k < 4; ++k)
+                pm.base_color[k] = 1.f;
+            if (sg->Has("diffuseFactor") && sg->Get("diffuseFactor").IsArray())
+                for (int k = 0; k < 4 && k < (int)sg->Get("diffuseFactor").ArrayLen(); ++k)
+                    pm.base_color[k] = (float)sg->Get("diffuseFactor").Get(k).GetNumberAsDouble();
+        }
+        /* KHR_materials_unlit: the surface shows its base colour whatever
+         * lights it, so to the probes it is a source of that radiance, not a
+         * reflector: it emits base colour x base texture and reflects nothing */
+        if (mt.extensions.find("KHR_materials_unlit") != mt.extensions.end()) {
+            for (int k = 0; k < 3; ++k)
+                pm.emissive[k] = pm.base_color[k], pm.base_color[k] = 0.f;
+            pm.emissive_texture = pm.base_color_texture;
+            pm.metallic = 0.f;
+        } else {
+            apply_transmission(r, mt, pm);
+        }
+        /* KHR_texture_transform: the scene keeps one UV set per triangle, so a
+         * material's UVs take its base colour texture's transform (else its
+         * emissive texture's); a different one on the other is warned of */
+        std::array<double, 6> xf = {1, 0, 0, 0, 1, 0}, xe = xf;
+        int tc_base = -1, tc_em = -1;
+        const tinygltf::Value *tb = nullptr;
+        if (const tinygltf::Value *sg = spec_gloss(mt)) {
+            if (sg->Has("diffuseTexture") && sg->Get("diffuseTexture").Has("extensions") &&
+                sg->Get("diffuseTexture").Get("extensions").Has("KHR_texture_transform"))
+                tb = &sg->Get("diffuseTexture").Get("extensions").Get("KHR_texture_transform");
+        } else {
+            tb = transform_of(pbr.baseColorTexture.extensions);
+        }
+        const tinygltf::Value *te = transform_of(mt.emissiveTexture.extensions);
+        if (tb)
+            texture_transform(*tb, xf, &tc_base);
+        if (te)
+            texture_transform(*te, xe, &tc_em);
+        if (!tb && te && pm.base_color_texture < 0)
+            xf = xe, tc_base = tc_em;
+        else if (te && pm.emissive_texture >= 0 && pm.base_color_texture >= 0 && xe != xf)
+            pb_logf(&r.b->log, PB_LOG_WARN,
+                    "%s: material '%s': its emissive texture's KHR_texture_transform differs from its base colour "
+                    "texture's; the base colour's is applied to both", r.path, pm.name);
+        if (tc_base > 0)
+            pb_logf(&r.b->log, PB_LOG_WARN, "%s: material '%s': KHR_texture_transform selects TEXCOORD_%d; "
+                    "only TEXCOORD_0 is read", r.path, pm.name, tc_base);
+        fold_metallic(r, pbr.metallicRoughnessTexture, xf, pm);
+        r.uv_transform.push_back(xf);
+        pb_sb_add_material(r.b, &pm);
+    }
+    r.uv_transform.push_back({1, 0, 0, 0, 1, 0});
+    pb_material def = pb_material_default();
+    snprintf(def.name, sizeof def.name, "default");
+    r.default_material = (uint32_t)pb_sb_add_material(r.b, &def);
+}
+
+} // namespace pb_gltf
