@@ -86,6 +86,15 @@ bool load_webp(tinygltf::Image *image, int index, const unsigned char *bytes, in
     return true;
 }
 
+// KTX2 (KHR_texture_basisu): not decoded, since Debian 12 packages no Basis
+// Universal transcoder. A file that requires the extension is refused; one
+// that merely uses it gives its textures a core PNG or JPEG, which is read.
+bool is_ktx2(const unsigned char *bytes, int size)
+{
+    static const unsigned char id[12] = {0xab, 'K', 'T', 'X', ' ', '2', '0', 0xbb, '\r', '\n', 0x1a, '\n'};
+    return size >= 12 && memcmp(bytes, id, 12) == 0;
+}
+
 // AVIF (ISOBMFF with an AVIF brand), for EXT_texture_avif
 bool is_avif(const unsigned char *bytes, int size)
 {
@@ -162,6 +171,12 @@ bool load_image(tinygltf::Image *image, const int index, std::string *, std::str
         return load_webp(image, index, bytes, size, ctx);
     if (is_avif(bytes, size))
         return load_avif(image, index, bytes, size, ctx);
+    if (is_ktx2(bytes, size)) {
+        pb_logf(&ctx->log, PB_LOG_INFO,
+                "%s: image %d is KTX2 (KHR_texture_basisu), which probebake does not decode; textures read their "
+                "core image", ctx->path, index);
+        return true;
+    }
     // the header first: stb allocates what it claims before reading the data
     int w = 0, h = 0, c = 0;
     unsigned char *px = nullptr;
