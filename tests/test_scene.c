@@ -1136,14 +1136,16 @@ static void gpu_instancing_draws_each_instance(void)
  * 4 sigma), 0.5 on a blended alpha of 0.5 gives 0.25, an all-metal material
  * lets nothing through and stays opaque, an alpha mask is left as it is (a
  * warning), an opaque material's texture alpha stops counting (its copy is
- * opaque), and a transmissionTexture is a warning with the factor applied. */
+ * opaque). A transmissionTexture (red 200 and 100) under factor 0.5 folds
+ * into the colour texture's alpha: 255 x (1 - 0.5 x red / 255) = 155 and 205;
+ * read through another transform it is a warning and the factor stands. */
 static void transmission_is_coverage(void)
 {
     unsigned char px[2 * 4] = {200, 200, 200, 0, 100, 100, 100, 0}; /* alpha 0: ignored while opaque */
     char png[600];
     snprintf(png, sizeof png, "%s/transmission-base.png", temp_dir());
     CHECK(stbi_write_png(png, 2, 1, 4, px, 8) != 0);
-    const char *mats[6] = {
+    const char *mats[7] = {
         "{\"pbrMetallicRoughness\":{\"metallicFactor\":0},"
         "\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":0.75}}}",
         "{\"alphaMode\":\"BLEND\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1,1,1,0.5],\"metallicFactor\":0},"
@@ -1154,27 +1156,32 @@ static void transmission_is_coverage(void)
         "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicFactor\":0},"
         "\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":0.5}}}",
         "{\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"extensions\":{\"KHR_materials_transmission\":"
-        "{\"transmissionFactor\":0.5,\"transmissionTexture\":{\"index\":0}}}}"};
+        "{\"transmissionFactor\":0.5,\"transmissionTexture\":{\"index\":0}}}}",
+        "{\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"extensions\":{\"KHR_materials_transmission\":"
+        "{\"transmissionFactor\":0.5,\"transmissionTexture\":{\"index\":0,\"extensions\":{"
+        "\"KHR_texture_transform\":{\"offset\":[0.5,0]}}}}}}"};
     char json[4096];
     int n = snprintf(json, sizeof json,
                      "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_materials_transmission\"],"
                      "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[");
-    for (int i = 0; i < 6; ++i)
+    for (int i = 0; i < 7; ++i)
         n += snprintf(json + n, sizeof json - (size_t)n, "%s{\"attributes\":{\"POSITION\":0},\"material\":%d}",
                       i ? "," : "", i);
-    n += snprintf(json + n, sizeof json - (size_t)n, "]}],\"materials\":[%s,%s,%s,%s,%s,%s],", mats[0], mats[1],
-                  mats[2], mats[3], mats[4], mats[5]);
+    n += snprintf(json + n, sizeof json - (size_t)n, "]}],\"materials\":[%s,%s,%s,%s,%s,%s,%s],", mats[0], mats[1],
+                  mats[2], mats[3], mats[4], mats[5], mats[6]);
     snprintf(json + n, sizeof json - (size_t)n,
              "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"transmission-base.png\"}],"
              "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
              "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}");
-    warning_counter warned = {{"transmissionTexture is not read", "transmission on an alpha-masked material", NULL}, 0};
+    warning_counter warned = {{"transmissionTexture is read with other UVs", "transmission on an alpha-masked material",
+                               NULL},
+                              0};
     pb_scene_desc d = {{count_warnings, &warned}, 0, 0, 0};
     pb_scene *s = NULL;
     pb_error err;
     const char *path = write_gltf("transmission.gltf", json, tri_pos, 36);
     CHECKF(pb_scene_load(path, &d, &s, &err) == PB_OK, "%s", err.message);
-    if (!s || s->material_count < 6)
+    if (!s || s->material_count < 7)
         return;
     const pb_material *m = s->materials;
     CHECK(m[0].alpha_mode == PB_ALPHA_BLEND && fabsf(m[0].base_color[3] - 0.25f) < 1e-6f);
@@ -1188,7 +1195,15 @@ static void transmission_is_coverage(void)
         CHECK(tx->width == 2 && (s->texels[tx->offset] >> 24) == 255 && (s->texels[tx->offset + 1] >> 24) == 255 &&
               (s->texels[tx->offset] & 0xffffffu) == 0xc8c8c8u);
     }
-    CHECK(m[5].alpha_mode == PB_ALPHA_BLEND && fabsf(m[5].base_color[3] - 0.5f) < 1e-6f);
+    CHECK(m[5].alpha_mode == PB_ALPHA_BLEND && m[5].base_color[3] == 1.f && m[5].base_color_texture >= 1);
+    if (m[5].base_color_texture >= 1) {
+        const pb_texture *tx = &s->textures[m[5].base_color_texture];
+        CHECKF(tx->width == 2 && (s->texels[tx->offset] >> 24) == 155 && (s->texels[tx->offset + 1] >> 24) == 205 &&
+                   (s->texels[tx->offset] & 0xffffffu) == 0xffffffu,
+               "transmission texture folded to alpha %u %u", s->texels[tx->offset] >> 24,
+               s->texels[tx->offset + 1] >> 24);
+    }
+    CHECK(m[6].alpha_mode == PB_ALPHA_BLEND && fabsf(m[6].base_color[3] - 0.5f) < 1e-6f);
     CHECKF(warned.count == 2, "%d warnings", warned.count);
     /* material 0's triangle (the first): the hashed blend keeps a quarter */
     uint32_t kept = 0, N = 20000;

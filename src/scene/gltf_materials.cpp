@@ -142,9 +142,11 @@ void fold_metallic(reader &r, const tinygltf::TextureInfo &info, const std::arra
 // through. To the bake that is coverage: a ray passes with probability
 // t (1 - metallic) and otherwise meets the surface as before, which the
 // hashed alpha blend already does, so the material becomes alpha-blended
-// with alpha x (1 - t (1 - metallic)). Not modelled: the base colour's tint of
-// the light let through, the surface's specular reflection, refraction.
-void apply_transmission(reader &r, const tinygltf::Material &mt, pb_material &pm)
+// with alpha x (1 - t (1 - metallic)); a transmission texture's red channel
+// scales t per texel, folded into the colour texture's alpha. Not modelled:
+// the base colour's tint of the light let through, the surface's specular
+// reflection, refraction.
+void apply_transmission(reader &r, const tinygltf::Material &mt, const std::array<double, 6> &xf, pb_material &pm)
 {
     auto ext = mt.extensions.find("KHR_materials_transmission");
     if (ext == mt.extensions.end() || !ext->second.IsObject() || !ext->second.Has("transmissionFactor"))
@@ -154,14 +156,42 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, pb_material &pm
     double pass = t * (1.0 - pm.metallic);
     if (!(pass > 0.0))
         return; // nothing passes (no factor, NaN, or all metal): as it was
-    if (ext->second.Has("transmissionTexture"))
-        pb_logf(&r.b->log, PB_LOG_WARN,
-                "%s: material '%s': its transmissionTexture is not read; its transmissionFactor stands alone",
-                r.path, pm.name);
     if (pm.alpha_mode == PB_ALPHA_MASK) {
         pb_logf(&r.b->log, PB_LOG_WARN,
                 "%s: material '%s': transmission on an alpha-masked material is not modelled; it stays opaque "
                 "where the mask keeps it", r.path, pm.name);
+        return;
+    }
+    // the transmission texture's red channel scales the factor: folded into the
+    // colour texture's alpha where it is read with the colour texture's UVs
+    const tinygltf::Value &tx = ext->second.Has("transmissionTexture") ? ext->second.Get("transmissionTexture")
+                                                                       : tinygltf::Value();
+    int32_t tt = tx.IsObject() && tx.Has("index") && tx.Get("index").IsInt()
+                     ? texture_of(r, tx.Get("index").GetNumberAsInt(), pm.name)
+                     : -1;
+    if (tt >= 0) {
+        std::array<double, 6> xt = {1, 0, 0, 0, 1, 0};
+        int tc = tx.Has("texCoord") && tx.Get("texCoord").IsInt() ? tx.Get("texCoord").GetNumberAsInt() : 0;
+        if (tx.Has("extensions") && tx.Get("extensions").Has("KHR_texture_transform")) {
+            int over = -1;
+            texture_transform(tx.Get("extensions").Get("KHR_texture_transform"), xt, &over);
+            tc = over >= 0 ? over : tc;
+        }
+        if (tc != 0 || xt != xf) {
+            pb_logf(&r.b->log, PB_LOG_WARN,
+                    "%s: material '%s': its transmissionTexture is read with other UVs than its base colour "
+                    "(TEXCOORD_%d or another KHR_texture_transform); its transmissionFactor stands alone",
+                    r.path, pm.name, tc);
+            tt = -1;
+        }
+    }
+    if (tt >= 0) {
+        int32_t id = pb_sb_fold_transmission(r.b, pm.base_color_texture, pm.alpha_mode == PB_ALPHA_OPAQUE, tt,
+                                             (float)pass);
+        if (id < 0)
+            return; // out of host memory: the builder reports it
+        pm.base_color_texture = id;
+        pm.alpha_mode = PB_ALPHA_BLEND;
         return;
     }
     if (pm.alpha_mode == PB_ALPHA_OPAQUE && pm.base_color_texture >= 0) {
@@ -254,8 +284,6 @@ void read_materials(reader &r)
                 pm.emissive[k] = pm.base_color[k], pm.base_color[k] = 0.f;
             pm.emissive_texture = pm.base_color_texture;
             pm.metallic = 0.f;
-        } else {
-            apply_transmission(r, mt, pm);
         }
         /* KHR_texture_transform: the scene keeps one UV set per triangle, so a
          * material's UVs take its base colour texture's transform (else its
@@ -284,6 +312,8 @@ void read_materials(reader &r)
         if (tc_base > 0)
             pb_logf(&r.b->log, PB_LOG_WARN, "%s: material '%s': KHR_texture_transform selects TEXCOORD_%d; "
                     "only TEXCOORD_0 is read", r.path, pm.name, tc_base);
+        if (mt.extensions.find("KHR_materials_unlit") == mt.extensions.end())
+            apply_transmission(r, mt, xf, pm);
         fold_metallic(r, pbr.metallicRoughnessTexture, xf, pm);
         r.uv_transform.push_back(xf);
         pb_sb_add_material(r.b, &pm);

@@ -20,6 +20,15 @@ extern "C" {
  * texture's size and wrap modes. Returns its index, or -1 out of host memory. */
 int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_roughness, float factor);
 
+/* Adds a texture whose alpha is the coverage KHR_materials_transmission
+ * leaves: base alpha (255 when `base_opaque`: glTF ignores an opaque
+ * material's alpha) x (1 - pass x the transmission texture's red / 255), at
+ * each texel of the finer of the two sizes (nearest texels, at texel
+ * centres); colour, wrap modes and colour space the base's (white, sRGB,
+ * with the transmission texture's wraps, when base < 0). -1 out of memory. */
+int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int base_opaque, int32_t transmission,
+                                float pass);
+
 /* Texture `tex` as it reads under alpha mode OPAQUE, for a material that
  * becomes alpha-blended (KHR_materials_transmission): itself when every texel
  * has alpha 255, else a copy with alpha 255. -1 out of host memory. */
