@@ -1234,7 +1234,7 @@ static double srgb_enc(double l)
 
 /* glTF's metallic is metallicFactor x the metallicRoughness texture's blue
  * channel; the bake reflects base colour x (1 - metallic), and a metallic
- * texture is folded into the colour texture (metallic_fold.h). Known texels:
+ * texture is folded into the colour texture (texture_fold.h). Known texels:
  * a 2 x 1 base colour texture and a 4 x 2 metallic one (blue 0, 255, 128, 0 /
  * 255, 0, 64, 255; red and green set, and ignored). Each folded texel is the
  * nearest base texel's linear colour x (1 - factor x blue / 255), within one

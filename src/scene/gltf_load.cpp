@@ -544,6 +544,19 @@ pb_result triangles_bounded(reader &r)
                                        " triangles after instancing: refused");
 }
 
+// Every primitive of a mesh at `world`, the triangle bound checked after each.
+pb_result read_mesh(reader &r, const tinygltf::Mesh &mesh, const mat4 world)
+{
+    for (const tinygltf::Primitive &p : mesh.primitives) {
+        pb_result res = read_primitive(r, p, world, mesh.name.c_str());
+        if (res == PB_OK)
+            res = triangles_bounded(r);
+        if (res != PB_OK)
+            return res;
+    }
+    return PB_OK;
+}
+
 // EXT_mesh_gpu_instancing: the node's mesh once per instance, at the node's
 // world transform x the instance's TRANSLATION x ROTATION x SCALE (each
 // optional; float, or normalized integers for ROTATION as the extension
@@ -605,13 +618,9 @@ pb_result read_instances(reader &r, int node_index, const tinygltf::Value &ext, 
         mat4 inst, w;
         trs_matrix(t, q, s, inst);
         mat_mul(world, inst, w);
-        for (const tinygltf::Primitive &p : mesh.primitives) {
-            pb_result res = read_primitive(r, p, w, mesh.name.c_str());
-            if (res == PB_OK)
-                res = triangles_bounded(r);
-            if (res != PB_OK)
-                return res;
-        }
+        pb_result res = read_mesh(r, mesh, w);
+        if (res != PB_OK)
+            return res;
     }
     return PB_OK;
 }
@@ -640,13 +649,9 @@ pb_result visit(reader &r, int node_index, const mat4 parent, int depth)
             if (res != PB_OK)
                 return res;
         } else {
-            for (const tinygltf::Primitive &p : mesh.primitives) {
-                pb_result res = read_primitive(r, p, world, mesh.name.c_str());
-                if (res == PB_OK)
-                    res = triangles_bounded(r);
-                if (res != PB_OK)
-                    return res;
-            }
+            pb_result res = read_mesh(r, mesh, world);
+            if (res != PB_OK)
+                return res;
         }
     }
     const double origin[3] = {0, 0, 0}, neg_z[3] = {0, 0, -1}, pos_y[3] = {0, 1, 0};

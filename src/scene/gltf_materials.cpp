@@ -1,6 +1,6 @@
 // glTF materials and textures to the scene's (gltf_materials.h).
 #include "scene/gltf_materials.h"
-#include "scene/metallic_fold.h"
+#include "scene/texture_fold.h"
 
 extern "C" {
 #include "common/common.h"
@@ -96,9 +96,25 @@ int texture_source(const reader &r, size_t i)
 }
 
 
+// Whether a texture with texCoord `tc` and KHR_texture_transform `tm` (or
+// none) reads the UVs the material's colour texture reads (TEXCOORD_0 under
+// the material's one transform xf): the condition for folding it into that
+// texture. *set: the set it reads.
+bool reads_material_uvs(int tc, const tinygltf::Value *tm, const std::array<double, 6> &xf, int *set)
+{
+    std::array<double, 6> x = {1, 0, 0, 0, 1, 0};
+    if (tm) {
+        int over = -1;
+        texture_transform(*tm, x, &over);
+        tc = over >= 0 ? over : tc;
+    }
+    *set = tc;
+    return tc == 0 && x == xf;
+}
+
 // glTF: metallic = metallicFactor x the metallicRoughness texture's blue
 // channel. The kernels read one colour texture, so a metallic texture is
-// folded into it (metallic_fold.h) and the material's metallic becomes 0.
+// folded into it (texture_fold.h) and the material's metallic becomes 0.
 // It must be read with the UVs the material's colour texture is read with
 // (TEXCOORD_0 under the material's one transform); else the factor alone
 // stands, with a warning.
@@ -109,14 +125,8 @@ void fold_metallic(reader &r, const tinygltf::TextureInfo &info, const std::arra
     int32_t mr = texture_of(r, info.index, pm.name);
     if (mr < 0)
         return; // not decoded (warned), or textures skipped: the factor alone
-    std::array<double, 6> xm = {1, 0, 0, 0, 1, 0};
-    int tc = info.texCoord;
-    if (const tinygltf::Value *tm = transform_of(info.extensions)) {
-        int over = -1;
-        texture_transform(*tm, xm, &over);
-        tc = over >= 0 ? over : tc;
-    }
-    if (tc != 0 || xm != xf) {
+    int tc;
+    if (!reads_material_uvs(info.texCoord, transform_of(info.extensions), xf, &tc)) {
         pb_logf(&r.b->log, PB_LOG_WARN,
                 "%s: material '%s': its metallicRoughness texture is read with other UVs than its base colour "
                 "(TEXCOORD_%d or another KHR_texture_transform); metallic is its factor alone",
@@ -170,14 +180,11 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
                      ? texture_of(r, tx.Get("index").GetNumberAsInt(), pm.name)
                      : -1;
     if (tt >= 0) {
-        std::array<double, 6> xt = {1, 0, 0, 0, 1, 0};
         int tc = tx.Has("texCoord") && tx.Get("texCoord").IsInt() ? tx.Get("texCoord").GetNumberAsInt() : 0;
-        if (tx.Has("extensions") && tx.Get("extensions").Has("KHR_texture_transform")) {
-            int over = -1;
-            texture_transform(tx.Get("extensions").Get("KHR_texture_transform"), xt, &over);
-            tc = over >= 0 ? over : tc;
-        }
-        if (tc != 0 || xt != xf) {
+        const tinygltf::Value *tm = tx.Has("extensions") && tx.Get("extensions").Has("KHR_texture_transform")
+                                        ? &tx.Get("extensions").Get("KHR_texture_transform")
+                                        : nullptr;
+        if (!reads_material_uvs(tc, tm, xf, &tc)) {
             pb_logf(&r.b->log, PB_LOG_WARN,
                     "%s: material '%s': its transmissionTexture is read with other UVs than its base colour "
                     "(TEXCOORD_%d or another KHR_texture_transform); its transmissionFactor stands alone",

@@ -1,10 +1,12 @@
-/* Colour textures rewritten on the host for what the kernels read: glTF's
- * metallic is metallicFactor x the metallicRoughness texture's blue channel
- * (linear), and a Lambertian bake reflects base colour x (1 - metallic). The
- * kernels read one colour texture per material, so the metallic texture is
- * folded into it, once per material. */
-#ifndef PB_SCENE_METALLIC_FOLD_H
-#define PB_SCENE_METALLIC_FOLD_H
+/* Colour textures rewritten on the host for what the kernels read. The
+ * kernels read one colour texture per material (its colour the albedo, its
+ * alpha the coverage), so textures that scale either are folded into it:
+ * glTF's metallic (metallicFactor x the metallicRoughness texture's blue
+ * channel, linear; a Lambertian bake reflects base colour x (1 - metallic))
+ * into the colour, KHR_materials_transmission's texture (red) into the
+ * alpha. One walk does both (texture_fold.c). */
+#ifndef PB_SCENE_TEXTURE_FOLD_H
+#define PB_SCENE_TEXTURE_FOLD_H
 
 #include "scene/scene_builder.h"
 

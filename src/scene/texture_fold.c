@@ -1,0 +1,84 @@
+/* Colour textures rewritten for what the kernels read (texture_fold.h). */
+#include "scene/texture_fold.h"
+#include "bvh/alpha.h"
+#include "common/srgb.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* The walk both folds share: a texture at the finer of the two sizes, each
+ * texel from the nearest texels of `base` (white and opaque when base < 0)
+ * and of `scale` (at the texel's centre, as the kernels sample), where
+ * keep = 1 - factor x channel `shift` of scale / 255, clamped to [0, 1],
+ * multiplies the base's linear colour (into_alpha 0) or its alpha
+ * (into_alpha 1; 255 first when base_opaque). Wrap modes and colour space
+ * the base's (scale's wraps and sRGB when base < 0). */
+static int32_t fold(pb_scene_builder *b, int32_t base, int base_opaque, int32_t scale, int shift, float factor,
+                    int into_alpha)
+{
+    /* copies: adding the texture may move the builder's arrays */
+    const pb_texture st = b->textures[scale];
+    const pb_texture bt = base >= 0 ? b->textures[base] : st;
+    uint32_t W = bt.width > st.width ? bt.width : st.width, H = bt.height > st.height ? bt.height : st.height;
+    uint32_t *out = malloc((size_t)W * H * sizeof *out);
+    if (!out) {
+        b->out_of_memory = 1;
+        return -1;
+    }
+    for (uint32_t y = 0; y < H; ++y)
+        for (uint32_t x = 0; x < W; ++x) {
+            float s = ((float)x + 0.5f) / (float)W, t = ((float)y + 0.5f) / (float)H;
+            uint32_t m = b->texels[st.offset + pb_texel_index(s, t, st.width, st.height, PB_WRAP_CLAMP, PB_WRAP_CLAMP)];
+            float keep = 1.f - factor * (float)((m >> shift) & 0xffu) / 255.f;
+            keep = keep < 0.f ? 0.f : (keep > 1.f ? 1.f : keep);
+            uint32_t c = base >= 0 ? b->texels[bt.offset + pb_texel_index(s, t, bt.width, bt.height, PB_WRAP_CLAMP,
+                                                                         PB_WRAP_CLAMP)]
+                                   : 0xffffffffu;
+            uint32_t texel;
+            if (into_alpha) {
+                float a = base_opaque ? 1.f : (float)(c >> 24) / 255.f;
+                texel = (c & 0x00ffffffu) | (uint32_t)lrintf(a * keep * 255.f) << 24;
+            } else {
+                texel = c & 0xff000000u;
+                for (int k = 0; k < 3; ++k) {
+                    float l = pb_srgb_to_linear((float)((c >> (8 * k)) & 0xffu) / 255.f) * keep;
+                    texel |= (uint32_t)lrintf(pb_linear_to_srgb(l) * 255.f) << (8 * k);
+                }
+            }
+            out[(size_t)y * W + x] = texel;
+        }
+    int32_t id = pb_sb_add_texture(b, out, W, H, bt.wrap_s, bt.wrap_t, base >= 0 ? bt.srgb : 1u);
+    free(out);
+    return id;
+}
+
+int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_roughness, float factor)
+{
+    return fold(b, base, 0, metallic_roughness, 16, factor, 0); /* blue: metalness */
+}
+
+int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int base_opaque, int32_t transmission,
+                                float pass)
+{
+    return fold(b, base, base_opaque, transmission, 0, pass, 1); /* red: transmission */
+}
+
+int32_t pb_sb_opaque_texture(pb_scene_builder *b, int32_t tex)
+{
+    const pb_texture t = b->textures[tex];
+    uint64_t n = (uint64_t)t.width * t.height, i = 0;
+    while (i < n && (b->texels[t.offset + i] >> 24) == 0xffu)
+        ++i;
+    if (i == n)
+        return tex;
+    uint32_t *out = malloc((size_t)n * sizeof *out);
+    if (!out) {
+        b->out_of_memory = 1;
+        return -1;
+    }
+    for (i = 0; i < n; ++i)
+        out[i] = b->texels[t.offset + i] | 0xff000000u;
+    int32_t id = pb_sb_add_texture(b, out, t.width, t.height, t.wrap_s, t.wrap_t, t.srgb);
+    free(out);
+    return id;
+}
