@@ -192,4 +192,29 @@ static inline pb_scene *load_demo(void)
     return s;
 }
 
+/* Bends every vertex normal of s away from its face normal by a smooth field
+ * of the vertex's position (amount: its largest length against the unit face
+ * normal), so the shading normal varies across each triangle and the scene
+ * shades smooth (shading_normals.h). */
+static inline void bend_normals(pb_scene *s, float amount)
+{
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        const float *p = s->positions + 9 * (size_t)t;
+        float e1[3], e2[3], g[3];
+        for (int k = 0; k < 3; ++k)
+            e1[k] = p[3 + k] - p[k], e2[k] = p[6 + k] - p[k];
+        g[0] = e1[1] * e2[2] - e1[2] * e2[1], g[1] = e1[2] * e2[0] - e1[0] * e2[2], g[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        float gl = sqrtf(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        for (int v = 0; v < 3; ++v) {
+            const float *x = p + 3 * v;
+            float b[3] = {sinf(1.7f * x[0] + 0.3f), sinf(2.3f * x[1] + 1.1f), sinf(1.3f * x[2] + 2.0f)}, n[3];
+            for (int k = 0; k < 3; ++k)
+                n[k] = g[k] / gl + amount / sqrtf(3.f) * b[k];
+            float l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            for (int k = 0; k < 3; ++k)
+                s->normals[9 * (size_t)t + 3 * v + k] = n[k] / l;
+        }
+    }
+}
+
 #endif

@@ -7,6 +7,7 @@
 #include "bake/guide_cache.h"
 #include "bake/light_cells.h"
 #include "bake/light_cells_gpu.h"
+#include "bake/shading_normals.h"
 #include "bake_reference.h"
 #include "common/common.h"
 #include "gpu/gpu.h"
@@ -407,6 +408,72 @@ static void environment_lights_floor(void)
     pb_scene_destroy(s);
 }
 
+/* Shading normals weigh reflected light: the 400 m floor of albedo 0.5 lit
+ * by a directional light of irradiance I (at normal incidence) from
+ * elevation e toward +x, its vertex normals all tilted by t toward +x, a
+ * probe 1 m above, direct light excluded: the floor's radiance is rho I
+ * max(0, n_s . l) / pi wherever the light is above the geometric surface,
+ * so the probe's irradiance is E(n) = rho I max(0, n_s . l) (1 - n_y) / 2
+ * (environment_lights_floor). Flat (t = 0), tilted toward the light and
+ * away from it; and a light below the floor that the tilted normal faces
+ * but the surface does not: no light. */
+static void shading_normals_weigh_reflected_light(void)
+{
+    double floor[18] = {-200, 0, -200, -200, 0, 200, 200, 0, 200, -200, 0, -200, 200, 0, 200, 200, 0, -200};
+    struct { float tilt, elevation; } cases[4] = {{0.f, 45.f}, {30.f, 45.f}, {-30.f, 45.f}, {60.f, -20.f}};
+    const float I = 3.f, rad = 3.14159265f / 180.f;
+    for (int c = 0; c < 4; ++c) {
+        pb_material m = pb_material_default();
+        m.base_color[0] = m.base_color[1] = m.base_color[2] = 0.5f;
+        m.metallic = 0.f;
+        uint32_t ids[2] = {0, 0};
+        pb_scene *s = NULL;
+        pb_error err;
+        CHECKF(pb_scene_from_triangles(floor, 2, ids, &m, 1, &s, &err) == PB_OK, "%s", err.message);
+        if (!s)
+            return;
+        float ns[3] = {sinf(cases[c].tilt * rad), cosf(cases[c].tilt * rad), 0.f};
+        float l[3] = {cosf(cases[c].elevation * rad), sinf(cases[c].elevation * rad), 0.f};
+        for (uint32_t v = 0; v < 6; ++v)
+            memcpy(s->normals + 3 * v, ns, sizeof ns);
+        CHECK(pb_scene_bent_triangles(s) == (cases[c].tilt != 0.f ? 2u : 0u));
+        s->lights = calloc(1, sizeof(pb_light));
+        s->light_count = 1;
+        s->lights[0].type = PB_LIGHT_DIRECTIONAL;
+        s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
+        s->lights[0].intensity = I;
+        for (int k = 0; k < 3; ++k)
+            s->lights[0].direction[k] = -l[k];
+        float cosine = ns[0] * l[0] + ns[1] * l[1];
+        double lit = cases[c].elevation > 0.f && cosine > 0.f ? 0.5 * I * cosine : 0.0;
+        pb_bake_desc d = {0};
+        d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 1;
+        d.grid.origin[1] = 1.f - (float)s->origin[1];
+        d.grid.origin[0] = -(float)s->origin[0], d.grid.origin[2] = -(float)s->origin[2];
+        d.rays_per_probe = 2048;
+        d.passes = 8;
+        d.bounces = 0;
+        d.exclude_direct = 1;
+        d.skip_relocation = 1;
+        baked b = bake(s, &d);
+        if (b.ok) {
+            float worst = 0, down[3];
+            float dirs[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 1, 0}};
+            pb_sh_eval(b.vol.sh, dirs[0], down);
+            for (int i = 0; i < 3; ++i) {
+                float e3[3];
+                pb_sh_eval(b.vol.sh, dirs[i], e3);
+                worst = fmaxf(worst, (float)(fabs(e3[0] - lit * (1 - dirs[i][1]) / 2) / (0.5 * I)));
+            }
+            fprintf(stderr, "  tilt %+3.0f, light at %+3.0f deg: irradiance from the floor %.4f (want %.4f), worst of "
+                    "3 normals %.2f%% of rho I\n", cases[c].tilt, cases[c].elevation, down[0], lit, 100 * worst);
+            CHECK(worst < 0.01f);
+        }
+        release(&b);
+        pb_scene_destroy(s);
+    }
+}
+
 /* One point light, nothing else: the SH is the projected delta E = I/d^2
  * from the light's direction (exactly, apart from float rounding). */
 static void point_light(void)
@@ -709,15 +776,10 @@ static float max_difference(const float *a, const float *b, uint32_t n, float *s
     return worst;
 }
 
-/* The kernels against bake_cpu.c on the demo scene, direct light only
- * (bounces 0: no random directions, so ray by ray equality to rounding).
- * Two passes: the volume is their mean, from SH summed on the host and depth
- * moments summed on the device (pass 0 stores them, pass 1 adds). */
-static void kernels_match_cpu_reference(void)
+/* Returns the bake's summed DC irradiance (0 if it failed). */
+static double kernels_match_cpu_reference_on(pb_scene *s, const char *label)
 {
-    pb_scene *s = load_demo();
-    if (!s)
-        return;
+    double dc = 0;
     pb_bake_desc d = {0};
     pb_probe_grid_fit(s->bounds_min, s->bounds_max, 27, &d.grid);
     d.rays_per_probe = 128;
@@ -775,14 +837,45 @@ static void kernels_match_cpu_reference(void)
         pb_bake_emitters_free(&em);
         pb_env_table_free(&env);
         pb_environment_free(&sky);
-        fprintf(stderr, "  %u probes: SH max difference %.2e (of %.2e), %u depth texels differ, %u flags differ\n", P,
-                worst_sh, scale, depth_bad, flag_diff);
+        fprintf(stderr, "  %s, %u probes: SH max difference %.2e (of %.2e), %u depth texels differ, %u flags differ\n",
+                label, P, worst_sh, scale, depth_bad, flag_diff);
         CHECK(scale > 0.f && worst_sh <= 1e-4f * scale);
         CHECK(depth_bad == 0 && flag_diff == 0);
+        for (uint32_t p = 0; p < P; ++p)
+            dc += b.vol.sh[27 * p];
         free(probes), free(rot), free(dirs), free(rays), free(red), free(mean);
     }
     release(&b);
-    pb_scene_destroy(s);
+    return dc;
+}
+
+/* The demo scene; with `bent`, its vertex normals bent so it shades smooth. */
+static pb_scene *load_demo_shaded(int bent)
+{
+    pb_scene *s = load_demo();
+    if (s && bent) {
+        bend_normals(s, 0.4f);
+        CHECK(pb_scene_bent_triangles(s) == s->triangle_count);
+    }
+    return s;
+}
+
+/* The kernels against bake_cpu.c on the demo scene, direct light only
+ * (bounces 0: no random directions, so ray by ray equality to rounding),
+ * with its face normals and with bent vertex normals (shading normals).
+ * Two passes: the volume is their mean, from SH summed on the host and depth
+ * moments summed on the device (pass 0 stores them, pass 1 adds). */
+static void kernels_match_cpu_reference(void)
+{
+    double dc[2] = {0, 0};
+    for (int bent = 0; bent <= 1; ++bent) {
+        pb_scene *s = load_demo_shaded(bent);
+        if (s)
+            dc[bent] = kernels_match_cpu_reference_on(s, bent ? "bent normals" : "face normals");
+        pb_scene_destroy(s);
+    }
+    fprintf(stderr, "  bent normals change the irradiance by %+.2f%%\n", 100 * (dc[1] / dc[0] - 1));
+    CHECK(dc[0] > 0 && fabs(dc[1] / dc[0] - 1) > 0.01); /* else the second comparison proved nothing */
 }
 
 /* The depth sums stay on the device across passes and are read once, at
@@ -850,10 +943,11 @@ static pb_bake_pass multi_bounce_template(const pb_scene *s, const baked *b, con
  * part where host and device round sin/cos/sqrt differently; over 8 passes
  * the irradiance of each probe must agree within a small Monte Carlo margin.
  * Then with path guiding: the same host guide on both sides (pb_guide_build
- * with the bake's inputs), and the reference without it must differ. */
-static void multi_bounce_matches_cpu_reference(void)
+ * with the bake's inputs), and the reference without it must differ. Then
+ * plain on bent vertex normals: shading normals draw the bounces. */
+static void multi_bounce_matches_cpu_reference_on(int guided, int bent)
 {
-    pb_scene *s = load_demo();
+    pb_scene *s = load_demo_shaded(bent);
     if (!s)
         return;
     pb_bake_desc d = {0};
@@ -863,59 +957,65 @@ static void multi_bounce_matches_cpu_reference(void)
     d.bounces = 3;
     d.octmap_res = 4;
     d.skip_relocation = 1;
-    for (int guided = 0; guided <= 1; ++guided) {
-        d.guide_paths = guided ? 1u << 14 : 0u;
-        baked b = bake(s, &d);
-        if (!b.ok) {
-            release(&b);
-            continue;
-        }
-        uint32_t P = b.vol.probe_count;
-        float *sh = malloc((size_t)P * 27 * sizeof(float)), *unguided = malloc((size_t)P * 27 * sizeof(float));
-        pb_bake_emitters em;
-        CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
-        pb_bake_pass tmpl = multi_bounce_template(s, &b, &em, d.seed);
-        pb_guide g;
-        memset(&g, 0, sizeof g);
-        if (guided) {
-            pb_error err;
-            CHECKF(pb_guide_build(&tmpl, d.guide_paths, &g, &err) == PB_OK, "%s", err.message);
-            reference_bake(s, &d, tmpl, P, 8, unguided); /* the guide must change the paths */
-            tmpl.guide = &g;
-        }
-        reference_bake(s, &d, tmpl, P, 8, sh);
-        double worst = 0, apart = 0;
-        uint32_t compared = 0;
-        for (uint32_t p = 0; p < P; ++p) {
-            if (b.vol.probe_flags[p] & PB_PROBE_DILATED)
-                continue; /* inside a box: its value comes from its neighbours by design */
-            ++compared;
-            const float *c = sh + 27 * p;
-            double rel = fabs(c[0] - b.vol.sh[27 * p]) / fmax(1e-6, fabs(c[0]));
-            if (rel > 0.01)
-                fprintf(stderr, "  probe %u: CPU %g GPU %g (flags %#x)\n", p, c[0], b.vol.sh[27 * p], b.vol.probe_flags[p]);
-            worst = fmax(worst, rel);
-            if (guided)
-                apart = fmax(apart, fabs(unguided[27 * p] - b.vol.sh[27 * p]) / fmax(1e-6, fabs(c[0])));
-        }
-        fprintf(stderr, "  %s: %u probes (%u not dilated), 3 bounces, 8 passes: DC irradiance differs by at most "
-                        "%.3f%%", guided ? "guided" : "plain", P, compared, 100 * worst);
-        if (guided)
-            fprintf(stderr, "; %u of %u guide entries learned; unguided reference %.2f%% apart", g.learned, g.entries,
-                    100 * apart);
-        fprintf(stderr, "\n");
-        CHECK(compared >= P / 2);
-        CHECK(worst < 0.01);
-        if (guided) {
-            CHECK(g.learned > 20 && apart > 0.01);
-            CHECK(b.vol.settings.techniques == PB_TECHNIQUE_GUIDING);
-        }
-        pb_guide_free(&g);
-        pb_bake_emitters_free(&em);
-        free(sh), free(unguided);
+    d.guide_paths = guided ? 1u << 14 : 0u;
+    baked b = bake(s, &d);
+    if (!b.ok) {
         release(&b);
+        pb_scene_destroy(s);
+        return;
     }
+    uint32_t P = b.vol.probe_count;
+    float *sh = malloc((size_t)P * 27 * sizeof(float)), *unguided = malloc((size_t)P * 27 * sizeof(float));
+    pb_bake_emitters em;
+    CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
+    pb_bake_pass tmpl = multi_bounce_template(s, &b, &em, d.seed);
+    pb_guide g;
+    memset(&g, 0, sizeof g);
+    if (guided) {
+        pb_error err;
+        CHECKF(pb_guide_build(&tmpl, d.guide_paths, &g, &err) == PB_OK, "%s", err.message);
+        reference_bake(s, &d, tmpl, P, 8, unguided); /* the guide must change the paths */
+        tmpl.guide = &g;
+    }
+    reference_bake(s, &d, tmpl, P, 8, sh);
+    double worst = 0, apart = 0;
+    uint32_t compared = 0;
+    for (uint32_t p = 0; p < P; ++p) {
+        if (b.vol.probe_flags[p] & PB_PROBE_DILATED)
+            continue; /* inside a box: its value comes from its neighbours by design */
+        ++compared;
+        const float *c = sh + 27 * p;
+        double rel = fabs(c[0] - b.vol.sh[27 * p]) / fmax(1e-6, fabs(c[0]));
+        if (rel > 0.01)
+            fprintf(stderr, "  probe %u: CPU %g GPU %g (flags %#x)\n", p, c[0], b.vol.sh[27 * p], b.vol.probe_flags[p]);
+        worst = fmax(worst, rel);
+        if (guided)
+            apart = fmax(apart, fabs(unguided[27 * p] - b.vol.sh[27 * p]) / fmax(1e-6, fabs(c[0])));
+    }
+    fprintf(stderr, "  %s: %u probes (%u not dilated), 3 bounces, 8 passes: DC irradiance differs by at most %.3f%%",
+            guided ? "guided" : bent ? "plain, bent normals" : "plain", P, compared, 100 * worst);
+    if (guided)
+        fprintf(stderr, "; %u of %u guide entries learned; unguided reference %.2f%% apart", g.learned, g.entries,
+                100 * apart);
+    fprintf(stderr, "\n");
+    CHECK(compared >= P / 2);
+    CHECK(worst < 0.01);
+    if (guided) {
+        CHECK(g.learned > 20 && apart > 0.01);
+        CHECK(b.vol.settings.techniques == PB_TECHNIQUE_GUIDING);
+    }
+    pb_guide_free(&g);
+    pb_bake_emitters_free(&em);
+    free(sh), free(unguided);
+    release(&b);
     pb_scene_destroy(s);
+}
+
+static void multi_bounce_matches_cpu_reference(void)
+{
+    multi_bounce_matches_cpu_reference_on(0, 0);
+    multi_bounce_matches_cpu_reference_on(1, 0);
+    multi_bounce_matches_cpu_reference_on(0, 1);
 }
 
 /* The closed 4 m box of closed_box_scene() written as glTF, base colour 1
@@ -2572,6 +2672,7 @@ int main(void)
     RUN(environment_map_projection);
     RUN(real_hdr_environment);
     RUN(environment_lights_floor);
+    RUN(shading_normals_weigh_reflected_light);
     RUN(closed_emissive_box);
     RUN(kernels_match_cpu_reference);
     RUN(staged_depth_sums_match_mapped);

@@ -55,6 +55,15 @@ expect info-json-bounds 0 '"bounds_min": \[-2, 0, -2.5\]' -- "$pb" info "$demo" 
 expect info-extensions 0 '^extensions  used: KHR_lights_punctual, KHR_materials_emissive_strength; applied: KHR_lights_punctual, KHR_materials_emissive_strength$' -- "$pb" info "$demo"
 expect info-json-extensions 0 '"extensions_applied": \["KHR_lights_punctual", "KHR_materials_emissive_strength"\],' -- "$pb" info "$demo" --json
 expect info-json-bounds-max 0 '"bounds_max": \[2, 3, 2.5\]' -- "$pb" info "$demo" --json
+expect info-shading-flat 0 '^shading     0 of 40 triangles smooth' -- "$pb" info "$demo"
+expect shading-normals-bad 2 "error: --shading-normals takes vertex or face" -- "$pb" info "$demo" --shading-normals x
+duck=$src/../shared/scenes/samples/Duck/Duck.gltf
+if [ -f "$duck" ]; then # vertex normals shade smooth, unless --shading-normals face
+    expect info-shading-duck 0 '^shading     4183 of 4212 triangles smooth' -- "$pb" info "$duck"
+    expect info-shading-duck-face 0 '"smooth_triangles": 0,' -- "$pb" info "$duck" --json --shading-normals face
+else
+    echo "skip info-shading-duck: $duck absent"
+fi
 expect info-needs-scene 2 'needs a SCENE' -- "$pb" info
 expect info-missing 1 "error: $tmp/missing.gltf: cannot open" -- "$pb" info "$tmp/missing.gltf"
 printf '{"asset": {"version": "2.0"}, "meshes": [' >"$tmp/broken.gltf"

@@ -55,12 +55,14 @@ static float lum(const float *c)
  * still flip a rare shadow ray), image means for the reference. With sd, the
  * volume is a sparse layout (the sparse lookup and sphere view in
  * render.comp against render_cpu.c). */
-static void render_matches_cpu(const pb_sparse_desc *sd)
+static void render_matches_cpu(const pb_sparse_desc *sd, int bent)
 {
     pb_scene *s = load_demo();
     pb_error err;
     if (!s)
         return;
+    if (bent) /* shading normals: every mode shades with them */
+        bend_normals(s, 0.4f);
     pb_bake_desc bd = {0};
     pb_probe_grid_fit(s->bounds_min, s->bounds_max, sd ? 500 : 60, &bd.grid);
     bd.rays_per_probe = sd ? 32 : 64;
@@ -125,13 +127,18 @@ static void render_matches_cpu(const pb_sparse_desc *sd)
 
 static void kernel_matches_cpu_reference(void)
 {
-    render_matches_cpu(NULL);
+    render_matches_cpu(NULL, 0);
+}
+
+static void kernel_matches_cpu_with_shading_normals(void)
+{
+    render_matches_cpu(NULL, 1);
 }
 
 static void sparse_kernel_matches_cpu_reference(void)
 {
     pb_sparse_desc sd = {2, 0.05f};
-    render_matches_cpu(&sd);
+    render_matches_cpu(&sd, 0);
 }
 
 /* A floor of albedo 0.5 under a constant sky L, its volume baked with the
@@ -370,6 +377,7 @@ int main(void)
     RUN(image_metric);
     RUN(bad_parameters_refused);
     RUN(kernel_matches_cpu_reference);
+    RUN(kernel_matches_cpu_with_shading_normals);
     RUN(sparse_kernel_matches_cpu_reference);
     RUN(constant_sky_lights_floor_evenly);
     RUN(reference_converges);

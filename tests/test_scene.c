@@ -2,6 +2,7 @@
  * encodings, dropped triangles, and every malformed-file error; and the
  * environment maps a scene is lit by (.hdr and OpenEXR). CPU only. */
 #define _DEFAULT_SOURCE /* mknod, makedev */
+#include "bake/shading_normals.h"
 #include "bvh/alpha.h"
 #include "compressed_variants.h"
 #include "exr_pattern.h"
@@ -497,6 +498,99 @@ static void bad_triangles_dropped_and_counted(void)
                                          "\"scale\":[1e308,1,1]}],"));
     CHECK(s && s->triangle_count == 0 && s->stats.dropped_nonfinite == 1);
     pb_scene_destroy(s);
+}
+
+/* Vertex normals are read for shading: normalized, a zero one replaced by
+ * the face normal (it used to become +Y), a bent one kept; packed for the
+ * kernels within 1e-4 radians; interpolated, turned to the side a ray
+ * arrives from, and the face normal where they cancel. */
+static void vertex_normals_read_for_shading(void)
+{
+    float data[18] = {0, 0, 0, 1, 0, 0, 0, 1, 0,   /* positions: counter-clockwise seen from +Z */
+                      0, 0, 0, 0, 0, 2, 1, 0, 1};  /* normals: zero, +Z twice as long, 45 degrees toward +X */
+    const char *json = "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                       "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":1}}]}],"
+                       "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+                       "{\"bufferView\":0,\"byteOffset\":36,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+                       "\"bufferViews\":[{\"buffer\":0,\"byteLength\":72}],"
+                       "\"buffers\":[{\"byteLength\":72,\"uri\":\"@BUF@\"}]}";
+    char path[512];
+    snprintf(path, sizeof path, "%s", write_gltf("normals.gltf", json, data, sizeof data));
+    pb_scene *s = load_ok(path);
+    if (!s)
+        return;
+    const float r = 0.70710678f, want[9] = {0, 0, 1, 0, 0, 1, r, 0, r};
+    float worst = 0;
+    for (int k = 0; k < 9; ++k)
+        worst = fmaxf(worst, fabsf(s->normals[k] - want[k]));
+    CHECKF(s->triangle_count == 1 && worst < 1e-6f, "normals off by %g", worst);
+    CHECK(pb_scene_bent_triangles(s) == 1);
+    /* at the corners the vertex normals, within the packing; from behind, turned to the back */
+    float up[3] = {0, 0, 1}, down[3] = {0, 0, -1}, ns[3];
+    pb_shading_normal_cpu(s, 0, 0.f, 1.f, up, ns);
+    CHECKF(fabsf(ns[0] - r) < 1e-4f && fabsf(ns[2] - r) < 1e-4f, "(%g %g %g)", ns[0], ns[1], ns[2]);
+    pb_shading_normal_cpu(s, 0, 0.f, 1.f, down, ns);
+    CHECKF(fabsf(ns[0] + r) < 1e-4f && fabsf(ns[2] + r) < 1e-4f, "(%g %g %g)", ns[0], ns[1], ns[2]);
+    /* opposite vertex normals cancel half way: the face normal */
+    s->normals[3] = 0, s->normals[5] = -1, s->normals[6] = 0, s->normals[8] = 1;
+    pb_shading_normal_cpu(s, 0, 0.5f, 0.5f, up, ns);
+    CHECKF(ns[0] == 0.f && ns[1] == 0.f && ns[2] == 1.f, "(%g %g %g)", ns[0], ns[1], ns[2]);
+    pb_scene_destroy(s);
+    /* pb_scene_desc.face_normals (--shading-normals face): the face normals, flat shading */
+    pb_scene_desc fd = {0};
+    fd.face_normals = 1;
+    pb_error err;
+    CHECK(pb_scene_load(path, &fd, &s, &err) == PB_OK && pb_scene_bent_triangles(s) == 0 &&
+          s->normals[6] == 0.f && s->normals[8] == 1.f);
+    pb_scene_destroy(s);
+
+    /* the packing: random directions, the axes and the octahedron's edges */
+    uint64_t state = 7;
+    double max_angle = 0;
+    for (int i = 0; i < 200000; ++i) {
+        float n[3], back[3];
+        if (i < 6) {
+            n[0] = n[1] = n[2] = 0.f;
+            n[i / 2] = i % 2 ? -1.f : 1.f;
+        } else if (i < 1006) { /* z = 0: the fold's seam */
+            float a = 6.2831853f * (float)(i - 6) / 1000.f;
+            n[0] = cosf(a), n[1] = sinf(a), n[2] = 0.f;
+        } else {
+            float z = 2.f * (float)((state = state * 6364136223846793005ull + 1442695040888963407ull) >> 40) /
+                      16777216.f - 1.f;
+            float a = 6.2831853f * (float)((state = state * 6364136223846793005ull + 1442695040888963407ull) >> 40) /
+                      16777216.f;
+            float rr = sqrtf(fmaxf(0.f, 1.f - z * z));
+            n[0] = rr * cosf(a), n[1] = rr * sinf(a), n[2] = z;
+        }
+        uint32_t w = pb_normal_pack(n);
+        pb_normal_unpack(w, back);
+        /* the angle from the cross product: acos of a float dot product cannot resolve 1e-4 */
+        double c[3] = {(double)n[1] * back[2] - (double)n[2] * back[1], (double)n[2] * back[0] - (double)n[0] * back[2],
+                       (double)n[0] * back[1] - (double)n[1] * back[0]};
+        double d = (double)n[0] * back[0] + (double)n[1] * back[1] + (double)n[2] * back[2];
+        max_angle = fmax(max_angle, atan2(sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), d));
+    }
+    fprintf(stderr, "  packed normals: worst angle %.2e rad over 200000 directions\n", max_angle);
+    CHECK(max_angle < 1e-4);
+
+    /* the shared scenes: the demo is flat, the duck and the helmet smooth */
+    pb_scene *demo = load_ok(source_path("tests/scenes/demo.gltf"));
+    CHECK(demo && pb_scene_bent_triangles(demo) == 0);
+    pb_scene_destroy(demo);
+    const char *smooth[2] = {"samples/Duck/Duck.gltf", "samples/DamagedHelmet/DamagedHelmet.gltf"};
+    for (int i = 0; i < 2; ++i) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/../shared/scenes/%s", PB_SOURCE_DIR, smooth[i]);
+        if (!file_exists(path))
+            continue;
+        pb_scene *m = load_ok(path);
+        uint64_t bent = m ? pb_scene_bent_triangles(m) : 0;
+        fprintf(stderr, "  %s: %llu of %u triangles shade smooth\n", smooth[i], (unsigned long long)bent,
+                m ? m->triangle_count : 0);
+        CHECK(m && bent > m->triangle_count / 4);
+        pb_scene_destroy(m);
+    }
 }
 
 static void far_from_origin_is_rebased(void)
@@ -1566,6 +1660,7 @@ int main(void)
     RUN(spec_gloss_and_unlit_materials);
     RUN(texture_transform_applied);
     RUN(bad_triangles_dropped_and_counted);
+    RUN(vertex_normals_read_for_shading);
     RUN(far_from_origin_is_rebased);
     RUN(malformed_files_get_clear_errors);
     RUN(hostile_inputs_refused);

@@ -143,6 +143,8 @@ typedef struct pb_scene_desc {
      * image past a limit is a warning and its material keeps its factor. */
     uint64_t max_texture_pixels;       /* per image; default PB_MAX_TEXTURE_PIXELS */
     uint64_t max_texture_total_pixels; /* all images of a file; default PB_MAX_TEXTURE_TOTAL_PIXELS */
+    uint32_t face_normals;    /* 1: every triangle keeps its face normal, whatever NORMAL says (flat
+                                 shading: `--shading-normals face`); default 0, the file's vertex normals */
 } pb_scene_desc;
 
 /* 8192 x 8192 (256 MiB as RGBA8) per image, and 16 such images per file
@@ -174,6 +176,14 @@ void pb_scene_destroy(pb_scene *scene);
  * of the local triangle positions and the materials. A volume baked from a
  * different scene (or a changed one) has another. */
 uint64_t pb_scene_hash(const pb_scene *scene);
+
+/* Triangles with a vertex normal bent away from the face normal by more
+ * than PB_BENT_NORMAL_COS (about 1.1 degrees; the sign is ignored: a normal
+ * that only points to the other side bends nothing). The bake and the
+ * renderer shade with vertex normals (docs/bake.md, "Shading normals") when
+ * there is one; else with the face normals, as fast as before. */
+#define PB_BENT_NORMAL_COS 0.9998f
+uint64_t pb_scene_bent_triangles(const pb_scene *scene);
 
 /* Default-initialised material (glTF defaults: white, opaque, cutoff 0.5). */
 pb_material pb_material_default(void);

@@ -107,8 +107,8 @@ async function main() {
                 if (!m.isMeshStandardMaterial || emissive.has(m)) continue;
                 volume.applyTo(m);
                 if (testing) checkable(m);
-                if (testing) { // shade as the C renderer does: geometric normal, nearest texel (src/bvh/alpha.h)
-                    m.flatShading = true;
+                if (testing) { // shade as the C renderer does: nearest texel (src/bvh/alpha.h); both shade
+                    // with the vertex normals (docs/bake.md, "Shading normals"), flat where a mesh has none
                     for (const t of [m.map, m.emissiveMap])
                         if (t) { t.minFilter = t.magFilter = THREE.NearestFilter; t.generateMipmaps = false; t.needsUpdate = true; }
                 }

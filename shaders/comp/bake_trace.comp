@@ -33,7 +33,7 @@ void main()
     PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, P.pass_index >= PB_RELOCATION_PASS, state);
     if (bake_feature(PB_FEATURE_VOLUME) && !addr_null(P.volume.probes) && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
         pb_volume = P.volume;
-        pr.L += pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.ng, -d);
+        pr.L += pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.n, -d);
     }
     if (bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee)) { // probe NEE: one light sample from the probe per ray
         vec4 nr[2] = vec4[2](vec4(0.0), vec4(0.0, 1.0, 0.0, 0.0));

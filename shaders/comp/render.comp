@@ -117,7 +117,7 @@ void main()
         if (R.mode == MODE_PROBES || R.mode == MODE_INDIRECT) {
             vec3 V = vec3(0.0);
             if (pr.shade)
-                V = pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.ng, -dir);
+                V = pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.n, -dir);
             if (R.mode == MODE_INDIRECT)
                 L = V;
             else

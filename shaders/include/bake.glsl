@@ -128,6 +128,7 @@ layout(constant_id = 2) const uint PB_BAKE_FEATURES = 0xffffffffu;
 #define PB_FEATURE_ENVIRONMENT 64u
 #define PB_FEATURE_LIGHTS 128u
 #define PB_FEATURE_VERTEX_COLORS 256u
+#define PB_FEATURE_SHADING_NORMALS 512u
 
 // Pass indices from here on are relocation passes (src/bake/bake_types.h):
 // they read only each probe ray's first hit

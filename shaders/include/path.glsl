@@ -88,15 +88,16 @@ EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
 
 // Next-event estimation of one emissive triangle (sample_emitter) as a
 // shadow ray, MIS-weighted against cosine-weighted bounce sampling (power
-// heuristic). Its light is emitted radiance x cos / (pi pdf) x weight: the
+// heuristic). ng decides the side light may come from, the shading normal ns
+// gives the cosine. Its light is emitted radiance x cos / (pi pdf) x weight: the
 // caller multiplies by throughput x albedo. (A function of its own also keeps
 // glslang's `precise` analysis of path_radiance small: inlined there, it ran
 // out of memory.)
-ShadowRay emitter_nee_ray(BakeParams P, vec3 x, vec3 ng, int ge, inout uint state)
+ShadowRay emitter_nee_ray(BakeParams P, vec3 x, vec3 ng, vec3 ns, int ge, inout uint state)
 {
     EmitterSample es = sample_emitter(P, x, state);
-    float cos_x = dot(ng, es.w);
-    if (!(cos_x > 0.0 && es.pdf > 0.0))
+    float cos_x = dot(ns, es.w);
+    if (!(cos_x > 0.0 && dot(ng, es.w) > 0.0 && es.pdf > 0.0))
         return no_shadow_ray();
     float pb = bounce_pdf(P, ge, cos_x, es.w);
     float wl = power_heuristic(es.pdf, pb);
@@ -153,13 +154,13 @@ vec4[2] probe_light_nee(BakeParams P, vec3 x, inout uint state)
 // Next-event estimation of the environment: a direction by texel power as a
 // shadow ray, MIS against cosine-weighted bounce sampling (power heuristic).
 // Its light is radiance x cos / (pi pdf) x weight, like emitter_nee_ray's.
-ShadowRay env_nee_ray(BakeParams P, Env env, vec3 ng, int ge, inout uint state)
+ShadowRay env_nee_ray(BakeParams P, Env env, vec3 ng, vec3 ns, int ge, inout uint state)
 {
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
     vec3 w = env_sample(env, u0, u1, u2).xyz;
-    float cos_x = dot(ng, w);
+    float cos_x = dot(ns, w);
     float pe = env_pdf(env, w);
-    if (!(cos_x > 0.0 && pe > 0.0))
+    if (!(cos_x > 0.0 && dot(ng, w) > 0.0 && pe > 0.0))
         return no_shadow_ray();
     float pb = bounce_pdf(P, ge, cos_x, w);
     float wl = power_heuristic(pe, pb);
@@ -168,6 +169,14 @@ ShadowRay env_nee_ray(BakeParams P, Env env, vec3 ng, int ge, inout uint state)
     r.tmax = PB_INF;
     r.L = env_radiance(env, w) * (cos_x / (PB_PI * pe) * wl);
     return r;
+}
+
+// A punctual light's shadow ray from a reflecting hit: the cosine is the
+// shading normal's, and a light below the geometric surface adds nothing.
+ShadowRay surface_light_ray(Light l, vec3 x, vec3 ng, vec3 ns)
+{
+    ShadowRay r = light_ray(l, x, ns, true);
+    return r.tmax >= 0.0 && dot(ng, r.w) > 0.0 ? r : no_shadow_ray();
 }
 
 // --clamp-indirect: a contribution of reflected light (all but emission and
@@ -185,8 +194,8 @@ struct PathResult {
     vec3 L_seen;     // the part that did not reflect: emission or environment seen along the ray
     float first_t;   // distance to the first hit, negative on a back face, PB_INF on a miss
     bool shade;      // the first hit is a surface that reflects (front face or double-sided)
-    vec3 x;          // first hit, offset off the surface along ng
-    vec3 ng;         // its geometric normal, facing the ray's origin
+    vec3 x;          // first hit, offset off the surface along its geometric normal
+    vec3 n;          // its shading normal, facing the ray's origin
     vec3 albedo;     // its diffuse albedo
 };
 
@@ -238,7 +247,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
     res.first_t = PB_INF;
     res.shade = false;
     res.x = o;
-    res.ng = vec3(0.0, 1.0, 0.0);
+    res.n = vec3(0.0, 1.0, 0.0);
     res.albedo = vec3(0.0);
     vec3 throughput = vec3(1.0);
     float bsdf_pdf = 0.0; // of the direction that led to the current hit (0: the first ray, not MIS-weighted)
@@ -247,7 +256,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
     // start, what they add to
     uvec2 ray = uvec2(PB_RAY_BOUNCE, PB_NEXT_LIGHTS); // (in flight, next light sample)
     uint bounce = 0u, light = 0u;
-    vec3 x = o, ng = vec3(0.0, 1.0, 0.0), albedo = vec3(0.0), E = vec3(0.0), c = vec3(0.0);
+    vec3 x = o, ng = vec3(0.0, 1.0, 0.0), ns = ng, albedo = vec3(0.0), E = vec3(0.0), c = vec3(0.0);
     int ge = -1;
     ShadowRay sr = no_shadow_ray();
     bool light_select = bake_feature(PB_FEATURE_LIGHT_SELECT) && P.light_select != 0u;
@@ -308,10 +317,12 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
             if (bake_feature(PB_FEATURE_VERTEX_COLORS) && (s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
                 albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
             x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);
+            bool smooth_shaded = bake_feature(PB_FEATURE_SHADING_NORMALS) && (s.flags & PB_SCENE_SHADING_NORMALS) != 0u;
+            ns = smooth_shaded ? shading_normal(s, tr.tri, tr.u, tr.v, ng) : ng;
             if (bounce == 0u) {
                 res.shade = true;
                 res.x = x;
-                res.ng = ng;
+                res.n = ns;
                 res.albedo = albedo;
             }
             E = vec3(0.0);
@@ -333,7 +344,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                 Emitter le = table.e[li];
                 uint pick = xl - float(li) < le.prob ? li : le.alias;
                 Emitter chosen = table.e[pick];
-                sr = light_ray(lights.l[chosen.tri], x, ng, true);
+                sr = surface_light_ray(lights.l[chosen.tri], x, ng, ns);
                 sr.L /= chosen.pad;
                 light = 1u;
                 if (sr.tmax >= 0.0) {
@@ -341,7 +352,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                     break;
                 }
             } else {
-                sr = light_ray(lights.l[light], x, ng, true);
+                sr = surface_light_ray(lights.l[light], x, ng, ns);
                 ++light;
                 if (sr.tmax >= 0.0) {
                     ray.x = PB_RAY_LIGHT;
@@ -354,7 +365,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         if (ray.y == PB_NEXT_EMITTER) {
             ray.y = PB_NEXT_ENV;
             if (bake_emitters(P) && albedo != vec3(0.0)) {
-                sr = emitter_nee_ray(P, x, ng, ge, state);
+                sr = emitter_nee_ray(P, x, ng, ns, ge, state);
                 if (sr.tmax >= 0.0) {
                     ray.x = PB_RAY_NEE;
                     continue;
@@ -364,7 +375,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         if (ray.y == PB_NEXT_ENV) {
             ray.y = PB_NEXT_BOUNCE;
             if (env.count > 0u && albedo != vec3(0.0)) {
-                sr = env_nee_ray(P, env, ng, ge, state);
+                sr = env_nee_ray(P, env, ng, ns, ge, state);
                 if (sr.tmax >= 0.0) {
                     ray.x = PB_RAY_NEE;
                     continue;
@@ -391,18 +402,22 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
         throughput *= albedo;
         if (max(throughput.r, max(throughput.g, throughput.b)) <= 0.0)
             break;
+        // The cosine lobe is the shading normal's; a direction below the
+        // geometric surface would leave through it, and no light comes from there.
         if (ge >= 0) { // guided: the learned distribution or the cosine lobe, weighed by the mixture
             float uc = rng_next(state), u1 = rng_next(state), u2 = rng_next(state), u3 = rng_next(state);
-            dir = uc < PB_GUIDE_SHARE ? guide_sample(P, ge, u1, u2, u3) : cosine_direction(ng, u1, u2);
-            float cosine = dot(ng, dir);
-            if (!(cosine > 0.0))
-                break; // below the surface: no light comes from there
+            dir = uc < PB_GUIDE_SHARE ? guide_sample(P, ge, u1, u2, u3) : cosine_direction(ns, u1, u2);
+            float cosine = dot(ns, dir);
+            if (!(cosine > 0.0 && dot(ng, dir) > 0.0))
+                break;
             bsdf_pdf = bounce_pdf(P, ge, cosine, dir);
             throughput *= cosine / (PB_PI * bsdf_pdf);
         } else {
             float u1 = rng_next(state), u2 = rng_next(state);
-            dir = cosine_direction(ng, u1, u2);
-            bsdf_pdf = max(0.0, dot(ng, dir)) / PB_PI;
+            dir = cosine_direction(ns, u1, u2);
+            if (!(dot(ng, dir) > 0.0))
+                break;
+            bsdf_pdf = max(0.0, dot(ns, dir)) / PB_PI;
         }
         o = x;
         ++bounce;

@@ -5,10 +5,12 @@
 #define PB_SCENE_GLSL
 
 #include "address.glsl"
+#include "octahedral.glsl"
 
 #define PB_NO_HIT 0xffffffffu
 #define PB_FLAG_ALPHA_MASK 0x80000000u
 #define PB_SCENE_VERTEX_COLORS 1u
+#define PB_SCENE_SHADING_NORMALS 2u
 #define PB_INF uintBitsToFloat(0x7f800000u)
 
 // 4-wide quantized BVH node (include/probebake/bvh.h), decoded: child i's
@@ -167,7 +169,8 @@ Tri load_tri(pb_addr base, uint index)
 struct SceneRefs {
     pb_addr nodes;     // Node4[] (48 bytes each)
     pb_addr tris;      // 10 words per triangle: 9 position floats, flags (material | PB_FLAG_ALPHA_MASK)
-    pb_addr tri_uv;    // float[6] per triangle; then, with PB_SCENE_VERTEX_COLORS, float[12] per triangle (RGBA per corner)
+    pb_addr tri_uv;    // float[6] per triangle; then, with PB_SCENE_VERTEX_COLORS, float[12] per triangle (RGBA per corner);
+                       // then, with PB_SCENE_SHADING_NORMALS, uint[3] per triangle (vertex normals, 16-bit octahedral)
     pb_addr materials; // Material[]
     pb_addr textures;  // Texture[]
     pb_addr texels;    // RGBA8 words
@@ -203,6 +206,26 @@ vec4 vertex_color(SceneRefs s, uint tri, float u, float v)
                      u * vec4(c.v[b + 4u], c.v[b + 5u], c.v[b + 6u], c.v[b + 7u]) +
                      v * vec4(c.v[b + 8u], c.v[b + 9u], c.v[b + 10u], c.v[b + 11u]);
     return r;
+}
+
+// Shading normal of leaf-ordered triangle `tri` at (u, v): its vertex
+// normals (packed as two snorm16 octahedral coordinates) interpolated and
+// normalized, turned to the side of ng (the geometric normal, facing the
+// ray's origin); ng where they cancel. pb_shading_normal_cpu
+// (src/bake/shading_normals.c) is the CPU reference, same arithmetic.
+vec3 shading_normal(SceneRefs s, uint tri, float u, float v, vec3 ng)
+{
+    UintBuf w = UintBuf(s.tri_uv);
+    uint b = ((s.flags & PB_SCENE_VERTEX_COLORS) != 0u ? 18u : 6u) * s.triangle_count + 3u * tri;
+    vec3 n0 = oct_decode(unpackSnorm2x16(w.v[b]));
+    vec3 n1 = oct_decode(unpackSnorm2x16(w.v[b + 1u]));
+    vec3 n2 = oct_decode(unpackSnorm2x16(w.v[b + 2u]));
+    precise float w0 = 1.0 - u - v;
+    precise vec3 n = w0 * n0 + u * n1 + v * n2;
+    float l = length(n);
+    if (!(l > 1e-6))
+        return ng;
+    return (dot(n, ng) < 0.0 ? -n : n) / l;
 }
 
 #endif

@@ -10,6 +10,7 @@
 #include "bake/guide.h"
 #include "bake/light_cells.h"
 #include "bake/path_cpu.h"
+#include "bake/shading_normals.h"
 #include "bvh/alpha.h"
 #include "common/common.h"
 #include "common/srgb.h"
@@ -90,9 +91,11 @@ static hit trace(const pb_bake_pass *p, const float o[3], const float d[3], floa
     return r;
 }
 
-/* light_irradiance of bake.glsl */
+/* light_irradiance of bake.glsl; with ng (not NULL), surface_light_ray of
+ * path.glsl: n is then the shading normal, and a light below the geometric
+ * surface adds nothing */
 static void light_irradiance(const pb_bake_pass *p, const gpu_light *l, const float x[3], const float n[3],
-                             int oriented, float E[3])
+                             const float *ng, int oriented, float E[3])
 {
     uint32_t type = (uint32_t)l->position_type[3];
     float to_light[3], dist, falloff = 1.f;
@@ -126,6 +129,8 @@ static void light_irradiance(const pb_bake_pass *p, const gpu_light *l, const fl
     }
     float cosine = oriented ? n[0] * to_light[0] + n[1] * to_light[1] + n[2] * to_light[2] : 1.f;
     if (cosine <= 0.f || falloff <= 0.f)
+        return;
+    if (ng && !(ng[0] * to_light[0] + ng[1] * to_light[1] + ng[2] * to_light[2] > 0.f))
         return;
     if (trace(p, x, to_light, dist, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
@@ -208,13 +213,19 @@ static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitter
     return es;
 }
 
-/* Next-event estimation of one emissive triangle (emitter_nee of path.glsl). */
+static float dot3(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* Next-event estimation of one emissive triangle (emitter_nee_ray of path.glsl). */
 static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const float x[3], const float ng[3],
-                        int32_t ge, const float albedo[3], const float thr[3], uint32_t *state, float L[3])
+                        const float ns[3], int32_t ge, const float albedo[3], const float thr[3], uint32_t *state,
+                        float L[3])
 {
     emitter_sample es = sample_emitter(c, em, x, state);
-    float cos_x = ng[0] * es.w[0] + ng[1] * es.w[1] + ng[2] * es.w[2];
-    if (!(cos_x > 0.f && es.pdf > 0.f))
+    float cos_x = dot3(ns, es.w);
+    if (!(cos_x > 0.f && dot3(ng, es.w) > 0.f && es.pdf > 0.f))
         return;
     if (trace(c->p, x, es.w, es.dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
@@ -263,17 +274,17 @@ static void probe_light_nee(const pb_path_ctx *c, const float x[3], uint32_t *st
         out[k] = L[k] * (wl / (4.f * PI_F * pdf));
 }
 
-/* env_nee of bake_trace.comp */
-static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], int32_t ge, const float albedo[3],
-                    const float thr[3], uint32_t *state, float L[3])
+/* env_nee_ray of path.glsl */
+static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], const float ns[3], int32_t ge,
+                    const float albedo[3], const float thr[3], uint32_t *state, float L[3])
 {
     const pb_env_table *env = p->env;
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
     float w[3];
     pb_env_sample(env, u0, u1, u2, w);
-    float cos_x = ng[0] * w[0] + ng[1] * w[1] + ng[2] * w[2];
+    float cos_x = dot3(ns, w);
     float pe = pb_env_pdf(env, w);
-    if (!(cos_x > 0.f && pe > 0.f))
+    if (!(cos_x > 0.f && dot3(ng, w) > 0.f && pe > 0.f))
         return;
     if (trace(p, x, w, INFINITY, PB_TRACE_ANY).tri != PB_NO_HIT)
         return;
@@ -314,7 +325,7 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
     pb_path_result res;
     memset(&res, 0, sizeof res);
     res.first_t = INFINITY;
-    res.ng[1] = 1.f;
+    res.n[1] = 1.f;
     memcpy(res.x, o_in, sizeof res.x);
     float thr[3] = {1, 1, 1}, bsdf_pdf = 0.f;
     const pb_bake_emitters *em = p->emitters && p->emitters->count ? p->emitters : NULL;
@@ -396,22 +407,25 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
                 albedo[k] *= vc[k];
         }
         pb_offset_ray_origin(xp, ng, x);
+        float ns[3] = {ng[0], ng[1], ng[2]};
+        if (c->smooth)
+            pb_shading_normal_cpu(s, h.tri, h.u, h.v, ng, ns);
         if (bounce == 0) {
             res.shade = 1;
             memcpy(res.x, x, sizeof x);
-            memcpy(res.ng, ng, sizeof ng);
+            memcpy(res.n, ns, sizeof ns);
             memcpy(res.albedo, albedo, sizeof albedo);
         }
         if (p->light_table && p->light_table->count) { /* many lights: one drawn by power */
             const pb_light_table *lt = p->light_table;
             uint32_t pick = pb_alias_sample(lt->keep, lt->alias, lt->count, rng_next(state));
-            light_irradiance(p, &c->lights[pick], x, ng, 1, E);
+            light_irradiance(p, &c->lights[pick], x, ns, ng, 1, E);
             for (int k = 0; k < 3; ++k)
                 E[k] /= lt->p[pick];
         } else {
             for (uint32_t l = 0; l < s->light_count; ++l) {
                 float El[3];
-                light_irradiance(p, &c->lights[l], x, ng, 1, El);
+                light_irradiance(p, &c->lights[l], x, ns, ng, 1, El);
                 for (int k = 0; k < 3; ++k)
                     E[k] += El[k];
             }
@@ -421,9 +435,9 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             cc[k] = thr[k] * albedo[k] * (E[k] / PI_F);
         int32_t ge = pb_guide_entry(p->guide, x, ng);
         if (em && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-            emitter_nee(c, em, x, ng, ge, albedo, thr, state, cc);
+            emitter_nee(c, em, x, ng, ns, ge, albedo, thr, state, cc);
         if (env_sampled && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-            env_nee(p, x, ng, ge, albedo, thr, state, cc);
+            env_nee(p, x, ng, ns, ge, albedo, thr, state, cc);
         clamp_indirect(cc, p->indirect_clamp);
         for (int k = 0; k < 3; ++k) {
             res.L[k] += cc[k];
@@ -443,22 +457,25 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             thr[k] *= albedo[k];
         if (fmaxf(thr[0], fmaxf(thr[1], thr[2])) <= 0.f)
             break;
+        /* the shading normal's cosine lobe; below the geometric surface no light comes */
         if (ge >= 0) { /* guided: the learned distribution or the cosine lobe, weighed by the mixture */
             float uc = rng_next(state), u1 = rng_next(state), u2 = rng_next(state), u3 = rng_next(state);
             if (uc < PB_GUIDE_SHARE)
                 pb_guide_sample(p->guide, ge, u1, u2, u3, dir);
             else
-                pb_cosine_direction_cpu(ng, u1, u2, dir);
-            float cosine = ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2];
-            if (!(cosine > 0.f))
-                break; /* below the surface: no light comes from there */
+                pb_cosine_direction_cpu(ns, u1, u2, dir);
+            float cosine = dot3(ns, dir);
+            if (!(cosine > 0.f && dot3(ng, dir) > 0.f))
+                break;
             bsdf_pdf = bounce_pdf(p, ge, cosine, dir);
             for (int k = 0; k < 3; ++k)
                 thr[k] *= cosine / (PI_F * bsdf_pdf);
         } else {
             float u1 = rng_next(state), u2 = rng_next(state);
-            pb_cosine_direction_cpu(ng, u1, u2, dir);
-            bsdf_pdf = fmaxf(0.f, ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]) / PI_F;
+            pb_cosine_direction_cpu(ns, u1, u2, dir);
+            if (!(dot3(ng, dir) > 0.f))
+                break;
+            bsdf_pdf = fmaxf(0.f, dot3(ns, dir)) / PI_F;
         }
         memcpy(o, x, sizeof x);
     }
@@ -479,7 +496,7 @@ static void trace_range(void *user, uint64_t begin, uint64_t end)
         pb_path_result r = pb_path_radiance_cpu(&c->path, o, d, p->bounces, (int)p->direct, &state);
         if (p->volume && r.shade) {
             float view[3] = {-d[0], -d[1], -d[2]}, e[3];
-            pb_sample_cpu(p->volume, r.x, r.ng, view, e);
+            pb_sample_cpu(p->volume, r.x, r.n, view, e);
             for (int k = 0; k < 3; ++k)
                 r.L[k] += r.albedo[k] / PI_F * e[k];
         }
@@ -511,6 +528,7 @@ int pb_path_ctx_init(pb_path_ctx *c, const pb_bake_pass *p)
     }
     pb_bake_lights(s, c->lights);
     pb_bake_materials(s, c->materials);
+    c->smooth = pb_scene_bent_triangles(s) != 0; /* as pb_gpu_scene_create decides */
     return 1;
 }
 
@@ -578,7 +596,7 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
             for (uint32_t k = 0; k < s->light_count; ++k) {
                 const gpu_light *l = &lights[k];
                 float E[3], n0[3] = {0, 0, 0};
-                light_irradiance(p, l, x, n0, 0, E);
+                light_irradiance(p, l, x, n0, NULL, 0, E);
                 if (E[0] == 0.f && E[1] == 0.f && E[2] == 0.f)
                     continue;
                 float to[3];

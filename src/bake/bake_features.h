@@ -19,6 +19,7 @@ enum {
     PB_FEATURE_ENVIRONMENT = 1u << 6,   /* env_count: the environment sampled */
     PB_FEATURE_LIGHTS = 1u << 7,        /* light_count: punctual lights */
     PB_FEATURE_VERTEX_COLORS = 1u << 8, /* scene.flags: COLOR_0 */
+    PB_FEATURE_SHADING_NORMALS = 1u << 9, /* scene.flags: vertex normals bent from the faces */
 };
 
 /* The features a pass with these parameters uses: a pipeline specialised to

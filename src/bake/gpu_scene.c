@@ -3,6 +3,7 @@
 #include "bake/gpu_scene.h"
 #include "bake/guide_cache.h"
 #include "bake/light_cells_gpu.h"
+#include "bake/shading_normals.h"
 #include "common/common.h"
 #include "probebake/scene.h"
 
@@ -87,15 +88,16 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     if (bvh->stats.depth > PB_BVH_MAX_DEPTH || bvh->stats.wide_depth > PB_BVH_MAX_DEPTH)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH depth %u exceeds %d", bvh->stats.depth, PB_BVH_MAX_DEPTH);
     uint32_t n = scene->triangle_count;
+    int smooth = pb_scene_bent_triangles(scene) != 0; /* else the kernels keep the face normals */
     uint64_t sizes[6] = {
         (uint64_t)bvh->wide_node_count * sizeof(pb_bvh4_node),
         (uint64_t)n * sizeof(gpu_tri) + 16u, /* + a texel: the last record's texels end 8 bytes past it */
-        (uint64_t)n * (scene->colors ? 72u : 24u), /* UVs, then vertex colours */
+        (uint64_t)n * ((scene->colors ? 72u : 24u) + (smooth ? 12u : 0u)), /* UVs, vertex colours, normals */
         (uint64_t)scene->material_count * sizeof(gpu_material),
         (uint64_t)scene->texture_count * sizeof(gpu_texture),
         scene->texel_count * 4u,
     };
-    static const char *const names[6] = {"BVH nodes", "triangles", "texture coordinates and vertex colours",
+    static const char *const names[6] = {"BVH nodes", "triangles", "texture coordinates, vertex colours and normals",
                                          "materials", "textures", "texels"};
     uint64_t total = 0;
     for (int i = 0; i < 6; ++i) {
@@ -142,6 +144,11 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         memcpy(uvs + 6 * (size_t)k, scene->texcoords + 6 * (size_t)tri, 24);
         if (scene->colors)
             memcpy(uvs + 6 * (size_t)n + 12 * (size_t)k, scene->colors + 12 * (size_t)tri, 48);
+        if (smooth) {
+            uint32_t *packed = (uint32_t *)(uvs + (scene->colors ? 18 : 6) * (size_t)n) + 3 * (size_t)k;
+            for (int v = 0; v < 3; ++v)
+                packed[v] = pb_normal_pack(scene->normals + 9 * (size_t)tri + 3 * v);
+        }
     }
     memcpy(gs->tri_order, bvh->tri_order, (size_t)n * 4);
     gs->triangle_count = n;
@@ -162,7 +169,8 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     }
     gs->refs = (gpu_scene_refs){gs->nodes.address, gs->tris.address, gs->tri_uv.address, gs->materials.address,
                                 gs->textures.address, gs->texels.address, n,
-                                scene->colors ? PB_SCENE_VERTEX_COLORS : 0u};
+                                (scene->colors ? PB_SCENE_VERTEX_COLORS : 0u) |
+                                    (smooth ? PB_SCENE_SHADING_NORMALS : 0u)};
     gs->ctx = ctx;
     gs->bvh = bvh;
     gs->bytes = total;

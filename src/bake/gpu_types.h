@@ -15,6 +15,9 @@
 /* gpu_scene_refs.flags: vertex colours follow the texture coordinates in
  * tri_uv (12 floats per triangle after the 6 n of the UVs) */
 #define PB_SCENE_VERTEX_COLORS 1u
+/* ... and vertex normals after them (3 packed words per triangle,
+ * shading_normals.h); without it the kernels shade with the face normal */
+#define PB_SCENE_SHADING_NORMALS 2u
 
 typedef struct gpu_material {
     float base_alpha;

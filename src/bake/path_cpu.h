@@ -10,6 +10,7 @@ typedef struct pb_path_ctx {
     const pb_bake_pass *p;         /* scene, BVH, environment, emitters (other fields unused here) */
     gpu_light *lights;
     gpu_shade_material *materials;
+    int smooth;                    /* the scene's vertex normals shade (PB_SCENE_SHADING_NORMALS) */
 } pb_path_ctx;
 
 /* PathResult of path.glsl */
@@ -17,7 +18,7 @@ typedef struct pb_path_result {
     float L[3], L_direct[3], L_seen[3];
     float first_t;                 /* negative on a back face, INFINITY on a miss */
     int shade;
-    float x[3], ng[3], albedo[3];
+    float x[3], n[3], albedo[3];   /* n: the shading normal, facing the ray's origin */
 } pb_path_result;
 
 /* The kernels' random numbers (rng.glsl) and cosine-weighted directions

@@ -97,6 +97,7 @@ int cmd_bake(const options *o)
         return cli_usage_error("%s: --points replaces the grid; drop --spacing, --counts and --bounds", "bake");
     pb_log log = {cli_log_to_stderr, (void *)&o->log};
     pb_scene_desc sd = {log, 0};
+    sd.face_normals = (uint32_t)o->face_normals;
     pb_scene *s = NULL;
     pb_bvh *bvh = NULL;
     pb_context *ctx = NULL;

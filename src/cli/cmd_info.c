@@ -32,6 +32,7 @@ int cmd_info(const options *o)
     if (!o->scene)
         return cli_usage_error("%s needs a SCENE file", "info");
     pb_scene_desc sd = {{cli_log_to_stderr, (void *)&o->log}, 0};
+    sd.face_normals = (uint32_t)o->face_normals;
     pb_scene *s;
     pb_error err;
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
@@ -42,6 +43,7 @@ int cmd_info(const options *o)
         lo[k] = s->bounds_min[k] + s->origin[k];
         hi[k] = s->bounds_max[k] + s->origin[k];
     }
+    uint64_t smooth = pb_scene_bent_triangles(s); /* shaded with their vertex normals */
     uint32_t emissive = 0, masked = 0, blended = 0;
     for (uint32_t m = 0; m < s->material_count; ++m) {
         const pb_material *mt = &s->materials[m];
@@ -54,10 +56,10 @@ int cmd_info(const options *o)
         json_string(o->scene);
         printf(",\n  \"triangles\": %u,\n  \"triangles_in\": %llu,\n  \"dropped_degenerate\": %llu,\n"
                "  \"dropped_nonfinite\": %llu,\n  \"primitives\": %u,\n  \"primitives_skipped\": %u,\n"
-               "  \"normals_generated\": %u,\n  \"nodes\": %u,\n",
+               "  \"normals_generated\": %u,\n  \"smooth_triangles\": %llu,\n  \"nodes\": %u,\n",
                s->triangle_count, (unsigned long long)st->triangles_in, (unsigned long long)st->dropped_degenerate,
                (unsigned long long)st->dropped_nonfinite, st->primitives, st->primitives_skipped,
-               st->normals_generated, st->nodes);
+               st->normals_generated, (unsigned long long)smooth, st->nodes);
         printf("  \"materials\": %u,\n  \"emissive_materials\": %u,\n  \"masked_materials\": %u,\n"
                "  \"blended_materials\": %u,\n  \"textures\": %u,\n",
                s->material_count, emissive, masked, blended, s->texture_count);
@@ -95,6 +97,8 @@ int cmd_info(const options *o)
                (unsigned long long)st->dropped_nonfinite);
         printf("primitives  %u (%u points/lines skipped, %u without normals: flat normals generated), %u nodes\n",
                st->primitives, st->primitives_skipped, st->normals_generated, st->nodes);
+        printf("shading     %llu of %u triangles smooth (vertex normals bent from the face)\n",
+               (unsigned long long)smooth, s->triangle_count);
         printf("materials   %u (%u emissive, %u alpha-masked, %u blended)\n", s->material_count, emissive, masked,
                blended);
         printf("textures    %u\n", s->texture_count);

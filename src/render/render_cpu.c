@@ -117,7 +117,7 @@ static void render_rows(void *user, uint64_t begin, uint64_t end)
                 float V[3] = {0, 0, 0};
                 if (pr.shade) {
                     float view[3] = {-dir[0], -dir[1], -dir[2]}, e[3];
-                    pb_sample_cpu(d->volume, pr.x, pr.ng, view, e);
+                    pb_sample_cpu(d->volume, pr.x, pr.n, view, e);
                     for (int c = 0; c < 3; ++c)
                         V[c] = pr.albedo[c] / 3.14159265358979324f * e[c];
                 }

@@ -526,7 +526,7 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
             for (int c = 0; c < 4 && col_n; ++c)
                 rgba[4 * k + c] = c < col_n ? (float)col[(size_t)col_n * v + c] : 1.f;
         }
-        if (!pb_sb_add_triangle(r.b, p, have_n ? n : nullptr, tc, col_n ? rgba : nullptr, material))
+        if (!pb_sb_add_triangle(r.b, p, have_n && !r.face_normals ? n : nullptr, tc, col_n ? rgba : nullptr, material))
             return fail(r, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
     }
     return PB_OK;
@@ -943,7 +943,7 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     snprintf(b->stats.extensions_used, sizeof b->stats.extensions_used, "%s", used.c_str());
     snprintf(b->stats.extensions_applied, sizeof b->stats.extensions_applied, "%s", applied.c_str());
 
-    reader r{model, path, b, err, {}, 0, {}, {}, {}, {}};
+    reader r{model, path, b, err, {}, 0, {}, {}, {}, {}, {}, desc->face_normals != 0};
     res = decode_meshopt_views(r);
     if (res != PB_OK)
         return res;

@@ -37,6 +37,8 @@ struct reader {
     std::map<int, decoded_accessor> draco_accessors;
     // colour textures with a metallic texture folded in: (base, metallic texture, factor bits) -> texture
     std::map<std::array<int64_t, 3>, int32_t> folded;
+    // pb_scene_desc.face_normals: NORMAL is read (and checked) but the face normals are kept
+    bool face_normals = false;
 };
 
 // A one-line error naming the file; returns `code`.

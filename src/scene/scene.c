@@ -2,6 +2,7 @@
 #include "common/common.h"
 #include "scene/scene_builder.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -69,6 +70,27 @@ pb_result pb_scene_from_triangles(const double *world_positions, uint32_t triang
         (*out)->path[0] = '\0';
     pb_sb_free(&b);
     return r;
+}
+
+uint64_t pb_scene_bent_triangles(const pb_scene *s)
+{
+    uint64_t bent = 0;
+    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+        /* the face normal in double, as the builder gives triangles without normals */
+        const float *p = s->positions + 9 * (size_t)t, *n = s->normals + 9 * (size_t)t;
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k)
+            e1[k] = (double)p[3 + k] - p[k], e2[k] = (double)p[6 + k] - p[k];
+        double g[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        double l = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (!(l > 0.0))
+            continue; /* no face normal to bend from (the builder drops such triangles) */
+        int b = 0;
+        for (int v = 0; v < 3; ++v)
+            b |= !(fabs(g[0] * n[3 * v] + g[1] * n[3 * v + 1] + g[2] * n[3 * v + 2]) >= PB_BENT_NORMAL_COS * l);
+        bent += (uint64_t)b;
+    }
+    return bent;
 }
 
 void pb_scene_destroy(pb_scene *s)

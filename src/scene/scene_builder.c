@@ -57,27 +57,14 @@ void pb_sb_free(pb_scene_builder *b)
     b->log = log;
 }
 
-static void normalize3f(float v[3])
+/* out = v / |v|; 0 when v has no direction (zero, or not finite) */
+static int normalize3f(const float v[3], float out[3])
 {
     float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (l > 0.f && isfinite(l)) {
-        v[0] /= l, v[1] /= l, v[2] /= l;
-    } else {
-        v[0] = 0.f, v[1] = 1.f, v[2] = 0.f;
-    }
-}
-
-static void flat_normal(const double p[9], float n[3])
-{
-    double e1[3] = {p[3] - p[0], p[4] - p[1], p[5] - p[2]};
-    double e2[3] = {p[6] - p[0], p[7] - p[1], p[8] - p[2]};
-    double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    double l = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    if (l > 0) {
-        n[0] = (float)(c[0] / l), n[1] = (float)(c[1] / l), n[2] = (float)(c[2] / l);
-    } else {
-        n[0] = 0.f, n[1] = 1.f, n[2] = 0.f;
-    }
+    if (!(l > 0.f && isfinite(l)))
+        return 0;
+    out[0] = v[0] / l, out[1] = v[1] / l, out[2] = v[2] / l;
+    return 1;
 }
 
 int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, const float *rgba,
@@ -128,19 +115,14 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
     memcpy(b->pos + 9 * i, p, 9 * sizeof(double));
     for (int k = 0; b->rgba && k < 12; ++k) /* glTF colours are in [0, 1] */
         b->rgba[12 * i + k] = !rgba ? 1.f : isfinite(rgba[k]) ? fminf(fmaxf(rgba[k], 0.f), 1.f) : 1.f;
+    /* A vertex normal that cannot be normalized (absent, zero, not finite)
+     * is the face normal: shading normals bend light. NaN marks it here;
+     * pb_sb_finish takes the face normal of the triangle as stored (float,
+     * rebased), so that it agrees with the triangle the kernels see. */
     float *dn = b->nrm + 9 * i;
-    int nrm_ok = n != NULL;
-    for (int k = 0; nrm_ok && k < 9; ++k)
-        nrm_ok = isfinite(n[k]);
-    if (nrm_ok) {
-        memcpy(dn, n, 9 * sizeof(float));
-        for (int v = 0; v < 3; ++v)
-            normalize3f(dn + 3 * v);
-    } else {
-        flat_normal(p, dn);
-        memcpy(dn + 3, dn, 3 * sizeof(float));
-        memcpy(dn + 6, dn, 3 * sizeof(float));
-    }
+    for (int v = 0; v < 3; ++v)
+        if (!n || !normalize3f(n + 3 * v, dn + 3 * v))
+            dn[3 * v] = dn[3 * v + 1] = dn[3 * v + 2] = NAN;
     float *du = b->uv + 6 * i;
     for (int k = 0; k < 6; ++k)
         du[k] = (uv && isfinite(uv[k])) ? uv[k] : 0.f;
@@ -294,7 +276,12 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
             flo[k % 3] = p[k] < flo[k % 3] ? p[k] : flo[k % 3];
             fhi[k % 3] = p[k] > fhi[k % 3] ? p[k] : fhi[k % 3];
         }
-        memcpy(s->normals + 9 * (uint64_t)kept, b->nrm + 9 * i, 9 * sizeof(float));
+        float *dn = s->normals + 9 * (uint64_t)kept;
+        memcpy(dn, b->nrm + 9 * i, 9 * sizeof(float));
+        double cl = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+        for (int v = 0; v < 3; ++v)
+            if (isnan(dn[3 * v])) /* no normal of its own: the face's */
+                dn[3 * v] = (float)(c0 / cl), dn[3 * v + 1] = (float)(c1 / cl), dn[3 * v + 2] = (float)(c2 / cl);
         memcpy(s->texcoords + 6 * (uint64_t)kept, b->uv + 6 * i, 6 * sizeof(float));
         if (s->colors)
             memcpy(s->colors + 12 * (uint64_t)kept, b->rgba + 12 * i, 12 * sizeof(float));
