@@ -346,14 +346,8 @@ static void relocation_traces_first_hits_only(void)
     pb_scene_destroy(s);
 }
 
-/* A 400 m floor of albedo 0.5 under a map with a small, bright sun, a probe
- * 1 m above, direct light excluded: the probe sees only the floor, of
- * radiance rho E / pi, where E is the map's irradiance on an upward surface
- * (per texel in closed form). SH of a lower-hemisphere step is exact at L1:
- * E(n) = rho E (1 - n_y) / 2: next-event estimation of the map, MIS-combined
- * with the (terminal) bounce rays that leave to the sky, is unbiased. With
- * bounces 0 and 1 alike (the floor cannot see itself). */
-static void environment_lights_floor(void)
+/* A 400 m floor of albedo 0.5 (its normals the face's, +Y) */
+static pb_scene *floor_scene(void)
 {
     double floor[18] = {-200, 0, -200, -200, 0, 200, 200, 0, 200, -200, 0, -200, 200, 0, 200, 200, 0, -200};
     pb_material m = pb_material_default();
@@ -363,6 +357,54 @@ static void environment_lights_floor(void)
     pb_scene *s = NULL;
     pb_error err;
     CHECKF(pb_scene_from_triangles(floor, 2, ids, &m, 1, &s, &err) == PB_OK, "%s", err.message);
+    return s;
+}
+
+/* One probe 1 m above floor_scene's floor, 2048 rays x 8 passes, direct light excluded. */
+static pb_bake_desc floor_probe(const pb_scene *s, uint32_t bounces)
+{
+    pb_bake_desc d = {0};
+    d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 1;
+    d.grid.origin[1] = 1.f - (float)s->origin[1];
+    d.grid.origin[0] = -(float)s->origin[0], d.grid.origin[2] = -(float)s->origin[2];
+    d.rays_per_probe = 2048;
+    d.passes = 8;
+    d.bounces = bounces;
+    d.exclude_direct = 1;
+    d.skip_relocation = 1;
+    return d;
+}
+
+/* The probe's irradiance from a floor of radiance L: a lower-hemisphere step,
+ * exact at L1 in SH: E(n) = pi L (1 - n_y) / 2 = want (1 - n_y) / 2. The
+ * worst error over three normals (down, sideways, up) and the channels, each
+ * over its scale; *down gets E(-Y). */
+static float floor_step_error(const float *sh, const double want[3], const double scale[3], float down[3])
+{
+    float worst = 0;
+    float dirs[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 1, 0}};
+    pb_sh_eval(sh, dirs[0], down);
+    for (int i = 0; i < 3; ++i) {
+        float e3[3];
+        pb_sh_eval(sh, dirs[i], e3);
+        for (int k = 0; k < 3; ++k)
+            worst = fmaxf(worst, (float)(fabs(e3[k] - want[k] * (1 - dirs[i][1]) / 2) / scale[k]));
+    }
+    return worst;
+}
+
+/* floor_scene under a map with a small, bright sun, a probe 1 m above,
+ * direct light excluded: the probe sees only the floor, of radiance rho E /
+ * pi, where E is the map's irradiance on an upward surface (per texel in
+ * closed form), so E(n) = rho E (1 - n_y) / 2 (floor_step_error):
+ * next-event estimation of the map, MIS-combined with the (terminal) bounce
+ * rays that leave to the sky, is unbiased. With bounces 0 and 1 alike (the
+ * floor cannot see itself). */
+static void environment_lights_floor(void)
+{
+    pb_scene *s = floor_scene();
+    if (!s)
+        return;
     pb_environment env;
     CHECK(make_env(&env, 128, 64, 0.3f, 0.f, 20, 12, 1, 3000.f, 30.f));
     /* E on an upward surface: sum of L cos dOmega over upper texels, exactly */
@@ -375,29 +417,12 @@ static void environment_lights_floor(void)
                 E[k] += env.rgb[3 * (y * 128 + x) + k] * band;
     }
     for (uint32_t bounces = 0; bounces <= 1; ++bounces) {
-        pb_bake_desc d = {0};
-        d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 1;
-        d.grid.origin[1] = 1.f - (float)s->origin[1];
-        d.grid.origin[0] = -(float)s->origin[0], d.grid.origin[2] = -(float)s->origin[2];
-        d.rays_per_probe = 2048;
-        d.passes = 8;
-        d.bounces = bounces;
-        d.exclude_direct = 1;
-        d.skip_relocation = 1;
+        pb_bake_desc d = floor_probe(s, bounces);
         d.environment = &env;
         baked b = bake(s, &d);
         if (b.ok) {
-            float worst = 0, down[3];
-            float dirs[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 1, 0}};
-            pb_sh_eval(b.vol.sh, dirs[0], down);
-            for (int i = 0; i < 3; ++i) {
-                float e3[3];
-                pb_sh_eval(b.vol.sh, dirs[i], e3);
-                for (int k = 0; k < 3; ++k) {
-                    double want = 0.5 * E[k] * (1 - dirs[i][1]) / 2;
-                    worst = fmaxf(worst, (float)(fabs(e3[k] - want) / (0.5 * E[k])));
-                }
-            }
+            double want[3] = {0.5 * E[0], 0.5 * E[1], 0.5 * E[2]};
+            float down[3], worst = floor_step_error(b.vol.sh, want, want, down);
             fprintf(stderr, "  bounces %u: irradiance from the floor %.4f (want %.4f), worst of 3 normals %.2f%% of it; "
                     "%.2f traversals per probe ray\n", bounces, down[0], 0.5 * E[0], 100 * worst, (double)b.vol.traversals / (double)b.vol.rays_traced);
             CHECK(worst < 0.01f);
@@ -408,28 +433,21 @@ static void environment_lights_floor(void)
     pb_scene_destroy(s);
 }
 
-/* Shading normals weigh reflected light: the 400 m floor of albedo 0.5 lit
- * by a directional light of irradiance I (at normal incidence) from
- * elevation e toward +x, its vertex normals all tilted by t toward +x, a
- * probe 1 m above, direct light excluded: the floor's radiance is rho I
- * max(0, n_s . l) / pi wherever the light is above the geometric surface,
- * so the probe's irradiance is E(n) = rho I max(0, n_s . l) (1 - n_y) / 2
- * (environment_lights_floor). Flat (t = 0), tilted toward the light and
- * away from it; and a light below the floor that the tilted normal faces
- * but the surface does not: no light. */
+/* Shading normals weigh reflected light: floor_scene lit by a directional
+ * light of irradiance I (at normal incidence) from elevation e toward +x,
+ * its vertex normals all tilted by t toward +x, a probe 1 m above, direct
+ * light excluded: the floor's radiance is rho I max(0, n_s . l) / pi
+ * wherever the light is above the geometric surface, so the probe's
+ * irradiance is E(n) = rho I max(0, n_s . l) (1 - n_y) / 2
+ * (floor_step_error). Flat (t = 0), tilted toward the light and away from
+ * it; and a light below the floor that the tilted normal faces but the
+ * surface does not: no light. */
 static void shading_normals_weigh_reflected_light(void)
 {
-    double floor[18] = {-200, 0, -200, -200, 0, 200, 200, 0, 200, -200, 0, -200, 200, 0, 200, 200, 0, -200};
     struct { float tilt, elevation; } cases[4] = {{0.f, 45.f}, {30.f, 45.f}, {-30.f, 45.f}, {60.f, -20.f}};
     const float I = 3.f, rad = 3.14159265f / 180.f;
     for (int c = 0; c < 4; ++c) {
-        pb_material m = pb_material_default();
-        m.base_color[0] = m.base_color[1] = m.base_color[2] = 0.5f;
-        m.metallic = 0.f;
-        uint32_t ids[2] = {0, 0};
-        pb_scene *s = NULL;
-        pb_error err;
-        CHECKF(pb_scene_from_triangles(floor, 2, ids, &m, 1, &s, &err) == PB_OK, "%s", err.message);
+        pb_scene *s = floor_scene();
         if (!s)
             return;
         float ns[3] = {sinf(cases[c].tilt * rad), cosf(cases[c].tilt * rad), 0.f};
@@ -446,25 +464,11 @@ static void shading_normals_weigh_reflected_light(void)
             s->lights[0].direction[k] = -l[k];
         float cosine = ns[0] * l[0] + ns[1] * l[1];
         double lit = cases[c].elevation > 0.f && cosine > 0.f ? 0.5 * I * cosine : 0.0;
-        pb_bake_desc d = {0};
-        d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 1;
-        d.grid.origin[1] = 1.f - (float)s->origin[1];
-        d.grid.origin[0] = -(float)s->origin[0], d.grid.origin[2] = -(float)s->origin[2];
-        d.rays_per_probe = 2048;
-        d.passes = 8;
-        d.bounces = 0;
-        d.exclude_direct = 1;
-        d.skip_relocation = 1;
+        pb_bake_desc d = floor_probe(s, 0);
         baked b = bake(s, &d);
         if (b.ok) {
-            float worst = 0, down[3];
-            float dirs[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 1, 0}};
-            pb_sh_eval(b.vol.sh, dirs[0], down);
-            for (int i = 0; i < 3; ++i) {
-                float e3[3];
-                pb_sh_eval(b.vol.sh, dirs[i], e3);
-                worst = fmaxf(worst, (float)(fabs(e3[0] - lit * (1 - dirs[i][1]) / 2) / (0.5 * I)));
-            }
+            double want[3] = {lit, lit, lit}, scale[3] = {0.5 * I, 0.5 * I, 0.5 * I};
+            float down[3], worst = floor_step_error(b.vol.sh, want, scale, down);
             fprintf(stderr, "  tilt %+3.0f, light at %+3.0f deg: irradiance from the floor %.4f (want %.4f), worst of "
                     "3 normals %.2f%% of rho I\n", cases[c].tilt, cases[c].elevation, down[0], lit, 100 * worst);
             CHECK(worst < 0.01f);
