@@ -542,6 +542,10 @@ static void vertex_normals_read_for_shading(void)
     pb_error err;
     CHECK(pb_scene_load(path, &fd, &s, &err) == PB_OK && pb_scene_bent_triangles(s) == 0 &&
           s->normals[6] == 0.f && s->normals[8] == 1.f);
+    /* the scene hash (merge's check) tells them apart: the bent normals shade */
+    pb_scene *smooth = load_ok(path);
+    CHECK(smooth && s && pb_scene_hash(smooth) != pb_scene_hash(s));
+    pb_scene_destroy(smooth);
     pb_scene_destroy(s);
 
     /* the packing: random directions, the axes and the octahedron's edges */
@@ -575,9 +579,13 @@ static void vertex_normals_read_for_shading(void)
     CHECK(max_angle < 1e-4);
 
     /* the shared scenes: the demo is flat, the duck and the helmet smooth */
-    pb_scene *demo = load_ok(source_path("tests/scenes/demo.gltf"));
+    /* a flat scene's hash is the same either way (and what it was before normals shaded) */
+    pb_scene *demo = load_ok(source_path("tests/scenes/demo.gltf")), *demo_face = NULL;
     CHECK(demo && pb_scene_bent_triangles(demo) == 0);
+    CHECK(pb_scene_load(source_path("tests/scenes/demo.gltf"), &fd, &demo_face, &err) == PB_OK && demo &&
+          pb_scene_hash(demo) == pb_scene_hash(demo_face));
     pb_scene_destroy(demo);
+    pb_scene_destroy(demo_face);
     const char *smooth[2] = {"samples/Duck/Duck.gltf", "samples/DamagedHelmet/DamagedHelmet.gltf"};
     for (int i = 0; i < 2; ++i) {
         char path[1024];

@@ -173,8 +173,10 @@ pb_result pb_scene_from_triangles(const double *world_positions, uint32_t triang
 void pb_scene_destroy(pb_scene *scene);
 
 /* The scene's identity as a volume records it (settings.scene_hash): a hash
- * of the local triangle positions and the materials. A volume baked from a
- * different scene (or a changed one) has another. */
+ * of the local triangle positions and the materials, and of the vertex
+ * normals where they shade (pb_scene_bent_triangles > 0). A volume baked from
+ * a different scene (or a changed one, or with --shading-normals face where
+ * the normals shade) has another; `merge` refuses to join them. */
 uint64_t pb_scene_hash(const pb_scene *scene);
 
 /* Triangles with a vertex normal bent away from the face normal by more

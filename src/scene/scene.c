@@ -112,6 +112,10 @@ void pb_scene_destroy(pb_scene *s)
 
 uint64_t pb_scene_hash(const pb_scene *scene)
 {
-    return pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
-                     pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
+    uint64_t h = pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
+                           pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
+    /* vertex normals that shade are part of what was baked; face normals add
+     * nothing, so a flat scene (or --shading-normals face) keeps the hash it
+     * had before vertex normals were read */
+    return pb_scene_bent_triangles(scene) ? pb_hash64(scene->normals, (size_t)scene->triangle_count * 36, h) : h;
 }
