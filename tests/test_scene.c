@@ -543,9 +543,9 @@ static void vertex_normals_read_for_shading(void)
     CHECK(pb_scene_load(path, &fd, &s, &err) == PB_OK && pb_scene_bent_triangles(s) == 0 &&
           s->normals[6] == 0.f && s->normals[8] == 1.f);
     /* the scene hash (merge's check) tells them apart: the bent normals shade */
-    pb_scene *smooth = load_ok(path);
-    CHECK(smooth && s && pb_scene_hash(smooth) != pb_scene_hash(s));
-    pb_scene_destroy(smooth);
+    pb_scene *vertex = load_ok(path);
+    CHECK(vertex && s && pb_scene_hash(vertex) != pb_scene_hash(s));
+    pb_scene_destroy(vertex);
     pb_scene_destroy(s);
 
     /* the packing: random directions, the axes and the octahedron's edges */
