@@ -44,6 +44,12 @@ typedef struct pb_material {
     uint32_t alpha_mode;      /* pb_alpha_mode */
     uint32_t double_sided;
     char name[64];
+    /* KHR_materials_transmission (a thin surface): the share of the light
+     * meeting it that goes straight through, tinted by the base colour:
+     * transmissionFactor x (1 - metallic). 0: none. Such a material is
+     * alpha-blended, base_color[3] its coverage (docs/scene.md). Last, so
+     * pb_scene_hash of a scene without transmission is what it was before. */
+    float transmission;
 } pb_material;
 
 /* Decoded texture: RGBA8 texels at pb_scene.texels[offset ...], row-major,

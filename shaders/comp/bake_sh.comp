@@ -73,7 +73,7 @@ void main()
         LightBuf lights = LightBuf(P.lights);
         for (uint k = 0u; k < P.light_count; ++k) {
             Light l = lights.l[k];
-            vec3 E = light_irradiance(P.scene, l, x, vec3(0.0), false);
+            vec3 E = light_irradiance(P, l, x, vec3(0.0), false);
             if (E == vec3(0.0))
                 continue;
             vec3 to_light = uint(l.position_type.w) == PB_LIGHT_DIRECTIONAL ? -l.direction_range.xyz

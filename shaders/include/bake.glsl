@@ -10,7 +10,7 @@
 // (alias tables) and combined with bounce rays by multiple importance
 // sampling (power heuristic). Back faces of single-sided materials are black
 // (the ray is inside geometry); alpha-blended surfaces pass light
-// stochastically (alpha.glsl). docs/bake.md.
+// stochastically (alpha.glsl), thin glass tinted (glass_step). docs/bake.md.
 #ifndef PB_BAKE_GLSL
 #define PB_BAKE_GLSL
 
@@ -28,7 +28,7 @@
 struct ShadeMaterial {
     vec4 base_color;
     vec4 emissive_metallic; // rgb emission (strength applied), w metallic
-    ivec4 tex;              // base colour texture, emissive texture, double sided, unused
+    ivec4 tex;              // base colour texture, emissive texture, double sided, transmission (float bits)
 };
 
 struct Light {
@@ -129,6 +129,7 @@ layout(constant_id = 2) const uint PB_BAKE_FEATURES = 0xffffffffu;
 #define PB_FEATURE_LIGHTS 128u
 #define PB_FEATURE_VERTEX_COLORS 256u
 #define PB_FEATURE_SHADING_NORMALS 512u
+#define PB_FEATURE_TRANSMISSION 1024u
 
 // Pass indices from here on are relocation passes (src/bake/bake_types.h):
 // they read only each probe ray's first hit
@@ -217,6 +218,92 @@ vec3 texture_rgb(SceneRefs s, int tex, vec2 uv)
     return srgb_to_linear(c);
 }
 
+// Thin transmissive surfaces (KHR_materials_transmission, docs/bake.md "Thin
+// glass"): the traversal meets them as opaque, and the ray's owner decides
+// here whether it goes through. A surface of coverage a (alpha: factor x
+// texture x vertex colour) and transmission tau lets a ray through with
+// probability 1 - a (1 - tau) (the alpha blend's hashed threshold, so CPU
+// and GPU decide alike), and on average (1 - a) + a tau c of the light, c
+// its base colour there: a ray that passes carries that over its
+// probability. CPU reference: glass_step in src/bake/bake_cpu.c.
+bool bake_glass(BakeParams P)
+{
+    return bake_feature(PB_FEATURE_TRANSMISSION) && (P.scene.flags & PB_SCENE_TRANSMISSION) != 0u;
+}
+
+// Layers of glass a ray goes through at most; the next one stops it.
+#define PB_GLASS_LAYERS 64u
+
+// The share of the light meeting a surface that it reflects diffusely, of
+// its base colour: 1 - metallic; for thin glass the dielectric part's
+// 1 - transmissionFactor over the share that does not pass,
+// ((1 - metallic) - tau) / (1 - tau).
+float diffuse_share(ShadeMaterial m)
+{
+    float keep = 1.0 - m.emissive_metallic.w, tau = intBitsToFloat(m.tex.w);
+    return tau > 0.0 ? (tau < 1.0 ? max(0.0, keep - tau) / (1.0 - tau) : 0.0) : keep;
+}
+
+struct GlassStep {
+    bool pass;      // the ray goes on
+    vec3 w;         // its tint
+    vec3 origin;    // where it goes on from: the hit, offset to the far side
+};
+
+GlassStep glass_step(BakeParams P, TraceResult tr, vec3 rd)
+{
+    GlassStep g;
+    g.pass = false;
+    g.w = vec3(1.0);
+    g.origin = vec3(0.0);
+    if (tr.tri == PB_NO_HIT)
+        return g;
+    SceneRefs s = P.scene;
+    Tri t = load_tri(s.tris, tr.tri);
+    uint mat = t.flags & ~PB_FLAG_ALPHA_MASK;
+    ShadeMaterial m = load_shade_material(P.materials, mat);
+    float tau = intBitsToFloat(m.tex.w);
+    if (!(tau > 0.0))
+        return g;
+    vec4 c = m.base_color;
+    if (m.tex.x >= 0) {
+        Texture tx = TextureBuf(s.textures).t[m.tex.x];
+        vec2 st = surface_uv(s, tr.tri, tr.u, tr.v);
+        uint texel = UintBuf(s.texels).v[tx.offset + texel_index(st.x, st.y, tx.width, tx.height, tx.wrap & 0xffu, tx.wrap >> 8)];
+        c.rgb *= srgb_to_linear(vec3(float(texel & 0xffu), float((texel >> 8) & 0xffu), float((texel >> 16) & 0xffu)) / 255.0);
+        c.a *= float(texel >> 24) * (1.0 / 255.0);
+    }
+    if ((s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
+        c *= vertex_color(s, tr.tri, tr.u, tr.v);
+    float opaque = c.a * (1.0 - tau);
+    if (opaque > alpha_blend_threshold(mat, tr.u, tr.v))
+        return g;
+    g.pass = true;
+    g.w = ((1.0 - c.a) + c.a * tau * c.rgb) / (1.0 - opaque);
+    vec3 e1 = t.v1 - t.v0, e2 = t.v2 - t.v0, n = normalize(cross(e1, e2));
+    g.origin = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, dot(n, rd) > 0.0 ? n : -n);
+    return g;
+}
+
+// The share of the light a shadow ray from x along w (to tmax) carries past
+// thin glass, per channel; 0 where anything else blocks it.
+vec3 shadow_transmittance(BakeParams P, vec3 x, vec3 w, float tmax)
+{
+    bool glass = bake_glass(P);
+    vec3 T = vec3(1.0);
+    for (uint layers = 0u;; ++layers) {
+        TraceResult tr = trace_ray(P.scene, x, w, 0.0, tmax, !glass);
+        if (tr.tri == PB_NO_HIT)
+            return T;
+        GlassStep g = glass && layers < PB_GLASS_LAYERS ? glass_step(P, tr, w) : GlassStep(false, vec3(1.0), vec3(0.0));
+        if (!g.pass)
+            return vec3(0.0);
+        T *= g.w;
+        x = g.origin;
+        tmax -= tr.t;
+    }
+}
+
 // A shadow ray from a surface point and the light it adds when nothing
 // blocks it. tmax < 0: no ray (the sample adds nothing).
 struct ShadowRay {
@@ -274,14 +361,13 @@ ShadowRay light_ray(Light l, vec3 x, vec3 n, bool oriented)
     return r;
 }
 
-// light_ray with its shadow ray traced
-vec3 light_irradiance(SceneRefs s, Light l, vec3 x, vec3 n, bool oriented)
+// light_ray with its shadow ray traced (through thin glass)
+vec3 light_irradiance(BakeParams P, Light l, vec3 x, vec3 n, bool oriented)
 {
     ShadowRay r = light_ray(l, x, n, oriented);
     if (r.tmax < 0.0)
         return vec3(0.0);
-    TraceResult shadow = trace_ray(s, x, r.w, 0.0, r.tmax, true);
-    return shadow.tri != PB_NO_HIT ? vec3(0.0) : r.L;
+    return r.L * shadow_transmittance(P, x, r.w, r.tmax);
 }
 
 #endif

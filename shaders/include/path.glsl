@@ -143,11 +143,11 @@ vec4[2] probe_light_nee(BakeParams P, vec3 x, inout uint state)
     if (!(pdf > 0.0))
         return r;
     r[1] = vec4(w, 0.0);
-    TraceResult shadow = trace_ray(P.scene, x, w, 0.0, tmax, true);
-    if (shadow.tri != PB_NO_HIT)
+    vec3 T = shadow_transmittance(P, x, w, tmax);
+    if (T == vec3(0.0))
         return r;
     float wl = power_heuristic(pdf, 1.0 / (4.0 * PB_PI));
-    r[0] = vec4(L * (wl / (4.0 * PB_PI * pdf)), 0.0);
+    r[0] = vec4(L * T * (wl / (4.0 * PB_PI * pdf)), 0.0);
     return r;
 }
 
@@ -260,10 +260,34 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
     int ge = -1;
     ShadowRay sr = no_shadow_ray();
     bool light_select = bake_feature(PB_FEATURE_LIGHT_SELECT) && P.light_select != 0u;
+    // Thin glass (bake.glsl, glass_step): a ray it lets through goes on from
+    // its far side, `past` along, tinted; shadow rays then find their hits
+    // nearest first (closest hit), so that each layer is met in order.
+    bool glass = bake_glass(P);
+    vec3 beyond = vec3(0.0);
+    float past = 0.0;
+    uint layers = 0u;
     for (;;) {
         bool bounce_ray = ray.x == PB_RAY_BOUNCE;
-        TraceResult tr = trace_ray(s, bounce_ray ? o : x, bounce_ray ? dir : sr.w, 0.0, bounce_ray ? PB_INF : sr.tmax,
-                                   !bounce_ray);
+        vec3 rd = bounce_ray ? dir : sr.w;
+        TraceResult tr = trace_ray(s, layers != 0u ? beyond : bounce_ray ? o : x, rd, 0.0,
+                                   (bounce_ray ? PB_INF : sr.tmax) - past, !bounce_ray && !glass);
+        if (glass) {
+            GlassStep g = layers < PB_GLASS_LAYERS ? glass_step(P, tr, rd) : GlassStep(false, vec3(1.0), vec3(0.0));
+            if (g.pass) {
+                if (bounce_ray)
+                    throughput *= g.w;
+                else
+                    sr.L *= g.w;
+                beyond = g.origin;
+                past += tr.t;
+                ++layers;
+                continue;
+            }
+            tr.t += past; // from the ray's origin: the probe's depth, the emitter's MIS density
+            past = 0.0;
+            layers = 0u;
+        }
         if (ray.x == PB_RAY_LIGHT) {
             E += tr.tri == PB_NO_HIT ? sr.L : vec3(0.0);
         } else if (ray.x == PB_RAY_NEE) {
@@ -313,7 +337,7 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
             }
             if (bounce > bounces)
                 break; // the terminal ray: it only gathers emission (see below)
-            albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * (1.0 - m.emissive_metallic.w);
+            albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * diffuse_share(m);
             if (bake_feature(PB_FEATURE_VERTEX_COLORS) && (s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
                 albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
             x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);

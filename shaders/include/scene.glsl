@@ -11,6 +11,7 @@
 #define PB_FLAG_ALPHA_MASK 0x80000000u
 #define PB_SCENE_VERTEX_COLORS 1u
 #define PB_SCENE_SHADING_NORMALS 2u
+#define PB_SCENE_TRANSMISSION 4u
 #define PB_INF uintBitsToFloat(0x7f800000u)
 
 // 4-wide quantized BVH node (include/probebake/bvh.h), decoded: child i's

@@ -91,10 +91,103 @@ static hit trace(const pb_bake_pass *p, const float o[3], const float d[3], floa
     return r;
 }
 
+/* Triangle tri's edges from its first corner and its unit face normal (the
+ * kernels' normalize(cross(e1, e2))). */
+static void face_normal(const pb_scene *s, uint32_t tri, float e1[3], float e2[3], float n[3])
+{
+    const float *v0 = s->positions + 9 * (size_t)tri, *v1 = v0 + 3, *v2 = v0 + 6;
+    for (int k = 0; k < 3; ++k)
+        e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; ++k)
+        n[k] /= nl;
+}
+
+/* bake.glsl's bound on the layers of glass one ray goes through */
+#define PB_GLASS_LAYERS 64u
+
+/* The scene has thin glass (PB_SCENE_TRANSMISSION). */
+static int scene_has_glass(const pb_scene *s)
+{
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        if (s->materials[m].transmission > 0.f)
+            return 1;
+    return 0;
+}
+
+/* glass_step of bake.glsl: 1 when hit h of a ray along rd is on thin glass
+ * that lets it through, with its tint w and the origin it goes on from. */
+static int glass_step(const pb_scene *s, hit h, const float rd[3], float w[3], float origin[3])
+{
+    if (h.tri == PB_NO_HIT)
+        return 0;
+    uint32_t mi = s->material[h.tri];
+    const pb_material *m = &s->materials[mi];
+    float tau = m->transmission;
+    if (!(tau > 0.f))
+        return 0;
+    float c[4] = {m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
+    if (m->base_color_texture >= 0) {
+        const pb_texture *t = &s->textures[m->base_color_texture];
+        const float *uv = s->texcoords + 6 * (size_t)h.tri;
+        float w0 = 1.f - h.u - h.v;
+        float tu = w0 * uv[0] + h.u * uv[2] + h.v * uv[4], tv = w0 * uv[1] + h.u * uv[3] + h.v * uv[5];
+        uint32_t texel = s->texels[t->offset + pb_texel_index(tu, tv, t->width, t->height, t->wrap_s, t->wrap_t)];
+        for (int k = 0; k < 3; ++k)
+            c[k] *= pb_srgb_to_linear((float)((texel >> (8 * k)) & 0xffu) / 255.f);
+        c[3] *= (float)(texel >> 24) * (1.f / 255.f);
+    }
+    if (s->colors) {
+        float vc[4];
+        pb_vertex_color(s, h.tri, h.u, h.v, vc);
+        for (int k = 0; k < 4; ++k)
+            c[k] *= vc[k];
+    }
+    float opaque = c[3] * (1.f - tau);
+    if (opaque > pb_alpha_blend_threshold(mi, h.u, h.v))
+        return 0;
+    for (int k = 0; k < 3; ++k)
+        w[k] = ((1.f - c[3]) + c[3] * tau * c[k]) / (1.f - opaque);
+    const float *v0 = s->positions + 9 * (size_t)h.tri;
+    float e1[3], e2[3], n[3], x[3];
+    face_normal(s, h.tri, e1, e2, n);
+    float side = n[0] * rd[0] + n[1] * rd[1] + n[2] * rd[2] > 0.f ? 1.f : -1.f;
+    for (int k = 0; k < 3; ++k) {
+        n[k] *= side;
+        x[k] = v0[k] + h.u * e1[k] + h.v * e2[k];
+    }
+    pb_offset_ray_origin(x, n, origin);
+    return 1;
+}
+
+/* shadow_transmittance of bake.glsl: 1 and the share T of the light a
+ * shadow ray from x along w (to tmax) carries past thin glass, or 0 where
+ * anything else blocks it. With glass, hits are found nearest first. */
+static int shadow_transmittance(const pb_bake_pass *p, int glass, const float x_in[3], const float w[3], float tmax,
+                                float T[3])
+{
+    float x[3] = {x_in[0], x_in[1], x_in[2]};
+    T[0] = T[1] = T[2] = 1.f;
+    for (uint32_t layers = 0;; ++layers) {
+        hit h = trace(p, x, w, tmax, glass ? PB_TRACE_CLOSEST : PB_TRACE_ANY);
+        if (h.tri == PB_NO_HIT)
+            return 1;
+        float g[3];
+        if (!glass || layers >= PB_GLASS_LAYERS || !glass_step(p->scene, h, w, g, x))
+            return 0;
+        for (int k = 0; k < 3; ++k)
+            T[k] *= g[k];
+        tmax -= h.t;
+    }
+}
+
 /* light_irradiance of bake.glsl; with ng (not NULL), surface_light_ray of
  * path.glsl: n is then the shading normal, and a light below the geometric
  * surface adds nothing */
-static void light_irradiance(const pb_bake_pass *p, const gpu_light *l, const float x[3], const float n[3],
+static void light_irradiance(const pb_bake_pass *p, int glass, const gpu_light *l, const float x[3], const float n[3],
                              const float *ng, int oriented, float E[3])
 {
     uint32_t type = (uint32_t)l->position_type[3];
@@ -132,10 +225,11 @@ static void light_irradiance(const pb_bake_pass *p, const gpu_light *l, const fl
         return;
     if (ng && !(ng[0] * to_light[0] + ng[1] * to_light[1] + ng[2] * to_light[2] > 0.f))
         return;
-    if (trace(p, x, to_light, dist, PB_TRACE_ANY).tri != PB_NO_HIT)
+    float T[3];
+    if (!shadow_transmittance(p, glass, x, to_light, dist, T))
         return;
     for (int k = 0; k < 3; ++k)
-        E[k] = l->radiance[k] * (cosine * falloff);
+        E[k] = l->radiance[k] * (cosine * falloff) * T[k];
 }
 
 void pb_cosine_direction_cpu(const float n[3], float u1, float u2, float out[3])
@@ -227,11 +321,12 @@ static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const 
     float cos_x = dot3(ns, es.w);
     if (!(cos_x > 0.f && dot3(ng, es.w) > 0.f && es.pdf > 0.f))
         return;
-    if (trace(c->p, x, es.w, es.dist * 0.9999f, PB_TRACE_ANY).tri != PB_NO_HIT)
+    float T[3];
+    if (!shadow_transmittance(c->p, c->glass, x, es.w, es.dist * 0.9999f, T))
         return;
     float pb = bounce_pdf(c->p, ge, cos_x, es.w), wl = power_heuristic(es.pdf, pb);
     for (int k = 0; k < 3; ++k)
-        L[k] += thr[k] * albedo[k] * es.Le[k] * (cos_x / (PI_F * es.pdf) * wl);
+        L[k] += thr[k] * albedo[k] * (es.Le[k] * T[k]) * (cos_x / (PI_F * es.pdf) * wl);
 }
 
 /* probe_emitter_share of path.glsl: the probability that probe NEE's light
@@ -267,17 +362,19 @@ static void probe_light_nee(const pb_path_ctx *c, const float x[3], uint32_t *st
     if (!(pdf > 0.f))
         return;
     memcpy(out + 4, w, sizeof w);
-    if (trace(p, x, w, tmax, PB_TRACE_ANY).tri != PB_NO_HIT)
+    float T[3];
+    if (!shadow_transmittance(p, c->glass, x, w, tmax, T))
         return;
     float wl = power_heuristic(pdf, 1.f / (4.f * PI_F));
     for (int k = 0; k < 3; ++k)
-        out[k] = L[k] * (wl / (4.f * PI_F * pdf));
+        out[k] = L[k] * T[k] * (wl / (4.f * PI_F * pdf));
 }
 
 /* env_nee_ray of path.glsl */
-static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], const float ns[3], int32_t ge,
+static void env_nee(const pb_path_ctx *c, const float x[3], const float ng[3], const float ns[3], int32_t ge,
                     const float albedo[3], const float thr[3], uint32_t *state, float L[3])
 {
+    const pb_bake_pass *p = c->p;
     const pb_env_table *env = p->env;
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
     float w[3];
@@ -286,12 +383,21 @@ static void env_nee(const pb_bake_pass *p, const float x[3], const float ng[3], 
     float pe = pb_env_pdf(env, w);
     if (!(cos_x > 0.f && dot3(ng, w) > 0.f && pe > 0.f))
         return;
-    if (trace(p, x, w, INFINITY, PB_TRACE_ANY).tri != PB_NO_HIT)
+    float T[3];
+    if (!shadow_transmittance(p, c->glass, x, w, INFINITY, T))
         return;
     float pb = bounce_pdf(p, ge, cos_x, w), wl = power_heuristic(pe, pb);
     const float *Le = env->texels[pb_env_texel_of(env, w)].rgb;
     for (int k = 0; k < 3; ++k)
-        L[k] += thr[k] * albedo[k] * (Le[k] * (cos_x / (PI_F * pe) * wl));
+        L[k] += thr[k] * albedo[k] * ((Le[k] * T[k]) * (cos_x / (PI_F * pe) * wl));
+}
+
+/* diffuse_share of bake.glsl */
+static float diffuse_share(const gpu_shade_material *m)
+{
+    float keep = 1.f - m->emissive_metallic[3], tau;
+    memcpy(&tau, &m->tex[3], 4);
+    return tau > 0.f ? (tau < 1.f ? fmaxf(0.f, keep - tau) / (1.f - tau) : 0.f) : keep;
 }
 
 /* clamp_indirect of path.glsl */
@@ -332,7 +438,20 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
     int env_sampled = p->env && p->env->count;
     float o[3] = {o_in[0], o_in[1], o_in[2]}, dir[3] = {dir_in[0], dir_in[1], dir_in[2]};
     for (uint32_t bounce = 0;; ++bounce) {
-        hit h = trace(p, o, dir, INFINITY, PB_TRACE_CLOSEST);
+        /* through thin glass (glass_step): on from its far side, tinted */
+        float from[3] = {o[0], o[1], o[2]}, past = 0.f;
+        hit h;
+        for (uint32_t layers = 0;; ++layers) {
+            h = trace(p, from, dir, INFINITY, PB_TRACE_CLOSEST);
+            float g[3];
+            if (!c->glass || layers >= PB_GLASS_LAYERS || !glass_step(s, h, dir, g, from))
+                break;
+            for (int k = 0; k < 3; ++k)
+                thr[k] *= g[k];
+            past += h.t;
+        }
+        if (c->glass)
+            h.t += past; /* from the ray's origin: the probe's depth, the emitter's MIS density */
         if (h.tri == PB_NO_HIT) {
             if ((bounce > 0 || see_direct) && p->env && p->env->width) {
                 float w = 1.f;
@@ -348,16 +467,9 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             }
             break;
         }
-        const float *v0 = s->positions + 9 * (size_t)h.tri, *v1 = v0 + 3, *v2 = v0 + 6;
+        const float *v0 = s->positions + 9 * (size_t)h.tri;
         float e1[3], e2[3], ng[3];
-        for (int k = 0; k < 3; ++k)
-            e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
-        ng[0] = e1[1] * e2[2] - e1[2] * e2[1];
-        ng[1] = e1[2] * e2[0] - e1[0] * e2[2];
-        ng[2] = e1[0] * e2[1] - e1[1] * e2[0];
-        float nl = sqrtf(ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2]);
-        for (int k = 0; k < 3; ++k)
-            ng[k] /= nl;
+        face_normal(s, h.tri, e1, e2, ng);
         int back = ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2] > 0.f;
         if (bounce == 0)
             res.first_t = back ? -h.t : h.t;
@@ -397,7 +509,7 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         texture_rgb(s, m->tex[0], tu, tv, base);
         float albedo[3], xp[3], x[3], E[3] = {0, 0, 0};
         for (int k = 0; k < 3; ++k) {
-            albedo[k] = m->base_color[k] * base[k] * (1.f - m->emissive_metallic[3]);
+            albedo[k] = m->base_color[k] * base[k] * diffuse_share(m);
             xp[k] = v0[k] + h.u * e1[k] + h.v * e2[k];
         }
         if (s->colors) {
@@ -419,13 +531,13 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         if (p->light_table && p->light_table->count) { /* many lights: one drawn by power */
             const pb_light_table *lt = p->light_table;
             uint32_t pick = pb_alias_sample(lt->keep, lt->alias, lt->count, rng_next(state));
-            light_irradiance(p, &c->lights[pick], x, ns, ng, 1, E);
+            light_irradiance(p, c->glass, &c->lights[pick], x, ns, ng, 1, E);
             for (int k = 0; k < 3; ++k)
                 E[k] /= lt->p[pick];
         } else {
             for (uint32_t l = 0; l < s->light_count; ++l) {
                 float El[3];
-                light_irradiance(p, &c->lights[l], x, ns, ng, 1, El);
+                light_irradiance(p, c->glass, &c->lights[l], x, ns, ng, 1, El);
                 for (int k = 0; k < 3; ++k)
                     E[k] += El[k];
             }
@@ -437,7 +549,7 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         if (em && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
             emitter_nee(c, em, x, ng, ns, ge, albedo, thr, state, cc);
         if (env_sampled && (albedo[0] != 0.f || albedo[1] != 0.f || albedo[2] != 0.f))
-            env_nee(p, x, ng, ns, ge, albedo, thr, state, cc);
+            env_nee(c, x, ng, ns, ge, albedo, thr, state, cc);
         clamp_indirect(cc, p->indirect_clamp);
         for (int k = 0; k < 3; ++k) {
             res.L[k] += cc[k];
@@ -529,6 +641,7 @@ int pb_path_ctx_init(pb_path_ctx *c, const pb_bake_pass *p)
     pb_bake_lights(s, c->lights);
     pb_bake_materials(s, c->materials);
     c->smooth = pb_scene_bent_triangles(s) != 0; /* as pb_gpu_scene_create decides */
+    c->glass = scene_has_glass(s);
     return 1;
 }
 
@@ -557,6 +670,7 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
     if (!lights)
         return;
     pb_bake_lights(s, lights);
+    int glass = scene_has_glass(s);
     float w = 4.f * PI_F / (float)p->rays_per_probe;
     for (uint32_t local = 0; local < p->probe_count; ++local) {
         uint32_t probe = slot_of(p, local);
@@ -596,7 +710,7 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
             for (uint32_t k = 0; k < s->light_count; ++k) {
                 const gpu_light *l = &lights[k];
                 float E[3], n0[3] = {0, 0, 0};
-                light_irradiance(p, l, x, n0, NULL, 0, E);
+                light_irradiance(p, glass, l, x, n0, NULL, 0, E);
                 if (E[0] == 0.f && E[1] == 0.f && E[2] == 0.f)
                     continue;
                 float to[3];

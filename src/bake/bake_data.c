@@ -38,7 +38,7 @@ void pb_bake_materials(const pb_scene *scene, gpu_shade_material *out)
         g->tex[0] = m->base_color_texture;
         g->tex[1] = m->emissive_texture;
         g->tex[2] = (int32_t)m->double_sided;
-        g->tex[3] = 0;
+        memcpy(&g->tex[3], &m->transmission, 4); /* float bits */
     }
 }
 

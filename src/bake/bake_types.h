@@ -9,7 +9,7 @@
 typedef struct gpu_shade_material {
     float base_color[4];
     float emissive_metallic[4];
-    int32_t tex[4]; /* base colour texture, emissive texture, double sided, unused */
+    int32_t tex[4]; /* base colour texture, emissive texture, double sided, transmission (float bits) */
 } gpu_shade_material;
 _Static_assert(sizeof(gpu_shade_material) == 48, "ShadeMaterial layout");
 

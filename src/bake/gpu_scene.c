@@ -89,6 +89,9 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH depth %u exceeds %d", bvh->stats.depth, PB_BVH_MAX_DEPTH);
     uint32_t n = scene->triangle_count;
     int smooth = pb_scene_bent_triangles(scene) != 0; /* else the kernels keep the face normals */
+    int glass = 0;
+    for (uint32_t m = 0; m < scene->material_count; ++m)
+        glass |= scene->materials[m].transmission > 0.f;
     uint64_t sizes[6] = {
         (uint64_t)bvh->wide_node_count * sizeof(pb_bvh4_node),
         (uint64_t)n * sizeof(gpu_tri) + 16u, /* + a texel: the last record's texels end 8 bytes past it */
@@ -140,7 +143,9 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         uint32_t tri = bvh->tri_order[k];
         uint32_t m = scene->material[tri];
         memcpy(tris[k].v, bvh->tri_positions + 9 * (size_t)k, 36);
-        tris[k].flags = m | (scene->materials[m].alpha_mode != PB_ALPHA_OPAQUE ? PB_FLAG_ALPHA_MASK : 0u);
+        /* thin glass is opaque to the traversal: glass_step (bake.glsl) lets rays through */
+        const pb_material *pm = &scene->materials[m];
+        tris[k].flags = m | (pm->alpha_mode != PB_ALPHA_OPAQUE && !(pm->transmission > 0.f) ? PB_FLAG_ALPHA_MASK : 0u);
         memcpy(uvs + 6 * (size_t)k, scene->texcoords + 6 * (size_t)tri, 24);
         if (scene->colors)
             memcpy(uvs + 6 * (size_t)n + 12 * (size_t)k, scene->colors + 12 * (size_t)tri, 48);
@@ -170,7 +175,7 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     gs->refs = (gpu_scene_refs){gs->nodes.address, gs->tris.address, gs->tri_uv.address, gs->materials.address,
                                 gs->textures.address, gs->texels.address, n,
                                 (scene->colors ? PB_SCENE_VERTEX_COLORS : 0u) |
-                                    (smooth ? PB_SCENE_SHADING_NORMALS : 0u)};
+                                    (smooth ? PB_SCENE_SHADING_NORMALS : 0u) | (glass ? PB_SCENE_TRANSMISSION : 0u)};
     gs->ctx = ctx;
     gs->bvh = bvh;
     gs->bytes = total;

@@ -18,6 +18,9 @@
 /* ... and vertex normals after them (3 packed words per triangle,
  * shading_normals.h); without it the kernels shade with the face normal */
 #define PB_SCENE_SHADING_NORMALS 2u
+/* ... a material is thin glass (pb_material.transmission > 0): its triangles
+ * are opaque to the traversal, and the ray's owner decides (glass_step) */
+#define PB_SCENE_TRANSMISSION 4u
 
 typedef struct gpu_material {
     float base_alpha;

@@ -11,6 +11,7 @@ typedef struct pb_path_ctx {
     gpu_light *lights;
     gpu_shade_material *materials;
     int smooth;                    /* the scene's vertex normals shade (PB_SCENE_SHADING_NORMALS) */
+    int glass;                     /* the scene has thin glass (PB_SCENE_TRANSMISSION) */
 } pb_path_ctx;
 
 /* PathResult of path.glsl */

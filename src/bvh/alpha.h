@@ -58,6 +58,8 @@ static inline int pb_alpha_opaque(const pb_scene *s, uint32_t tri, float u, floa
     const pb_material *m = &s->materials[s->material[tri]];
     if (m->alpha_mode != PB_ALPHA_MASK && m->alpha_mode != PB_ALPHA_BLEND)
         return 1;
+    if (m->transmission > 0.f)
+        return 1; /* thin glass: the ray's owner decides (glass_step in src/bake/bake_cpu.c) */
     float a = m->base_color[3];
     if (m->base_color_texture >= 0) {
         const pb_texture *tx = &s->textures[m->base_color_texture];

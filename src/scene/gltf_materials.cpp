@@ -149,13 +149,13 @@ void fold_metallic(reader &r, const tinygltf::TextureInfo &info, const std::arra
 
 // KHR_materials_transmission without KHR_materials_volume: a thin surface
 // that lets a share t of the light meeting its dielectric part straight
-// through. To the bake that is coverage: a ray passes with probability
-// t (1 - metallic) and otherwise meets the surface as before, which the
-// hashed alpha blend already does, so the material becomes alpha-blended
-// with alpha x (1 - t (1 - metallic)); a transmission texture's red channel
-// scales t per texel, folded into the colour texture's alpha. Not modelled:
-// the base colour's tint of the light let through, the surface's specular
-// reflection, refraction.
+// through, tinted by the base colour. The material becomes alpha-blended:
+// its alpha is its coverage (1 for an opaque one) and pm.transmission =
+// t (1 - metallic); the kernels let a ray through with probability
+// 1 - alpha (1 - transmission), tinted (docs/bake.md, "Thin glass"). A
+// transmission texture's red channel scales t per texel: folded into the
+// colour texture's alpha instead, as coverage, untinted. Not modelled: the
+// surface's specular reflection, refraction.
 void apply_transmission(reader &r, const tinygltf::Material &mt, const std::array<double, 6> &xf, pb_material &pm)
 {
     auto ext = mt.extensions.find("KHR_materials_transmission");
@@ -208,8 +208,10 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
             return; // out of host memory: the builder reports it
         pm.base_color_texture = id;
     }
+    if (pm.alpha_mode == PB_ALPHA_OPAQUE)
+        pm.base_color[3] = 1.f; // glTF ignores an opaque material's alpha: it covers all
     pm.alpha_mode = PB_ALPHA_BLEND;
-    pm.base_color[3] = (float)(pm.base_color[3] * (1.0 - pass));
+    pm.transmission = (float)pass;
 }
 
 } // namespace

@@ -3,6 +3,7 @@
 #include "scene/scene_builder.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -110,10 +111,30 @@ void pb_scene_destroy(pb_scene *s)
     free(s);
 }
 
+/* The materials' bytes before `transmission` (what pb_material held before
+ * it), then the transmissions where any is not 0. */
+_Static_assert(offsetof(pb_material, transmission) == 120, "volumes' scene hashes assume the 120-byte material");
+static uint64_t materials_hash(const pb_scene *scene)
+{
+    const size_t head = offsetof(pb_material, transmission);
+    unsigned char *bytes = calloc(scene->material_count * head + 1, 1);
+    int transmissive = 0;
+    if (!bytes)
+        return 0; /* out of host memory: the bake will not get far either */
+    for (uint32_t i = 0; i < scene->material_count; ++i) {
+        memcpy(bytes + i * head, &scene->materials[i], head);
+        transmissive |= scene->materials[i].transmission != 0.f;
+    }
+    uint64_t h = pb_hash64(bytes, scene->material_count * head, 0);
+    free(bytes);
+    for (uint32_t i = 0; transmissive && i < scene->material_count; ++i)
+        h = pb_hash64(&scene->materials[i].transmission, sizeof(float), h);
+    return h;
+}
+
 uint64_t pb_scene_hash(const pb_scene *scene)
 {
-    uint64_t h = pb_hash64(scene->positions, (size_t)scene->triangle_count * 36,
-                           pb_hash64(scene->materials, scene->material_count * sizeof(pb_material), 0));
+    uint64_t h = pb_hash64(scene->positions, (size_t)scene->triangle_count * 36, materials_hash(scene));
     /* vertex normals that shade are part of what was baked; face normals add
      * nothing, so a flat scene (or --shading-normals face) keeps the hash it
      * had before vertex normals were read */
