@@ -15,8 +15,13 @@ lamps.gltf    the doorway's rooms without the partition, lit by three 30 cm
               emissive ceiling panels (two in room A, a dim one in room B):
               light selection among emitters mostly hidden from each other.
 
-All are closed, single-sided and Lambertian, so every light path stays
-inside. Only the Python standard library is used.
+skylight.gltf one closed 4 x 3 x 4 m white room whose only light is a sun
+              outside, coming in through a 1.2 x 1.2 m skylight of red thin
+              glass (KHR_materials_transmission): every light path inside
+              has passed the glass, so the room is lit red.
+
+All are closed, single-sided and Lambertian (the skylight's glass aside),
+so every light path stays inside. Only the Python standard library is used.
 Run: python3 scripts/make_hard_scenes.py
 """
 import os
@@ -163,6 +168,43 @@ def lamps():
     s.write(os.path.join(scenes_dir(), "lamps.gltf"), gltf)
 
 
+def skylight():
+    s = Scene()
+    WALL, GLASS = range(2)
+    q, x, r = s.quad, 2.0, 0.6
+    s.add("room", WALL, lambda: (
+        q((-x, 0, x), (x, 0, x), (x, 0, -x), (-x, 0, -x), (0, 1, 0)),         # floor
+        q((-x, 0, -x), (x, 0, -x), (x, H, -x), (-x, H, -x), (0, 0, 1)),       # walls, facing in
+        q((x, 0, x), (-x, 0, x), (-x, H, x), (x, H, x), (0, 0, -1)),
+        q((-x, 0, x), (-x, 0, -x), (-x, H, -x), (-x, H, x), (1, 0, 0)),
+        q((x, 0, -x), (x, 0, x), (x, H, x), (x, H, -x), (-1, 0, 0)),
+        # the ceiling around the skylight's opening, facing down
+        q((-x, H, -x), (x, H, -x), (x, H, -r), (-x, H, -r), (0, -1, 0)),
+        q((-x, H, r), (x, H, r), (x, H, x), (-x, H, x), (0, -1, 0)),
+        q((-x, H, -r), (-r, H, -r), (-r, H, r), (-x, H, r), (0, -1, 0)),
+        q((r, H, -r), (x, H, -r), (x, H, r), (r, H, r), (0, -1, 0))))
+    s.add("skylight", GLASS, lambda: q((-r, H, -r), (r, H, -r), (r, H, r), (-r, H, r), (0, -1, 0)))
+    gltf = {
+        "asset": {"version": "2.0", "generator": "probebake scripts/make_hard_scenes.py"},
+        "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_transmission"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"name": "sun", "type": "directional", "color": [1.0, 0.97, 0.9], "intensity": 20.0}]}},
+        "scene": 0,
+        "scenes": [{"name": "skylight", "nodes": [0, 1, 2]}],
+        "nodes": [{"name": "room", "mesh": s.mesh_index("room")},
+                  {"name": "skylight", "mesh": s.mesh_index("skylight")},
+                  # pointing down (-Z turned to -Y), leaning 20 degrees toward +x
+                  {"name": "sun", "rotation": [-0.69636424, -0.12278780, 0.12278780, 0.69636424],
+                   "extensions": {"KHR_lights_punctual": {"light": 0}}}],
+        "meshes": None,
+        "materials": [material("wall", [0.8, 0.8, 0.8]),
+                      material("red glass", [0.9, 0.2, 0.1], doubleSided=True,
+                               extensions={"KHR_materials_transmission": {"transmissionFactor": 1.0}})],
+    }
+    s.write(os.path.join(scenes_dir(), "skylight.gltf"), gltf)
+
+
 doorway()
 panel()
 lamps()
+skylight()

@@ -520,6 +520,15 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect merge-parts 0 "wrote $tmp/merged.probes: 3 parts, 210 probes \([0-9]+ dilated across parts\)" -- \
         "$pb" merge "$tmp/merged.probes" "$tmp/part2.probes" "$tmp/part0.probes" "$tmp/part1.probes"
     expect merge-same-bytes 0 '^same$' -- bash -c "$(declare -f same_but_timings); same_but_timings '$tmp/whole.probes' '$tmp/merged.probes'"
+    # a room lit only through red thin glass (KHR_materials_transmission) is lit red:
+    # its probes' irradiance is more than 3x as red as green (the glass's 0.9 / 0.2;
+    # untinted, as transmission was read before, about 1)
+    expect glass-tints-room 0 '^red [0-9.]+ x green$' -- bash -c "'$pb' bake '$src/tests/scenes/skylight.gltf' \
+        --counts 3,2,3 --rays 64 --passes 2 --octmap-res 4 --quiet --validation -o '$tmp/sky.probes' >/dev/null &&
+        '$pb' inspect '$tmp/sky.probes' --json | python3 -c 'import json, sys
+p = json.load(sys.stdin)[\"probe_list\"]
+r, g = sum(q[\"sh\"][0] for q in p), sum(q[\"sh\"][1] for q in p)
+print(\"red %.2f x green\" % (r / g) if r > 3 * g else \"red %g green %g\" % (r, g))'"
     # parts baked with and without a scene's vertex normals are not one bake (the scene hash says so)
     duck=$src/../shared/scenes/samples/Duck/Duck.gltf
     if [ -f "$duck" ]; then
