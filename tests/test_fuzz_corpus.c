@@ -47,6 +47,8 @@ static void load_all(const char *rel)
         const char *path = write_file(dst, text, size);
         free(text);
         ++files;
+        if (getenv("PB_FUZZ_VERBOSE"))
+            fprintf(stderr, "  %s\n", src);
         int got_it = pb_fuzz_scene_exercise(path);
         loaded += got_it > 0;
         unnamed += got_it < 0;

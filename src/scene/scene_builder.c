@@ -57,13 +57,15 @@ void pb_sb_free(pb_scene_builder *b)
     b->log = log;
 }
 
-/* out = v / |v|; 0 when v has no direction (zero, or not finite) */
+/* out = v / |v|; 0 when v has no direction (zero, or not finite). In
+ * double: a float vector of length 1e-20 squares to a denormal, whose few
+ * bits would leave it far from unit length (the fuzzer found one). */
 static int normalize3f(const float v[3], float out[3])
 {
-    float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (!(l > 0.f && isfinite(l)))
+    double x = v[0], y = v[1], z = v[2], l = sqrt(x * x + y * y + z * z);
+    if (!(l > 0.0 && isfinite(l)))
         return 0;
-    out[0] = v[0] / l, out[1] = v[1] / l, out[2] = v[2] / l;
+    out[0] = (float)(x / l), out[1] = (float)(y / l), out[2] = (float)(z / l);
     return 1;
 }
 
