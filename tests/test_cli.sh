@@ -56,6 +56,9 @@ expect info-extensions 0 '^extensions  used: KHR_lights_punctual, KHR_materials_
 expect info-json-extensions 0 '"extensions_applied": \["KHR_lights_punctual", "KHR_materials_emissive_strength"\],' -- "$pb" info "$demo" --json
 expect info-json-bounds-max 0 '"bounds_max": \[2, 3, 2.5\]' -- "$pb" info "$demo" --json
 expect info-shading-flat 0 '^shading     0 of 40 triangles smooth' -- "$pb" info "$demo"
+expect info-glass 0 '^materials   3 \(0 emissive, 0 alpha-masked, 1 blended, 1 of them thin glass\)' -- \
+    "$pb" info "$src/tests/scenes/skylight.gltf"
+expect info-glass-json 0 '"glass_materials": 1,' -- "$pb" info "$src/tests/scenes/skylight.gltf" --json
 expect shading-normals-bad 2 "error: --shading-normals takes vertex or face" -- "$pb" info "$demo" --shading-normals x
 duck=$src/../shared/scenes/samples/Duck/Duck.gltf
 if [ -f "$duck" ]; then # vertex normals shade smooth, unless --shading-normals face

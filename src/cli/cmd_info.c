@@ -44,12 +44,13 @@ int cmd_info(const options *o)
         hi[k] = s->bounds_max[k] + s->origin[k];
     }
     uint64_t smooth = pb_scene_bent_triangles(s); /* shaded with their vertex normals */
-    uint32_t emissive = 0, masked = 0, blended = 0;
+    uint32_t emissive = 0, masked = 0, blended = 0, glass = 0;
     for (uint32_t m = 0; m < s->material_count; ++m) {
         const pb_material *mt = &s->materials[m];
         emissive += mt->emissive[0] > 0 || mt->emissive[1] > 0 || mt->emissive[2] > 0;
         masked += mt->alpha_mode == PB_ALPHA_MASK;
         blended += mt->alpha_mode == PB_ALPHA_BLEND;
+        glass += mt->transmission > 0.f;
     }
     if (o->json) {
         printf("{\n  \"file\": ");
@@ -61,8 +62,8 @@ int cmd_info(const options *o)
                (unsigned long long)st->dropped_nonfinite, st->primitives, st->primitives_skipped,
                st->normals_generated, (unsigned long long)smooth, st->nodes);
         printf("  \"materials\": %u,\n  \"emissive_materials\": %u,\n  \"masked_materials\": %u,\n"
-               "  \"blended_materials\": %u,\n  \"textures\": %u,\n",
-               s->material_count, emissive, masked, blended, s->texture_count);
+               "  \"blended_materials\": %u,\n  \"glass_materials\": %u,\n  \"textures\": %u,\n",
+               s->material_count, emissive, masked, blended, glass, s->texture_count);
         printf("  \"lights\": [");
         for (uint32_t i = 0; i < s->light_count; ++i) {
             const pb_light *l = &s->lights[i];
@@ -99,8 +100,8 @@ int cmd_info(const options *o)
                st->primitives, st->primitives_skipped, st->normals_generated, st->nodes);
         printf("shading     %llu of %u triangles smooth (vertex normals bent from the face)\n",
                (unsigned long long)smooth, s->triangle_count);
-        printf("materials   %u (%u emissive, %u alpha-masked, %u blended)\n", s->material_count, emissive, masked,
-               blended);
+        printf("materials   %u (%u emissive, %u alpha-masked, %u blended, %u of them thin glass)\n", s->material_count,
+               emissive, masked, blended, glass);
         printf("textures    %u\n", s->texture_count);
         printf("lights      %u", s->light_count);
         for (uint32_t i = 0; i < s->light_count; ++i)
