@@ -4,16 +4,15 @@
  * shading normal only weighs (and, for bounces, draws) directions on that
  * side (docs/bake.md, "Shading normals"). The kernels read each vertex
  * normal as one 32-bit word, 16-bit octahedral coordinates; the CPU
- * reference packs the scene's normals alike, so both use the same vectors. */
+ * reference packs the scene's normals alike, so both use the same vectors.
+ * Only scenes with pb_scene_bent_triangles (scene.h) > 0 shade smooth; the
+ * others keep the face normal, and their kernels compile this out. */
 #ifndef PB_SHADING_NORMALS_H
 #define PB_SHADING_NORMALS_H
 
 #include "probebake/scene.h"
 
 #include <stdint.h>
-
-/* Which scenes shade smooth: pb_scene_bent_triangles (scene.h) > 0; the
- * others keep the face normal, and their kernels compile the shading normal out. */
 
 /* A unit vector as two 16-bit signed-normalized octahedral coordinates (x in
  * the low half), and back: within 1e-4 radians. */
