@@ -118,6 +118,25 @@ static const char *one_triangle(const char *name, const char *nodes)
     return write_gltf(name, json, tri_pos, sizeof tri_pos);
 }
 
+/* One triangle whose material's colour is texture 0: `extensions` opens the
+ * JSON (extensionsUsed and the like, "" for none), `textures` gives its
+ * "textures" and "images" members, and `views` any bufferViews after the
+ * positions' (each ",{...}"). */
+static const char *textured_triangle(const char *name, const char *extensions, const char *textures,
+                                     const char *views)
+{
+    char json[4096];
+    snprintf(json, sizeof json,
+             "{\"asset\":{\"version\":\"2.0\"},%s\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+             "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}],"
+             "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],%s,"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}%s],"
+             "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}",
+             extensions, textures, views);
+    return write_gltf(name, json, tri_pos, 36);
+}
+
 /* ------------------------------------------------------------ tests */
 
 static void demo_scene_loads_everything(void)
@@ -738,51 +757,34 @@ static void hostile_inputs_refused(void)
 
 static void corrupt_texture_is_a_warning(void)
 {
-    const char *json =
-        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
-        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}],"
-        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],"
-        "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"data:image/png;base64,AAAAAAAA\"}],"
-        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
-        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
-        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
-    pb_scene *s = load_ok(write_gltf("badpng.gltf", json, tri_pos, 36));
+    pb_scene *s = load_ok(textured_triangle(
+        "badpng.gltf", "", "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"data:image/png;base64,AAAAAAAA\"}]",
+        ""));
     CHECK(s && s->triangle_count == 1 && s->materials[0].base_color_texture == -1);
     pb_scene_destroy(s);
     /* a WebP header over no image data, the only source of a texture
      * (EXT_texture_webp required): the factor again */
-    const char *webp =
-        "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"EXT_texture_webp\"],"
-        "\"extensionsRequired\":[\"EXT_texture_webp\"],\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
-        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}],"
-        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],"
+    s = load_ok(textured_triangle(
+        "badwebp.gltf", "\"extensionsUsed\":[\"EXT_texture_webp\"],\"extensionsRequired\":[\"EXT_texture_webp\"],",
         "\"textures\":[{\"extensions\":{\"EXT_texture_webp\":{\"source\":0}}}],"
-        "\"images\":[{\"uri\":\"data:image/webp;base64,UklGRgwAAABXRUJQVlA4IAAAAAA=\"}],"
-        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
-        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
-        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
-    s = load_ok(write_gltf("badwebp.gltf", webp, tri_pos, 36));
+        "\"images\":[{\"uri\":\"data:image/webp;base64,UklGRgwAAABXRUJQVlA4IAAAAAA=\"}]",
+        ""));
     CHECK(s && s->triangle_count == 1 && s->materials[0].base_color_texture == -1);
     pb_scene_destroy(s);
     /* KHR_texture_basisu used, not required: its KTX2 image is not decoded
      * (no transcoder in Debian 12), quietly, and the core PNG is read */
-    const char *ktx2 =
-        "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_texture_basisu\"],"
-        "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
-        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}],"
-        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],"
+    const char *ktx2 = textured_triangle(
+        "ktx2.gltf", "\"extensionsUsed\":[\"KHR_texture_basisu\"],",
         "\"textures\":[{\"source\":1,\"extensions\":{\"KHR_texture_basisu\":{\"source\":0}}}],"
         "\"images\":[{\"uri\":\"data:image/ktx2;base64,Q0tUWCAyMLsNChoKAAAAAAAAAAAAAAAAAAAAAAAAAAA=\"},"
         "{\"uri\":\"data:image/png;base64,"
-        "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mP8z8BQDwAEhQGAhKmMIQAAAABJRU5ErkJggg==\"}],"
-        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
-        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
-        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
+        "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mP8z8BQDwAEhQGAhKmMIQAAAABJRU5ErkJggg==\"}]",
+        "");
     warning_counter any = {{": ", NULL}, 0}; /* every warning names the file */
     pb_scene_desc d = {{count_warnings, &any}, 0, 0, 0};
     pb_error err;
     s = NULL;
-    CHECKF(pb_scene_load(write_gltf("ktx2.gltf", ktx2, tri_pos, 36), &d, &s, &err) == PB_OK, "%s", err.message);
+    CHECKF(pb_scene_load(ktx2, &d, &s, &err) == PB_OK, "%s", err.message);
     CHECK(s && s->materials[0].base_color_texture == 0 && s->texture_count == 1 && s->textures[0].width == 1 &&
           any.count == 0);
     pb_scene_destroy(s);
@@ -795,15 +797,9 @@ static void corrupt_texture_is_a_warning(void)
  * first: a warning, and the material keeps its factor. */
 static void image_view_outside_its_buffer_is_a_warning(void)
 {
-    const char *json =
-        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
-        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"material\":0}]}],"
-        "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}}}],"
-        "\"textures\":[{\"source\":0}],\"images\":[{\"bufferView\":1,\"mimeType\":\"image/png\"}],"
-        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
-        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":4000,\"byteLength\":52}],"
-        "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
-    const char *path = write_gltf("image-view-outside.gltf", json, tri_pos, 36);
+    const char *path = textured_triangle(
+        "image-view-outside.gltf", "", "\"textures\":[{\"source\":0}],\"images\":[{\"bufferView\":1,\"mimeType\":\"image/png\"}]",
+        ",{\"buffer\":0,\"byteOffset\":4000,\"byteLength\":52}");
     warning_counter views = {{"lies outside its buffer", NULL}, 0};
     pb_scene_desc d = {{count_warnings, &views}, 0, 0, 0};
     pb_scene *s = NULL;

@@ -193,6 +193,11 @@ uint64_t pb_scene_hash(const pb_scene *scene);
 #define PB_BENT_NORMAL_COS 0.9998f
 uint64_t pb_scene_bent_triangles(const pb_scene *scene);
 
+/* Materials that are thin glass (transmission > 0). The bake lets rays
+ * through them, tinted, where there is one (docs/bake.md, "Thin glass"); a
+ * scene without compiles that out. */
+uint32_t pb_scene_glass_materials(const pb_scene *scene);
+
 /* Default-initialised material (glTF defaults: white, opaque, cutoff 0.5). */
 pb_material pb_material_default(void);
 

@@ -208,14 +208,21 @@ vec3 srgb_to_linear(vec3 c)
     return mix(lo, hi, greaterThan(c, vec3(0.04045)));
 }
 
-vec3 texture_rgb(SceneRefs s, int tex, vec2 uv)
+// Texture `tex` at uv, nearest texel: linear colour (sRGB decoded) and alpha;
+// white and opaque for no texture.
+vec4 texture_rgba(SceneRefs s, int tex, vec2 uv)
 {
     if (tex < 0)
-        return vec3(1.0);
+        return vec4(1.0);
     Texture t = TextureBuf(s.textures).t[tex];
     uint texel = UintBuf(s.texels).v[t.offset + texel_index(uv.x, uv.y, t.width, t.height, t.wrap & 0xffu, t.wrap >> 8)];
     vec3 c = vec3(float(texel & 0xffu), float((texel >> 8) & 0xffu), float((texel >> 16) & 0xffu)) / 255.0;
-    return srgb_to_linear(c);
+    return vec4(srgb_to_linear(c), float(texel >> 24) * (1.0 / 255.0));
+}
+
+vec3 texture_rgb(SceneRefs s, int tex, vec2 uv)
+{
+    return texture_rgba(s, tex, uv).rgb;
 }
 
 // Thin transmissive surfaces (KHR_materials_transmission, docs/bake.md "Thin
@@ -266,13 +273,8 @@ GlassStep glass_step(BakeParams P, TraceResult tr, vec3 rd)
     if (!(tau > 0.0))
         return g;
     vec4 c = m.base_color;
-    if (m.tex.x >= 0) {
-        Texture tx = TextureBuf(s.textures).t[m.tex.x];
-        vec2 st = surface_uv(s, tr.tri, tr.u, tr.v);
-        uint texel = UintBuf(s.texels).v[tx.offset + texel_index(st.x, st.y, tx.width, tx.height, tx.wrap & 0xffu, tx.wrap >> 8)];
-        c.rgb *= srgb_to_linear(vec3(float(texel & 0xffu), float((texel >> 8) & 0xffu), float((texel >> 16) & 0xffu)) / 255.0);
-        c.a *= float(texel >> 24) * (1.0 / 255.0);
-    }
+    if (m.tex.x >= 0)
+        c *= texture_rgba(s, m.tex.x, surface_uv(s, tr.tri, tr.u, tr.v));
     if ((s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
         c *= vertex_color(s, tr.tri, tr.u, tr.v);
     float opaque = c.a * (1.0 - tau);

@@ -60,16 +60,25 @@ static void probe_ray_direction(const pb_bake_pass *p, uint32_t probe, uint32_t 
     }
 }
 
-static void texture_rgb(const pb_scene *s, int32_t tex, float u, float v, float rgb[3])
+/* texture_rgba of bake.glsl: linear colour and alpha, white and opaque for no texture */
+static void texture_rgba(const pb_scene *s, int32_t tex, float u, float v, float rgba[4])
 {
     if (tex < 0) {
-        rgb[0] = rgb[1] = rgb[2] = 1.f;
+        rgba[0] = rgba[1] = rgba[2] = rgba[3] = 1.f;
         return;
     }
     const pb_texture *t = &s->textures[tex];
     uint32_t texel = s->texels[t->offset + pb_texel_index(u, v, t->width, t->height, t->wrap_s, t->wrap_t)];
     for (int k = 0; k < 3; ++k)
-        rgb[k] = pb_srgb_to_linear((float)((texel >> (8 * k)) & 0xffu) / 255.f);
+        rgba[k] = pb_srgb_to_linear((float)((texel >> (8 * k)) & 0xffu) / 255.f);
+    rgba[3] = (float)(texel >> 24) * (1.f / 255.f);
+}
+
+static void texture_rgb(const pb_scene *s, int32_t tex, float u, float v, float rgb[3])
+{
+    float rgba[4];
+    texture_rgba(s, tex, u, v, rgba);
+    memcpy(rgb, rgba, 3 * sizeof(float));
 }
 
 typedef struct hit {
@@ -109,15 +118,6 @@ static void face_normal(const pb_scene *s, uint32_t tri, float e1[3], float e2[3
 /* bake.glsl's bound on the layers of glass one ray goes through */
 #define PB_GLASS_LAYERS 64u
 
-/* The scene has thin glass (PB_SCENE_TRANSMISSION). */
-static int scene_has_glass(const pb_scene *s)
-{
-    for (uint32_t m = 0; m < s->material_count; ++m)
-        if (s->materials[m].transmission > 0.f)
-            return 1;
-    return 0;
-}
-
 /* glass_step of bake.glsl: 1 when hit h of a ray along rd is on thin glass
  * that lets it through, with its tint w and the origin it goes on from. */
 static int glass_step(const pb_scene *s, hit h, const float rd[3], float w[3], float origin[3])
@@ -131,14 +131,12 @@ static int glass_step(const pb_scene *s, hit h, const float rd[3], float w[3], f
         return 0;
     float c[4] = {m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
     if (m->base_color_texture >= 0) {
-        const pb_texture *t = &s->textures[m->base_color_texture];
         const float *uv = s->texcoords + 6 * (size_t)h.tri;
-        float w0 = 1.f - h.u - h.v;
-        float tu = w0 * uv[0] + h.u * uv[2] + h.v * uv[4], tv = w0 * uv[1] + h.u * uv[3] + h.v * uv[5];
-        uint32_t texel = s->texels[t->offset + pb_texel_index(tu, tv, t->width, t->height, t->wrap_s, t->wrap_t)];
-        for (int k = 0; k < 3; ++k)
-            c[k] *= pb_srgb_to_linear((float)((texel >> (8 * k)) & 0xffu) / 255.f);
-        c[3] *= (float)(texel >> 24) * (1.f / 255.f);
+        float w0 = 1.f - h.u - h.v, tx[4];
+        texture_rgba(s, m->base_color_texture, w0 * uv[0] + h.u * uv[2] + h.v * uv[4],
+                     w0 * uv[1] + h.u * uv[3] + h.v * uv[5], tx);
+        for (int k = 0; k < 4; ++k)
+            c[k] *= tx[k];
     }
     if (s->colors) {
         float vc[4];
@@ -641,7 +639,7 @@ int pb_path_ctx_init(pb_path_ctx *c, const pb_bake_pass *p)
     pb_bake_lights(s, c->lights);
     pb_bake_materials(s, c->materials);
     c->smooth = pb_scene_bent_triangles(s) != 0; /* as pb_gpu_scene_create decides */
-    c->glass = scene_has_glass(s);
+    c->glass = pb_scene_glass_materials(s) != 0; /* as pb_gpu_scene_create decides */
     return 1;
 }
 
@@ -670,7 +668,7 @@ void pb_bake_sh_cpu(const pb_bake_pass *p, const float *rays, float *reduced)
     if (!lights)
         return;
     pb_bake_lights(s, lights);
-    int glass = scene_has_glass(s);
+    int glass = pb_scene_glass_materials(s) != 0;
     float w = 4.f * PI_F / (float)p->rays_per_probe;
     for (uint32_t local = 0; local < p->probe_count; ++local) {
         uint32_t probe = slot_of(p, local);

@@ -89,9 +89,7 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "BVH depth %u exceeds %d", bvh->stats.depth, PB_BVH_MAX_DEPTH);
     uint32_t n = scene->triangle_count;
     int smooth = pb_scene_bent_triangles(scene) != 0; /* else the kernels keep the face normals */
-    int glass = 0;
-    for (uint32_t m = 0; m < scene->material_count; ++m)
-        glass |= scene->materials[m].transmission > 0.f;
+    int glass = pb_scene_glass_materials(scene) != 0; /* else the kernels compile glass_step out */
     uint64_t sizes[6] = {
         (uint64_t)bvh->wide_node_count * sizeof(pb_bvh4_node),
         (uint64_t)n * sizeof(gpu_tri) + 16u, /* + a texel: the last record's texels end 8 bytes past it */

@@ -44,13 +44,12 @@ int cmd_info(const options *o)
         hi[k] = s->bounds_max[k] + s->origin[k];
     }
     uint64_t smooth = pb_scene_bent_triangles(s); /* shaded with their vertex normals */
-    uint32_t emissive = 0, masked = 0, blended = 0, glass = 0;
+    uint32_t emissive = 0, masked = 0, blended = 0, glass = pb_scene_glass_materials(s);
     for (uint32_t m = 0; m < s->material_count; ++m) {
         const pb_material *mt = &s->materials[m];
         emissive += mt->emissive[0] > 0 || mt->emissive[1] > 0 || mt->emissive[2] > 0;
         masked += mt->alpha_mode == PB_ALPHA_MASK;
         blended += mt->alpha_mode == PB_ALPHA_BLEND;
-        glass += mt->transmission > 0.f;
     }
     if (o->json) {
         printf("{\n  \"file\": ");

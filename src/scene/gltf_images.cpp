@@ -50,6 +50,16 @@ bool image_fits(const image_ctx *ctx, int index, int w, int h)
     return false;
 }
 
+// A decoded image of w x h RGBA8 pixels becomes the glTF image's, and counts
+// against the file's pixel budget.
+void keep_rgba(image_ctx *ctx, tinygltf::Image *image, const unsigned char *px, int w, int h)
+{
+    ctx->left_pixels -= (uint64_t)w * (uint64_t)h;
+    image->width = w;
+    image->height = h;
+    image->image.assign(px, px + (size_t)w * h * 4);
+}
+
 // RIFF container of a WebP image
 bool is_webp(const unsigned char *bytes, int size)
 {
@@ -78,10 +88,7 @@ bool load_webp(tinygltf::Image *image, int index, const unsigned char *bytes, in
                 ctx->path, index);
         return true;
     }
-    ctx->left_pixels -= (uint64_t)w * (uint64_t)h;
-    image->width = w;
-    image->height = h;
-    image->image.assign(px, px + (size_t)w * h * 4);
+    keep_rgba(ctx, image, px, w, h);
     WebPFree(px);
     return true;
 }
@@ -197,10 +204,7 @@ bool load_image(tinygltf::Image *image, const int index, std::string *, std::str
             stbi_image_free(px);
         return true;
     }
-    ctx->left_pixels -= (uint64_t)w * (uint64_t)h;
-    image->width = w;
-    image->height = h;
-    image->image.assign(px, px + (size_t)w * h * 4);
+    keep_rgba(ctx, image, px, w, h);
     stbi_image_free(px);
     return true;
 }

@@ -111,6 +111,14 @@ void pb_scene_destroy(pb_scene *s)
     free(s);
 }
 
+uint32_t pb_scene_glass_materials(const pb_scene *s)
+{
+    uint32_t glass = 0;
+    for (uint32_t i = 0; i < s->material_count; ++i)
+        glass += s->materials[i].transmission > 0.f;
+    return glass;
+}
+
 /* The materials' bytes before `transmission` (what pb_material held before
  * it), then the transmissions where any is not 0. */
 _Static_assert(offsetof(pb_material, transmission) == 120, "volumes' scene hashes assume the 120-byte material");
@@ -118,15 +126,13 @@ static uint64_t materials_hash(const pb_scene *scene)
 {
     const size_t head = offsetof(pb_material, transmission);
     unsigned char *bytes = calloc(scene->material_count * head + 1, 1);
-    int transmissive = 0;
     if (!bytes)
         return 0; /* out of host memory: the bake will not get far either */
-    for (uint32_t i = 0; i < scene->material_count; ++i) {
+    for (uint32_t i = 0; i < scene->material_count; ++i)
         memcpy(bytes + i * head, &scene->materials[i], head);
-        transmissive |= scene->materials[i].transmission != 0.f;
-    }
     uint64_t h = pb_hash64(bytes, scene->material_count * head, 0);
     free(bytes);
+    int transmissive = pb_scene_glass_materials(scene) != 0;
     for (uint32_t i = 0; transmissive && i < scene->material_count; ++i)
         h = pb_hash64(&scene->materials[i].transmission, sizeof(float), h);
     return h;
