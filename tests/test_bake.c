@@ -8,6 +8,7 @@
 #include "bake/light_cells.h"
 #include "bake/light_cells_gpu.h"
 #include "bake/shading_normals.h"
+#include "bake/spherical_triangle.h"
 #include "bake_reference.h"
 #include "common/common.h"
 #include "gpu/gpu.h"
@@ -597,16 +598,21 @@ static void closed_emissive_box(void)
      * the emission every probe ray sees from the probe (the box's 12
      * triangles), MIS-weighted; guiding draws bounces from a learned mixture
      * weighed by its density; light cells draw the box's 12 triangles (12
-     * clusters here) by how much each lights the cell of the point lit */
+     * clusters here) by how much each lights the cell of the point lit.
+     * Every bake above and here but the last draws its emitter samples by
+     * solid angle (each wall spans about 1 sr from the probes); the last
+     * draws points by area, as before that sampler. */
     struct {
         const char *name;
-        uint32_t probe_nee, guide_paths, light_cells, techniques;
-    } variants[3] = {{"probe NEE", 1, 0, 0, PB_TECHNIQUE_PROBE_NEE},
-                     {"guided", 0, 1u << 14, 0, PB_TECHNIQUE_GUIDING},
-                     {"light cells", 1, 0, 1, PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_LIGHT_CELLS}};
-    for (int i = 0; i < 3; ++i) {
+        uint32_t probe_nee, guide_paths, light_cells, by_area, techniques;
+    } variants[4] = {{"probe NEE", 1, 0, 0, 0, PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_SOLID_ANGLE},
+                     {"guided", 0, 1u << 14, 0, 0, PB_TECHNIQUE_GUIDING | PB_TECHNIQUE_SOLID_ANGLE},
+                     {"light cells", 1, 0, 1, 0,
+                      PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_LIGHT_CELLS | PB_TECHNIQUE_SOLID_ANGLE},
+                     {"probe NEE, emitters by area", 1, 0, 0, 1, PB_TECHNIQUE_PROBE_NEE}};
+    for (int i = 0; i < 4; ++i) {
         d.probe_nee = variants[i].probe_nee, d.guide_paths = variants[i].guide_paths;
-        d.light_cells = variants[i].light_cells;
+        d.light_cells = variants[i].light_cells, d.emitters_by_area = variants[i].by_area;
         /* in a uniform box the cells favour the walls near each point, which
          * buys nothing and has heavier tails at 2,048 paths (worst probe 4.2 %,
          * mean +0.8 %; at 16,384 paths +0.03 %, worst 0.44 % against probe
@@ -626,6 +632,7 @@ static void closed_emissive_box(void)
     d.probe_nee = 0;
     d.guide_paths = 0;
     d.light_cells = 0;
+    d.emitters_by_area = 0;
     d.passes = 8;
     /* the same with a 1 % target error: more passes where needed, converged */
     d.passes = 0;
@@ -735,7 +742,8 @@ static void closed_emissive_box(void)
 /* The CPU reference of a bake's passes 0 .. passes-1: `tmpl` gives the
  * shading inputs (environment, emitters, volume, light table, bounces,
  * direct, max distance); probes, rotations and directions are built as
- * pb_bake builds them, and probe NEE is on when d->probe_nee is. Writes the mean irradiance SH (27 per probe) to sh
+ * pb_bake builds them; probe NEE is on when d->probe_nee is, emitters are
+ * drawn by area when d->emitters_by_area is. Writes the mean irradiance SH (27 per probe) to sh
  * and returns the traversals the reference counted. */
 static uint64_t reference_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P,
                                uint32_t passes, float *sh)
@@ -752,7 +760,7 @@ static uint64_t reference_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake
         pb_bake_pass pp = tmpl;
         pp.scene = s, pp.probes = probes, pp.probe_list = NULL, pp.rotations = rot, pp.directions = dirs;
         pp.first_probe = 0, pp.probe_count = P, pp.rays_per_probe = rpp, pp.pass_index = pass;
-        pp.seed = d->seed, pp.octmap_res = n, pp.nee = nee;
+        pp.seed = d->seed, pp.octmap_res = n, pp.nee = nee, pp.emitters_by_area = d->emitters_by_area;
         traversals += pb_bake_trace_cpu(&pp, rays);
         pb_bake_sh_cpu(&pp, rays, red);
         for (uint32_t p = 0; p < P; ++p)
@@ -1006,7 +1014,7 @@ static void multi_bounce_matches_cpu_reference_on(int guided, int bent)
     CHECK(worst < 0.01);
     if (guided) {
         CHECK(g.learned > 20 && apart > 0.01);
-        CHECK(b.vol.settings.techniques == PB_TECHNIQUE_GUIDING);
+        CHECK(b.vol.settings.techniques == (PB_TECHNIQUE_GUIDING | PB_TECHNIQUE_SOLID_ANGLE));
     }
     pb_guide_free(&g);
     pb_bake_emitters_free(&em);
@@ -1389,7 +1397,7 @@ static void light_cells_match_cpu_reference(void)
                 P, 100 * worst, lc.clusters, lc.learned, worst_norm, 100 * apart);
         CHECK(lc.clusters == 12 && lc.learned > 8 && worst_norm < 1e-4);
         CHECK(worst < 0.01 && apart > 0.01);
-        CHECK(b.vol.settings.techniques == (PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_LIGHT_CELLS));
+        CHECK(b.vol.settings.techniques == (PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_LIGHT_CELLS | PB_TECHNIQUE_SOLID_ANGLE));
         pb_light_cells_free(&lc);
         pb_bake_emitters_free(&em);
         free(sh), free(by_power);
@@ -2000,9 +2008,74 @@ static double dc_luminance(const float *sh)
     return 0.2126 * sh[0] + 0.7152 * sh[1] + 0.0722 * sh[2];
 }
 
+/* spherical_triangle.glsl on the device against spherical_triangle.c, on
+ * triangles around a point at every size the sampler takes (and some it
+ * leaves to area sampling), slivers among them: the solid angles agree to
+ * float rounding, the drawn directions to a small angle. The arithmetic is
+ * the same; sin, cos and division may round differently on the device. */
+static void spherical_triangle_kernel_matches_cpu(void)
+{
+    uint32_t n = 1u << 16;
+    float *in = calloc((size_t)n * 20, sizeof(float)), *out = malloc((size_t)n * 16);
+    test_rng r = {17};
+    for (uint32_t i = 0; i < n; ++i) {
+        float *e = in + 20 * (size_t)i;
+        for (int k = 0; k < 3; ++k)
+            e[k] = (float)(rng_uniform(&r) * 4 - 2);
+        float d0[3], d1[3], d2[3];
+        rng_direction(&r, d0), rng_direction(&r, d1), rng_direction(&r, d2);
+        double spread = pow(10.0, -2.5 * rng_uniform(&r)); /* from the whole sphere to slivers of it */
+        for (int k = 0; k < 3; ++k) {
+            d1[k] = (float)(d0[k] + spread * d1[k]);
+            d2[k] = (float)(d0[k] + spread * (i % 4 == 0 ? 0.01 : 1.0) * d2[k]); /* every fourth a sliver */
+        }
+        for (int k = 0; k < 3; ++k) {
+            float l0 = (float)(0.1 + 3 * rng_uniform(&r)), l1 = (float)(0.1 + 3 * rng_uniform(&r));
+            e[4 + k] = e[k] + l0 * d0[k];
+            e[8 + k] = e[k] + l1 * d1[k];
+            e[12 + k] = e[k] + l0 * d2[k];
+        }
+        e[16] = (float)rng_uniform(&r), e[17] = (float)rng_uniform(&r);
+    }
+    pb_error err;
+    CHECKF(pb_spherical_triangle_gpu(ctx, in, n, out, &err) == PB_OK, "%s", err.message);
+    uint32_t sampled = 0, mismatched = 0;
+    double worst_area = 0, worst_angle = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        const float *e = in + 20 * (size_t)i, *g = out + 4 * (size_t)i;
+        float area = pb_spherical_triangle_area(e, e + 4, e + 8, e + 12), w[3] = {0, 0, 0};
+        int on = pb_spherical_triangle_sampled(area);
+        if (on)
+            pb_spherical_triangle_sample(e, e + 4, e + 8, e + 12, area, e[16], e[17], w);
+        worst_area = fmax(worst_area, fabs(g[3] - area) / fmax(area, 1e-3));
+        if (on != pb_spherical_triangle_sampled(g[3])) {
+            ++mismatched; /* the threshold between two roundings */
+            continue;
+        }
+        if (!on)
+            continue;
+        ++sampled;
+        double c = w[0] * (double)g[0] + w[1] * (double)g[1] + w[2] * (double)g[2];
+        double s2 = 0;
+        for (int k = 0; k < 3; ++k)
+            s2 += (w[k] - (double)g[k]) * (w[k] - (double)g[k]);
+        worst_angle = fmax(worst_angle, atan2(sqrt(s2), c));
+    }
+    fprintf(stderr, "  %u of %u sampled by solid angle, %u at the threshold: solid angle %.2e apart (relative), "
+            "directions %.2e rad\n", sampled, n, mismatched, worst_area, worst_angle);
+    CHECK(sampled > n / 4 && sampled < n - n / 8);
+    CHECK(mismatched <= 2);
+    CHECK(worst_area < 1e-6);
+    CHECK(worst_angle < 1e-5); /* 1e-7 on lavapipe; Arvo's cos(A, C') gave 7.5e-4 */
+    free(in), free(out);
+}
+
 /* Probe NEE against its CPU reference on the demo scene (its ceiling panel
  * is two emissive triangles), direct light only: the same emitter samples,
- * shadow rays and MIS weights, so the SH agrees to rounding. */
+ * shadow rays and MIS weights, so the SH agrees to rounding. The panel spans
+ * more than 0.01 sr from some probes, so those draw it by solid angle
+ * (spherical_triangle.glsl): the reference that draws points by area must
+ * see the difference. */
 static void probe_nee_matches_cpu_reference(void)
 {
     pb_scene *s = load_demo();
@@ -2023,18 +2096,23 @@ static void probe_nee_matches_cpu_reference(void)
         tmpl.bvh = b.bvh, tmpl.bounces = 0, tmpl.direct = 1, tmpl.max_distance = b.vol.settings.max_distance;
         tmpl.lobe_power = 50.f, tmpl.emitters = &em;
         reference_bake(s, &d, tmpl, P, 2, sh);
-        /* and without probe NEE: the reference must see the difference */
+        /* and by area, and without probe NEE: the reference must see the differences */
+        float *by_area = malloc((size_t)P * 27 * sizeof(float)), *plain = malloc((size_t)P * 27 * sizeof(float));
+        d.emitters_by_area = 1;
+        reference_bake(s, &d, tmpl, P, 2, by_area);
+        d.emitters_by_area = 0;
         d.probe_nee = 0;
-        float *plain = malloc((size_t)P * 27 * sizeof(float));
         reference_bake(s, &d, tmpl, P, 2, plain);
         pb_bake_emitters_free(&em);
-        float scale, worst = max_difference(sh, b.vol.sh, P * 27, &scale), plain_scale;
+        float scale, worst = max_difference(sh, b.vol.sh, P * 27, &scale), area_scale, plain_scale;
+        float area_apart = max_difference(by_area, b.vol.sh, P * 27, &area_scale);
         float apart = max_difference(plain, b.vol.sh, P * 27, &plain_scale);
-        fprintf(stderr, "  %u probes: SH max difference %.2e (of %.2e); without probe NEE %.2e\n", P, worst, scale,
-                apart);
+        fprintf(stderr, "  %u probes: SH max difference %.2e (of %.2e); emitters by area %.2e, without probe NEE %.2e\n",
+                P, worst, scale, area_apart, apart);
         CHECK(scale > 0.f && worst <= 1e-4f * scale);
+        CHECK(area_apart > 2e-3f * scale);
         CHECK(apart > 1e-2f * scale);
-        free(sh), free(plain);
+        free(sh), free(by_area), free(plain);
     }
     release(&b);
     pb_scene_destroy(s);
@@ -2221,7 +2299,7 @@ static void light_cells_agree_with_power(void)
                         "squared relative error %.2f\n", n, 100.0 * in2 / n, worst, ratio);
         CHECK(n >= 24 && in2 >= 0.82 * n && worst < 5.0);
         CHECK(pooled == n && ratio < 0.75);
-        CHECK(cells.vol.settings.techniques == (PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_LIGHT_CELLS));
+        CHECK(cells.vol.settings.techniques == (PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_LIGHT_CELLS | PB_TECHNIQUE_SOLID_ANGLE));
     }
     release(&power);
     release(&cells);
@@ -2734,7 +2812,7 @@ static void points_subset_bakes_like_the_grid(void)
         fprintf(stderr, "  %u of %u subset probes identical to the grid's (%u relocated)\n", same, compared, relocated);
         CHECK(compared >= 4 && same == compared);
         CHECK(whole.vol.settings.techniques ==
-              (PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_GUIDING | PB_TECHNIQUE_LIGHT_CELLS));
+              (PB_TECHNIQUE_PROBE_NEE | PB_TECHNIQUE_GUIDING | PB_TECHNIQUE_LIGHT_CELLS | PB_TECHNIQUE_SOLID_ANGLE));
         CHECK(!(sub.vol.flags & PB_VOLUME_GRID) && sub.vol.probe_count == 6);
     }
     release(&whole);
@@ -2892,6 +2970,7 @@ int main(void)
     RUN(depth_finite_and_scale_free_at_km_and_mm);
     RUN(passes_and_rays_agree);
     RUN(std_error_predicts_the_error);
+    RUN(spherical_triangle_kernel_matches_cpu);
     RUN(probe_nee_matches_cpu_reference);
     RUN(probe_nee_agrees_with_plain);
     RUN(guided_agrees_with_plain);

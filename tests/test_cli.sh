@@ -338,16 +338,23 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     # quality presets and probe NEE: printed at the start, recorded in the file
     expect bake-quality-preview 0 'at quality preview: .* 128 rays x 2 passes, .*probe NEE on, guiding off' -- \
         "$pb" bake "$demo" --counts 2,2,2 --octmap-res 4 --quality preview --validation -o "$tmp/q.probes"
-    expect bake-quality-inspect 0 '"techniques": \["probe-nee", "light-cells"\],' -- "$pb" inspect "$tmp/q.probes" --json
+    expect bake-quality-inspect 0 '"techniques": \["probe-nee", "light-cells", "solid-angle"\],' -- "$pb" inspect "$tmp/q.probes" --json
     expect bake-quality-override 0 'at quality production: .* 32 rays x up to 4 passes \(until converged\)' -- \
         "$pb" bake "$demo" --counts 2,2,2 --octmap-res 4 --quality production --rays 32 --passes 4 -o "$tmp/q.probes"
     expect bake-guide-on 0 'guiding on' -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --guide on --validation -o "$tmp/g.probes"
-    expect bake-guide-inspect 0 '"techniques": \["probe-nee", "guiding", "light-cells"\],' -- "$pb" inspect "$tmp/g.probes" --json
+    expect bake-guide-inspect 0 '"techniques": \["probe-nee", "guiding", "light-cells", "solid-angle"\],' -- "$pb" inspect "$tmp/g.probes" --json
     expect bake-light-cells-off 0 'light cells off' -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --light-cells off -o "$tmp/l.probes"
     expect bake-light-cells-off-inspect 0 'probe NEE on, guiding off, light cells off' -- "$pb" inspect "$tmp/l.probes"
     expect bake-bad-light-cells 2 '--light-cells takes on or off' -- "$pb" bake "$demo" --light-cells yes -o "$tmp/x.probes"
+    # emitter samples by solid angle (the default) or by area: printed, recorded
+    expect bake-emitters-by-area 0 'light cells on, emitters by area' -- \
+        "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --emitter-sampling area -o "$tmp/ea.probes"
+    expect bake-emitters-by-area-inspect 0 'light cells on, emitters by area' -- "$pb" inspect "$tmp/ea.probes"
+    expect bake-emitters-by-solid-angle-inspect 0 'light cells off, emitters by solid angle' -- "$pb" inspect "$tmp/l.probes"
+    expect bake-bad-emitter-sampling 2 '--emitter-sampling takes solid-angle or area' -- \
+        "$pb" bake "$demo" --emitter-sampling uniform -o "$tmp/x.probes"
     expect bake-bad-guide 2 '--guide takes on or off' -- "$pb" bake "$demo" --guide 7 -o "$tmp/x.probes"
     expect bake-probe-nee-off 0 'probe NEE off' -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --probe-nee off -o "$tmp/q.probes"

@@ -1,10 +1,13 @@
 /* SH L2 and octahedral mapping: orthonormality, known projections and the
  * addition theorem (which pins every normalisation constant), the uniform-sky
- * irradiance, octahedral round trips and border texels. CPU only. */
+ * irradiance, octahedral round trips and border texels; the samplers the
+ * bake draws with (alias tables, triangles by solid angle). CPU only. */
 #include "test_util.h"
 #include "bake/alias.h"
 #include "bake/bake_types.h"
 #include "bake/depth_lists.h"
+#include "bake/path_cpu.h"
+#include "bake/spherical_triangle.h"
 
 /* n spherical-Fibonacci directions: a uniform quadrature of the sphere. */
 static float *fibonacci(uint32_t n)
@@ -212,6 +215,151 @@ static void alias_table_samples_in_proportion(void)
     CHECK(pb_alias_build(zero, 2, prob, alias) == 0);
 }
 
+/* Lambert's formula: the cosine-weighted solid angle (irradiance over
+ * radiance) of a triangle wholly above the plane of normal n at x,
+ * (1/2) |sum over edges of angle(p_i, p_i+1) n.unit(p_i x p_i+1)|, in double. */
+static double projected_solid_angle(const float x[3], const float *v, const double n[3])
+{
+    double p[3][3], sum = 0;
+    for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k)
+            p[i][k] = (double)v[3 * i + k] - x[k];
+    for (int i = 0; i < 3; ++i) {
+        const double *a = p[i], *b = p[(i + 1) % 3];
+        double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+        double cl = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        double ang = atan2(cl, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+        sum += ang * (n[0] * c[0] + n[1] * c[1] + n[2] * c[2]) / cl;
+    }
+    return 0.5 * fabs(sum);
+}
+
+/* The solid angle of triangles whose answer is known: an octant from its
+ * corner (pi / 2), from either side (the formula takes no winding); a
+ * small far one (area cos / d^2); one seen edge-on (0); a large one from
+ * just in front of its centre (nearly 2 pi). And atan_nonneg against atan2
+ * over its whole range. */
+static void solid_angle_of_known_triangles(void)
+{
+    float o[3] = {0, 0, 0}, oct[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, rev[9] = {1, 0, 0, 0, 0, 1, 0, 1, 0};
+    CHECK(fabsf(pb_spherical_triangle_area(o, oct, oct + 3, oct + 6) - 1.5707963f) < 1e-6f);
+    CHECK(fabsf(pb_spherical_triangle_area(o, rev, rev + 3, rev + 6) - 1.5707963f) < 1e-6f);
+    /* 1 cm right triangle (area 5e-5 m^2) 2 m away along its normal, tilted 60 degrees */
+    float far[9] = {0, 0, 2, 0.01f, 0, 2, 0, 0.01f, 2}, xt[3] = {0, -2 * 1.7320508f, 0};
+    double want = 5e-5 / 4;
+    CHECKF(fabs(pb_spherical_triangle_area(o, far, far + 3, far + 6) / want - 1) < 1e-2, "%g vs %g",
+           pb_spherical_triangle_area(o, far, far + 3, far + 6), want);
+    float d = sqrtf(4 + 12), tilted = pb_spherical_triangle_area(xt, far, far + 3, far + 6);
+    double want_t = 5e-5 * (2 / d) / (d * d); /* cos 60 at distance 4 */
+    CHECKF(fabs(tilted / want_t - 1) < 2e-2, "%g vs %g", tilted, want_t);
+    float edge[3] = {-1, 0, 2};
+    CHECK(pb_spherical_triangle_area(edge, far, far + 3, far + 6) < 1e-9f);
+    float big[9] = {-100, -100, 1, 100, -100, 1, 0, 100, 1}, near[3] = {0, -30, 0.999f};
+    float near_area = pb_spherical_triangle_area(near, big, big + 3, big + 6);
+    CHECKF(near_area > 6.25f && near_area < 6.2832f, "%g", near_area);
+    CHECK(!pb_spherical_triangle_sampled(near_area) && pb_spherical_triangle_sampled(1.f) &&
+          !pb_spherical_triangle_sampled(5e-3f));
+    double worst = 0;
+    for (int i = 0; i <= 20000; ++i) {
+        double t = i * (3.141592653589793 / 20000);
+        float y = (float)sin(t), x = (float)cos(t);
+        double e = fabs(pb_atan_nonneg(y, x) - atan2((double)y, (double)x));
+        worst = fmax(worst, e / fmax(1e-3, atan2((double)y, (double)x)));
+        CHECK(pb_atan_nonneg(1e-30f * y, 1e-30f * x) == pb_atan_nonneg(y, x) || fabs(pb_atan_nonneg(1e-30f * y, 1e-30f * x) - pb_atan_nonneg(y, x)) < 1e-6);
+    }
+    CHECKF(worst < 3e-7, "atan_nonneg %.2e from atan2", worst);
+    CHECK(pb_atan_nonneg(0.f, 0.f) == 0.f && pb_atan_nonneg(0.f, -1.f) > 3.14159f);
+}
+
+/* pb_spherical_triangle_sample draws every direction toward the triangle
+ * with density 1 / solid angle. On a 256 x 256 stratified grid of (u1, u2)
+ * the solid angle times the mean cosine to a receiver's normal is Lambert's
+ * exact projected solid angle (any warp of the density would move it), and
+ * every direction meets the triangle. Shapes: a plain one, a sliver, one
+ * from up close (most of a hemisphere), one at the sampled range's low end. */
+static void spherical_triangle_samples_uniformly(void)
+{
+    struct {
+        const char *name;
+        float x[3], v[9];
+        double n[3];
+    } cases[] = {
+        {"plain", {0, 0, 0}, {-0.3f, 0.2f, 1, 0.5f, -0.1f, 1.2f, 0.1f, 0.6f, 0.9f}, {0, 0, 1}},
+        {"sliver", {0, 0, 0}, {-1, 0, 1, 1, 0.02f, 1, 0.9f, 0.05f, 1.1f}, {0, 0.3, 0.9539392}},
+        {"close", {0, 0, 0.6f}, {-3, -2, 1, 3, -2, 1, 0, 4, 1}, {0, 0, 1}},
+        {"small", {0, 0, 0}, {-0.07f, -0.07f, 1, 0.1f, -0.07f, 1, 0, 0.085f, 1}, {0.6, 0, 0.8}},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+        const float *x = cases[c].x, *v = cases[c].v;
+        float area = pb_spherical_triangle_area(x, v, v + 3, v + 6);
+        CHECK(pb_spherical_triangle_sampled(area));
+        const uint32_t G = 256;
+        double sum = 0, outside = 0;
+        float e1[3], e2[3];
+        for (int k = 0; k < 3; ++k)
+            e1[k] = v[3 + k] - v[k], e2[k] = v[6 + k] - v[k];
+        for (uint32_t i = 0; i < G; ++i)
+            for (uint32_t j = 0; j < G; ++j) {
+                float w[3];
+                pb_spherical_triangle_sample(x, v, v + 3, v + 6, area, (i + 0.5f) / G, (j + 0.5f) / G, w);
+                sum += fmax(0.0, cases[c].n[0] * w[0] + cases[c].n[1] * w[1] + cases[c].n[2] * w[2]);
+                /* where the ray x + t w meets the triangle's plane: barycentrics in [0, 1] */
+                double p[3] = {w[1] * e2[2] - w[2] * e2[1], w[2] * e2[0] - w[0] * e2[2], w[0] * e2[1] - w[1] * e2[0]};
+                double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
+                double t[3] = {x[0] - v[0], x[1] - v[1], x[2] - v[2]};
+                double q[3] = {t[1] * e1[2] - t[2] * e1[1], t[2] * e1[0] - t[0] * e1[2], t[0] * e1[1] - t[1] * e1[0]};
+                double b1 = (t[0] * p[0] + t[1] * p[1] + t[2] * p[2]) / det;
+                double b2 = (w[0] * q[0] + w[1] * q[1] + w[2] * q[2]) / det;
+                outside += b1 < -1e-4 || b2 < -1e-4 || b1 + b2 > 1 + 1e-4;
+            }
+        double got = area * sum / ((double)G * G), want = projected_solid_angle(x, v, cases[c].n);
+        fprintf(stderr, "  %s: solid angle %.4f sr, projected %.6f (Lambert %.6f, %+.1e), %g directions outside\n",
+                cases[c].name, area, got, want, got / want - 1, outside);
+        CHECKF(fabs(got / want - 1) < 2e-4, "%s", cases[c].name); /* the grid's own error: 1e-6 to 5e-5 */
+        CHECKF(outside == 0, "%s", cases[c].name);
+    }
+}
+
+/* What the sampler is for: next-event estimation of a 1 m emitting triangle
+ * 2 cm in front of a receiver point. Drawn by area, the estimate of its
+ * irradiance L cos_x cos_e area / d^2 swings with 1 / d^2; drawn by solid
+ * angle, L cos_x solid-angle only with the receiver's cosine. Both are
+ * unbiased (their means agree with Lambert's formula); the second has a
+ * small fraction of the first's spread. */
+static void solid_angle_sampling_tames_near_emitters(void)
+{
+    float v[9] = {-0.5f, -0.4f, 0.02f, 0.6f, -0.3f, 0.02f, 0.0f, 0.6f, 0.02f}, x[3] = {0.05f, 0.02f, 0};
+    double n[3] = {0.0, 0.0, 1.0}, want = projected_solid_angle(x, v, n);
+    float e1[3], e2[3];
+    for (int k = 0; k < 3; ++k)
+        e1[k] = v[3 + k] - v[k], e2[k] = v[6 + k] - v[k];
+    double tri_area = 0.5 * fabs(e1[0] * e2[1] - e1[1] * e2[0]); /* in the z = 0.02 plane */
+    float sa = pb_spherical_triangle_area(x, v, v + 3, v + 6);
+    uint32_t N = 1u << 16, state = 12345;
+    double m[2] = {0, 0}, m2[2] = {0, 0};
+    for (uint32_t i = 0; i < N; ++i) {
+        float u1 = pb_rng_next_cpu(&state), u2 = pb_rng_next_cpu(&state);
+        /* by area: a uniform point */
+        float su = sqrtf(u1), b1 = su * (1 - u2), b2 = su * u2, to[3];
+        for (int k = 0; k < 3; ++k)
+            to[k] = v[k] + b1 * e1[k] + b2 * e2[k] - x[k];
+        double d2 = (double)to[0] * to[0] + (double)to[1] * to[1] + (double)to[2] * to[2];
+        double cos_x = to[2] / sqrt(d2), est_area = cos_x * cos_x * tri_area / d2; /* cos_e = cos_x here */
+        /* by solid angle */
+        float w[3];
+        pb_spherical_triangle_sample(x, v, v + 3, v + 6, sa, u1, u2, w);
+        double est_sa = w[2] * (double)sa;
+        double e[2] = {est_area, est_sa};
+        for (int k = 0; k < 2; ++k)
+            m[k] += e[k] / N, m2[k] += e[k] * e[k] / N;
+    }
+    double sd[2] = {sqrt(m2[0] - m[0] * m[0]), sqrt(m2[1] - m[1] * m[1])};
+    fprintf(stderr, "  projected solid angle %.4f: by area %.4f (spread %.3f), by solid angle %.4f (spread %.3f)\n",
+            want, m[0], sd[0], m[1], sd[1]);
+    CHECK(fabs(m[0] - want) < 4 * sd[0] / sqrt(N) + 1e-4 && fabs(m[1] - want) < 4 * sd[1] / sqrt(N) + 1e-4);
+    CHECK(sd[1] < sd[0] / 5);
+}
+
 /* SH ringing under an HDR sun (1e5:1 against a uniform sky): the exact
  * irradiance against its L2 projection, unwindowed and windowed, over 2000
  * normals. Reports the negative lobe and the overshoot (relative to the
@@ -368,6 +516,9 @@ int main(void)
     RUN(octahedral_round_trip);
     RUN(border_texels_continue_across_the_fold);
     RUN(alias_table_samples_in_proportion);
+    RUN(solid_angle_of_known_triangles);
+    RUN(spherical_triangle_samples_uniformly);
+    RUN(solid_angle_sampling_tames_near_emitters);
     RUN(depth_lists_miss_no_ray);
     return test_summary();
 }

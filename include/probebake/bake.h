@@ -95,6 +95,9 @@ typedef struct pb_bake_desc {
     uint32_t light_cells;         /* 1: next-event estimation draws emitters per region of space by the light
                                      shadow rays measured from there, mixed with their power (unbiased;
                                      docs/bake.md, "Estimators"); 0: by power alone */
+    uint32_t emitters_by_area;    /* 1: next-event estimation draws a uniform point on the emitter triangle
+                                     (the density swings near it); 0: a uniform direction toward it where
+                                     it spans 0.01 sr or more (docs/bake.md, "Emitters by solid angle") */
     uint32_t shard_index, shard_count; /* count > 0: bake part `index` (0-based) of `count` only: a contiguous
                                      range of the probes (grid or points), undilated, as a volume with
                                      PB_VOLUME_SHARD; pb_volume_merge joins the parts into the very bytes
@@ -316,6 +319,7 @@ typedef struct pb_bake_pass {
                                          radiance / 4pi, 0, direction, 0); NULL: off */
     const struct pb_guide *guide;     /* path guiding's learned cache (src/bake/guide.h); NULL: off */
     const struct pb_light_cells *light_cells; /* emitters drawn per cell (src/bake/light_cells.h); NULL: by power */
+    uint32_t emitters_by_area;        /* as pb_bake_desc */
 } pb_bake_pass;
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).

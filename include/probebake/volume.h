@@ -90,7 +90,8 @@ typedef struct pb_volume_settings {
 enum {
     PB_TECHNIQUE_PROBE_NEE = 1u << 0,   /* light seen by probes sampled from the probe too (MIS) */
     PB_TECHNIQUE_GUIDING = 1u << 1,     /* bounce directions guided by a learned cache (mixture pdf) */
-    PB_TECHNIQUE_LIGHT_CELLS = 1u << 2  /* emitters drawn per cell by measured light (mixture with power) */
+    PB_TECHNIQUE_LIGHT_CELLS = 1u << 2, /* emitters drawn per cell by measured light (mixture with power) */
+    PB_TECHNIQUE_SOLID_ANGLE = 1u << 3  /* emitter triangles near a point sampled by solid angle */
 };
 
 /* Stage timings in milliseconds (0 for stages that did not run). */

@@ -110,6 +110,7 @@ struct BakeParams {
     pb_addr depth_lists;    // the depth filter's ray lists per query cell (src/bake/depth_lists.h)
     pb_addr depth_sum;      // bake_depth's sums over the passes: the address of each block of probe slots
     uint depth_block_probes; // probe slots per block; each holds 2 floats per texel per slot (depth_sums.h)
+    uint emitters_by_area;  // 1: emitters sampled by area alone; 0: by solid angle where near (spherical_triangle.glsl)
 };
 
 // The estimators and scene features a pipeline is built for (host:
@@ -130,6 +131,7 @@ layout(constant_id = 2) const uint PB_BAKE_FEATURES = 0xffffffffu;
 #define PB_FEATURE_VERTEX_COLORS 256u
 #define PB_FEATURE_SHADING_NORMALS 512u
 #define PB_FEATURE_TRANSMISSION 1024u
+#define PB_FEATURE_SOLID_ANGLE 2048u
 
 // Pass indices from here on are relocation passes (src/bake/bake_types.h):
 // they read only each probe ray's first hit

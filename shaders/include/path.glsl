@@ -12,6 +12,7 @@
 #include "bake.glsl"
 #include "guide.glsl"
 #include "light_cells.glsl"
+#include "spherical_triangle.glsl"
 
 // Multiple importance sampling, power heuristic: the weight of a sample
 // drawn with density a when density b could also have drawn it.
@@ -38,11 +39,31 @@ vec3 cosine_direction(vec3 n, float u1, float u2)
     return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(0.0, 1.0 - u1)));
 }
 
+// The solid-angle density with which sample_emitter draws a direction
+// toward an emitter triangle of area density pa (its probability over its
+// area), area tri_area and solid angle sa (0: sampled by area), meeting it
+// at distance dist and cosine cos_e.
+float emitter_density(float pa, float tri_area, float sa, float dist, float cos_e)
+{
+    return spherical_triangle_sampled(sa) ? pa * tri_area / sa : pa * dist * dist / cos_e;
+}
+
+// The solid angle of emitter triangle t seen from x where the bake samples
+// it by solid angle (spherical_triangle.glsl), else 0.
+float emitter_solid_angle(BakeParams P, vec3 x, Tri t)
+{
+    if (!bake_feature(PB_FEATURE_SOLID_ANGLE) || P.emitters_by_area != 0u)
+        return 0.0;
+    return spherical_triangle_area(x, t.v0, t.v1, t.v2);
+}
+
 // One emissive triangle, picked by power (alias table) or from the light
-// cell holding x, and a uniform point on it, seen from x: the direction and
-// distance to it, its emitted radiance toward x, and the solid-angle density
-// of drawing that direction (0 when its back faces x or it is degenerate).
-// Three random numbers, a fourth in a light cell.
+// cell holding x, and a direction toward it: uniform over its solid angle
+// where that is large enough, else toward a uniform point on it. Returns the
+// direction, the distance to the triangle, its emitted radiance toward x,
+// and the solid-angle density of drawing that direction (0 when its back
+// faces x or it is degenerate). Three random numbers, a fourth in a light
+// cell.
 struct EmitterSample {
     vec3 w;
     float dist;
@@ -67,20 +88,34 @@ EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
         etri = xe - float(ei) < e.prob ? e.tri : table.e[e.alias].tri;
     }
     Tri et = load_tri(s.tris, etri);
-    float su = sqrt(u1);
-    float b1 = su * (1.0 - u2), b2 = su * u2;
     vec3 ee1 = et.v1 - et.v0, ee2 = et.v2 - et.v0;
-    vec3 y = et.v0 + b1 * ee1 + b2 * ee2;
-    vec3 to = y - x;
-    float d2 = dot(to, to);
+    vec3 ne = cross(ee1, ee2);
+    float sa = emitter_solid_angle(P, x, et);
+    float b1, b2;
     EmitterSample es;
-    es.dist = sqrt(d2);
-    es.w = to / es.dist;
+    if (spherical_triangle_sampled(sa)) {
+        es.w = spherical_triangle_sample(x, et.v0, et.v1, et.v2, sa, u1, u2);
+        // where it meets the triangle: distance and barycentrics (Moller-Trumbore)
+        vec3 pv = cross(es.w, ee2);
+        float inv = 1.0 / dot(ee1, pv);
+        vec3 tv = x - et.v0;
+        vec3 qv = cross(tv, ee1);
+        b1 = clamp(dot(tv, pv) * inv, 0.0, 1.0);
+        b2 = clamp(dot(es.w, qv) * inv, 0.0, 1.0 - b1);
+        es.dist = dot(ee2, qv) * inv;
+    } else {
+        float su = sqrt(u1);
+        b1 = su * (1.0 - u2), b2 = su * u2;
+        vec3 to = et.v0 + b1 * ee1 + b2 * ee2 - x;
+        es.dist = length(to);
+        es.w = to / es.dist;
+    }
     ShadeMaterial em = load_shade_material(P.materials, et.flags & ~PB_FLAG_ALPHA_MASK);
-    float cos_e = -dot(normalize(cross(ee1, ee2)), es.w);
+    float cos_e = -dot(normalize(ne), es.w);
     if (em.tex.z != 0)
         cos_e = abs(cos_e);
-    es.pdf = cos_e > 0.0 && d2 > 0.0 ? FloatBuf(P.emit_pdf).v[etri] * ratio * d2 / cos_e : 0.0;
+    float pa = FloatBuf(P.emit_pdf).v[etri] * ratio;
+    es.pdf = cos_e > 0.0 && es.dist > 0.0 ? emitter_density(pa, 0.5 * length(ne), sa, es.dist, cos_e) : 0.0;
     vec2 yuv = em.tex.y >= 0 ? surface_uv(s, etri, b1, b2) : vec2(0.0);
     es.Le = em.emissive_metallic.rgb * texture_rgb(s, em.tex.y, yuv);
     return es;
@@ -329,7 +364,9 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
                 bool probe_nee = bounce == 0u && bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee);
                 float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
                 if (found_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
-                    float pl = pa * tr.t * tr.t / abs(dot(ng, dir)) * (probe_nee ? probe_emitter_share(P) : 1.0);
+                    float pl = emitter_density(pa, 0.5 * length(cross(e1, e2)), emitter_solid_angle(P, o, t), tr.t,
+                                               abs(dot(ng, dir))) *
+                               (probe_nee ? probe_emitter_share(P) : 1.0);
                     w = power_heuristic(found_pdf, pl);
                 }
                 add_found(res, throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w, bounce,

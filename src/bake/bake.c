@@ -163,6 +163,7 @@ static pb_result learn_guide(pb_context *ctx, const pb_scene *scene, pb_gpu_scen
     tp.emitters = &B->shading.emit;
     tp.light_table = B->shading.light_select ? &B->shading.lights_drawn : NULL;
     tp.max_distance = d->max_distance, tp.indirect_clamp = d->indirect_clamp;
+    tp.emitters_by_area = d->emitters_by_area;
     double t0 = pb_now_ms();
     pb_guide *g = &B->guide_host;
     pb_result r = gs->guide_cache ? PB_OK : pb_guide_cache_create(&gs->guide_cache, err);
@@ -225,6 +226,7 @@ static void pass_params(const bake_run *run, uint32_t pass, int relocating, cons
     prm->probe_list = list ? B->list.address : 0;
     prm->counters = B->counters.address;
     prm->indirect_clamp = d->indirect_clamp;
+    prm->emitters_by_area = d->emitters_by_area;
     if (!relocating) {
         prm->volume = run->feedback;
         prm->nee = B->nee.address; /* 0 unless probe NEE is on */
@@ -833,7 +835,8 @@ static pb_result stage_volume(bake_job *j, pb_volume *out, pb_error *err)
     out->settings.scene_hash = pb_scene_hash(j->scene);
     out->settings.techniques = (d->probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u) |
                                (j->B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u) |
-                               (j->B.light && j->B.light->host.table ? PB_TECHNIQUE_LIGHT_CELLS : 0u);
+                               (j->B.light && j->B.light->host.table ? PB_TECHNIQUE_LIGHT_CELLS : 0u) |
+                               (j->B.shading.emit.count && !d->emitters_by_area ? PB_TECHNIQUE_SOLID_ANGLE : 0u);
     snprintf(out->device, sizeof out->device, "%.127s", j->ctx->info.name);
     pb_result r = pb_volume_alloc(out, err);
     if (r != PB_OK)

@@ -11,6 +11,7 @@
 #include "bake/light_cells.h"
 #include "bake/path_cpu.h"
 #include "bake/shading_normals.h"
+#include "bake/spherical_triangle.h"
 #include "bvh/alpha.h"
 #include "common/common.h"
 #include "common/srgb.h"
@@ -262,8 +263,43 @@ static float bounce_pdf(const pb_bake_pass *p, int32_t ge, float cos_x, const fl
     return ge < 0 ? pc : (1.f - PB_GUIDE_SHARE) * pc + PB_GUIDE_SHARE * pb_guide_pdf(p->guide, ge, w);
 }
 
+static float dot3(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const float a[3], const float b[3], float c[3])
+{
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static float clampf(float x, float lo, float hi)
+{
+    return x < lo ? lo : (x > hi ? hi : x);
+}
+
+/* emitter_density of path.glsl: the solid-angle density with which
+ * sample_emitter draws a direction toward an emitter triangle of area
+ * density pa, area tri_area and solid angle sa (0: sampled by area), meeting
+ * it at distance dist and cosine cos_e. */
+static float emitter_density(float pa, float tri_area, float sa, float dist, float cos_e)
+{
+    return pb_spherical_triangle_sampled(sa) ? pa * tri_area / sa : pa * dist * dist / cos_e;
+}
+
+/* emitter_solid_angle of path.glsl: the solid angle of emitter triangle v
+ * seen from x where it is sampled by solid angle, else 0. */
+static float emitter_solid_angle(const pb_path_ctx *c, const float x[3], const float *v)
+{
+    return c->p->emitters_by_area ? 0.f : pb_spherical_triangle_area(x, v, v + 3, v + 6);
+}
+
 /* sample_emitter of path.glsl: one emissive triangle by power (or from the
- * light cell holding x) and a uniform point on it, seen from x. pdf 0: its back faces x, or degenerate. */
+ * light cell holding x), and a direction toward it: uniform over its solid
+ * angle where that is large enough, else toward a uniform point on it.
+ * pdf 0: its back faces x, or degenerate. */
 typedef struct emitter_sample {
     float w[3], dist, Le[3], pdf;
 } emitter_sample;
@@ -278,24 +314,39 @@ static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitter
     uint32_t etri = lc >= 0 ? pb_light_cells_sample(c->p->light_cells, lc, u0, rng_next(state), &ratio)
                             : em->tri[pb_alias_sample(em->prob, em->alias, em->count, u0)];
     const float *v0 = s->positions + 9 * (size_t)etri, *v1 = v0 + 3, *v2 = v0 + 6;
-    float su = sqrtf(u1), b1 = su * (1.f - u2), b2 = su * u2;
-    float e1[3], e2[3], y[3], to[3];
-    for (int k = 0; k < 3; ++k) {
-        e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
-        y[k] = v0[k] + b1 * e1[k] + b2 * e2[k];
-        to[k] = y[k] - x[k];
-    }
-    float d2 = to[0] * to[0] + to[1] * to[1] + to[2] * to[2];
-    es.dist = sqrtf(d2);
+    float e1[3], e2[3], ne[3], b1, b2;
     for (int k = 0; k < 3; ++k)
-        es.w[k] = to[k] / es.dist;
-    float ne[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    float nl = sqrtf(ne[0] * ne[0] + ne[1] * ne[1] + ne[2] * ne[2]);
+        e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
+    cross3(e1, e2, ne);
+    float sa = emitter_solid_angle(c, x, v0);
+    if (pb_spherical_triangle_sampled(sa)) {
+        pb_spherical_triangle_sample(x, v0, v1, v2, sa, u1, u2, es.w);
+        /* where it meets the triangle: distance and barycentrics (Moller-Trumbore) */
+        float pv[3], tv[3], qv[3];
+        cross3(es.w, e2, pv);
+        float inv = 1.f / dot3(e1, pv);
+        for (int k = 0; k < 3; ++k)
+            tv[k] = x[k] - v0[k];
+        cross3(tv, e1, qv);
+        b1 = clampf(dot3(tv, pv) * inv, 0.f, 1.f);
+        b2 = clampf(dot3(es.w, qv) * inv, 0.f, 1.f - b1);
+        es.dist = dot3(e2, qv) * inv;
+    } else {
+        float su = sqrtf(u1), to[3];
+        b1 = su * (1.f - u2), b2 = su * u2;
+        for (int k = 0; k < 3; ++k)
+            to[k] = v0[k] + b1 * e1[k] + b2 * e2[k] - x[k];
+        es.dist = sqrtf(dot3(to, to));
+        for (int k = 0; k < 3; ++k)
+            es.w[k] = to[k] / es.dist;
+    }
+    float nl = sqrtf(dot3(ne, ne));
     const gpu_shade_material *m = &c->materials[s->material[etri]];
-    float cos_e = -(ne[0] * es.w[0] + ne[1] * es.w[1] + ne[2] * es.w[2]) / nl;
+    float cos_e = -dot3(ne, es.w) / nl;
     if (m->tex[2] != 0)
         cos_e = fabsf(cos_e);
-    es.pdf = cos_e > 0.f && d2 > 0.f ? em->pdf_area[etri] * ratio * d2 / cos_e : 0.f;
+    float pa = em->pdf_area[etri] * ratio;
+    es.pdf = cos_e > 0.f && es.dist > 0.f ? emitter_density(pa, 0.5f * nl, sa, es.dist, cos_e) : 0.f;
     const float *uv = s->texcoords + 6 * (size_t)etri;
     float w0 = 1.f - b1 - b2, tu = w0 * uv[0] + b1 * uv[2] + b2 * uv[4], tv = w0 * uv[1] + b1 * uv[3] + b2 * uv[5];
     float et[3];
@@ -303,11 +354,6 @@ static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitter
     for (int k = 0; k < 3; ++k)
         es.Le[k] = m->emissive_metallic[k] * et[k];
     return es;
-}
-
-static float dot3(const float a[3], const float b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
 /* Next-event estimation of one emissive triangle (emitter_nee_ray of path.glsl). */
@@ -491,7 +537,11 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             int probe_nee = bounce == 0 && p->nee;
             float found_pdf = probe_nee ? 1.f / (4.f * PI_F) : bsdf_pdf;
             if (found_pdf > 0.f && pa > 0.f) {
-                float pl = pa * h.t * h.t / fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2]) *
+                const float *v = s->positions + 9 * (size_t)h.tri;
+                float ne[3];
+                cross3(e1, e2, ne);
+                float pl = emitter_density(pa, 0.5f * sqrtf(dot3(ne, ne)), emitter_solid_angle(c, o, v), h.t,
+                                           fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2])) *
                            (probe_nee ? probe_emitter_share(p) : 1.f);
                 w = power_heuristic(found_pdf, pl);
             }

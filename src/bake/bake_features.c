@@ -21,13 +21,15 @@ uint32_t pb_bake_features(const gpu_bake_params *p)
     f |= (p->scene.flags & PB_SCENE_VERTEX_COLORS) ? PB_FEATURE_VERTEX_COLORS : 0u;
     f |= (p->scene.flags & PB_SCENE_SHADING_NORMALS) ? PB_FEATURE_SHADING_NORMALS : 0u;
     f |= (p->scene.flags & PB_SCENE_TRANSMISSION) ? PB_FEATURE_TRANSMISSION : 0u;
+    f |= p->emitter_count && !p->emitters_by_area ? PB_FEATURE_SOLID_ANGLE : 0u;
     return f;
 }
 
 void pb_bake_features_name(uint32_t features, char *out, size_t size)
 {
     static const char *names[] = {"probe-nee", "guide", "light-cells", "volume", "light-select",
-                                  "emitters", "environment", "lights", "vertex-colours", "shading-normals", "transmission"};
+                                  "emitters", "environment", "lights", "vertex-colours", "shading-normals", "transmission",
+                                  "solid-angle"};
     size_t used = 0;
     if (size)
         out[0] = '\0';

@@ -21,6 +21,7 @@ enum {
     PB_FEATURE_VERTEX_COLORS = 1u << 8, /* scene.flags: COLOR_0 */
     PB_FEATURE_SHADING_NORMALS = 1u << 9, /* scene.flags: vertex normals bent from the faces */
     PB_FEATURE_TRANSMISSION = 1u << 10,   /* scene.flags: thin glass */
+    PB_FEATURE_SOLID_ANGLE = 1u << 11,    /* emitters sampled by solid angle where near */
 };
 
 /* The features a pass with these parameters uses: a pipeline specialised to

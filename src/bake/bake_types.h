@@ -49,7 +49,7 @@ typedef struct gpu_bake_params {
     uint64_t depth_lists; /* bake_depth's ray lists (depth_lists.h) */
     uint64_t depth_sum;   /* bake_depth's sums over the passes: uint64 address per block (depth_sums.h) */
     uint32_t depth_block_probes; /* probe slots per block of them */
-    uint32_t pad_;
+    uint32_t emitters_by_area;   /* pb_bake_desc.emitters_by_area */
 } gpu_bake_params;
 _Static_assert(offsetof(gpu_bake_params, env_rotation) == 160, "BakeParams layout");
 _Static_assert(offsetof(gpu_bake_params, guide_origin) == 368, "BakeParams layout");

@@ -34,7 +34,7 @@ pb_guide_key pb_guide_key_make(const pb_bake_desc *d, const pb_bake_pass *pass)
     memset(&k, 0, sizeof k); /* padding too: keys compare as bytes */
     k.scene = pass->scene, k.bvh = pass->bvh;
     k.seed = pass->seed, k.bounces = pass->bounces, k.paths = d->guide_paths;
-    k.max_lights_per_hit = d->max_lights_per_hit;
+    k.max_lights_per_hit = d->max_lights_per_hit, k.emitters_by_area = d->emitters_by_area;
     k.max_distance = pass->max_distance, k.indirect_clamp = pass->indirect_clamp;
     const pb_environment *env = d->environment;
     if (env) { /* a map: its content, not its address (a caller may load another into the same memory) */

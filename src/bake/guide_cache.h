@@ -16,7 +16,7 @@
  * pb_guide_key_make only (it zeroes the padding). */
 typedef struct pb_guide_key {
     const void *scene, *bvh; /* identities: a GPU scene's BVH outlives it */
-    uint32_t seed, bounces, paths, max_lights_per_hit;
+    uint32_t seed, bounces, paths, max_lights_per_hit, emitters_by_area;
     float max_distance, indirect_clamp, sky[3];
     uint64_t environment; /* hash of the map's size, rotation and texels (24 ms for the largest,
                              2048 x 1024, here); 0: none (the uniform sky) */

@@ -36,6 +36,7 @@ typedef struct options {
     int portable_kernels;       /* --portable-kernels: pb_context_desc.portable_kernels */
     uint32_t scene_loads;       /* --scene-loads: pb_context_desc.scene_loads (pb_scene_loads) */
     int face_normals;           /* --shading-normals face: pb_scene_desc.face_normals */
+    int emitters_by_area;       /* --emitter-sampling area: pb_bake_desc.emitters_by_area */
     uint32_t probes, rays, seed, probe;
     cli_log log;
     /* render */

@@ -174,6 +174,7 @@ int cmd_bake(const options *o)
     d.probe_nee = o->probe_nee ? !strcmp(o->probe_nee, "on") : q ? q->probe_nee : 1u;
     d.guide_paths = o->guide ? (!strcmp(o->guide, "on") ? PB_GUIDE_DEFAULT_PATHS : 0u) : q ? q->guide_paths : 0u;
     d.light_cells = o->light_cells ? !strcmp(o->light_cells, "on") : q ? q->light_cells : 1u;
+    d.emitters_by_area = (uint32_t)o->emitters_by_area;
     memcpy(d.sky, o->sky, sizeof d.sky);
     d.environment = o->env ? &env : NULL;
     d.indirect_volume = (uint32_t)o->indirect_volume;
@@ -217,7 +218,7 @@ int cmd_bake(const options *o)
     if (!o->log.quiet)
         fprintf(stderr,
                 "probebake: baking %s%s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
-                "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, light cells %s, seed %u\n",
+                "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, light cells %s, emitters by %s, seed %u\n",
                 o->scene, q ? " at quality " : "", q ? q->name : "", part, where, d.rays_per_probe,
                 d.target_error > 0.f ? "up to " : "", d.passes, d.target_error > 0.f ? " (until converged)" : "",
                 d.bounces, light, d.octmap_res,
@@ -225,7 +226,7 @@ int cmd_bake(const options *o)
                 d.probe_nee ? "on" : "off",
                 /* --indirect volume bakes one bounce at a time: no bounce rays to guide */
                 d.guide_paths && d.bounces && !d.indirect_volume ? "on" : "off", d.light_cells ? "on" : "off",
-                d.seed);
+                d.emitters_by_area ? "area" : "solid angle", d.seed);
     if (!o->log.quiet && (d.indirect_clamp > 0.f || d.sh_window))
         fprintf(stderr, "probebake: biased on request:%s%s%s\n",
                 d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",

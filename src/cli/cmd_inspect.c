@@ -72,13 +72,13 @@ static const char *window_name(uint32_t w)
 }
 
 /* The file's techniques as JSON array items. */
-static const char *technique_list(uint32_t t, char buf[64])
+static const char *technique_list(uint32_t t, char buf[96])
 {
-    static const char *names[3] = {"probe-nee", "guiding", "light-cells"};
+    static const char *names[4] = {"probe-nee", "guiding", "light-cells", "solid-angle"};
     buf[0] = 0;
-    for (int k = 0; k < 3; ++k)
+    for (int k = 0; k < 4; ++k)
         if (t & (1u << k))
-            snprintf(buf + strlen(buf), 64 - strlen(buf), "%s\"%s\"", buf[0] ? ", " : "", names[k]);
+            snprintf(buf + strlen(buf), 96 - strlen(buf), "%s\"%s\"", buf[0] ? ", " : "", names[k]);
     return buf;
 }
 
@@ -93,7 +93,7 @@ int cmd_inspect(const options *o)
         return cli_usage_error("%s needs a VOLUME file", "inspect");
     pb_volume v;
     pb_error err;
-    char techniques[64];
+    char techniques[96];
     if (pb_volume_read(o->scene, &v, &err) != PB_OK)
         return cli_fail(&err);
     if (o->has_probe && o->probe >= v.probe_count) {
@@ -233,10 +233,11 @@ int cmd_inspect(const options *o)
         printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
                v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
         printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, guiding %s, light cells %s, "
-               "seed %llu, device %s\n", s->rays_per_probe, s->passes, s->bounces,
+               "emitters by %s, seed %llu, device %s\n", s->rays_per_probe, s->passes, s->bounces,
                s->indirect_mode ? "volume" : "path", s->techniques & PB_TECHNIQUE_PROBE_NEE ? "on" : "off",
                s->techniques & PB_TECHNIQUE_GUIDING ? "on" : "off",
-               s->techniques & PB_TECHNIQUE_LIGHT_CELLS ? "on" : "off", (unsigned long long)s->seed,
+               s->techniques & PB_TECHNIQUE_LIGHT_CELLS ? "on" : "off",
+               s->techniques & PB_TECHNIQUE_SOLID_ANGLE ? "solid angle" : "area", (unsigned long long)s->seed,
                v.device[0] ? v.device : "?");
         if (s->sh_window || s->indirect_clamp > 0.f)
             printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),

@@ -68,6 +68,9 @@ void cli_print_help(void)
            "                                 in the production and reference presets)\n"
            "  --light-cells on|off           emitters drawn per region of space by the light shadow rays\n"
            "                                 measured there, mixed with power (unbiased; default on)\n"
+           "  --emitter-sampling solid-angle|area   light samples on an emissive triangle: uniform in the\n"
+           "                                 solid angle it spans where that is 0.01 sr or more (default),\n"
+           "                                 or a uniform point on it (noisier near it; both unbiased)\n"
            "  --shading-normals vertex|face  reflect with the file's vertex normals interpolated (default)\n"
            "                                 or each triangle's face normal (flat); render too, info counts\n"
            "  --sh-window none|hanning[:W]|lanczos[:W]   taper SH bands against ringing (default none; W 3)\n"
@@ -193,7 +196,8 @@ static int parse_open_range(const char *s, float lo, float hi, float *out)
     X(OPT_REFINE_SEAMS, "refine-seams", required_argument) \
     X(OPT_SEAM_ERROR, "seam-error", required_argument) \
     X(OPT_SCENE_LOADS, "scene-loads", required_argument) \
-    X(OPT_SHADING_NORMALS, "shading-normals", required_argument)
+    X(OPT_SHADING_NORMALS, "shading-normals", required_argument) \
+    X(OPT_EMITTER_SAMPLING, "emitter-sampling", required_argument)
 
 enum {
     OPT_FIRST = 256,
@@ -352,6 +356,10 @@ static int apply(options *o, const char *a, const char *next)
             return cli_usage_error("%s takes auto, address or texel", a);
         o->scene_loads = !strcmp(next, "address") ? PB_SCENE_LOADS_ADDRESS
                          : !strcmp(next, "texel") ? PB_SCENE_LOADS_TEXEL : PB_SCENE_LOADS_AUTO;
+    } else if (!strcmp(a, "--emitter-sampling")) {
+        if (!next || (strcmp(next, "solid-angle") && strcmp(next, "area")))
+            return cli_usage_error("%s takes solid-angle or area", a);
+        o->emitters_by_area = !strcmp(next, "area");
     } else if (!strcmp(a, "--shading-normals")) {
         if (!next || (strcmp(next, "vertex") && strcmp(next, "face")))
             return cli_usage_error("%s takes vertex or face", a);
