@@ -7,6 +7,7 @@
  * SCENE is one of the built-in cases (default: all present):
  *   doorway  tests/scenes/doorway.gltf: room B lit only through a doorway
  *   panel    tests/scenes/panel.gltf: a small bright panel and an occluder
+ *   demo     tests/scenes/demo.gltf: a room with a 1 m^2 ceiling panel and a lamp
  *   cornell  ../shared/scenes/cornell/cornellBox.gltf
  *   crypt    ../shared/scenes/openarena/oacmpdm1.glb (5,776 small emitters)
  * (the last two are skipped with a message when ../shared is absent).
@@ -60,6 +61,7 @@ typedef struct bench_case {
 static const bench_case cases[] = {
     {"doorway", "tests/scenes/doorway.gltf", {8, 2, 4}, {-3.55, 1.0, -1.5}, 1.0, 0},
     {"panel", "tests/scenes/panel.gltf", {4, 3, 4}, {-1.5, 0.5, -1.5}, 1.0, 0},
+    {"demo", "tests/scenes/demo.gltf", {0, 0, 0}, {0, 0, 0}, 0, 64},
     {"cornell", "../shared/scenes/cornell/cornellBox.gltf", {0, 0, 0}, {0, 0, 0}, 0, 64},
     {"crypt", "../shared/scenes/openarena/oacmpdm1.glb", {0, 0, 0}, {0, 0, 0}, 0, 160},
 };
@@ -73,6 +75,7 @@ typedef struct method {
     uint32_t probe_nee;          /* pb_bake_desc.probe_nee */
     uint32_t guide_paths;        /* pb_bake_desc.guide_paths */
     uint32_t light_cells;        /* pb_bake_desc.light_cells */
+    uint32_t emitters_by_area;   /* pb_bake_desc.emitters_by_area: the emitter sampler before solid angle */
 } method;
 
 static const method methods[] = {
@@ -85,6 +88,8 @@ static const method methods[] = {
     {"nee+cells", 0, 1, 0, 1},
     {"nee+cells+guide", 0, 1, PB_GUIDE_DEFAULT_PATHS, 1},
     {"all", 1, 1, PB_GUIDE_DEFAULT_PATHS, 1},  /* the production preset's estimators */
+    {"plain-area", 0, 0, 0, 0, 1},              /* plain and all with emitters drawn by area */
+    {"all-area", 1, 1, PB_GUIDE_DEFAULT_PATHS, 1, 1},
 };
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 
@@ -93,6 +98,7 @@ static void apply_method(const method *m, pb_bake_desc *d)
     d->probe_nee = m->probe_nee;
     d->guide_paths = m->guide_paths;
     d->light_cells = m->light_cells;
+    d->emitters_by_area = m->emitters_by_area;
 }
 
 typedef struct point {
