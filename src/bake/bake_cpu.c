@@ -15,6 +15,7 @@
 #include "bvh/alpha.h"
 #include "common/common.h"
 #include "common/srgb.h"
+#include "common/vec3.h"
 #include "probebake/bake.h"
 #include "probebake/octahedral.h"
 #include "probebake/sh.h"
@@ -263,18 +264,6 @@ static float bounce_pdf(const pb_bake_pass *p, int32_t ge, float cos_x, const fl
     return ge < 0 ? pc : (1.f - PB_GUIDE_SHARE) * pc + PB_GUIDE_SHARE * pb_guide_pdf(p->guide, ge, w);
 }
 
-static float dot3(const float a[3], const float b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const float a[3], const float b[3], float c[3])
-{
-    c[0] = a[1] * b[2] - a[2] * b[1];
-    c[1] = a[2] * b[0] - a[0] * b[2];
-    c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 static float clampf(float x, float lo, float hi)
 {
     return x < lo ? lo : (x > hi ? hi : x);
@@ -317,32 +306,32 @@ static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitter
     float e1[3], e2[3], ne[3], b1, b2;
     for (int k = 0; k < 3; ++k)
         e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
-    cross3(e1, e2, ne);
+    pb_cross3(e1, e2, ne);
     float sa = emitter_solid_angle(c, x, v0);
     if (pb_spherical_triangle_sampled(sa)) {
         pb_spherical_triangle_sample(x, v0, v1, v2, sa, u1, u2, es.w);
         /* where it meets the triangle: distance and barycentrics (Moller-Trumbore) */
         float pv[3], tv[3], qv[3];
-        cross3(es.w, e2, pv);
-        float inv = 1.f / dot3(e1, pv);
+        pb_cross3(es.w, e2, pv);
+        float inv = 1.f / pb_dot3(e1, pv);
         for (int k = 0; k < 3; ++k)
             tv[k] = x[k] - v0[k];
-        cross3(tv, e1, qv);
-        b1 = clampf(dot3(tv, pv) * inv, 0.f, 1.f);
-        b2 = clampf(dot3(es.w, qv) * inv, 0.f, 1.f - b1);
-        es.dist = dot3(e2, qv) * inv;
+        pb_cross3(tv, e1, qv);
+        b1 = clampf(pb_dot3(tv, pv) * inv, 0.f, 1.f);
+        b2 = clampf(pb_dot3(es.w, qv) * inv, 0.f, 1.f - b1);
+        es.dist = pb_dot3(e2, qv) * inv;
     } else {
         float su = sqrtf(u1), to[3];
         b1 = su * (1.f - u2), b2 = su * u2;
         for (int k = 0; k < 3; ++k)
             to[k] = v0[k] + b1 * e1[k] + b2 * e2[k] - x[k];
-        es.dist = sqrtf(dot3(to, to));
+        es.dist = sqrtf(pb_dot3(to, to));
         for (int k = 0; k < 3; ++k)
             es.w[k] = to[k] / es.dist;
     }
-    float nl = sqrtf(dot3(ne, ne));
+    float nl = sqrtf(pb_dot3(ne, ne));
     const gpu_shade_material *m = &c->materials[s->material[etri]];
-    float cos_e = -dot3(ne, es.w) / nl;
+    float cos_e = -pb_dot3(ne, es.w) / nl;
     if (m->tex[2] != 0)
         cos_e = fabsf(cos_e);
     float pa = em->pdf_area[etri] * ratio;
@@ -362,8 +351,8 @@ static void emitter_nee(const pb_path_ctx *c, const pb_bake_emitters *em, const 
                         float L[3])
 {
     emitter_sample es = sample_emitter(c, em, x, state);
-    float cos_x = dot3(ns, es.w);
-    if (!(cos_x > 0.f && dot3(ng, es.w) > 0.f && es.pdf > 0.f))
+    float cos_x = pb_dot3(ns, es.w);
+    if (!(cos_x > 0.f && pb_dot3(ng, es.w) > 0.f && es.pdf > 0.f))
         return;
     float T[3];
     if (!shadow_transmittance(c->p, c->glass, x, es.w, es.dist * 0.9999f, T))
@@ -423,9 +412,9 @@ static void env_nee(const pb_path_ctx *c, const float x[3], const float ng[3], c
     float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
     float w[3];
     pb_env_sample(env, u0, u1, u2, w);
-    float cos_x = dot3(ns, w);
+    float cos_x = pb_dot3(ns, w);
     float pe = pb_env_pdf(env, w);
-    if (!(cos_x > 0.f && dot3(ng, w) > 0.f && pe > 0.f))
+    if (!(cos_x > 0.f && pb_dot3(ng, w) > 0.f && pe > 0.f))
         return;
     float T[3];
     if (!shadow_transmittance(p, c->glass, x, w, INFINITY, T))
@@ -539,8 +528,8 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             if (found_pdf > 0.f && pa > 0.f) {
                 const float *v = s->positions + 9 * (size_t)h.tri;
                 float ne[3];
-                cross3(e1, e2, ne);
-                float pl = emitter_density(pa, 0.5f * sqrtf(dot3(ne, ne)), emitter_solid_angle(c, o, v), h.t,
+                pb_cross3(e1, e2, ne);
+                float pl = emitter_density(pa, 0.5f * sqrtf(pb_dot3(ne, ne)), emitter_solid_angle(c, o, v), h.t,
                                            fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2])) *
                            (probe_nee ? probe_emitter_share(p) : 1.f);
                 w = power_heuristic(found_pdf, pl);
@@ -624,8 +613,8 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
                 pb_guide_sample(p->guide, ge, u1, u2, u3, dir);
             else
                 pb_cosine_direction_cpu(ns, u1, u2, dir);
-            float cosine = dot3(ns, dir);
-            if (!(cosine > 0.f && dot3(ng, dir) > 0.f))
+            float cosine = pb_dot3(ns, dir);
+            if (!(cosine > 0.f && pb_dot3(ng, dir) > 0.f))
                 break;
             bsdf_pdf = bounce_pdf(p, ge, cosine, dir);
             for (int k = 0; k < 3; ++k)
@@ -633,9 +622,9 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         } else {
             float u1 = rng_next(state), u2 = rng_next(state);
             pb_cosine_direction_cpu(ns, u1, u2, dir);
-            if (!(dot3(ng, dir) > 0.f))
+            if (!(pb_dot3(ng, dir) > 0.f))
                 break;
-            bsdf_pdf = fmaxf(0.f, dot3(ns, dir)) / PI_F;
+            bsdf_pdf = fmaxf(0.f, pb_dot3(ns, dir)) / PI_F;
         }
         memcpy(o, x, sizeof x);
     }

@@ -1,31 +1,15 @@
 /* Emitter triangles sampled by solid angle (spherical_triangle.h). */
 #include "bake/spherical_triangle.h"
+#include "common/vec3.h"
 
 #include <math.h>
-
-static float dot3(const float a[3], const float b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const float a[3], const float b[3], float c[3])
-{
-    c[0] = a[1] * b[2] - a[2] * b[1];
-    c[1] = a[2] * b[0] - a[0] * b[2];
-    c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static float length3(const float a[3])
-{
-    return sqrtf(dot3(a, a));
-}
 
 /* normalize(v - x) */
 static void toward(const float x[3], const float v[3], float d[3])
 {
     for (int k = 0; k < 3; ++k)
         d[k] = v[k] - x[k];
-    float l = length3(d);
+    float l = pb_length3(d);
     for (int k = 0; k < 3; ++k)
         d[k] /= l;
 }
@@ -56,12 +40,12 @@ float pb_spherical_triangle_area(const float x[3], const float v0[3], const floa
         p0[k] = v0[k] - x[k], p1[k] = v1[k] - x[k], p2[k] = v2[k] - x[k];
         e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
     }
-    float l0 = length3(p0), l1 = length3(p1), l2 = length3(p2);
+    float l0 = pb_length3(p0), l1 = pb_length3(p1), l2 = pb_length3(p2);
     for (int k = 0; k < 3; ++k)
         a[k] = p0[k] / l0, b[k] = p1[k] / l1, c[k] = p2[k] / l2;
-    cross3(e1, e2, n);
-    float num = fabsf(dot3(p0, n)) / (l0 * l1 * l2);
-    float den = 1.f + dot3(a, b) + dot3(b, c) + dot3(c, a);
+    pb_cross3(e1, e2, n);
+    float num = fabsf(pb_dot3(p0, n)) / (l0 * l1 * l2);
+    float den = 1.f + pb_dot3(a, b) + pb_dot3(b, c) + pb_dot3(c, a);
     return 2.f * pb_atan_nonneg(num, den);
 }
 
@@ -76,21 +60,21 @@ void pb_spherical_triangle_sample(const float x[3], const float v0[3], const flo
     float A[3], B[3], C[3], P[3], bP[3], cm[3], cp[3];
     toward(x, v0, A), toward(x, v1, B), toward(x, v2, C);
     /* first step: C' on the arc from A toward C, by tau = tan(angle(A, C') / 2) */
-    float ca = dot3(C, A);
+    float ca = pb_dot3(C, A);
     for (int k = 0; k < 3; ++k)
         P[k] = C[k] - ca * A[k];
-    float pl = length3(P);
+    float pl = pb_length3(P);
     for (int k = 0; k < 3; ++k)
         P[k] /= pl;
-    cross3(B, P, bP);
-    float k = fabsf(dot3(A, bP)), bp = dot3(B, P);
+    pb_cross3(B, P, bP);
+    float k = fabsf(pb_dot3(A, bP)), bp = pb_dot3(B, P);
     float h = 0.5f * u1 * area;
     float sh = sinf(h), ch = cosf(h);
     float den = k * ch - bp * sh;
     for (int j = 0; j < 3; ++j)
         cm[j] = C[j] - A[j], cp[j] = C[j] + A[j];
-    float tau_c = length3(cm) / length3(cp); /* C' = C at u1 = 1 */
-    float tau = (1.f + dot3(A, B)) * sh / den;
+    float tau_c = pb_length3(cm) / pb_length3(cp); /* C' = C at u1 = 1 */
+    float tau = (1.f + pb_dot3(A, B)) * sh / den;
     if (!(den > 0.f && tau < tau_c))
         tau = tau_c;
     float t2 = tau * tau, Cs[3], d[3];
@@ -99,12 +83,12 @@ void pb_spherical_triangle_sample(const float x[3], const float v0[3], const flo
         d[j] = Cs[j] - B[j];
     }
     /* second step: 1 - cos(B, C') = |C' - B|^2 / 2 keeps its digits when C' is near B */
-    float e = u2 * 0.5f * dot3(d, d);
+    float e = u2 * 0.5f * pb_dot3(d, d);
     float z = 1.f - e;
-    float bp2[3], cb = dot3(Cs, B);
+    float bp2[3], cb = pb_dot3(Cs, B);
     for (int j = 0; j < 3; ++j)
         bp2[j] = Cs[j] - cb * B[j];
-    float bl = length3(bp2);
+    float bl = pb_length3(bp2);
     if (!(bl > 0.f)) {
         w[0] = B[0], w[1] = B[1], w[2] = B[2];
         return;
@@ -112,7 +96,7 @@ void pb_spherical_triangle_sample(const float x[3], const float v0[3], const flo
     float r = sqrtf(fmaxf(0.f, e * (2.f - e))) / bl;
     for (int j = 0; j < 3; ++j)
         w[j] = z * B[j] + r * bp2[j];
-    float wl = length3(w);
+    float wl = pb_length3(w);
     for (int j = 0; j < 3; ++j)
         w[j] /= wl;
 }

@@ -158,4 +158,12 @@ void pb_cmd_timestamp(pb_context *ctx); /* no-op without timestamp support */
  * interval is also left in ctx->intervals_ms[0 .. interval_count). */
 pb_result pb_cmd_submit_wait(pb_context *ctx, double *gpu_ms, pb_error *err);
 
+/* A test kernel over a batch, synchronously (src/gpu/batch.c): `count`
+ * entries of in_stride bytes in, out_stride bytes out, one invocation per
+ * entry in workgroups of 64. The kernel's push constants are (inputs address,
+ * outputs address, count, 3 unused words): exact_diff.comp and
+ * spherical_triangle.comp, which test shading math against its C reference. */
+pb_result pb_gpu_batch(pb_context *ctx, const uint32_t *spirv, size_t spirv_bytes, const char *name, const void *in,
+                       uint32_t in_stride, void *out, uint32_t out_stride, uint32_t count, pb_error *err);
+
 #endif

@@ -2,6 +2,7 @@
  * submission bounded by rays_per_submit camera paths). */
 #include "bake/shading.h"
 #include "common/common.h"
+#include "common/vec3.h"
 #include "probebake/render.h"
 #include "render/render_types.h"
 
@@ -22,21 +23,14 @@ static void normalize3(float v[3])
         v[k] = l > 0.f ? v[k] / l : 0.f;
 }
 
-static void cross3(const float a[3], const float b[3], float o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 void pb_render_camera_basis(const pb_camera_view *c, uint32_t width, uint32_t height, float fwd[3], float right[3],
                             float up[3])
 {
     memcpy(fwd, c->forward, 12);
     normalize3(fwd);
-    cross3(fwd, c->up, right);
+    pb_cross3(fwd, c->up, right);
     normalize3(right);
-    cross3(right, fwd, up);
+    pb_cross3(right, fwd, up);
     float t = tanf(0.5f * c->yfov), aspect = (float)width / (float)height;
     for (int k = 0; k < 3; ++k)
         right[k] *= t * aspect, up[k] *= t;
@@ -67,7 +61,7 @@ pb_result pb_render_check(const pb_render_desc *d, pb_error *err)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "field of view %g degrees: must be in (0, 180)",
                        d->camera.yfov * 57.29578f);
     float c[3];
-    cross3(d->camera.forward, d->camera.up, c);
+    pb_cross3(d->camera.forward, d->camera.up, c);
     for (int k = 0; k < 3; ++k)
         if (!isfinite(d->camera.eye[k]) || !isfinite(d->camera.forward[k]) || !isfinite(d->camera.up[k]))
             return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "camera position and directions must be finite");
