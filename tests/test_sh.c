@@ -244,6 +244,19 @@ static void solid_angle_of_known_triangles(void)
     float o[3] = {0, 0, 0}, oct[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, rev[9] = {1, 0, 0, 0, 0, 1, 0, 1, 0};
     CHECK(fabsf(pb_spherical_triangle_area(o, oct, oct + 3, oct + 6) - 1.5707963f) < 1e-6f);
     CHECK(fabsf(pb_spherical_triangle_area(o, rev, rev + 3, rev + 6) - 1.5707963f) < 1e-6f);
+    /* no vector is normalized: the same at a micrometre and at 1e9 m; past
+     * float's range (lengths cubed) the formula gives no number, which the
+     * bake reads as "draw by area" */
+    for (int e = 0; e < 3; ++e) {
+        float s = e == 0 ? 1e-6f : e == 1 ? 1e9f : 1e14f, v[9];
+        for (int k = 0; k < 9; ++k)
+            v[k] = oct[k] * s;
+        float a = pb_spherical_triangle_area(o, v, v + 3, v + 6);
+        if (e < 2)
+            CHECKF(fabsf(a - 1.5707963f) < 1e-6f, "octant at scale %g: %g", s, a);
+        else
+            CHECKF(!pb_spherical_triangle_sampled(a), "octant at scale %g: %g", s, a);
+    }
     /* 1 cm right triangle (area 5e-5 m^2) 2 m away along its normal, tilted 60 degrees */
     float far[9] = {0, 0, 2, 0.01f, 0, 2, 0, 0.01f, 2}, xt[3] = {0, -2 * 1.7320508f, 0};
     double want = 5e-5 / 4;

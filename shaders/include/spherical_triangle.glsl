@@ -15,19 +15,17 @@
 
 // atan(y, x) for y >= 0, in [0, pi], to float's rounding (6e-8 relative)
 // alike on every device and the host: GLSL's atan may be as coarse as 4096
-// ulp (lavapipe's is about 1e-5 rad off), and the solid angle divides the
-// light. An odd polynomial on [0, tan(pi/8)] (least squares, relative
-// error), reached by min/max and the pi/4 shift.
+// ulp and differs between drivers, and the solid angle divides the light.
+// An odd polynomial on [-tan(pi/8), tan(pi/8)] (least squares, relative
+// error), reached by min/max and, above tan(pi/8), the pi/4 shift
+// atan(q) = pi/4 + atan((lo - hi) / (lo + hi)): one division either way.
 float atan_nonneg(float y, float x)
 {
     float ax = abs(x), hi = max(ax, y), lo = min(ax, y);
     if (!(hi > 0.0))
         return 0.0;
-    float a = lo / hi, base = 0.0;
-    if (a > 0.41421356) {
-        a = (a - 1.0) / (a + 1.0);
-        base = 0.78539816;
-    }
+    bool shift = lo > 0.41421356 * hi;
+    float a = shift ? (lo - hi) / (lo + hi) : lo / hi, base = shift ? 0.78539816 : 0.0;
     precise float w = a * a;
     precise float p = (((-6.092343107e-02 * w + 1.060001552e-01) * w - 1.424448639e-01) * w + 1.999853104e-01) * w -
               3.333331645e-01;
@@ -38,19 +36,19 @@ float atan_nonneg(float y, float x)
 }
 
 // Solid angle of the triangle (v0, v1, v2) seen from x: Van Oosterom and
-// Strackee's formula, tan(area / 2) = |a.(b x c)| / (1 + a.b + b.c + c.a)
-// for the unit vectors toward the corners. Its triple product is taken as
-// (v0 - x).((v1 - v0) x (v2 - v0)) over the lengths, which keeps its digits
-// where the corners' directions nearly share a plane (small or edge-on
-// triangles); `precise`: a driver that fuses or reorders these rounds
-// differently from the C reference (lavapipe did, by 1e-4 of some probes).
+// Strackee's formula for the corners p_i = v_i - x of lengths l_i,
+// tan(area / 2) = |p0.(p1 x p2)| / (l0 l1 l2 + (p0.p1) l2 + (p1.p2) l0 + (p2.p0) l1),
+// no vector normalized. The triple product is taken as
+// p0.((v1 - v0) x (v2 - v0)), which keeps its digits where the corners'
+// directions nearly share a plane (small or edge-on triangles). `precise`:
+// a driver that fuses or reorders these rounds differently from the C
+// reference (lavapipe did, by 1e-4 of some probes' light).
 float spherical_triangle_area(vec3 x, vec3 v0, vec3 v1, vec3 v2)
 {
     vec3 p0 = v0 - x, p1 = v1 - x, p2 = v2 - x;
     float l0 = length(p0), l1 = length(p1), l2 = length(p2);
-    vec3 a = p0 / l0, b = p1 / l1, c = p2 / l2;
-    precise float num = abs(dot(p0, cross(v1 - v0, v2 - v0))) / (l0 * l1 * l2);
-    precise float den = 1.0 + dot(a, b) + dot(b, c) + dot(c, a);
+    precise float num = abs(dot(p0, cross(v1 - v0, v2 - v0)));
+    precise float den = l0 * l1 * l2 + dot(p0, p1) * l2 + dot(p1, p2) * l0 + dot(p2, p0) * l1;
     return 2.0 * atan_nonneg(num, den);
 }
 

@@ -19,11 +19,8 @@ float pb_atan_nonneg(float y, float x)
     float ax = fabsf(x), hi = fmaxf(ax, y), lo = fminf(ax, y);
     if (!(hi > 0.f))
         return 0.f;
-    float a = lo / hi, base = 0.f;
-    if (a > 0.41421356f) {
-        a = (a - 1.f) / (a + 1.f);
-        base = 0.78539816f;
-    }
+    int shift = lo > 0.41421356f * hi;
+    float a = shift ? (lo - hi) / (lo + hi) : lo / hi, base = shift ? 0.78539816f : 0.f;
     float w = a * a;
     float p = (((-6.092343107e-02f * w + 1.060001552e-01f) * w - 1.424448639e-01f) * w + 1.999853104e-01f) * w -
               3.333331645e-01f;
@@ -35,17 +32,15 @@ float pb_atan_nonneg(float y, float x)
 
 float pb_spherical_triangle_area(const float x[3], const float v0[3], const float v1[3], const float v2[3])
 {
-    float p0[3], p1[3], p2[3], e1[3], e2[3], n[3], a[3], b[3], c[3];
+    float p0[3], p1[3], p2[3], e1[3], e2[3], n[3];
     for (int k = 0; k < 3; ++k) {
         p0[k] = v0[k] - x[k], p1[k] = v1[k] - x[k], p2[k] = v2[k] - x[k];
         e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
     }
     float l0 = pb_length3(p0), l1 = pb_length3(p1), l2 = pb_length3(p2);
-    for (int k = 0; k < 3; ++k)
-        a[k] = p0[k] / l0, b[k] = p1[k] / l1, c[k] = p2[k] / l2;
     pb_cross3(e1, e2, n);
-    float num = fabsf(pb_dot3(p0, n)) / (l0 * l1 * l2);
-    float den = 1.f + pb_dot3(a, b) + pb_dot3(b, c) + pb_dot3(c, a);
+    float num = fabsf(pb_dot3(p0, n));
+    float den = l0 * l1 * l2 + pb_dot3(p0, p1) * l2 + pb_dot3(p1, p2) * l0 + pb_dot3(p2, p0) * l1;
     return 2.f * pb_atan_nonneg(num, den);
 }
 
