@@ -242,6 +242,10 @@ expect render-up-parallel 1 'up vector is parallel' -- \
 expect render-bad-eye 2 "--eye '1,2' is not three" -- "$pb" render "$demo" --eye 1,2 --target 0,0,0 -o "$tmp/r.png"
 expect render-spheres-need-volume 1 '--show-probes needs --volume' -- "$pb" render "$demo" --show-probes -o "$tmp/r.png"
 expect render-no-partial-file 0 '^absent$' -- bash -c "[ -e '$tmp/r.png' ] && echo present || echo absent"
+expect render-bad-emitter-sampling 2 '--emitter-sampling takes solid-angle or area' -- \
+    "$pb" render "$demo" --emitter-sampling cosine -o "$tmp/r.png"
+expect render-emitters-by-area 0 'wrote .*direct, 1 spp' -- \
+    "$pb" render "$demo" --mode direct --size 32x24 --emitter-sampling area -o "$tmp/ea.png"
 
 # no Vulkan driver at all: one clear line, exit 1, nothing else
 expect no-driver-devices 1 'error: no Vulkan 1.2 driver found .*mesa-vulkan-drivers' -- \

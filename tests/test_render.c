@@ -76,13 +76,14 @@ static void render_matches_cpu(const pb_sparse_desc *sd, int bent)
     }
     uint32_t W = 40, H = 30, n = W * H;
     float *g = malloc(n * 16), *c = malloc(n * 16), *gd = malloc(n * 16), *cd = malloc(n * 16);
-    const char *names[5] = {"direct", "reference", "probes", "indirect", "spheres"};
-    float *plain = malloc(n * 16);
-    for (int pass = 0; pass < 5; ++pass) {
-        int mode = pass == 4 ? PB_RENDER_PROBES : pass;
+    const char *names[6] = {"direct", "reference", "probes", "indirect", "spheres", "direct, by area"};
+    float *plain = malloc(n * 16), *direct = malloc(n * 16);
+    for (int pass = 0; pass < 6; ++pass) {
+        int mode = pass == 4 ? PB_RENDER_PROBES : pass == 5 ? PB_RENDER_DIRECT : pass;
         pb_render_desc d;
         memset(&d, 0, sizeof d);
         d.show_probes = pass == 4;
+        d.emitters_by_area = pass == 5; /* the panel's light samples drawn by area, not by solid angle */
         pb_camera_from_scene(&s->cameras[0], &d.camera);
         d.width = W, d.height = H;
         d.mode = (pb_render_mode)mode;
@@ -106,6 +107,15 @@ static void render_matches_cpu(const pb_sparse_desc *sd, int bent)
                 100 * rel);
         if (pass == PB_RENDER_PROBES)
             memcpy(plain, g, n * 16);
+        if (pass == 0)
+            memcpy(direct, g, n * 16);
+        if (pass == 5) { /* the other sampler: other light samples where the panel lights */
+            uint32_t changed = 0;
+            for (uint32_t i = 0; i < n; ++i)
+                changed += fabsf(lum(g + 4 * i) - lum(direct + 4 * i)) > 1e-3f * fmaxf(1.f, lum(direct + 4 * i));
+            fprintf(stderr, "  %u pixels differ from the solid-angle samples\n", changed);
+            CHECK(changed > n / 10);
+        }
         if (pass == 4) { /* the spheres are there: some pixels changed, not most */
             uint32_t changed = 0;
             for (uint32_t i = 0; i < n; ++i)
@@ -121,7 +131,7 @@ static void render_matches_cpu(const pb_sparse_desc *sd, int bent)
     }
     if (sd) /* refined: chunks and bricks of both levels were looked up */
         CHECK(p.sv.levels == sd->levels && p.vol.sparse && p.vol.sparse->brick_count > 1);
-    free(g), free(c), free(gd), free(cd), free(plain);
+    free(g), free(c), free(gd), free(cd), free(plain), free(direct);
     release(&p);
 }
 

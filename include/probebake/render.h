@@ -41,6 +41,7 @@ typedef struct pb_render_desc {
     const pb_environment *environment;
     uint32_t show_probes;     /* debug view: probes as spheres lit by their SH (invalid red, grid homes of
                                  relocated ones grey); needs volume */
+    uint32_t emitters_by_area; /* as pb_bake_desc: emitter light samples drawn by area (0: by solid angle) */
     pb_progress_fn progress;  /* NULL, or called after each band of rows; nonzero cancels (PB_ERROR_CANCELLED) */
     void *progress_user;
 } pb_render_desc;

@@ -152,6 +152,7 @@ int cmd_render(const options *o)
      * light reflects once more at the surface); without one, 8 */
     d.bounces = o->has_bounces ? o->bounces : (o->volume ? vol.settings.bounces + 1 : 8);
     d.seed = o->has_seed ? o->seed : 1;
+    d.emitters_by_area = (uint32_t)o->emitters_by_area;
     d.volume = o->volume ? &sv : NULL;
     d.volume_direct = (vol.flags & PB_VOLUME_DIRECT) != 0;
     memcpy(d.sky, o->sky, sizeof d.sky);

@@ -104,7 +104,8 @@ void cli_print_help(void)
            "                  same camera and size) instead of tracing a 16x-spp reference\n"
            "  --seams-of SPARSE.probes   diff: the seam and per-level metrics on the pixels where that sparse\n"
            "                  volume's levels meet (e.g. a grid's error where a sparse volume has its seams)\n"
-           "  --sky R,G,B | --env FILE.hdr|.exr [...]   the environment, as for bake\n",
+           "  --sky R,G,B | --env FILE.hdr|.exr [...]   the environment, as for bake\n"
+           "  --emitter-sampling solid-angle|area   reference, direct: light samples on emitters, as for bake\n",
            PB_VERSION_STRING);
 }
 

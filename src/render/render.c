@@ -117,6 +117,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
         memset(&prm, 0, sizeof prm);
         prm.scene = gs->refs;
         pb_shading_params(&sh, &prm);
+        prm.emitters_by_area = d.emitters_by_area;
         memcpy(params.mapped, &prm, sizeof prm);
     }
     gpu_render_params rp;

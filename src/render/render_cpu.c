@@ -173,6 +173,7 @@ pb_result pb_render_cpu(const pb_scene *scene, const pb_bvh *bvh, const pb_rende
     memset(&pass, 0, sizeof pass);
     pass.scene = scene, pass.bvh = bvh, pass.env = env.width ? &env : NULL, pass.emitters = &emit;
     pass.light_table = lights_drawn.count ? &lights_drawn : NULL;
+    pass.emitters_by_area = d.emitters_by_area;
     render_job j;
     memset(&j, 0, sizeof j);
     j.d = &d, j.rgba = rgba, j.direct = direct;
