@@ -288,8 +288,9 @@ static void solid_angle_of_known_triangles(void)
  * with density 1 / solid angle. On a 256 x 256 stratified grid of (u1, u2)
  * the solid angle times the mean cosine to a receiver's normal is Lambert's
  * exact projected solid angle (any warp of the density would move it), and
- * every direction meets the triangle. Shapes: a plain one, a sliver, one
- * from up close (most of a hemisphere), one at the sampled range's low end. */
+ * every direction meets the triangle. Shapes: a plain one (and wound the
+ * other way: a double-sided emitter seen from behind), a sliver, one from up
+ * close (most of a hemisphere), one at the sampled range's low end. */
 static void spherical_triangle_samples_uniformly(void)
 {
     struct {
@@ -298,6 +299,7 @@ static void spherical_triangle_samples_uniformly(void)
         double n[3];
     } cases[] = {
         {"plain", {0, 0, 0}, {-0.3f, 0.2f, 1, 0.5f, -0.1f, 1.2f, 0.1f, 0.6f, 0.9f}, {0, 0, 1}},
+        {"plain, wound the other way", {0, 0, 0}, {-0.3f, 0.2f, 1, 0.1f, 0.6f, 0.9f, 0.5f, -0.1f, 1.2f}, {0, 0, 1}},
         {"sliver", {0, 0, 0}, {-1, 0, 1, 1, 0.02f, 1, 0.9f, 0.05f, 1.1f}, {0, 0.3, 0.9539392}},
         {"close", {0, 0, 0.6f}, {-3, -2, 1, 3, -2, 1, 0, 4, 1}, {0, 0, 1}},
         {"small", {0, 0, 0}, {-0.07f, -0.07f, 1, 0.1f, -0.07f, 1, 0, 0.085f, 1}, {0.6, 0, 0.8}},
