@@ -3,8 +3,8 @@
 // equally likely, density 1 / (its solid angle). Area sampling's density
 // d^2 / (cos_e area) swings over a triangle close to the point, and the
 // light it brings with it; this one does not. Tiny triangles (far away,
-// seen edge-on) keep area sampling, where both are alike and the angles
-// below lose their digits. CPU reference: src/bake/spherical_triangle.c,
+// seen edge-on) keep area sampling, where both are alike and differences
+// of nearly equal unit vectors below lose their digits. CPU reference: src/bake/spherical_triangle.c,
 // same arithmetic in the same order. docs/bake.md, "Emitters by solid angle".
 #ifndef PB_SPHERICAL_TRIANGLE_GLSL
 #define PB_SPHERICAL_TRIANGLE_GLSL

@@ -4,9 +4,9 @@
  * density d^2 / (cos_e area) swings over a triangle close to x, and the light
  * it brings swings with it; this one's does not. Triangles of small solid
  * angle (far away or edge-on) keep area sampling: there both are alike, and
- * the angles below lose their digits. The CPU reference of
- * shaders/include/spherical_triangle.glsl, same arithmetic in the same order
- * (docs/bake.md, "Emitters by solid angle"). */
+ * the differences of nearly equal unit vectors below lose their digits. The
+ * CPU reference of shaders/include/spherical_triangle.glsl, same arithmetic
+ * in the same order (docs/bake.md, "Emitters by solid angle"). */
 #ifndef PB_SPHERICAL_TRIANGLE_H
 #define PB_SPHERICAL_TRIANGLE_H
 
