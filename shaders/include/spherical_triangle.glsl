@@ -4,8 +4,9 @@
 // d^2 / (cos_e area) swings over a triangle close to the point, and the
 // light it brings with it; this one does not. Tiny triangles (far away,
 // seen edge-on) keep area sampling, where both are alike and differences
-// of nearly equal unit vectors below lose their digits. CPU reference: src/bake/spherical_triangle.c,
-// same arithmetic in the same order. docs/bake.md, "Emitters by solid angle".
+// of nearly equal unit vectors below lose their digits. CPU reference:
+// src/bake/spherical_triangle.c, same arithmetic in the same order.
+// docs/bake.md, "Emitters by solid angle".
 #ifndef PB_SPHERICAL_TRIANGLE_GLSL
 #define PB_SPHERICAL_TRIANGLE_GLSL
 
