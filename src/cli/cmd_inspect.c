@@ -237,7 +237,7 @@ int cmd_inspect(const options *o)
                s->indirect_mode ? "volume" : "path", s->techniques & PB_TECHNIQUE_PROBE_NEE ? "on" : "off",
                s->techniques & PB_TECHNIQUE_GUIDING ? "on" : "off",
                s->techniques & PB_TECHNIQUE_LIGHT_CELLS ? "on" : "off",
-               s->techniques & PB_TECHNIQUE_SOLID_ANGLE ? "solid angle" : "area", (unsigned long long)s->seed,
+               s->techniques & PB_TECHNIQUE_SOLID_ANGLE ? "solid angle" : "area, if any", (unsigned long long)s->seed,
                v.device[0] ? v.device : "?");
         if (s->sh_window || s->indirect_clamp > 0.f)
             printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),
