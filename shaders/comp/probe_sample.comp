@@ -11,11 +11,12 @@ layout(local_size_x = 64) in;
 
 layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer QueryOut { vec4 v[]; };
 
+// pb_gpu_batch's push constants (src/gpu/gpu.h), then the volume's references
 layout(push_constant) uniform Push {
-    PbVolumeRefs volume;
     pb_addr queries;   // 3 vec4 per query: point, normal, view
     pb_addr out_rgb;
     uint count;
+    PbVolumeRefs volume;
 } pc;
 
 void main()

@@ -109,10 +109,8 @@ static void face_normal(const pb_scene *s, uint32_t tri, float e1[3], float e2[3
     const float *v0 = s->positions + 9 * (size_t)tri, *v1 = v0 + 3, *v2 = v0 + 6;
     for (int k = 0; k < 3; ++k)
         e1[k] = v1[k] - v0[k], e2[k] = v2[k] - v0[k];
-    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-    float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    pb_cross3(e1, e2, n);
+    float nl = pb_length3(n);
     for (int k = 0; k < 3; ++k)
         n[k] /= nl;
 }
@@ -329,7 +327,7 @@ static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitter
         for (int k = 0; k < 3; ++k)
             es.w[k] = to[k] / es.dist;
     }
-    float nl = sqrtf(pb_dot3(ne, ne));
+    float nl = pb_length3(ne);
     const gpu_shade_material *m = &c->materials[s->material[etri]];
     float cos_e = -pb_dot3(ne, es.w) / nl;
     if (m->tex[2] != 0)
@@ -526,10 +524,9 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             int probe_nee = bounce == 0 && p->nee;
             float found_pdf = probe_nee ? 1.f / (4.f * PI_F) : bsdf_pdf;
             if (found_pdf > 0.f && pa > 0.f) {
-                const float *v = s->positions + 9 * (size_t)h.tri;
                 float ne[3];
                 pb_cross3(e1, e2, ne);
-                float pl = emitter_density(pa, 0.5f * sqrtf(pb_dot3(ne, ne)), emitter_solid_angle(c, o, v), h.t,
+                float pl = emitter_density(pa, 0.5f * pb_length3(ne), emitter_solid_angle(c, o, v0), h.t,
                                            fabsf(ng[0] * dir[0] + ng[1] * dir[1] + ng[2] * dir[2])) *
                            (probe_nee ? probe_emitter_share(p) : 1.f);
                 w = power_heuristic(found_pdf, pl);

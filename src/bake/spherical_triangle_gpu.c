@@ -8,6 +8,6 @@
 
 pb_result pb_spherical_triangle_gpu(pb_context *ctx, const float *inputs, uint32_t count, float *out, pb_error *err)
 {
-    return pb_gpu_batch(ctx, pb_spv_spherical_triangle, sizeof pb_spv_spherical_triangle, "spherical_triangle", inputs,
-                        80, out, 16, count, err);
+    return pb_gpu_batch(ctx, pb_spv_spherical_triangle, sizeof pb_spv_spherical_triangle, "spherical_triangle", NULL, 0,
+                        inputs, 80, out, 16, count, err);
 }

@@ -8,5 +8,6 @@
 
 pb_result pb_exact_diff_gpu(pb_context *ctx, const float *abcd, uint32_t count, float *out, pb_error *err)
 {
-    return pb_gpu_batch(ctx, pb_spv_exact_diff, sizeof pb_spv_exact_diff, "exact_diff", abcd, 16, out, 4, count, err);
+    return pb_gpu_batch(ctx, pb_spv_exact_diff, sizeof pb_spv_exact_diff, "exact_diff", NULL, 0, abcd, 16, out, 4, count,
+                        err);
 }

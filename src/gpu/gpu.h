@@ -161,9 +161,12 @@ pb_result pb_cmd_submit_wait(pb_context *ctx, double *gpu_ms, pb_error *err);
 /* A test kernel over a batch, synchronously (src/gpu/batch.c): `count`
  * entries of in_stride bytes in, out_stride bytes out, one invocation per
  * entry in workgroups of 64. The kernel's push constants are (inputs address,
- * outputs address, count, 3 unused words): exact_diff.comp and
- * spherical_triangle.comp, which test shading math against its C reference. */
-pb_result pb_gpu_batch(pb_context *ctx, const uint32_t *spirv, size_t spirv_bytes, const char *name, const void *in,
-                       uint32_t in_stride, void *out, uint32_t out_stride, uint32_t count, pb_error *err);
+ * outputs address, count, 3 unused words) and then `extra` (extra_bytes, at
+ * most 96; NULL for none): exact_diff.comp, spherical_triangle.comp and
+ * probe_sample.comp (extra: the volume's references), which test shading
+ * and sampling math against their C references. */
+pb_result pb_gpu_batch(pb_context *ctx, const uint32_t *spirv, size_t spirv_bytes, const char *name, const void *extra,
+                       uint32_t extra_bytes, const void *in, uint32_t in_stride, void *out, uint32_t out_stride,
+                       uint32_t count, pb_error *err);
 
 #endif

@@ -59,24 +59,13 @@ void pb_sample_release(pb_context *ctx, pb_sample_buffers *b)
     memset(b, 0, sizeof *b);
 }
 
-typedef struct sample_push {
-    gpu_volume_refs volume;
-    uint64_t queries, out; /* 3 vec4 per query: point, normal, view */
-    uint32_t count, pad;
-} sample_push;
-_Static_assert(sizeof(sample_push) <= 128, "push constants within Vulkan's guaranteed 128 bytes");
-
 pb_result pb_sample_gpu(pb_context *ctx, const pb_sample_volume *s, const float *p4, const float *n4,
                         const float *view4, uint32_t count, float *rgb4, pb_error *err)
 {
     pb_error_clear(err);
     if (count == 0)
         return PB_OK;
-    uint64_t bytes = (uint64_t)count * 16;
-    pb_sample_buffers vb;
-    pb_buffer q = {0}, out = {0};
-    pb_pipeline pipe = {0};
-    float *interleaved = malloc((size_t)bytes * 3);
+    float *interleaved = malloc((size_t)count * 48); /* 3 vec4 per query: point, normal, view */
     if (!interleaved)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u queries", count);
     for (uint32_t i = 0; i < count; ++i) {
@@ -84,30 +73,12 @@ pb_result pb_sample_gpu(pb_context *ctx, const pb_sample_volume *s, const float 
         memcpy(interleaved + 12 * (size_t)i + 4, n4 + 4 * (size_t)i, 16);
         memcpy(interleaved + 12 * (size_t)i + 8, view4 + 4 * (size_t)i, 16);
     }
+    pb_sample_buffers vb;
     pb_result r = pb_sample_upload(ctx, s, &vb, err);
-    if (r == PB_OK)
-        r = pb_buffer_create(ctx, 3 * bytes, PB_MEMORY_DEVICE, "sample queries", &q, err);
-    if (r == PB_OK)
-        r = pb_buffer_upload(ctx, &q, 0, interleaved, 3 * bytes, err);
+    if (r == PB_OK) /* the batch's push constants, then the volume's references */
+        r = pb_gpu_batch(ctx, pb_spv_probe_sample, sizeof pb_spv_probe_sample, "probe_sample", &vb.refs,
+                         sizeof vb.refs, interleaved, 48, rgb4, 16, count, err);
     free(interleaved);
-    if (r == PB_OK)
-        r = pb_buffer_create(ctx, bytes, PB_MEMORY_DOWNLOAD, "sample results", &out, err);
-    if (r == PB_OK)
-        r = pb_pipeline_create(ctx, pb_spv_probe_sample, sizeof pb_spv_probe_sample, sizeof(sample_push), NULL, 0, 64,
-                               "probe_sample", &pipe, err);
-    if (r == PB_OK)
-        r = pb_cmd_begin(ctx, err);
-    if (r == PB_OK) {
-        sample_push push = {vb.refs, q.address, out.address, count, 0};
-        pb_cmd_dispatch(ctx, &pipe, &push, (count + 63) / 64);
-        pb_cmd_barrier_to_host(ctx);
-        r = pb_cmd_submit_wait(ctx, NULL, err);
-    }
-    if (r == PB_OK)
-        memcpy(rgb4, out.mapped, (size_t)bytes);
-    pb_pipeline_destroy(ctx, &pipe);
-    pb_buffer_destroy(ctx, &q);
-    pb_buffer_destroy(ctx, &out);
     pb_sample_release(ctx, &vb);
     return r;
 }
