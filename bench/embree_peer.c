@@ -1,9 +1,18 @@
 /* Embree 3 as the benches' CPU peer (bench/embree_peer.h). */
 #include "embree_peer.h"
+#include "bvh/alpha.h"
 #include "common/common.h"
 
 #include <math.h>
 #include <string.h>
+
+static void ray_in(const pb_ray *r, struct RTCRay *ray)
+{
+    ray->org_x = r->origin[0], ray->org_y = r->origin[1], ray->org_z = r->origin[2];
+    ray->dir_x = r->direction[0], ray->dir_y = r->direction[1], ray->dir_z = r->direction[2];
+    ray->tnear = r->tmin, ray->tfar = r->tmax;
+    ray->time = 0.f, ray->mask = 0xffffffffu, ray->id = 0, ray->flags = 0;
+}
 
 typedef struct embree_job {
     RTCScene scene;
@@ -19,18 +28,7 @@ static void embree_range(void *user, uint64_t b, uint64_t e)
     for (uint64_t i = b; i < e; ++i) {
         const pb_ray *r = &j->rays[i];
         struct RTCRayHit rh;
-        rh.ray.org_x = r->origin[0];
-        rh.ray.org_y = r->origin[1];
-        rh.ray.org_z = r->origin[2];
-        rh.ray.dir_x = r->direction[0];
-        rh.ray.dir_y = r->direction[1];
-        rh.ray.dir_z = r->direction[2];
-        rh.ray.tnear = r->tmin;
-        rh.ray.tfar = r->tmax;
-        rh.ray.time = 0.f;
-        rh.ray.mask = 0xffffffffu;
-        rh.ray.id = 0;
-        rh.ray.flags = 0;
+        ray_in(r, &rh.ray);
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(j->scene, &ctx, &rh);
@@ -38,7 +36,20 @@ static void embree_range(void *user, uint64_t b, uint64_t e)
     }
 }
 
-int embree_peer_build(RTCDevice dev, const pb_scene *s, embree_peer *out)
+/* Cuts out alpha: a hit where the surface is not opaque is refused. (The
+ * RTCHitN accessors are C++ only; in C the hits are read from their
+ * structure-of-arrays layout: u, v and primID rows after Ng's three.) */
+static void alpha_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    const pb_scene *s = args->geometryUserPtr;
+    const float *f = (const float *)args->hit;
+    const unsigned *prim = (const unsigned *)args->hit + 5 * args->N;
+    for (unsigned i = 0; i < args->N; ++i)
+        if (args->valid[i] == -1 && !pb_alpha_opaque(s, prim[i], f[3 * args->N + i], f[4 * args->N + i]))
+            args->valid[i] = 0;
+}
+
+int embree_peer_build(RTCDevice dev, const pb_scene *s, int alpha, embree_peer *out)
 {
     double t0 = pb_now_ms();
     out->scene = rtcNewScene(dev);
@@ -54,6 +65,11 @@ int embree_peer_build(RTCDevice dev, const pb_scene *s, embree_peer *out)
     memcpy(vb, s->positions, (size_t)s->triangle_count * 36);
     for (uint32_t i = 0; i < 3 * s->triangle_count; ++i)
         ib[i] = i;
+    if (alpha) {
+        rtcSetGeometryUserData(g, (void *)s);
+        rtcSetGeometryIntersectFilterFunction(g, alpha_filter);
+        rtcSetGeometryOccludedFilterFunction(g, alpha_filter);
+    }
     rtcCommitGeometry(g);
     rtcAttachGeometry(out->scene, g);
     rtcReleaseGeometry(g);
@@ -68,6 +84,30 @@ double embree_peer_trace(const embree_peer *p, const pb_ray *rays, uint32_t n, f
     double t0 = pb_now_ms();
     pb_parallel_for(n, 1024, 0, embree_range, &job);
     return pb_now_ms() - t0;
+}
+
+void embree_peer_cast(void *user, const pb_ray *r, pb_trace_mode mode, pb_hit *hit)
+{
+    const embree_peer *p = user;
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    memset(hit, 0, sizeof *hit);
+    hit->triangle = PB_NO_HIT, hit->t = INFINITY;
+    if (mode == PB_TRACE_ANY) {
+        struct RTCRay ray;
+        ray_in(r, &ray);
+        rtcOccluded1(p->scene, &ctx, &ray);
+        if (ray.tfar < 0.f) /* occluded: Embree names no triangle, and a shadow ray needs none */
+            hit->triangle = 0, hit->t = r->tmin;
+        return;
+    }
+    struct RTCRayHit rh;
+    ray_in(r, &rh.ray);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(p->scene, &ctx, &rh);
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
+        hit->triangle = rh.hit.primID, hit->t = rh.ray.tfar, hit->u = rh.hit.u, hit->v = rh.hit.v;
 }
 
 void embree_peer_release(embree_peer *p)

@@ -134,7 +134,7 @@ int main(int argc, char **argv)
                 pb_trace(ctx, gs, pr, n, PB_TRACE_CLOSEST, hits, NULL, &err) == PB_OK &&
                 pb_trace(ctx, gs, pr, n, PB_TRACE_CLOSEST, hits, &st, &err) == PB_OK && st.kernel_ms > 0)
                 trace_mrays = n / (st.kernel_ms * 1e3);
-            if (pr && et && embree_peer_build(edev, s, &peer)) {
+            if (pr && et && embree_peer_build(edev, s, 0, &peer)) {
                 embree_peer_trace(&peer, pr, n, et);
                 embree_mrays = n / (embree_peer_trace(&peer, pr, n, et) * 1e3);
                 embree_peer_release(&peer);

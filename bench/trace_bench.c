@@ -204,7 +204,7 @@ static int bench_scene(pb_context *ctx, RTCDevice edev, const char *path, const 
 
     /* Embree on the same triangles (local frame) and rays */
     embree_peer peer;
-    if (!embree_peer_build(edev, s, &peer)) {
+    if (!embree_peer_build(edev, s, 0, &peer)) {
         fprintf(stderr, "trace_bench: Embree could not build %s\n", path);
         free(rays), free(hits), free(et), free(kt), free(wt), free(times);
         pb_gpu_scene_destroy(gs);

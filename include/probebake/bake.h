@@ -300,6 +300,12 @@ void pb_light_table_free(pb_light_table *t);
 
 /* --- CPU references of the bake kernels (tests) --- */
 
+/* A ray caster for the CPU reference path tracer: answers one ray as
+ * pb_trace_cpu would (closest hit, or any hit for a shadow ray; alpha cut
+ * outs honoured). bench/peer_paths plugs Embree in to time the same paths
+ * on a CPU peer. */
+typedef void (*pb_ray_cast_fn)(void *user, const pb_ray *ray, pb_trace_mode mode, pb_hit *hit);
+
 /* Everything a bake kernel reads for one pass, on the host. */
 typedef struct pb_bake_pass {
     const pb_scene *scene;
@@ -320,6 +326,8 @@ typedef struct pb_bake_pass {
     const struct pb_guide *guide;     /* path guiding's learned cache (src/bake/guide.h); NULL: off */
     const struct pb_light_cells *light_cells; /* emitters drawn per cell (src/bake/light_cells.h); NULL: by power */
     uint32_t emitters_by_area;        /* as pb_bake_desc */
+    pb_ray_cast_fn cast;              /* the CPU reference's rays: NULL traces pb_trace_cpu over bvh */
+    void *cast_user;
 } pb_bake_pass;
 
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).

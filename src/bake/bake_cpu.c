@@ -97,7 +97,10 @@ static hit trace(const pb_bake_pass *p, const float o[3], const float d[3], floa
     ++traversals;
     pb_ray ray = {{o[0], o[1], o[2]}, 0.f, {d[0], d[1], d[2]}, tmax};
     pb_hit h;
-    pb_trace_cpu(p->scene, p->bvh, &ray, 1, mode, &h, 1);
+    if (p->cast)
+        p->cast(p->cast_user, &ray, mode, &h);
+    else
+        pb_trace_cpu(p->scene, p->bvh, &ray, 1, mode, &h, 1);
     hit r = {h.triangle, h.t, h.u, h.v};
     return r;
 }

@@ -1,0 +1,329 @@
+/* peer_paths: what a path costs the bake on this Vulkan device against a CPU
+ * path tracer on this host's cores, path for path.
+ *
+ *   peer_paths [--probes N] [--rays N] [--passes N] [--bounces N] [--methods plain,all]
+ *              [--repeat N] [--out DIR] [--validation] [SCENE ...]
+ *
+ * The peer is the bake's own CPU reference path tracer (src/bake/bake_cpu.c:
+ * the kernels' estimators line by line, the same random numbers) casting its
+ * rays with Embree 3 on all host threads (pb_bake_pass.cast), so both trace
+ * the same paths to the same error, and the ratio of their rates is the
+ * ratio of their times to any accuracy. Per scene and method, one bake of
+ * --passes passes of --probes probes (a fitted grid, not relocated) x
+ * --rays rays, --bounces bounces:
+ *   bake   GPU time of the trace kernel (timestamps: paths, shading, every
+ *          ray), and of all three kernels (trace + SH + depth);
+ *   peer   wall time of the same paths on the host (Embree's rays);
+ *   own    the same C path tracer over the bake's BVH (pb_trace_cpu);
+ * and "agree": the relative RMSE of the peer's irradiance against the
+ * bake's (64 directions per valid probe), which is noise-sized only where
+ * a hit decides differently (a blended surface's hashed threshold, a
+ * Russian roulette draw), else ~1e-7. The run fails where the C path
+ * tracer over the bake's own BVH is off the bake by more than
+ * AGREE_OWN_MAX in a scene without blended surfaces: then the peer does
+ * not trace the bake's paths (or the kernels left their CPU reference).
+ * Methods: plain (no probe NEE, light cells or guiding) and all (probe
+ * NEE, light cells, path guiding: the production preset's estimators with
+ * a fixed path count). Times are medians of --repeat rounds (default 3; the
+ * bake and its peers alternate within each round, as lavapipe drifts).
+ * Writes DIR/peer_paths.csv and DIR/peer_paths.json (default bench/out). */
+#define _POSIX_C_SOURCE 200809L
+#include "bake/gpu_scene.h"
+#include "bake/guide_cache.h"
+#include "bake/light_cells_gpu.h"
+#include "bake/shading.h"
+#include "bench_util.h"
+#include "common/common.h"
+#include "embree_peer.h"
+#include "probebake/probebake.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+typedef struct method {
+    const char *name;
+    uint32_t probe_nee, light_cells, guide_paths;
+} method;
+
+static const method methods[] = {
+    {"plain", 0, 0, 0},
+    {"all", 1, 1, PB_GUIDE_DEFAULT_PATHS},
+};
+#define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
+#define MAX_REPEAT 15
+#define AGREE_OWN_MAX 1e-3 /* a rare Russian roulette draw flipped by rounding moves ~1e-4 */
+
+typedef struct row {
+    const char *scene, *method;
+    uint64_t paths;
+    double bake_trace_ms, bake_gpu_ms, peer_ms, own_ms; /* medians of the rounds */
+    double agree_peer, agree_own;                        /* relative RMSE against the bake */
+} row;
+
+/* The CPU tracer's inputs that pb_bake learned on the device side and keeps
+ * with the GPU scene (the light cells, the guide), and the shading tables. */
+typedef struct peer_inputs {
+    pb_bake_emitters emit;
+    pb_env_table env;
+    pb_light_table lights;
+    int draws_lights;
+} peer_inputs;
+
+/* Runs the CPU path tracer of tmpl over every pass of d, as pb_bake places,
+ * turns and lights its probes; sh: 27 irradiance coefficients per probe.
+ * Returns the wall ms of the path tracing (pb_bake_trace_cpu) alone, or a
+ * negative number when out of memory. */
+static double cpu_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P, float *sh)
+{
+    uint32_t rpp = d->rays_per_probe, n = d->octmap_res ? d->octmap_res : 16;
+    float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
+    float *dirs = malloc((size_t)rpp * 16), *rays = malloc((size_t)P * rpp * 16);
+    float *red = calloc((size_t)P * (40 + 2 * n * n), sizeof(float));
+    float *nee = d->probe_nee ? malloc((size_t)P * rpp * 32) : NULL;
+    double *sum = calloc((size_t)P * 27, sizeof(double)), ms = 0.0;
+    if (!probes || !rot || !dirs || !rays || !red || !sum || (d->probe_nee && !nee)) {
+        ms = -1.0;
+        goto out;
+    }
+    pb_sf_directions(rpp, dirs);
+    for (uint32_t pass = 0; pass < d->passes; ++pass) {
+        for (uint32_t p = 0; p < P; ++p) {
+            uint32_t id;
+            float m[9];
+            pb_bake_probe_position(s, d, p, probes + 4 * p, &id);
+            memcpy(&probes[4 * p + 3], &id, 4);
+            pb_random_rotation(d->seed, id, pass, m);
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 4; ++c)
+                    rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
+        }
+        pb_bake_pass pp = tmpl;
+        pp.probes = probes, pp.probe_list = NULL, pp.rotations = rot, pp.directions = dirs;
+        pp.first_probe = 0, pp.probe_count = P, pp.rays_per_probe = rpp, pp.pass_index = pass;
+        pp.octmap_res = n, pp.nee = nee;
+        double t0 = pb_now_ms();
+        pb_bake_trace_cpu(&pp, rays);
+        ms += pb_now_ms() - t0;
+        pb_bake_sh_cpu(&pp, rays, red);
+        for (uint32_t p = 0; p < P; ++p)
+            for (int k = 0; k < 27; ++k)
+                sum[27 * (size_t)p + k] += red[40 * (size_t)p + k] / (double)d->passes;
+    }
+    for (uint32_t p = 0; p < P; ++p) {
+        for (int k = 0; k < 27; ++k)
+            sh[27 * (size_t)p + k] = (float)sum[27 * (size_t)p + k];
+        pb_sh_radiance_to_irradiance(sh + 27 * (size_t)p);
+    }
+out:
+    free(probes), free(rot), free(dirs), free(rays), free(red), free(nee), free(sum);
+    return ms;
+}
+
+/* Relative RMSE of the irradiance of sh (27 per probe) against the volume's,
+ * over its valid probes and 64 directions (bench_volume_rmse's metric). */
+static double agreement(const pb_volume *v, const float *sh)
+{
+    pb_volume a = *v;
+    a.sh = (float *)sh;
+    return bench_volume_rmse(&a, v);
+}
+
+int main(int argc, char **argv)
+{
+    uint32_t probes = 256, rays = 256, passes = 2, bounces = 3, repeat = 3;
+    const char *out_dir = "bench/out", *scenes[16];
+    int nscenes = 0, validation = 0, use[METHOD_COUNT] = {1, 1};
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--probes") && v)
+            probes = (uint32_t)strtoul(argv[++i], NULL, 10);
+        else if (!strcmp(a, "--rays") && v)
+            rays = (uint32_t)strtoul(argv[++i], NULL, 10);
+        else if (!strcmp(a, "--passes") && v)
+            passes = (uint32_t)strtoul(argv[++i], NULL, 10);
+        else if (!strcmp(a, "--bounces") && v)
+            bounces = (uint32_t)strtoul(argv[++i], NULL, 10);
+        else if (!strcmp(a, "--repeat") && v)
+            repeat = (uint32_t)strtoul(argv[++i], NULL, 10);
+        else if (!strcmp(a, "--out") && v)
+            out_dir = argv[++i];
+        else if (!strcmp(a, "--validation"))
+            validation = 1;
+        else if (!strcmp(a, "--methods") && v) {
+            const char *list = argv[++i];
+            for (int m = 0; m < METHOD_COUNT; ++m) {
+                size_t l = strlen(methods[m].name);
+                const char *f = strstr(list, methods[m].name);
+                use[m] = f && (f == list || f[-1] == ',') && (f[l] == ',' || f[l] == 0);
+            }
+        } else if (a[0] == '-') {
+            fprintf(stderr, "peer_paths: unknown option %s\n", a);
+            return 2;
+        } else if (nscenes < 16)
+            scenes[nscenes++] = a;
+    }
+    if (!probes || !rays || !passes || !repeat || repeat > MAX_REPEAT) {
+        fprintf(stderr, "peer_paths: --probes, --rays and --passes must be at least 1, --repeat 1 to %d\n",
+                MAX_REPEAT);
+        return 2;
+    }
+    if (!nscenes)
+        nscenes = bench_default_scenes("peer_paths", scenes, 16);
+    mkdir(out_dir, 0755);
+    char csv_path[1024], json_path[1024];
+    snprintf(csv_path, sizeof csv_path, "%s/peer_paths.csv", out_dir);
+    snprintf(json_path, sizeof json_path, "%s/peer_paths.json", out_dir);
+    FILE *csv = fopen(csv_path, "w"), *json = fopen(json_path, "w");
+    if (!csv || !json) {
+        fprintf(stderr, "peer_paths: cannot write %s: %s\n", csv ? json_path : csv_path, strerror(errno));
+        return 1;
+    }
+    pb_context *ctx = NULL;
+    pb_error err;
+    pb_context_desc cd = {NULL, (uint32_t)validation, 0, 0, {0}};
+    if (pb_context_create(&cd, &ctx, &err) != PB_OK) {
+        fprintf(stderr, "peer_paths: %s\n", err.message);
+        return 1;
+    }
+    RTCDevice edev = rtcNewDevice(NULL);
+    printf("device: %s; peer: the bake's CPU path tracer on Embree %d.%d.%d, %u host threads; %u probes x %u rays x "
+           "%u passes, %u bounces, median of %u rounds\n",
+           pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
+           probes, rays, passes, bounces, repeat);
+    printf("%-12s %-6s %9s %10s %10s %10s %10s %8s %8s %10s %10s\n", "scene", "method", "paths", "bake ms", "all GPU",
+           "peer ms", "own ms", "vs peer", "vs own", "agree peer", "agree own");
+    fprintf(csv, "scene,method,paths,bake_trace_ms,bake_gpu_ms,peer_ms,own_ms,vs_peer,vs_own,agree_peer,agree_own\n");
+    fprintf(json, "{\"device\": \"%s\", \"peer\": \"Embree %d.%d.%d\", \"host_threads\": %u, \"probes\": %u, "
+                  "\"rays\": %u, \"passes\": %u, \"bounces\": %u, \"repeat\": %u, \"rows\": [",
+            pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
+            probes, rays, passes, bounces, repeat);
+    int failed = 0, first_row = 1;
+    for (int si = 0; si < nscenes; ++si) {
+        pb_scene *s;
+        pb_bvh *bvh;
+        pb_gpu_scene *gs;
+        if (!bench_open_scene(ctx, "peer_paths", scenes[si], &s, &bvh, &gs)) {
+            failed = 1;
+            continue;
+        }
+        embree_peer peer;
+        peer_inputs in;
+        memset(&peer, 0, sizeof peer);
+        memset(&in, 0, sizeof in);
+        float zero[3] = {0, 0, 0};
+        in.draws_lights = pb_shading_draws_lights(s, 0);
+        if (!embree_peer_build(edev, s, 1, &peer) ||
+            pb_shading_host(s, zero, NULL, &in.emit, &in.env, &err) != PB_OK ||
+            (in.draws_lights && pb_light_table_build(s, &in.lights, &err) != PB_OK)) {
+            fprintf(stderr, "peer_paths: %s: %s\n", scenes[si], err.message);
+            failed = 1;
+            goto next_scene;
+        }
+        const char *name = strrchr(scenes[si], '/') ? strrchr(scenes[si], '/') + 1 : scenes[si];
+        int blended = 0; /* hits there pass by hashed hit bits, which float rounding changes */
+        for (uint32_t k = 0; k < s->material_count; ++k)
+            blended |= s->materials[k].alpha_mode == PB_ALPHA_BLEND;
+        for (int mi = 0; mi < METHOD_COUNT; ++mi) {
+            if (!use[mi])
+                continue;
+            const method *m = &methods[mi];
+            pb_bake_desc d;
+            memset(&d, 0, sizeof d);
+            pb_probe_grid_fit(s->bounds_min, s->bounds_max, probes, &d.grid);
+            d.rays_per_probe = rays, d.passes = passes, d.bounces = bounces, d.seed = 1;
+            d.skip_relocation = 1; /* the peer places probes where the grid puts them */
+            d.probe_nee = m->probe_nee, d.light_cells = m->light_cells, d.guide_paths = m->guide_paths;
+            d.lobe_power = 50.f;
+            float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
+                  dz = s->bounds_max[2] - s->bounds_min[2];
+            d.max_distance = fmaxf(1e-3f, sqrtf(dx * dx + dy * dy + dz * dz));
+            uint32_t P = d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+            double bake_ms[MAX_REPEAT], gpu_ms[MAX_REPEAT], peer_ms[MAX_REPEAT], own_ms[MAX_REPEAT];
+            double agree_peer = 0, agree_own = 0;
+            float *sh = malloc((size_t)P * 27 * sizeof *sh);
+            int ok = sh != NULL;
+            for (uint32_t r = 0; ok && r < repeat; ++r) {
+                pb_volume v;
+                if (pb_bake(ctx, s, gs, &d, &v, &err) != PB_OK) {
+                    fprintf(stderr, "peer_paths: %s, %s: %s\n", name, m->name, err.message);
+                    ok = 0;
+                    break;
+                }
+                bake_ms[r] = v.timings.trace;
+                gpu_ms[r] = v.timings.trace + v.timings.sh + v.timings.octmap;
+                /* what pb_bake learned for this bake, kept with the GPU scene */
+                pb_bake_pass tmpl;
+                memset(&tmpl, 0, sizeof tmpl);
+                tmpl.scene = s, tmpl.bvh = bvh, tmpl.seed = d.seed, tmpl.bounces = d.bounces, tmpl.direct = 1;
+                tmpl.env = in.env.width ? &in.env : NULL, tmpl.emitters = &in.emit;
+                tmpl.light_table = in.draws_lights ? &in.lights : NULL;
+                tmpl.max_distance = d.max_distance, tmpl.lobe_power = d.lobe_power;
+                tmpl.light_cells = m->light_cells && gs->light_cells && gs->light_cells->host.table
+                                       ? &gs->light_cells->host
+                                       : NULL;
+                tmpl.guide = m->guide_paths && gs->guide_cache && gs->guide_cache->valid ? &gs->guide_cache->guide
+                                                                                          : NULL;
+                tmpl.cast = embree_peer_cast, tmpl.cast_user = &peer;
+                peer_ms[r] = cpu_bake(s, &d, tmpl, P, sh);
+                agree_peer = agreement(&v, sh);
+                tmpl.cast = NULL;
+                own_ms[r] = cpu_bake(s, &d, tmpl, P, sh);
+                agree_own = agreement(&v, sh);
+                pb_volume_free(&v);
+                if (peer_ms[r] < 0 || own_ms[r] < 0) {
+                    fprintf(stderr, "peer_paths: %s, %s: out of host memory\n", name, m->name);
+                    ok = 0;
+                }
+            }
+            free(sh);
+            if (!ok) {
+                failed = 1;
+                continue;
+            }
+            if (!blended && !(agree_own <= AGREE_OWN_MAX)) {
+                fprintf(stderr, "peer_paths: %s, %s: the C path tracer on the bake's BVH is %.2e off the bake "
+                        "(at most %.0e): it does not trace the bake's paths\n", name, m->name, agree_own,
+                        AGREE_OWN_MAX);
+                failed = 1;
+            }
+            row w = {name, m->name, (uint64_t)P * rays * passes, bench_median(bake_ms, repeat),
+                     bench_median(gpu_ms, repeat), bench_median(peer_ms, repeat), bench_median(own_ms, repeat),
+                     agree_peer, agree_own};
+            double vs_peer = w.peer_ms / w.bake_trace_ms, vs_own = w.own_ms / w.bake_trace_ms;
+            printf("%-12.12s %-6s %9llu %10.1f %10.1f %10.1f %10.1f %7.3fx %7.3fx %10.2e %10.2e\n", w.scene, w.method,
+                   (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own,
+                   w.agree_peer, w.agree_own);
+            fprintf(csv, "%s,%s,%llu,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.3e,%.3e\n", w.scene, w.method,
+                    (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own,
+                    w.agree_peer, w.agree_own);
+            fprintf(json,
+                    "%s\n  {\"scene\": \"%s\", \"method\": \"%s\", \"paths\": %llu, \"bake_trace_ms\": %.3f, "
+                    "\"bake_gpu_ms\": %.3f, \"peer_ms\": %.3f, \"own_ms\": %.3f, \"vs_peer\": %.4f, \"vs_own\": %.4f, "
+                    "\"agree_peer\": %.3e, \"agree_own\": %.3e}",
+                    first_row ? "" : ",", w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms,
+                    w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own);
+            first_row = 0;
+        }
+    next_scene:
+        if (peer.scene)
+            embree_peer_release(&peer);
+        pb_bake_emitters_free(&in.emit);
+        pb_env_table_free(&in.env);
+        if (in.draws_lights)
+            pb_light_table_free(&in.lights);
+        pb_gpu_scene_destroy(gs);
+        pb_bvh_destroy(bvh);
+        pb_scene_destroy(s);
+    }
+    fprintf(json, "\n]}\n");
+    fclose(csv), fclose(json);
+    printf("vs peer / vs own: the bake's paths per second of trace-kernel GPU time over the CPU path tracer's per "
+           "second of wall time (Embree's rays / the bake's BVH on the host); > 1: the bake is faster\n");
+    printf("wrote %s\nwrote %s\n", csv_path, json_path);
+    rtcReleaseDevice(edev);
+    pb_context_destroy(ctx);
+    return failed;
+}
