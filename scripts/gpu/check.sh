@@ -6,12 +6,12 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads sweep test_bake test_trace traceab tests
-# vsbake (default: compile bake vsbake bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
+# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads peer sweep test_bake test_trace traceab tests
+# vsbake (default: compile bake vsbake peer bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
 out=${OUT:?OUT must name the folder that comes back}
-steps=${*:-compile bake vsbake bench clocks loads tests}
+steps=${*:-compile bake vsbake peer bench clocks loads tests}
 log=$out/log.txt
 say() { echo "== $(date +%T) $*" | tee -a "$log"; }
 run() { local limit=$1; shift; say "$*"; timeout "$limit" "$@" >>"$log" 2>&1; local rc=$?; [ $rc = 0 ] || say "rc $rc"; }
@@ -97,6 +97,10 @@ for s in $steps; do
         run 240 build/bench/bake_bench --probes 16384 --reference-passes 8 --bounces 3 --repeat 3 \
             --json /tmp/bake-vs-trace-16k.json $crypt $cornell
         keep /tmp/bake-vs-trace-16k.json ;;
+    peer) # the bake's paths against the same paths on the CPU path tracer with Embree on all host
+        # cores (bench/peer_paths), at a size that fills the GPU
+        run 240 build/bench/peer_paths --probes 16384 --repeat 3 --out /tmp/peer $crypt $cornell
+        keep /tmp/peer/peer_paths.json ;;
     bakeab) # the issue's bake by this build and by .dev/probebake-before (another build's
         # binary, put there by hand), alternately: the stages' wall and GPU times of each
         for b in before after before after before after; do
