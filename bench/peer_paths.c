@@ -88,18 +88,8 @@ static double cpu_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tm
         ms = -1.0;
         goto out;
     }
-    pb_sf_directions(rpp, dirs);
     for (uint32_t pass = 0; pass < d->passes; ++pass) {
-        for (uint32_t p = 0; p < P; ++p) {
-            uint32_t id;
-            float m[9];
-            pb_bake_probe_position(s, d, p, probes + 4 * p, &id);
-            memcpy(&probes[4 * p + 3], &id, 4);
-            pb_random_rotation(d->seed, id, pass, m);
-            for (int r = 0; r < 3; ++r)
-                for (int c = 0; c < 4; ++c)
-                    rot[12 * p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
-        }
+        pb_bake_pass_inputs(s, d, P, rpp, pass, probes, rot, dirs);
         pb_bake_pass pp = tmpl;
         pp.probes = probes, pp.probe_list = NULL, pp.rotations = rot, pp.directions = dirs;
         pp.first_probe = 0, pp.probe_count = P, pp.rays_per_probe = rpp, pp.pass_index = pass;

@@ -9,7 +9,6 @@
 #include "bake/light_cells_gpu.h"
 #include "bake/shading_normals.h"
 #include "bake/spherical_triangle.h"
-#include "bake_reference.h"
 #include "common/common.h"
 #include "gpu/gpu.h"
 #include "compressed_variants.h"
@@ -756,7 +755,7 @@ static uint64_t reference_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake
     double *sum = calloc((size_t)P * 27, sizeof(double));
     uint64_t traversals = 0;
     for (uint32_t pass = 0; pass < passes; ++pass) {
-        reference_inputs(s, d, P, rpp, pass, probes, rot, dirs);
+        pb_bake_pass_inputs(s, d, P, rpp, pass, probes, rot, dirs);
         pb_bake_pass pp = tmpl;
         pp.scene = s, pp.probes = probes, pp.probe_list = NULL, pp.rotations = rot, pp.directions = dirs;
         pp.first_probe = 0, pp.probe_count = P, pp.rays_per_probe = rpp, pp.pass_index = pass;
@@ -817,7 +816,7 @@ static double kernels_match_cpu_reference_on(pb_scene *s, const char *label)
               dz = s->bounds_max[2] - s->bounds_min[2];
         pass.max_distance = sqrtf(dx * dx + dy * dy + dz * dz);
         for (uint32_t k = 0; k < d.passes; ++k) {
-            reference_inputs(s, &d, P, 128, k, probes, rot, dirs);
+            pb_bake_pass_inputs(s, &d, P, 128, k, probes, rot, dirs);
             pass.pass_index = k;
             pb_bake_trace_cpu(&pass, rays);
             pb_bake_sh_cpu(&pass, rays, red);

@@ -5,7 +5,6 @@
  * agree with their originals within the bound docs/scene.md states. CPU
  * only, so the CI's sanitizer run covers the decoders and the bake of what
  * they decoded. (test_bake runs the same comparison through the kernels.) */
-#include "bake_reference.h"
 #include "compressed_variants.h"
 #include "test_util.h"
 
@@ -32,7 +31,7 @@ static int cpu_bake(const pb_scene *s, const pb_bake_desc *d, uint32_t passes, d
     float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
           dz = s->bounds_max[2] - s->bounds_min[2];
     for (uint32_t pass = 0; pass < passes; ++pass) {
-        reference_inputs(s, d, P, rpp, pass, probes, rot, dirs);
+        pb_bake_pass_inputs(s, d, P, rpp, pass, probes, rot, dirs);
         pb_bake_pass pp = {0};
         pp.scene = s, pp.bvh = bvh, pp.probes = probes, pp.rotations = rot, pp.directions = dirs;
         pp.probe_count = P, pp.rays_per_probe = rpp, pp.pass_index = pass, pp.seed = d->seed;

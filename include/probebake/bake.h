@@ -330,6 +330,13 @@ typedef struct pb_bake_pass {
     void *cast_user;
 } pb_bake_pass;
 
+/* A pass's per-probe host inputs as pb_bake makes them for probes 0..P-1
+ * of d (not relocated): probes (4 per probe: local position, w = probe id
+ * bits), rotations (12 per probe) and the rays_per_probe directions (4 per
+ * ray), for the CPU references of the tests and benches. */
+void pb_bake_pass_inputs(const pb_scene *scene, const pb_bake_desc *d, uint32_t P, uint32_t rays_per_probe,
+                         uint32_t pass, float *probes, float *rotations, float *directions);
+
 /* bake_trace.comp: rays out, 4 floats per ray (radiance, signed distance).
  * Returns the BVH traversals it made (rays, shadow rays), as the kernel counts. */
 uint64_t pb_bake_trace_cpu(const pb_bake_pass *p, float *rays);
