@@ -69,6 +69,25 @@ static inline int bench_open_scene(pb_context *ctx, const char *tool, const char
     return 1;
 }
 
+/* llvmpipe (lavapipe) compiles a pipeline's machine code at its first
+ * dispatch, inside the GPU timestamps: 0.2-0.4 s per set of bake kernels
+ * when Mesa's shader cache is cold (a fresh machine, or any shader change).
+ * An untimed bake of d's probes with d's estimators, one pass of 64 rays,
+ * first keeps that out of a bench's GPU times. Its seed is another, so what
+ * the GPU scene learns per seed (light cells, guide) is still learned, and
+ * timed, by the bench's own first bake. Returns 0 with err on failure. */
+static inline int bench_warm_bake(pb_context *ctx, const pb_scene *s, pb_gpu_scene *gs, const pb_bake_desc *d,
+                                  pb_error *err)
+{
+    pb_bake_desc w = *d;
+    w.passes = 1, w.target_error = 0.f, w.rays_per_probe = 64, w.seed = d->seed + 1u;
+    pb_volume v;
+    if (pb_bake(ctx, s, gs, &w, &v, err) != PB_OK)
+        return 0;
+    pb_volume_free(&v);
+    return 1;
+}
+
 /* The benches' scenes when none are named: the demo scene, and the shared
  * Cornell box and The Crypt when ../shared is beside the checkout. */
 static inline int bench_default_scenes(const char *tool, const char **scenes, int max)

@@ -406,6 +406,16 @@ int main(int argc, char **argv)
             point pts[MAX_SWEEP];
             int np = 0;
             uint32_t compared = 0, moved = 0;
+            {
+                pb_bake_desc w = base;
+                apply_method(m, &w);
+                w.seed = seed, w.octmap_res = 16;
+                if (!bench_warm_bake(ctx, s, gs, &w, &err)) {
+                    fprintf(stderr, "paths_to_error: %s %s: %s\n", c->name, m->name, err.message);
+                    failed = 1;
+                    continue;
+                }
+            }
             for (int step = 0; step < MAX_SWEEP; ++step) {
                 pb_bake_desc d = base;
                 apply_method(m, &d);

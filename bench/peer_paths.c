@@ -25,7 +25,9 @@
  * Methods: plain (no probe NEE, light cells or guiding) and all (probe
  * NEE, light cells, path guiding: the production preset's estimators with
  * a fixed path count). Times are medians of --repeat rounds (default 3; the
- * bake and its peers alternate within each round, as lavapipe drifts).
+ * bake and its peers alternate within each round, as lavapipe drifts),
+ * after an untimed bake that has the driver compile the kernels
+ * (bench_warm_bake).
  * Writes DIR/peer_paths.csv and DIR/peer_paths.json (default bench/out). */
 #define _POSIX_C_SOURCE 200809L
 #include "bake/gpu_scene.h"
@@ -234,7 +236,9 @@ int main(int argc, char **argv)
             double bake_ms[MAX_REPEAT], gpu_ms[MAX_REPEAT], peer_ms[MAX_REPEAT], own_ms[MAX_REPEAT];
             double agree_peer = 0, agree_own = 0;
             float *sh = malloc((size_t)P * 27 * sizeof *sh);
-            int ok = sh != NULL;
+            int ok = sh != NULL && bench_warm_bake(ctx, s, gs, &d, &err);
+            if (sh && !ok)
+                fprintf(stderr, "peer_paths: %s, %s: %s\n", name, m->name, err.message);
             for (uint32_t r = 0; ok && r < repeat; ++r) {
                 pb_volume v;
                 if (pb_bake(ctx, s, gs, &d, &v, &err) != PB_OK) {
