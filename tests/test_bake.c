@@ -1029,6 +1029,73 @@ static void multi_bounce_matches_cpu_reference(void)
     multi_bounce_matches_cpu_reference_on(0, 1);
 }
 
+/* pb_bake_pass.cast: the CPU reference casts every ray it traces through
+ * the caster it is given (bench/peer_paths gives it Embree). A caster that
+ * answers as pb_trace_cpu does must give the same irradiance to the bit and
+ * the same traversals, each one through it, and the SH stage's shadow ray
+ * from each probe to each punctual light besides; one that finds nothing
+ * must change the result. */
+typedef struct counting_caster {
+    const pb_scene *scene;
+    const pb_bvh *bvh;
+    uint64_t calls;               /* atomic: the reference traces on all host threads */
+    int blind;                    /* 1: every ray misses */
+} counting_caster;
+
+static void counting_cast(void *user, const pb_ray *ray, pb_trace_mode mode, pb_hit *hit)
+{
+    counting_caster *c = user;
+    __atomic_fetch_add(&c->calls, 1, __ATOMIC_RELAXED);
+    if (c->blind) {
+        memset(hit, 0, sizeof *hit);
+        hit->triangle = PB_NO_HIT, hit->t = INFINITY;
+        return;
+    }
+    pb_trace_cpu(c->scene, c->bvh, ray, 1, mode, hit, 1);
+}
+
+static void cpu_reference_casts_through_the_given_tracer(void)
+{
+    pb_scene *s = load_demo_shaded(0);
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
+    d.rays_per_probe = 64, d.passes = 1, d.bounces = 3, d.octmap_res = 4, d.skip_relocation = 1;
+    baked b = bake(s, &d);
+    if (!b.ok) {
+        release(&b);
+        pb_scene_destroy(s);
+        return;
+    }
+    uint32_t P = b.vol.probe_count;
+    float *plain = malloc((size_t)P * 27 * sizeof(float)), *cast = malloc((size_t)P * 27 * sizeof(float));
+    float *blind = malloc((size_t)P * 27 * sizeof(float));
+    pb_bake_emitters em;
+    CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
+    pb_bake_pass tmpl = multi_bounce_template(s, &b, &em, d.seed);
+    uint64_t t_plain = reference_bake(s, &d, tmpl, P, 1, plain);
+    counting_caster c = {s, b.bvh, 0, 0};
+    tmpl.cast = counting_cast, tmpl.cast_user = &c;
+    uint64_t t_cast = reference_bake(s, &d, tmpl, P, 1, cast);
+    uint64_t calls = c.calls;
+    c.blind = 1;
+    reference_bake(s, &d, tmpl, P, 1, blind);
+    int same = !memcmp(plain, cast, (size_t)P * 27 * sizeof(float)), differs = 0;
+    for (uint32_t i = 0; i < P * 27; ++i)
+        differs |= blind[i] != plain[i];
+    fprintf(stderr, "  %u probes: %llu traversals without a caster, %llu with one (%llu calls), SH %s; a blind "
+            "caster %s\n", P, (unsigned long long)t_plain, (unsigned long long)t_cast, (unsigned long long)calls,
+            same ? "identical" : "DIFFERENT", differs ? "changes it" : "changes NOTHING");
+    CHECK(s->light_count == 1); /* the demo's lamp */
+    CHECK(t_plain > (uint64_t)P * d.rays_per_probe && t_cast == t_plain && calls == t_cast + P * s->light_count);
+    CHECK(same && differs);
+    pb_bake_emitters_free(&em);
+    free(plain), free(cast), free(blind);
+    release(&b);
+    pb_scene_destroy(s);
+}
+
 /* The closed 4 m box of closed_box_scene() written as glTF, base colour 1
  * and emission 1, its albedo given by vertex colours (COLOR_0, float RGB):
  * `color(corner, rgb)` per corner of each face. Returns the file's path. */
@@ -2964,6 +3031,7 @@ int main(void)
     RUN(kernels_match_cpu_reference);
     RUN(staged_depth_sums_match_mapped);
     RUN(multi_bounce_matches_cpu_reference);
+    RUN(cpu_reference_casts_through_the_given_tracer);
     RUN(light_cells_match_cpu_reference);
     RUN(vertex_colours_are_albedo);
     RUN(dilation_kernel_matches_cpu_reference);
