@@ -7,10 +7,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#define BINS 64
+#ifndef GRID
+#define GRID 8
+#endif
+#define G GRID
+#define BINS (G * G)
 static uint32_t hash(uint32_t x) { x ^= x >> 16; x *= 0x7feb352d; x ^= x >> 15; x *= 0x846ca68b; x ^= x >> 16; return x; }
 static float rnd(uint32_t *s) { *s = hash(*s + 0x9e3779b9u); return (*s >> 8) * (1.f / 16777216.f); }
-static int bin_of(const float d[3]) { float s, t; pb_equal_area_encode(d, &s, &t); int bx = (int)fminf(fmaxf(s * 8, 0), 7), by = (int)fminf(fmaxf(t * 8, 0), 7); return by * 8 + bx; }
+static int bin_of(const float d[3]) { float s, t; pb_equal_area_encode(d, &s, &t); int bx = (int)fminf(fmaxf(s * G, 0), G - 1), by = (int)fminf(fmaxf(t * G, 0), G - 1); return by * G + bx; }
 static int cmpd(const void *a, const void *b) { double x = *(const double *)a, y = *(const double *)b; return (x > y) - (x < y); }
 int main(int argc, char **argv)
 {
@@ -84,7 +88,7 @@ int main(int argc, char **argv)
                     float u = rnd(&st), c = 0; int b = 0;
                     while (b < BINS - 1 && cdf[p * (BINS + 1) + b + 1] <= u) ++b;
                     (void)c;
-                    pb_equal_area_decode(((b % 8) + rnd(&st)) / 8.f, ((b / 8) + rnd(&st)) / 8.f, w);
+                    pb_equal_area_decode(((b % G) + rnd(&st)) / (float)G, ((b / G) + rnd(&st)) / (float)G, w);
                 } else {
                     float z = 1 - 2 * rnd(&st), ph = 2 * M_PI * rnd(&st), rr = sqrtf(fmaxf(0, 1 - z * z));
                     w[0] = rr * cosf(ph), w[1] = rr * sinf(ph), w[2] = z;
