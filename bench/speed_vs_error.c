@@ -207,13 +207,12 @@ int main(int argc, char **argv)
             for (int mode = 0; mode < 2; ++mode)
                 for (int ri = 0; ri < nrays; ++ri) {
                     pb_volume v;
-                    d.indirect_volume = (uint32_t)mode, d.seed = 7;
+                    d.indirect_volume = (uint32_t)mode;
+                    d.rays_per_probe = rays[ri], d.passes = 1, d.seed = 7;
                     if (ri == 0 && !bench_warm_bake(ctx, s, gs, &d, &err)) { /* volume mode's kernels are others */
                         fprintf(stderr, "speed_vs_error: %s: %s\n", name, err.message);
                         break;
                     }
-                    d.indirect_volume = (uint32_t)mode;
-                    d.rays_per_probe = rays[ri], d.passes = 1, d.seed = 7;
                     double t0 = pb_now_ms();
                     if (pb_bake(ctx, s, gs, &d, &v, &err) != PB_OK) {
                         fprintf(stderr, "speed_vs_error: %s: %s\n", name, err.message);

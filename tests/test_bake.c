@@ -1059,23 +1059,26 @@ static void cpu_reference_casts_through_the_given_tracer(void)
     pb_scene *s = load_demo_shaded(0);
     if (!s)
         return;
-    pb_bake_desc d = {0};
-    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
-    d.rays_per_probe = 64, d.passes = 1, d.bounces = 3, d.octmap_res = 4, d.skip_relocation = 1;
-    baked b = bake(s, &d);
-    if (!b.ok) {
-        release(&b);
+    pb_bvh *bvh = NULL;
+    pb_error err;
+    if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK) {
+        CHECKF(0, "%s", err.message);
         pb_scene_destroy(s);
         return;
     }
-    uint32_t P = b.vol.probe_count;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
+    d.rays_per_probe = 64, d.passes = 1, d.octmap_res = 4;
+    uint32_t P = pb_probe_grid_count(&d.grid);
     float *plain = malloc((size_t)P * 27 * sizeof(float)), *cast = malloc((size_t)P * 27 * sizeof(float));
     float *blind = malloc((size_t)P * 27 * sizeof(float));
     pb_bake_emitters em;
     CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
-    pb_bake_pass tmpl = multi_bounce_template(s, &b, &em, d.seed);
+    pb_bake_pass tmpl = {0};
+    tmpl.scene = s, tmpl.bvh = bvh, tmpl.bounces = 3, tmpl.direct = 1, tmpl.seed = d.seed;
+    tmpl.max_distance = 50.f, tmpl.lobe_power = 50.f, tmpl.emitters = &em;
     uint64_t t_plain = reference_bake(s, &d, tmpl, P, 1, plain);
-    counting_caster c = {s, b.bvh, 0, 0};
+    counting_caster c = {s, bvh, 0, 0};
     tmpl.cast = counting_cast, tmpl.cast_user = &c;
     uint64_t t_cast = reference_bake(s, &d, tmpl, P, 1, cast);
     uint64_t calls = c.calls;
@@ -1092,7 +1095,7 @@ static void cpu_reference_casts_through_the_given_tracer(void)
     CHECK(same && differs);
     pb_bake_emitters_free(&em);
     free(plain), free(cast), free(blind);
-    release(&b);
+    pb_bvh_destroy(bvh);
     pb_scene_destroy(s);
 }
 

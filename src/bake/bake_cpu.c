@@ -693,14 +693,10 @@ void pb_bake_pass_inputs(const pb_scene *scene, const pb_bake_desc *d, uint32_t 
 {
     for (uint32_t p = 0; p < P; ++p) {
         uint32_t id;
-        float m[9];
         pb_bake_probe_position(scene, d, p, probes + 4 * (size_t)p, &id);
         memcpy(&probes[4 * (size_t)p + 3], &id, 4);
-        pb_random_rotation(d->seed, id, pass, m);
-        for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 4; ++c)
-                rotations[12 * (size_t)p + 4 * r + c] = c < 3 ? m[3 * r + c] : 0.f;
     }
+    pb_bake_rotations(d->seed, pass, probes, P, rotations); /* as the bake's passes turn them */
     pb_sf_directions(rays_per_probe, directions);
 }
 
