@@ -291,9 +291,10 @@ static void real_hdr_environment(void)
  * emitter shadow ray and a terminal bounce ray. Its first iteration traces
  * every probe, each later one only the probes the one before moved. Probes
  * in open air stay in place, so the bakes with and without relocation differ
- * by exactly probes x rays (one iteration). Probes 0.1 m over the floor,
- * closer than a fifth of the spacing, all move in the first iteration, and
- * the two later ones trace at most those again. */
+ * by exactly probes x relocation rays (one iteration). Probes 0.1 m over the
+ * floor, closer than a fifth of the spacing, all move in the first
+ * iteration, and the two later ones trace at most those again. Relocation
+ * traces its own ray count, by default fewer than a pass's, and records it. */
 static void relocation_traces_first_hits_only(void)
 {
     double tris[36] = {-50, 0, -50, -50, 0, 50, 50, 0, 50, -50, 0, -50, 50, 0, 50, 50, 0, -50, /* floor, up */
@@ -307,42 +308,48 @@ static void relocation_traces_first_hits_only(void)
     pb_error err;
     CHECKF(pb_scene_from_triangles(tris, 4, ids, m, 2, &s, &err) == PB_OK, "%s", err.message);
     const float heights[2] = {1.5f, 0.1f};
-    for (int h = 0; h < 2 && s; ++h) {
-        pb_bake_desc d = {0};
-        d.grid.counts[0] = d.grid.counts[2] = 2, d.grid.counts[1] = 1;
-        for (int k = 0; k < 3; ++k) {
-            d.grid.spacing[k] = 2.f;
-            d.grid.origin[k] = (k == 1 ? heights[h] : -1.f) - (float)s->origin[k];
-        }
-        d.rays_per_probe = 64, d.passes = 1, d.bounces = 2, d.octmap_res = 4;
-        baked with = bake(s, &d);
-        d.skip_relocation = 1;
-        baked without = bake(s, &d);
-        if (with.ok && without.ok) {
-            uint32_t P = with.vol.probe_count, moved = 0;
-            for (uint32_t p = 0; p < P; ++p)
-                moved += with.vol.offset[3 * p] != 0.f || with.vol.offset[3 * p + 1] != 0.f ||
-                         with.vol.offset[3 * p + 2] != 0.f;
-            uint64_t rays = d.rays_per_probe, traced = with.vol.relocation_rays / rays;
-            uint64_t relocation = with.vol.traversals - without.vol.traversals;
-            fprintf(stderr, "  probes %.1f m up: %u of %u moved; relocation traced %llu probes' rays (%llu "
-                    "traversals more than without it); the bake pass %.2f traversals per probe ray\n", heights[h],
-                    moved, P, (unsigned long long)traced, (unsigned long long)relocation,
-                    (double)without.vol.traversals / (double)without.vol.rays_traced);
-            CHECK(without.vol.traversals > without.vol.rays_traced); /* the pass does trace shadow and bounce rays */
-            CHECK(with.vol.relocation_rays % rays == 0 && without.vol.relocation_rays == 0);
-            if (h == 0) { /* nobody moved: one iteration, and one traversal per probe ray */
-                CHECK(moved == 0);
-                CHECK(traced == P);
-                CHECK(relocation == P * rays);
-            } else { /* all moved in the first iteration; the later ones traced at most those again */
-                CHECK(moved == P);
-                CHECK(traced >= P + moved && traced <= P + 2 * moved);
+    const uint32_t relocation_rays[3] = {0, 16, 128}; /* the default, fewer, all of a pass's */
+    for (int h = 0; h < 2 && s; ++h)
+        for (int q = 0; q < 3; ++q) {
+            pb_bake_desc d = {0};
+            d.grid.counts[0] = d.grid.counts[2] = 2, d.grid.counts[1] = 1;
+            for (int k = 0; k < 3; ++k) {
+                d.grid.spacing[k] = 2.f;
+                d.grid.origin[k] = (k == 1 ? heights[h] : -1.f) - (float)s->origin[k];
             }
+            d.rays_per_probe = 128, d.passes = 1, d.bounces = 2, d.octmap_res = 4;
+            d.relocation_rays = relocation_rays[q];
+            uint64_t rays = relocation_rays[q] ? relocation_rays[q] : PB_RELOCATION_RAYS_DEFAULT;
+            baked with = bake(s, &d);
+            d.skip_relocation = 1;
+            baked without = bake(s, &d);
+            if (with.ok && without.ok) {
+                uint32_t P = with.vol.probe_count, moved = 0;
+                for (uint32_t p = 0; p < P; ++p)
+                    moved += with.vol.offset[3 * p] != 0.f || with.vol.offset[3 * p + 1] != 0.f ||
+                             with.vol.offset[3 * p + 2] != 0.f;
+                uint64_t traced = with.vol.relocation_rays / rays;
+                uint64_t relocation = with.vol.traversals - without.vol.traversals;
+                fprintf(stderr, "  probes %.1f m up, %llu relocation rays: %u of %u moved; relocation traced %llu probes' "
+                        "rays (%llu traversals more than without it); the bake pass %.2f traversals per probe ray\n",
+                        heights[h], (unsigned long long)rays, moved, P, (unsigned long long)traced,
+                        (unsigned long long)relocation, (double)without.vol.traversals / (double)without.vol.rays_traced);
+                CHECK(without.vol.traversals > without.vol.rays_traced); /* the pass does trace shadow and bounce rays */
+                CHECK(with.vol.relocation_rays % rays == 0 && without.vol.relocation_rays == 0);
+                CHECK(with.vol.settings.relocation_rays == rays && without.vol.settings.relocation_rays == 0);
+                CHECK(with.vol.rays_traced == without.vol.rays_traced); /* the passes trace all their rays */
+                if (h == 0) { /* nobody moved: one iteration, and one traversal per probe ray */
+                    CHECK(moved == 0);
+                    CHECK(traced == P);
+                    CHECK(relocation == P * rays);
+                } else { /* all moved in the first iteration; the later ones traced at most those again */
+                    CHECK(moved == P);
+                    CHECK(traced >= P + moved && traced <= P + 2 * moved);
+                }
+            }
+            release(&with);
+            release(&without);
         }
-        release(&with);
-        release(&without);
-    }
     pb_scene_destroy(s);
 }
 
@@ -2915,6 +2922,9 @@ static void bad_parameters_refused_before_gpu_work(void)
     d.sky[1] = NAN;
     CHECK(pb_bake(ctx, s, gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "sky"));
     d.sky[1] = 0.f;
+    d.rays_per_probe = 64, d.relocation_rays = 65; /* relocation traces at most a pass's rays */
+    CHECK(pb_bake(ctx, s, gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "relocation rays"));
+    d.rays_per_probe = 0, d.relocation_rays = 0;
     d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 4096; /* 2^36 probes */
     CHECK(pb_bake(ctx, s, gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT);
     d.grid.counts[0] = 16384, d.grid.counts[1] = 1024, d.grid.counts[2] = 1; /* 2^24: allowed, but too big here */

@@ -165,6 +165,8 @@ expect sh-window-bad 2 "--sh-window 'gauss': use none, hanning" -- "$pb" bake "$
 expect sh-window-bad-width 2 "--sh-window 'lanczos:0'" -- "$pb" bake "$demo" --sh-window lanczos:0 -o "$tmp/x.probes"
 expect max-lights-bad 2 "--max-lights-per-hit '0' is not an integer in \[1, 1048576\]" -- \
     "$pb" bake "$demo" --max-lights-per-hit 0 -o "$tmp/x.probes"
+expect relocation-rays-bad 2 "--relocation-rays '0' is not an integer in \[1, 65536\]" -- \
+    "$pb" bake "$demo" --relocation-rays 0 -o "$tmp/x.probes"
 expect clamp-bad 2 "--clamp-indirect '-3' is not a positive radiance" -- "$pb" bake "$demo" --clamp-indirect -3 -o "$tmp/x.probes"
 expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
 expect scene-loads-bad 2 '--scene-loads takes auto, address or texel' -- "$pb" trace "$demo" --scene-loads words
@@ -580,6 +582,14 @@ print(\"red %.2f x green\" % (r / g) if r > 3 * g else \"red %g green %g\" % (r,
         "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part1.probes" "$tmp/part1.probes" "$tmp/part2.probes"
     expect merge-foreign 1 "$tmp/foreign2.probes: not a part of the same bake as $tmp/part0.probes: its seed differs" -- \
         "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part1.probes" "$tmp/foreign2.probes"
+    # relocation's rays: recorded (shard_args' 32 rays: the default 64 is capped there), at most
+    # a pass's, and parts relocated with other counts are not parts of one bake
+    expect inspect-relocation-rays 0 '"relocation_rays": 32,' -- "$pb" inspect "$tmp/part0.probes" --json
+    expect relocation-rays-over-pass 1 "64 relocation rays per probe: at most the 32 rays per probe of a pass" -- \
+        "$pb" bake "$demo" "${shard_args[@]}" --relocation-rays 64 --shard 2/3 -o "$tmp/bad.probes"
+    "$pb" bake "$demo" "${shard_args[@]}" --relocation-rays 16 --shard 2/3 -o "$tmp/reloc2.probes" >/dev/null
+    expect merge-relocation-rays 1 "$tmp/reloc2.probes: not a part of the same bake as $tmp/part0.probes: its relocation ray count" -- \
+        "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part1.probes" "$tmp/reloc2.probes"
     expect merge-whole-volume 1 "$tmp/whole.probes: not a part of a sharded bake" -- \
         "$pb" merge "$tmp/bad.probes" "$tmp/whole.probes"
     one_error_line merge-one-line -- "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part2.probes"

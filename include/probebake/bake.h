@@ -52,6 +52,12 @@ typedef struct pb_points {
 pb_result pb_points_read(const char *path, pb_points *out, pb_error *err);
 void pb_points_free(pb_points *p);
 
+/* Relocation's rays per probe and iteration by default. It decides only
+ * whether a probe is in a wall or too near one, and where it moves; the
+ * volume's validity and light come from the passes' rays. bench/RESULTS.md,
+ * "Relocation with 64 rays", has what fewer rays change. */
+#define PB_RELOCATION_RAYS_DEFAULT 64u
+
 /* Progress: fraction done in [0,1] and a label; return nonzero to cancel. */
 typedef int (*pb_progress_fn)(float fraction, const char *label, void *user_data);
 
@@ -75,6 +81,9 @@ typedef struct pb_bake_desc {
     float lobe_power;             /* cosine power of the depth filter, default 50 */
     float invalid_backface_fraction; /* default 0.25: above it a probe is inside geometry (invalid) */
     uint32_t skip_relocation;     /* 1: probes stay on the grid (default: 3 relocation iterations) */
+    uint32_t relocation_rays;     /* first-hit rays per probe in each relocation iteration, at most
+                                     rays_per_probe (default PB_RELOCATION_RAYS_DEFAULT, or rays_per_probe
+                                     if fewer) */
     uint32_t sh_window;           /* pb_sh_window_kind applied to the stored irradiance SH (default none) */
     float sh_window_width;        /* its W, default 3 */
     float indirect_clamp;         /* > 0: reflected light (all but what a probe ray sees directly) is clamped

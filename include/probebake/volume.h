@@ -84,6 +84,8 @@ typedef struct pb_volume_settings {
                                            recorded, or the probe test) */
     uint32_t seam_rounds;               /* sparse: rounds of the seam test (0: off, or not recorded) */
     float seam_error;                   /* sparse: the seam test's threshold (0: refine_error, or not recorded) */
+    uint32_t relocation_rays;           /* rays per probe of each relocation iteration (0: no relocation, or not
+                                           recorded: files before 2026-11-27 relocated with rays_per_probe) */
 } pb_volume_settings;
 
 /* Variance-reduction techniques (pb_volume_settings.techniques). */

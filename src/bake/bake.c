@@ -42,6 +42,7 @@
 
 typedef struct bake_buffers {
     pb_buffer params, probes, rotations, directions, rays, reduced, list, counters;
+    pb_buffer relocation_directions; /* the relocation passes' fewer directions (unallocated when as many) */
     pb_buffer depth_lists;         /* bake_depth's ray lists per query cell (depth_lists.h) */
     pb_depth_sums sums;            /* bake_depth's moment sums over the passes (depth_sums.h) */
     pb_buffer nee;                 /* probe NEE: 2 vec4 per ray of a submission (unallocated when off) */
@@ -56,9 +57,10 @@ typedef struct bake_buffers {
 
 static void release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[12] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
-                           &b->list, &b->counters, &b->nee, &b->guide, &b->guide_slots, &b->depth_lists};
-    for (int i = 0; i < 12; ++i)
+    pb_buffer *bufs[13] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
+                           &b->list, &b->counters, &b->nee, &b->guide, &b->guide_slots, &b->depth_lists,
+                           &b->relocation_directions};
+    for (int i = 0; i < 13; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_depth_sums_destroy(ctx, &b->sums);
     pb_guide_free(&b->guide_host);
@@ -113,6 +115,11 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
     }
     if (d->rays_per_probe > 65536)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u rays per probe: at most 65536", d->rays_per_probe);
+    if (!d->relocation_rays)
+        d->relocation_rays = d->rays_per_probe < PB_RELOCATION_RAYS_DEFAULT ? d->rays_per_probe : PB_RELOCATION_RAYS_DEFAULT;
+    if (d->relocation_rays > d->rays_per_probe)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u relocation rays per probe: at most the %u rays per probe "
+                       "of a pass", d->relocation_rays, d->rays_per_probe);
     if (d->passes > 1000000)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u passes: at most 1e6", d->passes);
     if (d->sh_window > PB_SH_WINDOW_LANCZOS || !(d->sh_window_width >= 0.f) || d->sh_window_width > 1e3f)
@@ -205,6 +212,7 @@ typedef struct bake_run {
     uint64_t long_paths;           /* paths whose traversal loops ran past 32768 iterations */
     gpu_volume_refs feedback;      /* --indirect volume: the previous bounce's volume (probes 0: none) */
     pb_convergence *conv;          /* per probe: passes done and the spread of their estimates */
+    uint32_t relocation_rpp;       /* rays per probe of a relocation pass (<= rpp) */
 } bake_run;
 
 /* The parameters of a pass, all but its submission's probe range: the one
@@ -248,7 +256,9 @@ static void pass_params(const bake_run *run, uint32_t pass, int relocating, cons
             prm->light_cluster_of = B->light->cluster_of.address;
         }
     }
-    prm->rays_per_probe = run->rpp, prm->pass_index = pass;
+    prm->rays_per_probe = relocating ? run->relocation_rpp : run->rpp, prm->pass_index = pass;
+    if (relocating && run->relocation_rpp != run->rpp)
+        prm->directions = B->relocation_directions.address;
     prm->seed = d->seed, prm->bounces = relocating ? 0 : d->bounces;
     prm->octmap_res = run->n, prm->max_distance = d->max_distance, prm->lobe_power = d->lobe_power;
     prm->direct = !d->exclude_direct, prm->lobe_cutoff = pb_depth_lobe_cutoff(d->lobe_power);
@@ -295,7 +305,7 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
     pb_context *ctx = run->ctx;
     bake_buffers *B = run->B;
     const pb_bake_desc *d = run->d;
-    uint32_t P = run->P, rpp = run->rpp, n = run->n, texels = n * n;
+    uint32_t P = run->P, rpp = relocating ? run->relocation_rpp : run->rpp, n = run->n, texels = n * n;
     pb_bake_rotations(d->seed, pass, run->probes, P, run->rotations);
     pb_result r = pb_buffer_upload(ctx, &B->rotations, 0, run->rotations, (uint64_t)P * 48, err);
     if (r == PB_OK && list)
@@ -396,7 +406,7 @@ static uint32_t relocate(bake_run *run, float *offsets, const uint32_t *list, ui
         uint32_t p = list ? list[i] : i;
         const float *nr = run->near + 8 * (size_t)p;
         float *off = offsets + 3 * (size_t)p, step[3] = {0, 0, 0};
-        float back_fraction = (float)(run->backfaces[p] / run->rpp);
+        float back_fraction = (float)(run->backfaces[p] / run->relocation_rpp);
         if (back_fraction > d->invalid_backface_fraction && nr[0] < d->max_distance) {
             for (int k = 0; k < 3; ++k)
                 step[k] = nr[1 + k] * (nr[0] + margin);
@@ -476,6 +486,7 @@ typedef struct bake_job {
     double *sh_sum, *backfaces, *hits;
     uint32_t *active, *converged_at;
     uint64_t relocation_rays;      /* probe rays the relocation passes traced */
+    uint32_t relocated_with;       /* rays per probe of each relocation iteration; 0: none ran */
     pb_convergence conv;
     bake_buffers B;
     bake_run run;
@@ -612,6 +623,16 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
         }
         pb_depth_lists_free(&dl);
     }
+    if (r == PB_OK && d->relocation_rays != rpp) { /* relocation's own, smaller spherical Fibonacci set */
+        float *dirs = malloc((size_t)d->relocation_rays * 4 * sizeof(float));
+        if (!dirs || pb_sf_directions(d->relocation_rays, dirs) != PB_OK)
+            r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u relocation directions",
+                        d->relocation_rays);
+        else
+            r = make_buffer(ctx, &B->relocation_directions, (uint64_t)d->relocation_rays * 16, PB_MEMORY_DEVICE,
+                            "relocation ray directions", dirs, err);
+        free(dirs);
+    }
     if (r == PB_OK)
         r = make_buffer(ctx, &B->rays, (uint64_t)chunk * rpp * 16, PB_MEMORY_DEVICE, "probe rays", NULL, err);
     if (r == PB_OK && d->probe_nee)
@@ -632,6 +653,7 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
                         j->n,         chunk,     0,            j->probes, j->rotations, j->reduced, j->sh_sum,
                         j->backfaces, j->hits,   0,            0,         0,         j->near,
                         0,            0,         {0},          &j->conv};
+    j->run.relocation_rpp = d->relocation_rays;
     if (r == PB_OK && feedback) {
         r = pb_sample_upload(ctx, feedback, &B->feedback, err);
         j->run.feedback = B->feedback.refs;
@@ -671,13 +693,14 @@ static pb_result stage_relocate(bake_job *j, pb_error *err)
         iterations = 0; /* no cell to stay in */
     pb_result r = PB_OK;
     const uint32_t *list = NULL; /* then j->active, free until the trace passes */
+    j->relocated_with = iterations ? j->run.relocation_rpp : 0u;
     uint32_t count = P;
     for (uint32_t it = 0; r == PB_OK && it < iterations && count > 0; ++it) {
         memset(j->backfaces, 0, P * sizeof(double));
         r = run_pass(&j->run, PB_RELOCATION_PASS + it, 1, list, count, err);
         if (r != PB_OK)
             break;
-        j->relocation_rays += (uint64_t)count * j->rpp;
+        j->relocation_rays += (uint64_t)count * j->run.relocation_rpp;
         uint32_t moved = relocate(&j->run, j->offsets, list, count, j->active);
         pb_logf(&j->ctx->desc.log, PB_LOG_DEBUG, "relocation %u: %u probes traced, %u moved", it + 1, count, moved);
         if (moved)
@@ -833,6 +856,7 @@ static pb_result stage_volume(bake_job *j, pb_volume *out, pb_error *err)
     out->settings = (pb_volume_settings){d->seed,         0, rpp, passes_max, d->bounces, 0, d->target_error,
                                         d->max_distance, d->sh_window, d->sh_window_width, d->indirect_clamp};
     out->settings.scene_hash = pb_scene_hash(j->scene);
+    out->settings.relocation_rays = j->relocated_with;
     out->settings.techniques = (d->probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u) |
                                (j->B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u) |
                                (j->B.light && j->B.light->host.table ? PB_TECHNIQUE_LIGHT_CELLS : 0u) |

@@ -37,6 +37,8 @@ static const char *differs(const pb_volume *a, const pb_volume *b)
         x->sh_window_width != y->sh_window_width || x->indirect_clamp != y->indirect_clamp ||
         x->techniques != y->techniques)
         return "bake settings (rays, bounces, target error, SH window, clamp or estimators)";
+    if (x->relocation_rays != y->relocation_rays)
+        return "relocation ray count (--relocation-rays)";
     if (x->refine_error != y->refine_error)
         return "sparse refine error";
     if (x->refine_test != y->refine_test || x->test_pass_scale != y->test_pass_scale ||

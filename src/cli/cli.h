@@ -30,6 +30,7 @@ typedef struct options {
     uint32_t sh_window;
     float sh_window_width, indirect_clamp;
     uint32_t max_lights_per_hit;
+    uint32_t relocation_rays;   /* --relocation-rays; 0: the library's default */
     uint32_t counts[3], passes, bounces, octmap_res;
     int has_spacing, has_counts, has_bounds, has_rays, has_seed, has_bounces;
     int json, validation, verify, has_probe;

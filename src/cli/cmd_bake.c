@@ -181,6 +181,7 @@ int cmd_bake(const options *o)
     d.sh_window = o->sh_window;
     d.indirect_clamp = o->indirect_clamp;
     d.max_lights_per_hit = o->max_lights_per_hit;
+    d.relocation_rays = o->relocation_rays;
     d.sh_window_width = o->sh_window_width;
     d.shard_index = o->shard_index, d.shard_count = o->shard_count;
     char light[1200], clamp_text[32], part[96] = "";

@@ -141,14 +141,14 @@ int cmd_inspect(const options *o)
                "  \"seed\": %llu,\n"
                "  \"scene_hash\": \"%016llx\",\n  \"rays_per_probe\": %u,\n  \"passes\": %u,\n  \"bounces\": %u,\n"
                "  \"indirect\": \"%s\",\n  \"sh_window\": \"%s\",\n  \"sh_window_width\": %s,\n  \"indirect_clamp\": %s,\n"
-               "  \"techniques\": [%s],\n  \"device\": ",
+               "  \"techniques\": [%s],\n  \"relocation_rays\": %u,\n  \"device\": ",
                v.file_version, v.probe_count, v.flags & PB_VOLUME_GRID ? "true" : "false", v.counts[0], v.counts[1],
                v.counts[2], J17(v.origin[0]).s, J17(v.origin[1]).s, J17(v.origin[2]).s, J(v.spacing[0]).s,
                J(v.spacing[1]).s, J(v.spacing[2]).s, kind, v.flags & PB_VOLUME_DIRECT ? "true" : "false", v.octmap_res,
                J(s->max_distance).s, J(v.depth_unit).s, (unsigned long long)s->seed,
                (unsigned long long)s->scene_hash, s->rays_per_probe, s->passes, s->bounces,
                s->indirect_mode ? "volume" : "path", window_name(s->sh_window), J(s->sh_window_width).s,
-               J(s->indirect_clamp).s, technique_list(s->techniques, techniques));
+               J(s->indirect_clamp).s, technique_list(s->techniques, techniques), s->relocation_rays);
         json_string(v.device);
         if (v.flags & PB_VOLUME_SHARD)
             printf(",\n  \"shard\": {\"index\": %u, \"count\": %u, \"first\": %u, \"step\": %u, \"total\": %u}",
@@ -228,8 +228,11 @@ int cmd_inspect(const options *o)
         else if (v.flags & PB_VOLUME_SHARD)
             printf("part        %u of %u: probes %u..%u of %u, undilated (probebake merge joins the parts)\n",
                    v.shard.index, v.shard.count, v.shard.first, v.shard.first + v.probe_count - 1, v.shard.total);
-        printf("flags       %u valid, %u relocated, %u dilated, %u outside, %u converged\n", counts[0], counts[1],
-               counts[2], counts[3], counts[4]);
+        char moved_with[48] = "";
+        if (s->relocation_rays)
+            snprintf(moved_with, sizeof moved_with, " (with %u rays per probe)", s->relocation_rays);
+        printf("flags       %u valid, %u relocated%s, %u dilated, %u outside, %u converged\n", counts[0], counts[1],
+               moved_with, counts[2], counts[3], counts[4]);
         printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
                v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
         printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, guiding %s, light cells %s, "

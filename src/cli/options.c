@@ -56,6 +56,8 @@ void cli_print_help(void)
            "                                 --passes passes)\n"
            "  --points FILE.json             probes at given positions instead of a grid:\n"
            "                                 {\"spacing\": S, \"points\": [[x,y,z] | {\"id\": I, \"position\": [x,y,z]}]}\n"
+           "  --relocation-rays N            rays per probe in each of the 3 iterations that move probes out of\n"
+           "                                 walls (first hits only; default 64, at most --rays)\n"
            "  --sky R,G,B                    uniform sky radiance (default black)\n"
            "  --env FILE.hdr|FILE.exr        equirectangular environment map (Radiance or OpenEXR) instead of --sky\n"
            "  --env-intensity K              scale of the map (default 1)\n"
@@ -187,6 +189,7 @@ static int parse_open_range(const char *s, float lo, float hi, float *out)
     X(OPT_PROBE, "probe", required_argument) \
     X(OPT_PROBES, "probes", required_argument) \
     X(OPT_RAYS, "rays", required_argument) \
+    X(OPT_RELOCATION_RAYS, "relocation-rays", required_argument) \
     X(OPT_SEED, "seed", required_argument) \
     X(OPT_SHARD, "shard", required_argument) \
     X(OPT_DEVICES, "devices", required_argument) \
@@ -327,6 +330,12 @@ static int apply(options *o, const char *a, const char *next)
         if (!next)
             return cli_usage_error("%s needs a .hdr or .exr file", a);
         o->env = next;
+    } else if (!strcmp(a, "--relocation-rays")) {
+        if (!next || !parse_u32(next, 1, 65536, &o->relocation_rays)) {
+            fprintf(stderr, "probebake: error: --relocation-rays '%s' is not an integer in [1, 65536]\n",
+                    next ? next : "");
+            return 2;
+        }
     } else if (!strcmp(a, "--max-lights-per-hit")) {
         if (!next || !parse_u32(next, 1, 1u << 20, &o->max_lights_per_hit)) {
             fprintf(stderr, "probebake: error: --max-lights-per-hit '%s' is not an integer in [1, 1048576]\n",

@@ -258,6 +258,7 @@ static unsigned char *encode(const pb_volume *v, uint64_t *size)
     put_f32(b + 384, s->indirect_clamp);
     put_u32(b + 388, s->techniques);
     put_u64(b + 392, l.accounting);
+    put_u32(b + 448, s->relocation_rays);
     if (v->flags & PB_VOLUME_SHARD) {
         put_u32(b + 400, v->shard.index);
         put_u32(b + 404, v->shard.count);
@@ -506,6 +507,7 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     v->settings.test_pass_scale = (v->flags & PB_VOLUME_SPARSE) ? get_u32(h + 432) : 0u;
     v->settings.seam_rounds = (v->flags & PB_VOLUME_SPARSE) ? get_u32(h + 436) : 0u;
     v->settings.seam_error = (v->flags & PB_VOLUME_SPARSE) ? get_f32(h + 440) : 0.f;
+    v->settings.relocation_rays = get_u32(h + 448);
     memset(&v->shard, 0, sizeof v->shard);
     if (v->flags & PB_VOLUME_SHARD)
         v->shard = (pb_volume_shard){get_u32(h + 400), get_u32(h + 404), get_u32(h + 408), get_u32(h + 412),
