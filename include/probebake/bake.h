@@ -9,9 +9,10 @@
  * sees directly enter the SH as projected deltas. The result is a pb_volume
  * with irradiance SH.
  *
- * Before the passes, up to 3 relocation iterations move probes out of
- * geometry (along the nearest back face) and away from walls they nearly
- * touch, within 45 % of a cell. After them, probes still seeing more than
+ * Before the passes, up to 3 relocation iterations (relocation_rays
+ * first-hit rays per probe each) move probes out of geometry (along the
+ * nearest back face) and away from walls they nearly touch, within 45 % of
+ * a cell. After the passes, probes still seeing more than
  * invalid_backface_fraction back faces are invalid and take the
  * distance-weighted mean of valid neighbours (dilation).
  *
