@@ -169,6 +169,7 @@ expect relocation-rays-bad 2 "--relocation-rays '0' is not an integer in \[1, 65
     "$pb" bake "$demo" --relocation-rays 0 -o "$tmp/x.probes"
 expect clamp-bad 2 "--clamp-indirect '-3' is not a positive radiance" -- "$pb" bake "$demo" --clamp-indirect -3 -o "$tmp/x.probes"
 expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --indirect photons -o "$tmp/x.probes"
+expect skip-inside-bad 2 '--skip-inside takes on or off' -- "$pb" bake "$demo" --skip-inside maybe -o "$tmp/x.probes"
 expect scene-loads-bad 2 '--scene-loads takes auto, address or texel' -- "$pb" trace "$demo" --scene-loads words
 
 # non-finite or overflowing light and positions: refused before any device work (issue 9)
@@ -585,6 +586,12 @@ print(\"red %.2f x green\" % (r / g) if r > 3 * g else \"red %g green %g\" % (r,
     # relocation's rays: recorded (shard_args' 32 rays: the default 64 is capped there), at most
     # a pass's, and parts relocated with other counts are not parts of one bake
     expect inspect-relocation-rays 0 '"relocation_rays": 32,' -- "$pb" inspect "$tmp/part0.probes" --json
+    # probes relocation finds inside geometry are not traced: the demo's default grid has some
+    "$pb" bake "$demo" --rays 64 --passes 1 --quiet -o "$tmp/in.probes" >"$tmp/in.txt"
+    expect bake-skips-inside 0 'invalid of which [0-9]+ dilated and [1-9][0-9]* inside geometry, not traced' -- cat "$tmp/in.txt"
+    expect inspect-inside 0 '"inside": [1-9][0-9]*,' -- "$pb" inspect "$tmp/in.probes" --json
+    "$pb" bake "$demo" --rays 64 --passes 1 --quiet --skip-inside off -o "$tmp/in-off.probes" >"$tmp/in-off.txt"
+    expect bake-traces-inside 0 'and 0 inside geometry, not traced' -- cat "$tmp/in-off.txt"
     expect relocation-rays-over-pass 1 "64 relocation rays per probe: at most the 32 rays per probe of a pass" -- \
         "$pb" bake "$demo" "${shard_args[@]}" --relocation-rays 64 --shard 2/3 -o "$tmp/bad.probes"
     "$pb" bake "$demo" "${shard_args[@]}" --relocation-rays 16 --shard 2/3 -o "$tmp/reloc2.probes" >/dev/null

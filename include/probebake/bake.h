@@ -59,6 +59,12 @@ void pb_points_free(pb_points *p);
  * "Relocation with 64 rays", has what fewer rays change. */
 #define PB_RELOCATION_RAYS_DEFAULT 64u
 
+/* A probe is classified inside geometry when its relocation rays see back
+ * faces this much more often than invalid_backface_fraction allows: 0.35
+ * by default. Over four scenes no probe the passes call valid was above it
+ * (bench/RESULTS.md, "Probes inside geometry not traced"). */
+#define PB_INSIDE_MARGIN 0.1f
+
 /* Progress: fraction done in [0,1] and a label; return nonzero to cancel. */
 typedef int (*pb_progress_fn)(float fraction, const char *label, void *user_data);
 
@@ -82,6 +88,10 @@ typedef struct pb_bake_desc {
     float lobe_power;             /* cosine power of the depth filter, default 50 */
     float invalid_backface_fraction; /* default 0.25: above it a probe is inside geometry (invalid) */
     uint32_t skip_relocation;     /* 1: probes stay on the grid (default: 3 relocation iterations) */
+    float inside_fraction;        /* a probe whose relocation rays, where it ends up, hit more back faces
+                                     than this is inside geometry: flagged PB_PROBE_INSIDE and not traced
+                                     (default invalid_backface_fraction + PB_INSIDE_MARGIN; >= 1: every
+                                     probe is traced). Only where relocation runs */
     uint32_t relocation_rays;     /* first-hit rays per probe in each relocation iteration, at most
                                      rays_per_probe (default PB_RELOCATION_RAYS_DEFAULT, or rays_per_probe
                                      if fewer) */

@@ -62,7 +62,9 @@ enum {
     PB_PROBE_RELOCATED = 1u << 1,
     PB_PROBE_DILATED = 1u << 2,         /* invalid, value taken from valid neighbours */
     PB_PROBE_OUTSIDE = 1u << 3,         /* every ray left the scene: no surface nearby */
-    PB_PROBE_CONVERGED = 1u << 4        /* reached the target error before the last pass */
+    PB_PROBE_CONVERGED = 1u << 4,       /* reached the target error before the last pass */
+    PB_PROBE_INSIDE = 1u << 5           /* invalid: relocation's rays found it inside geometry, so it was not
+                                           traced (zero SH and depth before dilation; pb_bake_desc.inside_fraction) */
 };
 
 typedef struct pb_volume_settings {

@@ -86,6 +86,7 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
     if (!d->octmap_res) d->octmap_res = 16;
     if (d->lobe_power == 0.f) d->lobe_power = 50.f;
     if (d->invalid_backface_fraction == 0.f) d->invalid_backface_fraction = 0.25f;
+    if (d->inside_fraction == 0.f) d->inside_fraction = d->invalid_backface_fraction + PB_INSIDE_MARGIN;
     if (d->max_distance == 0.f) {
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
               dz = s->bounds_max[2] - s->bounds_min[2];
@@ -143,6 +144,9 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
         !(d->invalid_backface_fraction > 0.f && d->invalid_backface_fraction <= 1.f))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "max distance and lobe power must be positive, the "
                                                        "invalid back-face fraction in (0, 1]");
+    if (!(d->inside_fraction > 0.f) || !isfinite(d->inside_fraction))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "inside fraction %g: must be in (0, 1), or >= 1 to trace every "
+                       "probe", d->inside_fraction);
     return PB_OK;
 }
 
@@ -487,6 +491,11 @@ typedef struct bake_job {
     uint32_t *active, *converged_at;
     uint64_t relocation_rays;      /* probe rays the relocation passes traced */
     uint32_t relocated_with;       /* rays per probe of each relocation iteration; 0: none ran */
+    float *inside;                 /* per probe: the back-face share of relocation's rays where it ends up
+                                      (NaN: not measured there) */
+    uint8_t *skip;                 /* per probe: 1 if classified inside geometry, not traced (stage 5) */
+    uint32_t skipped;
+    uint32_t moved_last;           /* probes the last relocation iteration moved (j->active holds them) */
     pb_convergence conv;
     bake_buffers B;
     bake_run run;
@@ -566,10 +575,13 @@ static pb_result stage_place(bake_job *j, pb_error *err)
     j->active = malloc(P * sizeof *j->active);
     j->offsets = calloc((size_t)P * 3, sizeof(float));
     j->near = malloc((size_t)P * 8 * sizeof(float));
+    j->inside = malloc((size_t)P * sizeof(float));
+    j->skip = calloc(P, 1);
     j->global = malloc((size_t)P * sizeof *j->global);
     j->floor_list = malloc(PB_FLOOR_SAMPLE * sizeof *j->floor_list);
     if (!j->probes || !j->rotations || !j->directions || !j->sh_sum || !j->backfaces || !j->hits ||
         !j->reduced || !j->converged_at || !j->active || !j->offsets || !j->near || !j->global || !j->floor_list ||
+        !j->inside || !j->skip ||
         !pb_convergence_init(&j->conv, P) || pb_sf_directions(rpp, j->directions) != PB_OK)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
     for (uint32_t i = 0; i < j->own; ++i)
@@ -679,11 +691,22 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
     return r;
 }
 
+/* The back-face share of the last relocation pass's rays for the `count`
+ * probes of `list` (NULL: all) where they stand. */
+static void record_inside(bake_job *j, const uint32_t *list, uint32_t count)
+{
+    for (uint32_t i = 0; i < count; ++i) {
+        uint32_t p = list ? list[i] : i;
+        j->inside[p] = (float)(j->backfaces[p] / j->run.relocation_rpp);
+    }
+}
+
 /* Stage 4, relocate: probes in geometry move out, probes against a wall
  * move away. The first iteration traces every probe; each later one only
  * the probes the one before moved (the rest stay where they were tested).
  * Iterations use their own pass numbers (RNG streams), so the bake passes
- * that follow are the same whatever relocation did. */
+ * that follow are the same whatever relocation did. Records each probe's
+ * back-face share where it was last tested (stage 5 reads it). */
 static pb_result stage_relocate(bake_job *j, pb_error *err)
 {
     const pb_bake_desc *d = &j->d;
@@ -694,6 +717,8 @@ static pb_result stage_relocate(bake_job *j, pb_error *err)
     pb_result r = PB_OK;
     const uint32_t *list = NULL; /* then j->active, free until the trace passes */
     j->relocated_with = iterations ? j->run.relocation_rpp : 0u;
+    for (uint32_t p = 0; p < P; ++p)
+        j->inside[p] = NAN;
     uint32_t count = P;
     for (uint32_t it = 0; r == PB_OK && it < iterations && count > 0; ++it) {
         memset(j->backfaces, 0, P * sizeof(double));
@@ -701,18 +726,54 @@ static pb_result stage_relocate(bake_job *j, pb_error *err)
         if (r != PB_OK)
             break;
         j->relocation_rays += (uint64_t)count * j->run.relocation_rpp;
+        record_inside(j, list, count);
         uint32_t moved = relocate(&j->run, j->offsets, list, count, j->active);
         pb_logf(&j->ctx->desc.log, PB_LOG_DEBUG, "relocation %u: %u probes traced, %u moved", it + 1, count, moved);
         if (moved)
             r = pb_buffer_upload(j->ctx, &j->B.probes, 0, j->probes, (uint64_t)P * 16, err);
+        for (uint32_t i = 0; i < moved; ++i)
+            j->inside[j->active[i]] = NAN; /* not tested where it went */
         list = j->active, count = moved;
     }
+    j->moved_last = iterations ? count : 0;
     memset(j->backfaces, 0, P * sizeof(double));
     memset(j->hits, 0, P * sizeof(double));
     return r;
 }
 
-/* Stage 5, the trace passes; with a target error, probes whose irradiance
+/* Stage 5, classify: a probe whose relocation rays, where it ends up, hit
+ * back faces more often than d->inside_fraction is inside geometry. Its
+ * passes would only confirm it invalid and be thrown away by dilation, so
+ * it is flagged PB_PROBE_INSIDE and not traced (DDGI's probe
+ * classification). The probes the last relocation iteration moved are
+ * tested once more first, with their own pass number, without moving. */
+static pb_result stage_classify(bake_job *j, pb_error *err)
+{
+    const pb_bake_desc *d = &j->d;
+    pb_result r = PB_OK;
+    if (!j->relocated_with || !(d->inside_fraction < 1.f))
+        return PB_OK;
+    if (j->moved_last) { /* j->active holds them (stage 4) */
+        memset(j->backfaces, 0, j->P * sizeof(double));
+        r = run_pass(&j->run, PB_RELOCATION_PASS + 3, 1, j->active, j->moved_last, err);
+        if (r != PB_OK)
+            return r;
+        j->relocation_rays += (uint64_t)j->moved_last * j->run.relocation_rpp;
+        record_inside(j, j->active, j->moved_last);
+        memset(j->backfaces, 0, j->P * sizeof(double));
+        memset(j->hits, 0, j->P * sizeof(double));
+    }
+    j->skipped = 0;
+    for (uint32_t p = 0; p < j->P; ++p) {
+        j->skip[p] = j->inside[p] > d->inside_fraction;
+        j->skipped += j->skip[p];
+    }
+    pb_logf(&j->ctx->desc.log, PB_LOG_DEBUG, "classification: %u probes retested, %u of %u inside geometry (not traced)",
+            j->moved_last, j->skipped, j->P);
+    return r;
+}
+
+/* Stage 6, the trace passes over the probes not classified inside; with a target error, probes whose irradiance
  * estimate has converged (after at least 4 passes, along every axis the
  * standard error of the mean is below target x the mean, or x the floor
  * where that is larger: convergence.h) drop out and the rest keep going.
@@ -721,9 +782,11 @@ static pb_result stage_relocate(bake_job *j, pb_error *err)
 static pb_result stage_trace_passes(bake_job *j, pb_error *err)
 {
     const pb_bake_desc *d = &j->d;
-    uint32_t active_count = j->P;
+    uint32_t active_count = 0;
     for (uint32_t p = 0; p < j->P; ++p)
-        j->active[p] = p;
+        if (!j->skip[p])
+            j->active[active_count++] = p;
+    int listed = d->target_error > 0.f || j->skipped;
     /* start the submission size afresh: relocation's rays stop at their first
      * hits, so the size its passes grew to would make a bake pass's first
      * submission run for seconds (a late Ctrl-C, a watchdog) */
@@ -731,7 +794,7 @@ static pb_result stage_trace_passes(bake_job *j, pb_error *err)
     double floor = 0.0;
     pb_result r = PB_OK;
     for (uint32_t pass = 0; r == PB_OK && pass < d->passes && active_count > 0; ++pass) {
-        r = run_pass(&j->run, pass, 0, d->target_error > 0.f ? j->active : NULL, active_count, err);
+        r = run_pass(&j->run, pass, 0, listed ? j->active : NULL, active_count, err);
         if (r != PB_OK || !(d->target_error > 0.f) || pass + 1 < 4)
             continue;
         uint32_t keep = 0;
@@ -754,7 +817,7 @@ static pb_result stage_trace_passes(bake_job *j, pb_error *err)
     return r;
 }
 
-/* Stage 6's per-probe work (SH, flags, accounting, depth tiles with their
+/* Stage 7's per-probe work (SH, flags, accounting, depth tiles with their
  * borders) over a range of probes: each probe writes only its own slots, so
  * ranges run on all host cores (on an H100 this stage was a quarter of a
  * 16k-probe bake's wall time, single-threaded). */
@@ -782,6 +845,15 @@ static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
             out->base[3 * p + k] = d->points ? local[k] : (float)((double)local[k] - (double)d->grid.origin[k]);
             out->offset[3 * p + k] = j->offsets[3 * p + k];
         }
+        uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
+        if (j->skip[p]) { /* classified inside (stage 5): no light, no free distance; dilation fills its SH */
+            memset(out->sh + 27 * (size_t)p, 0, 27 * sizeof(float));
+            memset(tile, 0, pb_volume_tile_halves(n) * sizeof *tile);
+            out->probe_flags[p] = PB_PROBE_INSIDE | (j->offsets[3 * p] != 0.f || j->offsets[3 * p + 1] != 0.f ||
+                                                     j->offsets[3 * p + 2] != 0.f ? PB_PROBE_RELOCATED : 0u);
+            out->probe_paths[p] = 0;
+            continue;
+        }
         float c[27];
         uint32_t done_p = passes_done[p] ? passes_done[p] : 1;
         for (int k = 0; k < 27; ++k)
@@ -804,7 +876,6 @@ static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
         float rse = pb_convergence_relative_error(&j->conv, p);
         if (rse >= 0.f)
             out->probe_std_error[p] = rse;
-        uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
         double unit = out->depth_unit; /* a power of two: the division is exact */
         for (uint32_t by = 0; by < n + 2; ++by)
             for (uint32_t bx = 0; bx < n + 2; ++bx) {
@@ -825,7 +896,7 @@ static void volume_fill_run(void *user, const float *sums, uint32_t first, uint3
     pb_parallel_for(n, 64, 0, volume_fill_range, vf);
 }
 
-/* Stage 6, SH, depth and validity: the passes' means as irradiance SH
+/* Stage 7, SH, depth and validity: the passes' means as irradiance SH
  * (windowed if asked) and depth tiles with borders, each probe's flags,
  * paths and standard error, into the volume (a part's, for a shard). */
 static pb_result stage_volume(bake_job *j, pb_volume *out, pb_error *err)
@@ -878,6 +949,7 @@ static void bake_job_free(bake_job *j)
     release(j->ctx, &j->B);
     free(j->probes), free(j->rotations), free(j->directions), free(j->sh_sum);
     free(j->backfaces), free(j->hits), free(j->reduced), free(j->offsets), free(j->near);
+    free(j->inside), free(j->skip);
     free(j->active), free(j->converged_at), free(j->global), free(j->floor_list);
     pb_convergence_free(&j->conv);
 }
@@ -914,6 +986,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
     t[2] = pb_now_ms();
     if (r == PB_OK)
         r = stage_relocate(&j, err);
+    if (r == PB_OK)
+        r = stage_classify(&j, err);
     t[3] = pb_now_ms();
     gpu_relocate = j.run.t_trace + j.run.t_sh;
     if (r == PB_OK)

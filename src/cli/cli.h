@@ -22,6 +22,7 @@ typedef struct options {
     const char *quality;        /* a pb_bake_quality name; NULL: none (the defaults below) */
     const char *guide;          /* "on" | "off"; NULL: the preset's, else off */
     const char *light_cells;    /* "on" | "off"; NULL: the preset's, else on */
+    const char *skip_inside;    /* "on" | "off"; NULL: on */
     const char *points;
     const char *env;
     const char *textures;       /* export: the output directory */

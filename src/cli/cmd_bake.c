@@ -182,6 +182,7 @@ int cmd_bake(const options *o)
     d.indirect_clamp = o->indirect_clamp;
     d.max_lights_per_hit = o->max_lights_per_hit;
     d.relocation_rays = o->relocation_rays;
+    d.inside_fraction = o->skip_inside && !strcmp(o->skip_inside, "off") ? 1.f : 0.f; /* 0: the library's default */
     d.sh_window_width = o->sh_window_width;
     d.shard_index = o->shard_index, d.shard_count = o->shard_count;
     char light[1200], clamp_text[32], part[96] = "";
@@ -291,13 +292,14 @@ int cmd_bake(const options *o)
     if (pb_volume_write_ex(o->output, &vol, cli_interrupted, NULL, &err) != PB_OK)
         goto out;
     FILE *report = strcmp(o->output, "-") ? stdout : stderr; /* stdout carries the volume for -o - */
-    uint32_t valid = 0, outside = 0, relocated = 0, dilated = 0, converged = 0;
+    uint32_t valid = 0, outside = 0, relocated = 0, dilated = 0, converged = 0, inside = 0;
     for (uint32_t i = 0; i < vol.probe_count; ++i) {
         valid += (vol.probe_flags[i] & PB_PROBE_VALID) != 0;
         outside += (vol.probe_flags[i] & PB_PROBE_OUTSIDE) != 0;
         relocated += (vol.probe_flags[i] & PB_PROBE_RELOCATED) != 0;
         dilated += (vol.probe_flags[i] & PB_PROBE_DILATED) != 0;
         converged += (vol.probe_flags[i] & PB_PROBE_CONVERGED) != 0;
+        inside += (vol.probe_flags[i] & PB_PROBE_INSIDE) != 0;
     }
     double rays = (double)vol.rays_traced;
     if (o->sparse && o->devices) { /* the parts' refinement counts stay with them */
@@ -331,14 +333,16 @@ int cmd_bake(const options *o)
                 vol.shard.total, valid, relocated, vol.probe_count - valid, outside);
     else if (o->shard_count)
         fprintf(report, "wrote %s: part %u of %u, %u of %llu probes, undilated (probebake merge joins the parts) (%u "
-                "valid, %u relocated, %u invalid, %u outside", o->output, o->shard_index, o->shard_count,
-                vol.probe_count, (unsigned long long)probes, valid, relocated, vol.probe_count - valid, outside);
+                "valid, %u relocated, %u invalid of which %u inside geometry, not traced, %u outside", o->output,
+                o->shard_index, o->shard_count, vol.probe_count, (unsigned long long)probes, valid, relocated,
+                vol.probe_count - valid, inside, outside);
     else if (o->sparse && vol.probes_dropped) /* the one invalid probe left is the empty one of step 7 */
         fprintf(report, "wrote %s: %u probes (%u valid, %u relocated, %u inside geometry dropped for one empty probe, "
                 "%u outside", o->output, vol.probe_count, valid, relocated, vol.probes_dropped, outside);
     else
-        fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated, %u outside",
-                o->output, (unsigned long long)probes, valid, relocated, vol.probe_count - valid, dilated, outside);
+        fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated and %u inside "
+                "geometry, not traced, %u outside", o->output, (unsigned long long)probes, valid, relocated,
+                vol.probe_count - valid, dilated, inside, outside);
     if (d.target_error > 0.f)
         fprintf(report, ", %u converged before the last pass", converged);
     fprintf(report, "), %.3g probe rays in %s%u passes\n", rays, d.target_error > 0.f ? "up to " : "", vol.settings.passes);

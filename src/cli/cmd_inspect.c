@@ -10,10 +10,10 @@
 
 static void print_flags(uint32_t f)
 {
-    static const char *const names[] = {"valid", "relocated", "dilated", "outside", "converged"};
+    static const char *const names[] = {"valid", "relocated", "dilated", "outside", "converged", "inside"};
     int first = 1;
     printf("[");
-    for (int b = 0; b < 5; ++b)
+    for (int b = 0; b < 6; ++b)
         if (f & (1u << b)) {
             printf("%s\"%s\"", first ? "" : ", ", names[b]);
             first = 0;
@@ -126,9 +126,9 @@ int cmd_inspect(const options *o)
                    k == 0 ? "depth atlas" : "SH irradiance view", v.probe_count,
                    v.sparse ? "; tile frames by finest level (0 blue, 1 green, 2 red), dim on odd bricks" : "");
     }
-    uint32_t counts[5] = {0};
+    uint32_t counts[6] = {0};
     for (uint32_t i = 0; i < v.probe_count; ++i)
-        for (int b = 0; b < 5; ++b)
+        for (int b = 0; b < 6; ++b)
             counts[b] += (v.probe_flags[i] >> b) & 1u;
     const pb_volume_settings *s = &v.settings;
     const char *kind = v.flags & PB_VOLUME_IRRADIANCE ? "irradiance" : "radiance";
@@ -164,8 +164,8 @@ int cmd_inspect(const options *o)
                    refine_test_json(s->refine_test), s->test_pass_scale, s->seam_rounds,
                    (double)s->seam_error);
         }
-        printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u,\n"
-               "  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4]);
+        printf(",\n  \"valid\": %u, \"relocated\": %u, \"dilated\": %u, \"outside\": %u, \"converged\": %u, "
+               "\"inside\": %u,\n  \"probe_list\": [\n", counts[0], counts[1], counts[2], counts[3], counts[4], counts[5]);
         if (o->has_probe)
             print_probe_json(&v, o->probe, 1);
         else
@@ -231,8 +231,8 @@ int cmd_inspect(const options *o)
         char moved_with[48] = "";
         if (s->relocation_rays)
             snprintf(moved_with, sizeof moved_with, " (with %u rays per probe)", s->relocation_rays);
-        printf("flags       %u valid, %u relocated%s, %u dilated, %u outside, %u converged\n", counts[0], counts[1],
-               moved_with, counts[2], counts[3], counts[4]);
+        printf("flags       %u valid, %u relocated%s, %u dilated (%u inside geometry, not traced), %u outside, %u "
+               "converged\n", counts[0], counts[1], moved_with, counts[2], counts[5], counts[3], counts[4]);
         printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
                v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
         printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, guiding %s, light cells %s, "

@@ -58,6 +58,8 @@ void cli_print_help(void)
            "                                 {\"spacing\": S, \"points\": [[x,y,z] | {\"id\": I, \"position\": [x,y,z]}]}\n"
            "  --relocation-rays N            rays per probe in each of the 3 iterations that move probes out of\n"
            "                                 walls (first hits only; default 64, at most --rays)\n"
+           "  --skip-inside on|off           probes relocation still finds inside geometry (more than 35 %% back\n"
+           "                                 faces where they end up) are flagged and not traced (default on)\n"
            "  --sky R,G,B                    uniform sky radiance (default black)\n"
            "  --env FILE.hdr|FILE.exr        equirectangular environment map (Radiance or OpenEXR) instead of --sky\n"
            "  --env-intensity K              scale of the map (default 1)\n"
@@ -190,6 +192,7 @@ static int parse_open_range(const char *s, float lo, float hi, float *out)
     X(OPT_PROBES, "probes", required_argument) \
     X(OPT_RAYS, "rays", required_argument) \
     X(OPT_RELOCATION_RAYS, "relocation-rays", required_argument) \
+    X(OPT_SKIP_INSIDE, "skip-inside", required_argument) \
     X(OPT_SEED, "seed", required_argument) \
     X(OPT_SHARD, "shard", required_argument) \
     X(OPT_DEVICES, "devices", required_argument) \
@@ -262,11 +265,14 @@ static int apply(options *o, const char *a, const char *next)
         if (!next || !pb_bake_quality_find(next))
             return cli_usage_error("%s takes preview, production or reference", a);
         o->quality = next;
-    } else if (!strcmp(a, "--guide") || !strcmp(a, "--probe-nee") || !strcmp(a, "--light-cells")) {
+    } else if (!strcmp(a, "--guide") || !strcmp(a, "--probe-nee") || !strcmp(a, "--light-cells") ||
+               !strcmp(a, "--skip-inside")) {
         if (!next || (strcmp(next, "on") && strcmp(next, "off")))
             return cli_usage_error("%s takes on or off", a);
-        *(!strcmp(a, "--guide") ? &o->guide : !strcmp(a, "--probe-nee") ? &o->probe_nee : &o->light_cells) =
-            next;
+        *(!strcmp(a, "--guide")         ? &o->guide
+          : !strcmp(a, "--probe-nee")   ? &o->probe_nee
+          : !strcmp(a, "--light-cells") ? &o->light_cells
+                                        : &o->skip_inside) = next;
     } else if (!strcmp(a, "--direct")) {
         if (!next || (strcmp(next, "include") && strcmp(next, "exclude")))
             return cli_usage_error("%s takes include or exclude", a);
