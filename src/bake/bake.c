@@ -1,7 +1,7 @@
 /* pb_bake: the bake's host loop (include/probebake/bake.h).
  *
  *   stages over one bake_job: probe set (and memory budget) -> place ->
- *   device resources -> relocate -> trace passes -> SH, depth, validity ->
+ *   device resources -> relocate -> classify -> trace passes -> SH, depth, validity ->
  *   dilation (a grid's; merge dilates a sharded bake's parts)
  *   per pass:   rotations for every probe
  *     per chunk of probes (at most rays_per_submit rays): one submission of
@@ -773,12 +773,13 @@ static pb_result stage_classify(bake_job *j, pb_error *err)
     return r;
 }
 
-/* Stage 6, the trace passes over the probes not classified inside; with a target error, probes whose irradiance
- * estimate has converged (after at least 4 passes, along every axis the
- * standard error of the mean is below target x the mean, or x the floor
- * where that is larger: convergence.h) drop out and the rest keep going.
- * The floor is taken once, after pass 4, over the floor sample, whose
- * probes of other parts are then done. */
+/* Stage 6, the trace passes over the probes not classified inside. With a
+ * target error, probes whose irradiance estimate has converged (after at
+ * least 4 passes, along every axis the standard error of the mean is below
+ * target x the mean, or x the floor where that is larger: convergence.h)
+ * drop out and the rest keep going. The floor is taken once, after pass 4,
+ * over the floor sample's traced probes, whose probes of other parts are
+ * then done. */
 static pb_result stage_trace_passes(bake_job *j, pb_error *err)
 {
     const pb_bake_desc *d = &j->d;
@@ -955,7 +956,7 @@ static void bake_job_free(bake_job *j)
 }
 
 /* One bake as its stages over one context: probe set, place, device
- * resources, relocate, trace passes, SH / depth / validity, then dilation
+ * resources, relocate, classify, trace passes, SH / depth / validity, then dilation
  * (dilate_gpu.c; a grid's, not a part's: merge dilates parts). */
 static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc_in,
                            const pb_sample_volume *feedback, pb_volume *out, pb_error *err)
