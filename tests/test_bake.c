@@ -2527,7 +2527,8 @@ static uint32_t add_box(double *tris, uint32_t t, const double lo[3], const doub
  * lets them move: they stay invalid and are dilated from valid neighbours.
  * Relocation's rays find them inside, so they are not traced: flagged
  * inside, no paths, zero depth, and every probe's SH and every other flag
- * exactly those of the bake that traces them (inside_fraction 1). */
+ * exactly those of the bake that traces them (inside_fraction 1). Another
+ * bake seed places and classifies every probe alike. */
 static void relocation_and_dilation(void)
 {
     double tris[36 * 9];
@@ -2620,6 +2621,22 @@ static void relocation_and_dilation(void)
             CHECK(!(all.vol.probe_flags[p] & PB_PROBE_INSIDE));
     }
     release(&all);
+    /* relocation's rays are turned by their own seed: another bake seed
+     * moves and classifies every probe alike, and only the light changes */
+    d.inside_fraction = 0.f, d.seed = 99;
+    baked reseeded = bake(s, &d);
+    if (b.ok && reseeded.ok) {
+        uint32_t same_place = 0, other_light = 0, P = b.vol.probe_count;
+        for (uint32_t p = 0; p < P; ++p) {
+            same_place += !memcmp(b.vol.offset + 3 * (size_t)p, reseeded.vol.offset + 3 * (size_t)p, 3 * sizeof(float)) &&
+                          (b.vol.probe_flags[p] & (PB_PROBE_INSIDE | PB_PROBE_RELOCATED)) ==
+                              (reseeded.vol.probe_flags[p] & (PB_PROBE_INSIDE | PB_PROBE_RELOCATED));
+            other_light += memcmp(b.vol.sh + 27 * (size_t)p, reseeded.vol.sh + 27 * (size_t)p, 27 * sizeof(float)) != 0;
+        }
+        CHECKF(same_place == P, "%u of %u probes placed alike under another seed", same_place, P);
+        CHECK(other_light > P / 2);
+    }
+    release(&reseeded);
     release(&b);
     pb_scene_destroy(s);
 }

@@ -40,16 +40,16 @@ static void teardown(setup *su)
     pb_scene_destroy(su->scene);
 }
 
-/* 8 x 6 x 10 = 480 probes in the demo scene's cells, as bake --counts
+/* 9 x 6 x 10 = 540 probes in the demo scene's cells, as bake --counts
  * places them (more than the floor sample's 256, so the sample is every
- * second probe; a few stay inside its boxes, so dilation crosses parts, and
+ * third probe; two stay inside its boxes, so dilation crosses parts, and
  * relocation's rays classify one of them inside: it is not traced),
  * and a target error that stops some probes early. Path guiding on: each
  * part learns the same guide (it depends on the scene and seed only). */
 static pb_bake_desc demo_desc(const pb_scene *s)
 {
     pb_bake_desc d = {0};
-    const uint32_t counts[3] = {8, 6, 10};
+    const uint32_t counts[3] = {9, 6, 10};
     for (int k = 0; k < 3; ++k) {
         d.grid.counts[k] = counts[k];
         d.grid.spacing[k] = (s->bounds_max[k] - s->bounds_min[k]) / (float)counts[k];
@@ -366,7 +366,7 @@ static void shard_parameters_refused(void)
     pb_error err;
     d.shard_index = 3, d.shard_count = 3;
     CHECK(pb_bake(ctx, su.scene, su.gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "shard 3/3"));
-    d.shard_index = 0, d.shard_count = 481; /* more parts than the 480 probes */
+    d.shard_index = 0, d.shard_count = 541; /* more parts than the 540 probes */
     CHECK(pb_bake(ctx, su.scene, su.gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT);
     d.shard_count = 2, d.indirect_volume = 1;
     CHECK(pb_bake(ctx, su.scene, su.gs, &d, &v, &err) == PB_ERROR_INVALID_ARGUMENT &&

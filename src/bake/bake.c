@@ -263,7 +263,7 @@ static void pass_params(const bake_run *run, uint32_t pass, int relocating, cons
     prm->rays_per_probe = relocating ? run->relocation_rpp : run->rpp, prm->pass_index = pass;
     if (relocating && run->relocation_rpp != run->rpp)
         prm->directions = B->relocation_directions.address;
-    prm->seed = d->seed, prm->bounces = relocating ? 0 : d->bounces;
+    prm->seed = relocating ? PB_RELOCATION_SEED : d->seed, prm->bounces = relocating ? 0 : d->bounces;
     prm->octmap_res = run->n, prm->max_distance = d->max_distance, prm->lobe_power = d->lobe_power;
     prm->direct = !d->exclude_direct, prm->lobe_cutoff = pb_depth_lobe_cutoff(d->lobe_power);
 }
@@ -310,7 +310,7 @@ static pb_result run_pass(bake_run *run, uint32_t pass, int relocating, const ui
     bake_buffers *B = run->B;
     const pb_bake_desc *d = run->d;
     uint32_t P = run->P, rpp = relocating ? run->relocation_rpp : run->rpp, n = run->n, texels = n * n;
-    pb_bake_rotations(d->seed, pass, run->probes, P, run->rotations);
+    pb_bake_rotations(relocating ? PB_RELOCATION_SEED : d->seed, pass, run->probes, P, run->rotations);
     pb_result r = pb_buffer_upload(ctx, &B->rotations, 0, run->rotations, (uint64_t)P * 48, err);
     if (r == PB_OK && list)
         r = pb_buffer_upload(ctx, &B->list, 0, list, (uint64_t)total * 4, err);

@@ -26,6 +26,13 @@ _Static_assert(sizeof(gpu_light) == 64, "Light layout");
  * reads (bake.glsl has the same value). */
 #define PB_RELOCATION_PASS 0x80000000u
 
+/* Relocation's rays are turned by this seed, not the bake's: where a probe
+ * ends up (and whether it is classified inside) does not change with
+ * --seed, so bakes that differ in their seed compare probes at the same
+ * places (bench/RESULTS.md, "Relocation with 64 rays"). Still keyed by probe
+ * and iteration: a part of a bake relocates its probes as the whole does. */
+#define PB_RELOCATION_SEED 0x9e3779b9u
+
 typedef struct gpu_bake_params {
     gpu_scene_refs scene;
     uint64_t materials, lights, probes, rotations, directions, rays, reduced, probe_list, emitters, emit_pdf, env,
