@@ -2528,7 +2528,8 @@ static uint32_t add_box(double *tris, uint32_t t, const double lo[3], const doub
  * Relocation's rays find them inside, so they are not traced: flagged
  * inside, no paths, zero depth, and every probe's SH and every other flag
  * exactly those of the bake that traces them (inside_fraction 1). Another
- * bake seed places and classifies every probe alike. */
+ * bake seed places and classifies every probe alike; so do the same probes
+ * given as points, whose inside ones keep zero SH (no dilation). */
 static void relocation_and_dilation(void)
 {
     double tris[36 * 9];
@@ -2637,6 +2638,44 @@ static void relocation_and_dilation(void)
         CHECK(other_light > P / 2);
     }
     release(&reseeded);
+    /* the same probes as placed points (spacing 1, ids their grid indices):
+     * classified alike, and with no neighbourhood to dilate from, the ones
+     * inside keep zero SH; the others bake as the grid's do, bit for bit */
+    d.seed = 0;
+    baked grid = bake(s, &d);
+    double positions[45 * 3];
+    uint32_t ids[45];
+    for (uint32_t p = 0; p < 45; ++p) {
+        ids[p] = p;
+        uint32_t ijk[3] = {p % 5, (p / 5) % 3, p / 15};
+        for (int k = 0; k < 3; ++k)
+            positions[3 * p + k] = d.grid.origin[k] + (double)ijk[k];
+    }
+    pb_points pts = {45, positions, ids, 1.0};
+    d.points = &pts;
+    baked placed = bake(s, &d);
+    if (grid.ok && placed.ok) {
+        uint32_t inside = 0, zero = 0, same_valid = 0, valid = 0;
+        for (uint32_t p = 0; p < 45; ++p) {
+            uint32_t f = placed.vol.probe_flags[p];
+            CHECK((f & PB_PROBE_INSIDE) == (grid.vol.probe_flags[p] & PB_PROBE_INSIDE));
+            if (f & PB_PROBE_INSIDE) {
+                ++inside;
+                uint32_t z = 0;
+                for (int c = 0; c < 27; ++c)
+                    z += placed.vol.sh[27 * p + c] == 0.f;
+                zero += z == 27;
+            }
+            if (f & PB_PROBE_VALID) {
+                ++valid;
+                same_valid += !memcmp(placed.vol.sh + 27 * p, grid.vol.sh + 27 * p, 27 * sizeof(float));
+            }
+        }
+        CHECK(inside == 9 && zero == 9);
+        CHECK(valid > 0 && same_valid == valid);
+    }
+    release(&placed);
+    release(&grid);
     release(&b);
     pb_scene_destroy(s);
 }
