@@ -61,7 +61,7 @@ void pb_points_free(pb_points *p);
 
 /* A probe is classified inside geometry when its relocation rays see back
  * faces this much more often than invalid_backface_fraction allows: 0.35
- * by default. Over four scenes no probe the passes call valid was above it
+ * by default. On five scenes no probe the passes call valid was above it
  * (bench/RESULTS.md, "Probes inside geometry not traced"). */
 #define PB_INSIDE_MARGIN 0.1f
 

@@ -847,11 +847,13 @@ static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
             out->offset[3 * p + k] = j->offsets[3 * p + k];
         }
         uint16_t *tile = out->depth + pb_volume_tile_halves(n) * p;
+        uint32_t relocated = j->offsets[3 * p] != 0.f || j->offsets[3 * p + 1] != 0.f || j->offsets[3 * p + 2] != 0.f
+                                 ? PB_PROBE_RELOCATED
+                                 : 0u;
         if (j->skip[p]) { /* classified inside (stage 5): no light, no free distance; dilation fills its SH */
             memset(out->sh + 27 * (size_t)p, 0, 27 * sizeof(float));
             memset(tile, 0, pb_volume_tile_halves(n) * sizeof *tile);
-            out->probe_flags[p] = PB_PROBE_INSIDE | (j->offsets[3 * p] != 0.f || j->offsets[3 * p + 1] != 0.f ||
-                                                     j->offsets[3 * p + 2] != 0.f ? PB_PROBE_RELOCATED : 0u);
+            out->probe_flags[p] = PB_PROBE_INSIDE | relocated;
             out->probe_paths[p] = 0;
             continue;
         }
@@ -863,13 +865,11 @@ static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
         pb_sh_apply_window(c, (pb_sh_window_kind)d->sh_window, d->sh_window_width);
         memcpy(out->sh + 27 * (size_t)p, c, sizeof c);
         double rays_total = (double)rpp * done_p;
-        uint32_t f = 0;
+        uint32_t f = relocated;
         if (j->hits[p] == 0)
             f |= PB_PROBE_OUTSIDE;
         if (j->backfaces[p] / rays_total <= d->invalid_backface_fraction)
             f |= PB_PROBE_VALID;
-        if (j->offsets[3 * p] != 0.f || j->offsets[3 * p + 1] != 0.f || j->offsets[3 * p + 2] != 0.f)
-            f |= PB_PROBE_RELOCATED;
         if (j->converged_at[p] && j->converged_at[p] < d->passes)
             f |= PB_PROBE_CONVERGED;
         out->probe_flags[p] = f;

@@ -29,7 +29,9 @@ _Static_assert(sizeof(gpu_light) == 64, "Light layout");
 /* Relocation's rays are turned by this seed, not the bake's: where a probe
  * ends up (and whether it is classified inside) does not change with
  * --seed, so bakes that differ in their seed compare probes at the same
- * places (bench/RESULTS.md, "Relocation with 64 rays"). Still keyed by probe
+ * places (bench/RESULTS.md, "Session 33's bake against the session's
+ * start": a seed-dependent placement put a floor under that bench's probe
+ * error). Still keyed by probe
  * and iteration: a part of a bake relocates its probes as the whole does. */
 #define PB_RELOCATION_SEED 0x9e3779b9u
 

@@ -231,7 +231,7 @@ int cmd_inspect(const options *o)
         char moved_with[48] = "";
         if (s->relocation_rays)
             snprintf(moved_with, sizeof moved_with, " (with %u rays per probe)", s->relocation_rays);
-        printf("flags       %u valid, %u relocated%s, %u dilated (%u inside geometry, not traced), %u outside, %u "
+        printf("flags       %u valid, %u relocated%s, %u dilated, %u inside geometry (not traced), %u outside, %u "
                "converged\n", counts[0], counts[1], moved_with, counts[2], counts[5], counts[3], counts[4]);
         printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
                v.flags & PB_VOLUME_DIRECT ? "included" : "excluded", v.octmap_res, v.octmap_res, s->max_distance);
