@@ -833,6 +833,72 @@ static void memory_choice_on_discrete_and_uma(void)
     CHECK(c.type == -1);
 }
 
+/* Pipelines made on worker threads (pb_pipelines_begin / end: the bake makes
+ * its kernels while it learns its light cells). Push sizes no kernel uses
+ * make the keys new to this context's cache. */
+static uint32_t *read_spirv(const char *name, size_t *bytes)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", PB_SHADER_DIR, name);
+    FILE *f = fopen(path, "rb");
+    uint32_t *words = NULL;
+    *bytes = 0;
+    if (f && fseek(f, 0, SEEK_END) == 0) {
+        long n = ftell(f);
+        if (n > 0 && (words = malloc((size_t)n)) && fseek(f, 0, SEEK_SET) == 0 && fread(words, 1, (size_t)n, f) == (size_t)n)
+            *bytes = (size_t)n;
+    }
+    if (f)
+        fclose(f);
+    CHECKF(*bytes > 0, "cannot read %s", path);
+    return words;
+}
+
+/* the context's cache keys pipelines by the address of their words: these
+ * live until the context is gone (main) */
+static uint32_t *pb_spv_dilate, *pb_spv_ray_offset;
+
+static void pipelines_made_on_worker_threads(void)
+{
+    size_t dilate_bytes, offset_bytes;
+    pb_spv_dilate = read_spirv("dilate.spv", &dilate_bytes);
+    pb_spv_ray_offset = read_spirv("ray_offset.spv", &offset_bytes);
+    if (!dilate_bytes || !offset_bytes)
+        return;
+    pb_error err;
+    pb_pipeline a, b, a2, b2, c, over;
+    pb_pipeline_request q[2] = {{pb_spv_dilate, dilate_bytes, 116, NULL, 0, 64, "dilate (test)", &a},
+                                {pb_spv_ray_offset, offset_bytes, 116, NULL, 0, 64, "ray_offset (test)", &b}};
+    pb_pipeline_batch batch;
+    uint32_t made0 = ctx->pipelines_created;
+    CHECK(pb_pipelines_begin(ctx, q, 2, &batch, &err) == PB_OK);
+    CHECK(batch.count == 2);
+    CHECK(pb_pipelines_end(ctx, &batch, &err) == PB_OK);
+    CHECKF(ctx->pipelines_created == made0 + 2, "%u pipelines made, 2 expected", ctx->pipelines_created - made0);
+    CHECK(a.pipeline && b.pipeline && a.pipeline != b.pipeline && a.cached && b.cached && a.push_size == 116);
+    /* the same requests again: handed out from the cache, no thread, nothing made */
+    q[0].out = &a2, q[1].out = &b2;
+    CHECK(pb_pipelines_begin(ctx, q, 2, &batch, &err) == PB_OK && batch.count == 0);
+    CHECK(pb_pipelines_end(ctx, &batch, &err) == PB_OK);
+    CHECK(ctx->pipelines_created == made0 + 2 && a2.pipeline == a.pipeline && b2.pipeline == b.pipeline);
+    /* and a single one made on the caller's thread is found by a batch */
+    CHECK(pb_pipeline_create(ctx, pb_spv_dilate, dilate_bytes, 120, NULL, 0, 64, "dilate (test)", &c, &err) ==
+          PB_OK);
+    /* a request the device refuses fails the batch before anything runs
+     * unjoined: every out is cleared, the one started is kept by the cache */
+    uint32_t too_big = ctx->limits.maxPushConstantsSize + 4;
+    pb_pipeline_request bad[3] = {
+        {pb_spv_ray_offset, offset_bytes, 124, NULL, 0, 64, "ray_offset (test)", &a2},
+        {pb_spv_dilate, dilate_bytes, 120, NULL, 0, 64, "dilate (test)", &b2},
+        {pb_spv_dilate, dilate_bytes, too_big, NULL, 0, 64, "dilate (test, too big)", &over}};
+    made0 = ctx->pipelines_created;
+    CHECK(pb_pipelines_begin(ctx, bad, 3, &batch, &err) == PB_ERROR_UNSUPPORTED);
+    CHECKF(strstr(err.message, "push constants") && strstr(err.message, "too big"), "message: %s", err.message);
+    CHECK(!a2.pipeline && !b2.pipeline && !over.pipeline && batch.count == 0);
+    CHECK(ctx->pipelines_created == made0 + 1);
+    pb_pipeline_destroy(ctx, &a), pb_pipeline_destroy(ctx, &b), pb_pipeline_destroy(ctx, &c);
+}
+
 static void device_choice_and_refusals(void)
 {
     pb_context *c = (pb_context *)1;
@@ -880,6 +946,9 @@ int main(void)
     RUN(texel_and_address_loads_same_hits);
     RUN(trace_kernels_divide_only_for_boxes);
     RUN(memory_choice_on_discrete_and_uma);
+    RUN(pipelines_made_on_worker_threads);
     RUN(device_choice_and_refusals);
-    return test_gpu_finish(ctx);
+    int rc = test_gpu_finish(ctx);
+    free(pb_spv_dilate), free(pb_spv_ray_offset);
+    return rc;
 }

@@ -600,9 +600,19 @@ static pb_result stage_place(bake_job *j, pb_error *err)
     return PB_OK;
 }
 
-/* Stage 3, the device side: shading data, the guide and light cells when
- * on, probe and ray buffers, the three pipelines, the previous volume for
- * --indirect volume; then the pass runner over them. */
+/* The kernel features of this bake's relocation and trace passes. */
+static uint32_t bake_kernel_features(const bake_run *run)
+{
+    gpu_bake_params relocation, bake;
+    pass_params(run, PB_RELOCATION_PASS, 1, NULL, &relocation);
+    pass_params(run, 0, 0, NULL, &bake);
+    return pb_bake_features(&relocation) | pb_bake_features(&bake);
+}
+
+/* Stage 3, the device side: shading data, the guide when on, probe and ray
+ * buffers, the previous volume for --indirect volume, then the three
+ * pipelines, made while the light cells are learned; then the pass runner
+ * over them. */
 static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, pb_error *err)
 {
     pb_context *ctx = j->ctx;
@@ -614,8 +624,6 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
         r = pb_shading_create(ctx, j->scene, j->gs, d->sky, d->environment, d->max_lights_per_hit, &B->shading, err);
     if (r == PB_OK && d->guide_paths && d->bounces)
         r = learn_guide(ctx, j->scene, j->gs, d, B, err);
-    if (r == PB_OK && d->light_cells)
-        r = pb_light_cells_gpu_get(ctx, j->scene, j->gs, d->seed, &B->shading.emit, &B->light, NULL, err);
     if (r == PB_OK)
         r = make_buffer(ctx, &B->probes, (uint64_t)P * 16, PB_MEMORY_DEVICE, "probe positions", j->probes, err);
     if (r == PB_OK)
@@ -670,24 +678,43 @@ static pb_result stage_resources(bake_job *j, const pb_sample_volume *feedback, 
         r = pb_sample_upload(ctx, feedback, &B->feedback, err);
         j->run.feedback = B->feedback.refs;
     }
-    /* the kernels keep only the code some pass of this bake runs */
-    gpu_bake_params relocation, bake;
-    pass_params(&j->run, PB_RELOCATION_PASS, 1, NULL, &relocation);
-    pass_params(&j->run, 0, 0, NULL, &bake);
-    B->features = pb_bake_features(&relocation) | pb_bake_features(&bake);
+    /* The kernels are made on worker threads while the light cells are
+     * learned (lavapipe: 0.2 s of NIR work beside 0.2 s of shadow rays on
+     * The Crypt). They keep only the code some pass of this bake may run;
+     * whether the cells make tables is known only once they are measured,
+     * so their code is in whenever they may (the kernel skips it when a
+     * pass has none, light_cells.glsl). */
+    uint32_t planned = bake_kernel_features(&j->run);
+    if (d->light_cells && B->shading.emit.count && j->scene->triangle_count)
+        planned |= PB_FEATURE_LIGHT_CELLS;
+    uint32_t spec[3] = {j->gs->stack_size, j->gs->texel_loads, planned};
+    pb_pipeline_request kernels[3] = {
+        {PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 3, 64, "bake_trace", &B->trace},
+        {PB_KERNEL_SPIRV(ctx, bake_sh), sizeof(bake_push), spec, 3, 64, "bake_sh", &B->sh},
+        {pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 3, 64, "bake_depth", &B->depth}};
+    pb_pipeline_batch batch;
+    if (r == PB_OK)
+        r = pb_pipelines_begin(ctx, kernels, 3, &batch, err);
+    if (r == PB_OK) {
+        pb_result learned = PB_OK;
+        if (d->light_cells)
+            learned = pb_light_cells_gpu_get(ctx, j->scene, j->gs, d->seed, &B->shading.emit, &B->light, NULL, err);
+        pb_result made = pb_pipelines_end(ctx, &batch, learned == PB_OK ? err : NULL);
+        r = learned != PB_OK ? learned : made;
+    }
+    uint32_t needed = bake_kernel_features(&j->run);
+    if (r == PB_OK && (needed & ~planned)) { /* a plan that missed a part: made again rather than run without it */
+        pb_logf(&ctx->desc.log, PB_LOG_WARN, "bake kernels planned with features 0x%x, the bake needs 0x%x: made again",
+                planned, needed);
+        spec[2] = needed;
+        r = pb_pipelines_begin(ctx, kernels, 3, &batch, err);
+        if (r == PB_OK)
+            r = pb_pipelines_end(ctx, &batch, err);
+    }
+    B->features = spec[2];
     char names[160];
     pb_bake_features_name(B->features, names, sizeof names);
     pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "bake kernels specialised to: %s", names);
-    uint32_t spec[3] = {j->gs->stack_size, j->gs->texel_loads, B->features};
-    if (r == PB_OK)
-        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 3, 64, "bake_trace",
-                               &B->trace, err);
-    if (r == PB_OK)
-        r = pb_pipeline_create(ctx, PB_KERNEL_SPIRV(ctx, bake_sh), sizeof(bake_push), spec, 3, 64, "bake_sh",
-                               &B->sh, err);
-    if (r == PB_OK)
-        r = pb_pipeline_create(ctx, pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 3, 64,
-                               "bake_depth", &B->depth, err);
     return r;
 }
 

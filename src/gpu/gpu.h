@@ -16,6 +16,9 @@
 #endif
 #include <volk.h>
 
+#include <pthread.h>
+#include <stdatomic.h>
+
 #include "probebake/device.h"
 
 typedef struct pb_context {
@@ -45,7 +48,7 @@ typedef struct pb_context {
     uint64_t allocated;          /* device-local bytes allocated through pb_buffer_create */
     double intervals_ms[32];     /* timestamp pairs of the last submission, in order */
     uint32_t interval_count;
-    uint32_t validation_messages;
+    atomic_uint validation_messages; /* pipelines are made on worker threads too (pb_pipelines_begin) */
     uint32_t allocations, submissions; /* counted for desc.fail_allocation / fail_submission */
     int recording;
     int native64;                /* shaderInt64 + shaderFloat64 enabled: run the *_native64 kernels */
@@ -137,6 +140,46 @@ pb_result pb_pipeline_create(pb_context *ctx, const uint32_t *spirv, size_t spir
                              const uint32_t *spec, uint32_t spec_count, uint32_t local_size, const char *what,
                              pb_pipeline *out, pb_error *err);
 void pb_pipeline_destroy(pb_context *ctx, pb_pipeline *p);
+
+/* Pipelines made on worker threads while the caller does other host work:
+ * lavapipe spends about 0.2 s of NIR work on the bake kernel, and the bake
+ * learns its light cells and fills its buffers meanwhile. Begin copies out
+ * the cached ones and starts a thread per new one; end waits for them, then
+ * caches, counts and logs them on the caller's thread, and returns the
+ * first failure (then every `out` is cleared). Each begin needs its end
+ * (also on the caller's error paths), before the context is destroyed. */
+typedef struct pb_pipeline_request {
+    const uint32_t *spirv;
+    size_t spirv_bytes;
+    uint32_t push_size;
+    const uint32_t *spec;
+    uint32_t spec_count;
+    uint32_t local_size;
+    const char *what;
+    pb_pipeline *out;
+} pb_pipeline_request;
+
+#define PB_PIPELINE_BATCH_MAX 8
+typedef struct pb_pipeline_job {
+    pb_context *ctx;
+    pb_pipeline_request request; /* its spec points at the job's own copy */
+    uint32_t spec[16];
+    pthread_t thread;
+    int threaded;
+    VkResult result;
+    const char *stage;           /* the failing Vulkan call */
+    pb_pipeline made;
+    double ms;
+} pb_pipeline_job;
+
+typedef struct pb_pipeline_batch {
+    pb_pipeline_job jobs[PB_PIPELINE_BATCH_MAX];
+    uint32_t count;
+} pb_pipeline_batch;
+
+pb_result pb_pipelines_begin(pb_context *ctx, const pb_pipeline_request *requests, uint32_t count,
+                             pb_pipeline_batch *batch, pb_error *err);
+pb_result pb_pipelines_end(pb_context *ctx, pb_pipeline_batch *batch, pb_error *err);
 /* Destroys every cached pipeline (pb_context_destroy calls it). */
 void pb_pipeline_cache_release(pb_context *ctx);
 
