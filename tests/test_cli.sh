@@ -508,6 +508,8 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
         env PB_INJECT_FAULT=submission:3 "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 2 -o "$tmp/keep.probes"
     expect bake-out-of-device-memory 1 'out of device memory during allocation of .* MiB for' -- \
         env PB_INJECT_FAULT=allocation:6 "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 2 -o "$tmp/keep.probes"
+    expect bake-pipeline-fault 1 'out of host memory during vkCreateComputePipelines \(injected fault\) \(kernel bake_sh\)' -- \
+        env PB_INJECT_FAULT=pipeline:2 "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 2 -o "$tmp/keep.probes"
     expect render-device-lost 1 'device lost' -- \
         env PB_INJECT_FAULT=submission:1 "$pb" render "$demo" --size 16x12 --spp 2 -o "$tmp/keep.png"
     expect faults-left-files-alone 0 '^previous absent$' -- \

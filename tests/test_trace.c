@@ -896,6 +896,24 @@ static void pipelines_made_on_worker_threads(void)
     CHECKF(strstr(err.message, "push constants") && strstr(err.message, "too big"), "message: %s", err.message);
     CHECK(!a2.pipeline && !b2.pipeline && !over.pipeline && batch.count == 0);
     CHECK(ctx->pipelines_created == made0 + 1);
+    /* a driver failure on a worker thread (injected, as OUT_OF_HOST_MEMORY):
+     * end names the call and the kernel, clears every output, and keeps the
+     * ones made in the cache, so nothing leaks (the validation layer reports
+     * objects left at device destruction) */
+    pb_pipeline d0, d1, d2;
+    pb_pipeline_request three[3] = {
+        {pb_spv_dilate, dilate_bytes, 128, NULL, 0, 64, "dilate (test)", &d0},
+        {pb_spv_ray_offset, offset_bytes, 128, NULL, 0, 64, "ray_offset (test, fails)", &d1},
+        {pb_spv_dilate, dilate_bytes, 132, NULL, 0, 64, "dilate (test)", &d2}};
+    made0 = ctx->pipelines_created;
+    ctx->desc.fail_pipeline = ctx->pipeline_jobs + 2;
+    CHECK(pb_pipelines_begin(ctx, three, 3, &batch, &err) == PB_OK && batch.count == 3);
+    CHECK(pb_pipelines_end(ctx, &batch, &err) == PB_ERROR_OUT_OF_HOST_MEMORY);
+    CHECKF(strstr(err.message, "out of host memory during vkCreateComputePipelines (injected fault) (kernel "
+                               "ray_offset (test, fails))") != NULL, "message: %s", err.message);
+    CHECK(!d0.pipeline && !d1.pipeline && !d2.pipeline && batch.count == 0);
+    CHECK(ctx->pipelines_created == made0 + 2);
+    ctx->desc.fail_pipeline = 0;
     pb_pipeline_destroy(ctx, &a), pb_pipeline_destroy(ctx, &b), pb_pipeline_destroy(ctx, &c);
 }
 

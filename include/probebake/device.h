@@ -73,6 +73,9 @@ typedef struct pb_context_desc {
     uint32_t portable_kernels;    /* 1: run the kernels that need neither shaderInt64 nor shaderFloat64
                                      even where the device has them (tests that path; same results) */
     uint32_t scene_loads;         /* pb_scene_loads; 0: AUTO */
+    /* Fault injection, as fail_allocation: the Nth new pipeline fails with
+     * VK_ERROR_OUT_OF_HOST_MEMORY (it may be made on a worker thread) */
+    uint32_t fail_pipeline;
 } pb_context_desc;
 
 /* Lists the Vulkan devices. Writes up to `capacity` entries to `out` (may be

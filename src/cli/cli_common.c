@@ -63,13 +63,15 @@ pb_context_desc cli_context_desc(const options *o, const char *device, pb_log lo
     pb_context_desc cd = {device, (uint32_t)o->validation, 0, 0, log};
     cd.portable_kernels = (uint32_t)o->portable_kernels;
     cd.scene_loads = o->scene_loads;
-    /* PB_INJECT_FAULT=allocation:N | submission:N fails that call (test_cli's failure paths) */
+    /* PB_INJECT_FAULT=allocation:N | submission:N | pipeline:N fails that call (test_cli's failure paths) */
     const char *f = getenv("PB_INJECT_FAULT");
     unsigned n = 0;
     if (f && sscanf(f, "allocation:%u", &n) == 1)
         cd.fail_allocation = n;
     else if (f && sscanf(f, "submission:%u", &n) == 1)
         cd.fail_submission = n;
+    else if (f && sscanf(f, "pipeline:%u", &n) == 1)
+        cd.fail_pipeline = n;
     return cd;
 }
 

@@ -50,6 +50,7 @@ typedef struct pb_context {
     uint32_t interval_count;
     atomic_uint validation_messages; /* pipelines are made on worker threads too (pb_pipelines_begin) */
     uint32_t allocations, submissions; /* counted for desc.fail_allocation / fail_submission */
+    uint32_t pipeline_jobs;      /* new pipelines asked for, counted for desc.fail_pipeline */
     int recording;
     int native64;                /* shaderInt64 + shaderFloat64 enabled: run the *_native64 kernels */
     struct pb_pipeline_entry *pipelines; /* the pipeline cache (pb_pipeline_create), destroyed with the context */
@@ -166,6 +167,7 @@ typedef struct pb_pipeline_job {
     uint32_t spec[16];
     pthread_t thread;
     int threaded;
+    int inject;                  /* desc.fail_pipeline chose this one: it fails without a driver call */
     VkResult result;
     const char *stage;           /* the failing Vulkan call */
     pb_pipeline made;

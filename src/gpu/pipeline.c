@@ -99,6 +99,11 @@ static void *make_pipeline_job(void *arg)
 {
     pb_pipeline_job *job = arg;
     double t0 = pb_now_ms();
+    if (job->inject) {
+        memset(&job->made, 0, sizeof job->made);
+        job->result = VK_ERROR_OUT_OF_HOST_MEMORY, job->stage = "vkCreateComputePipelines (injected fault)";
+        return NULL;
+    }
     job->result = make_pipeline(job->ctx, &job->request, &job->made, &job->stage);
     job->ms = pb_now_ms() - t0;
     return NULL;
@@ -128,6 +133,7 @@ static pb_result batch_add(pb_context *ctx, pb_pipeline_batch *batch, const pb_p
     pb_pipeline_job *job = &batch->jobs[batch->count++];
     job->ctx = ctx;
     job->request = q;
+    job->inject = ++ctx->pipeline_jobs == ctx->desc.fail_pipeline;
     memcpy(job->spec, q.spec, q.spec_count * sizeof *q.spec); /* the caller's array may not outlive the call */
     job->request.spec = job->spec;
     job->threaded = threaded && pthread_create(&job->thread, NULL, make_pipeline_job, job) == 0;
