@@ -35,7 +35,9 @@ pid=$!
 trap 'kill $pid 2>/dev/null || true; rm -rf "$tmp"' EXIT
 sleep "$wait_s"
 kill -0 $pid 2>/dev/null || { echo "$0: the command ended within $wait_s s; give it more work" >&2; exit 1; }
-perf record -q -o "$tmp/perf.data" -F 4000 -p $pid -- sleep "$sample_s" >/dev/null 2>&1
+# stopped by SIGINT after the sampling time: `perf record -p PID -- sleep N`
+# got SIGTERM on some kernels (the Zen 5 VM, 2026-11-27) and wrote nothing
+timeout -s INT "$sample_s" perf record -q -o "$tmp/perf.data" -F 4000 -p $pid >/dev/null 2>&1 || true
 # samples in anonymous (JIT) memory: perf names them after /tmp/perf-PID.map
 perf script -i "$tmp/perf.data" -F ip,dso 2>/dev/null | awk '$2 ~ /perf-[0-9]+\.map/ {print $1}' >"$tmp/ips"
 total=$(perf script -i "$tmp/perf.data" -F ip 2>/dev/null | wc -l)
