@@ -1265,6 +1265,42 @@ static void pipelines_are_made_once_per_context(void)
 /* Light cells are learned once per GPU scene and seed: a second bake on the
  * same GPU scene reuses them and writes the same volume; another seed learns
  * its own. */
+/* The bake makes its kernels while it learns the light cells, so they keep
+ * the light-cells code whenever the cells may make tables. The panel's one
+ * emitter is one cluster, which makes none: its bake with light cells on runs
+ * kernels holding that code (made anew: another specialisation) and must
+ * write what the bake without them writes, bit for bit. */
+static void light_cells_code_without_tables_changes_nothing(void)
+{
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(PB_SOURCE_DIR "/tests/scenes/panel.gltf", NULL, &s, &err) == PB_OK, "%s", err.message);
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 27, &d.grid);
+    d.rays_per_probe = 64, d.passes = 2, d.bounces = 2, d.octmap_res = 4, d.probe_nee = 1;
+    baked off = bake(s, &d);
+    uint32_t made_before = ctx->pipelines_created;
+    d.light_cells = 1;
+    baked on = bake(s, &d);
+    uint32_t made = ctx->pipelines_created - made_before;
+    if (off.ok && on.ok) {
+        size_t P = off.vol.probe_count;
+        int same = P == on.vol.probe_count && !memcmp(off.vol.sh, on.vol.sh, P * 27 * sizeof(float)) &&
+                   !memcmp(off.vol.probe_flags, on.vol.probe_flags, P * sizeof *off.vol.probe_flags) &&
+                   !memcmp(off.vol.depth, on.vol.depth, P * pb_volume_tile_halves(4) * sizeof *off.vol.depth);
+        fprintf(stderr, "  light cells on, no tables: %u kernels made for it; volume %s the bake without\n", made,
+                same ? "the same as" : "differs from");
+        CHECK(!on.gs->light_cells || !on.gs->light_cells->host.table); /* one cluster: no tables */
+        CHECK(!(on.vol.settings.techniques & PB_TECHNIQUE_LIGHT_CELLS));
+        CHECK(made >= 1); /* the kernels with the light-cells code, not the ones without */
+        CHECK(same);
+    }
+    release(&off), release(&on);
+    pb_scene_destroy(s);
+}
+
 static void light_cells_are_learned_once_per_scene_and_seed(void)
 {
     pb_scene *s = load_demo();
@@ -3141,6 +3177,7 @@ int main(void)
     RUN(dilation_kernel_matches_cpu_reference);
     RUN(pipelines_are_made_once_per_context);
     RUN(light_cells_are_learned_once_per_scene_and_seed);
+    RUN(light_cells_code_without_tables_changes_nothing);
     RUN(guide_is_learned_once_per_key);
     RUN(environment_kernels_match_cpu);
     RUN(glass_kernels_match_cpu);

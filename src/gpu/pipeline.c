@@ -148,8 +148,13 @@ pb_result pb_pipelines_begin(pb_context *ctx, const pb_pipeline_request *request
         pb_result r = batch_add(ctx, batch, &requests[i], 1, err);
         if (r != PB_OK) {
             pb_pipelines_end(ctx, batch, NULL); /* joins the started ones */
+            /* the requests up to i were handed an output (cached: forgotten; a
+             * pipeline the cache could not keep: destroyed); the rest are cleared */
             for (uint32_t k = 0; k < count; ++k)
-                memset(requests[k].out, 0, sizeof *requests[k].out);
+                if (k <= i)
+                    pb_pipeline_destroy(ctx, requests[k].out);
+                else
+                    memset(requests[k].out, 0, sizeof *requests[k].out);
             return r;
         }
     }

@@ -181,16 +181,9 @@ pb_result pb_bake_stage_resources(bake_job *j, const pb_sample_volume *feedback,
         pb_result made = pb_pipelines_end(ctx, &batch, learned == PB_OK ? err : NULL);
         r = learned != PB_OK ? learned : made;
     }
-    uint32_t needed = bake_kernel_features(&j->run);
-    if (r == PB_OK && (needed & ~planned)) { /* a plan that missed a part: made again rather than run without it */
-        pb_logf(&ctx->desc.log, PB_LOG_WARN, "bake kernels planned with features 0x%x, the bake needs 0x%x: made again",
-                planned, needed);
-        spec[2] = needed;
-        r = pb_pipelines_begin(ctx, kernels, 3, &batch, err);
-        if (r == PB_OK)
-            r = pb_pipelines_end(ctx, &batch, err);
-    }
-    B->features = spec[2];
+    /* the plan covers every pass: the light cells add only the bit planned for
+     * them, and each pass checks its own features against these (pass.c) */
+    B->features = planned;
     char names[160];
     pb_bake_features_name(B->features, names, sizeof names);
     pb_logf(&ctx->desc.log, PB_LOG_DEBUG, "bake kernels specialised to: %s", names);
