@@ -965,7 +965,7 @@ static pb_bake_pass multi_bounce_template(const pb_scene *s, const baked *b, con
  * Then with path guiding: the same host guide on both sides (pb_guide_build
  * with the bake's inputs), and the reference without it must differ. Then
  * plain on bent vertex normals: shading normals draw the bounces. */
-static void multi_bounce_matches_cpu_reference_on(int guided, int bent)
+static void multi_bounce_matches_cpu_reference_on(int guided, int bent, uint32_t schedule)
 {
     pb_scene *s = load_demo_shaded(bent);
     if (!s)
@@ -978,6 +978,7 @@ static void multi_bounce_matches_cpu_reference_on(int guided, int bent)
     d.octmap_res = 4;
     d.skip_relocation = 1;
     d.guide_paths = guided ? 1u << 14 : 0u;
+    d.schedule = schedule;
     baked b = bake(s, &d);
     if (!b.ok) {
         release(&b);
@@ -1012,8 +1013,10 @@ static void multi_bounce_matches_cpu_reference_on(int guided, int bent)
         if (guided)
             apart = fmax(apart, fabs(unguided[27 * p] - b.vol.sh[27 * p]) / fmax(1e-6, fabs(c[0])));
     }
-    fprintf(stderr, "  %s: %u probes (%u not dilated), 3 bounces, 8 passes: DC irradiance differs by at most %.3f%%",
-            guided ? "guided" : bent ? "plain, bent normals" : "plain", P, compared, 100 * worst);
+    fprintf(stderr, "  %s%s: %u probes (%u not dilated), 3 bounces, 8 passes: DC irradiance differs by at most %.3f%%",
+            guided && bent ? "guided, bent normals" : guided ? "guided" : bent ? "plain, bent normals" : "plain",
+            schedule ? ", wavefront" : "", P, compared,
+            100 * worst);
     if (guided)
         fprintf(stderr, "; %u of %u guide entries learned; unguided reference %.2f%% apart", g.learned, g.entries,
                 100 * apart);
@@ -1033,9 +1036,10 @@ static void multi_bounce_matches_cpu_reference_on(int guided, int bent)
 
 static void multi_bounce_matches_cpu_reference(void)
 {
-    multi_bounce_matches_cpu_reference_on(0, 0);
-    multi_bounce_matches_cpu_reference_on(1, 0);
-    multi_bounce_matches_cpu_reference_on(0, 1);
+    multi_bounce_matches_cpu_reference_on(0, 0, PB_SCHEDULE_MEGAKERNEL);
+    multi_bounce_matches_cpu_reference_on(1, 0, PB_SCHEDULE_MEGAKERNEL);
+    multi_bounce_matches_cpu_reference_on(0, 1, PB_SCHEDULE_MEGAKERNEL);
+    multi_bounce_matches_cpu_reference_on(1, 1, PB_SCHEDULE_WAVEFRONT); /* bake_wave.comp against the reference */
 }
 
 /* pb_bake_pass.cast: the CPU reference casts every ray it traces through
@@ -1757,6 +1761,22 @@ static void thin_glass_tints_light(void)
     pb_environment_free(&env);
 }
 
+/* A soup of grey and thin-glass triangles under one directional light. */
+static pb_scene *glass_soup(void)
+{
+    pb_material mats[2] = {grey_material(), glass_material(0.8f, 0.6f)};
+    pb_scene *s = soup_of(12, mats, 2);
+    if (!s)
+        return NULL;
+    s->lights = calloc(1, sizeof(pb_light));
+    s->light_count = 1;
+    s->lights[0].type = PB_LIGHT_DIRECTIONAL;
+    s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
+    s->lights[0].intensity = 3.f;
+    s->lights[0].direction[0] = 0.3f, s->lights[0].direction[1] = -0.9f, s->lights[0].direction[2] = 0.3f;
+    return s;
+}
+
 /* Thin glass through the kernels against bake_cpu.c: a soup of triangles,
  * every other one tinted glass (a 0.8, t 0.6), under an environment map with
  * a sun and a directional light, 2 bounces, probe NEE, shadow rays through
@@ -1770,16 +1790,9 @@ static void thin_glass_tints_light(void)
  * instead lets through more blue: the tint counts. */
 static void glass_kernels_match_cpu(void)
 {
-    pb_material mats[2] = {grey_material(), glass_material(0.8f, 0.6f)};
-    pb_scene *s = soup_of(12, mats, 2);
+    pb_scene *s = glass_soup();
     if (!s)
         return;
-    s->lights = calloc(1, sizeof(pb_light));
-    s->light_count = 1;
-    s->lights[0].type = PB_LIGHT_DIRECTIONAL;
-    s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
-    s->lights[0].intensity = 3.f;
-    s->lights[0].direction[0] = 0.3f, s->lights[0].direction[1] = -0.9f, s->lights[0].direction[2] = 0.3f;
     pb_environment envmap;
     CHECK(make_env(&envmap, 64, 32, 0.5f, 0.1f, 10, 6, 1, 400.f, 30.f));
     pb_env_table env;
@@ -1833,6 +1846,129 @@ static void glass_kernels_match_cpu(void)
     release(&clear);
     pb_env_table_free(&env);
     pb_environment_free(&envmap);
+    pb_scene_destroy(s);
+}
+
+static pb_scene *load_test_scene(const char *name);
+
+/* Whether two bakes wrote the same volume, bit for bit (timings aside). */
+static int volumes_identical(const pb_volume *a, const pb_volume *b)
+{
+    size_t P = a->probe_count, halves = pb_volume_tile_halves(a->octmap_res);
+    return P == b->probe_count && a->octmap_res == b->octmap_res && a->traversals == b->traversals &&
+           !memcmp(a->sh, b->sh, P * 27 * sizeof *a->sh) &&
+           !memcmp(a->probe_flags, b->probe_flags, P * sizeof *a->probe_flags) &&
+           !memcmp(a->probe_std_error, b->probe_std_error, P * sizeof *a->probe_std_error) &&
+           !memcmp(a->depth, b->depth, P * halves * sizeof *a->depth) &&
+           !memcmp(a->offset, b->offset, P * 3 * sizeof *a->offset);
+}
+
+/* The wavefront's continued submissions, counted from its debug line. */
+static uint32_t wave_continued;
+
+static void count_wave_submissions(pb_log_level level, const char *msg, void *user)
+{
+    test_log_line(level, msg, user);
+    unsigned submissions = 0, paths = 0;
+    if (sscanf(msg, "wavefront: %u submissions for %u paths", &submissions, &paths) == 2 && submissions > 1)
+        ++wave_continued;
+}
+
+/* --schedule wavefront (bake_wave.comp, stages/wave.c) keeps the paths in
+ * memory between dispatches that each trace one kind of ray, with
+ * bake_trace's random numbers and arithmetic: every volume below is the
+ * megakernel's bit for bit, with the same traversals. The cases cover what
+ * the path state carries: punctual lights one by one and one drawn by power,
+ * emitters with light cells, probe NEE, guiding, shading normals, the
+ * environment and thin glass (a shadow ray through layers, and rays that
+ * outlast a submission's rounds), and --indirect volume's first-hit shading.
+ * Relocation runs as one kernel in both. */
+static void wavefront_writes_the_megakernel_volume(void)
+{
+    struct {
+        const char *label;
+        const char *file; /* tests/scenes, or NULL: the glass soup */
+        uint32_t bounces, nee, guide, cells, lights_per_hit, indirect_volume;
+    } cases[] = {
+        {"demo: lights, guiding", "demo.gltf", 3, 1, 1u << 12, 1, 8, 0},
+        {"demo: one light drawn per hit", "demo.gltf", 2, 0, 0, 0, 1, 0},
+        {"demo: 20 lights, each one's shadow ray", "demo.gltf", 2, 0, 0, 0, 32, 0},
+        {"lamps: emitters, light cells, probe NEE", "lamps.gltf", 3, 1, 0, 1, 8, 0},
+        {"skylight: the sky", "skylight.gltf", 2, 1, 0, 1, 8, 0},
+        {"doorway: --indirect volume", "doorway.gltf", 1, 0, 0, 1, 8, 1},
+        {"thin glass, environment, a directional light", NULL, 3, 1, 0, 1, 8, 0},
+    };
+    pb_environment envmap;
+    CHECK(make_env(&envmap, 64, 32, 0.5f, 0.1f, 10, 6, 1, 400.f, 30.f));
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+        pb_scene *s = NULL;
+        pb_bake_desc d = {0};
+        if (cases[c].file) {
+            s = load_test_scene(cases[c].file);
+            if (s && cases[c].lights_per_hit == 32 && s->light_count) { /* 20 copies of its first light, dimmer */
+                pb_light *many = calloc(20, sizeof *many);
+                for (int k = 0; many && k < 20; ++k) {
+                    many[k] = s->lights[0];
+                    many[k].intensity /= 20.f;
+                    many[k].position[0] += 0.05f * (float)k;
+                }
+                free(s->lights);
+                s->lights = many, s->light_count = many ? 20 : 0;
+            }
+        } else {
+            s = glass_soup();
+            d.environment = &envmap;
+        }
+        if (!s)
+            continue;
+        pb_probe_grid_fit(s->bounds_min, s->bounds_max, 64, &d.grid);
+        d.rays_per_probe = 64, d.passes = 2, d.octmap_res = 4;
+        d.bounces = cases[c].bounces, d.probe_nee = cases[c].nee, d.guide_paths = cases[c].guide;
+        d.light_cells = cases[c].cells, d.max_lights_per_hit = cases[c].lights_per_hit;
+        d.indirect_volume = cases[c].indirect_volume;
+        baked mega = bake(s, &d);
+        d.schedule = PB_SCHEDULE_WAVEFRONT;
+        uint32_t made_before = ctx->pipelines_created;
+        pb_log log = ctx->desc.log;
+        ctx->desc.log = (pb_log){count_wave_submissions, NULL};
+        wave_continued = 0;
+        baked wave = bake(s, &d);
+        ctx->desc.log = log;
+        uint32_t made = ctx->pipelines_created - made_before;
+        if (mega.ok && wave.ok) {
+            int same = volumes_identical(&mega.vol, &wave.vol);
+            fprintf(stderr, "  %s: %u probes, %llu traversals; wavefront %s (%u kernels made for it, %u chunks "
+                    "continued in another submission)\n", cases[c].label, mega.vol.probe_count,
+                    (unsigned long long)mega.vol.traversals, same ? "the same bytes" : "DIFFERS", made, wave_continued);
+            CHECK(same);
+            if (!cases[c].file || cases[c].lights_per_hit == 32) /* glass layers and 20 shadow rays per hit
+                                                                      outlast a submission's rounds */
+                CHECK(wave_continued > 0);
+            CHECK(mega.vol.traversals > mega.vol.rays_traced); /* paths went past their first hit */
+        }
+        release(&mega), release(&wave);
+        pb_scene_destroy(s);
+    }
+    pb_environment_free(&envmap);
+    /* an unknown schedule is refused before any work */
+    pb_scene *s = load_test_scene("panel.gltf");
+    if (s) {
+        pb_bake_desc d = {0};
+        pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
+        d.schedule = 2;
+        pb_volume v;
+        pb_error err;
+        pb_bvh *bvh = NULL;
+        pb_gpu_scene *gs = NULL;
+        CHECK(pb_bvh_build(s, NULL, &bvh, &err) == PB_OK && pb_gpu_scene_create(ctx, s, bvh, &gs, &err) == PB_OK);
+        if (gs) {
+            pb_result r = pb_bake(ctx, s, gs, &d, &v, &err);
+            fprintf(stderr, "  schedule 2: %s\n", err.message);
+            CHECK(r == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "schedule 2"));
+        }
+        pb_gpu_scene_destroy(gs);
+        pb_bvh_destroy(bvh);
+    }
     pb_scene_destroy(s);
 }
 
@@ -3181,6 +3317,7 @@ int main(void)
     RUN(guide_is_learned_once_per_key);
     RUN(environment_kernels_match_cpu);
     RUN(glass_kernels_match_cpu);
+    RUN(wavefront_writes_the_megakernel_volume);
     RUN(indirect_volume_matches_cpu_reference);
     RUN(relocation_and_dilation);
     RUN(scale_and_position_invariance);

@@ -363,6 +363,14 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-bad-emitter-sampling 2 '--emitter-sampling takes solid-angle or area' -- \
         "$pb" bake "$demo" --emitter-sampling uniform -o "$tmp/x.probes"
     expect bake-bad-guide 2 '--guide takes on or off' -- "$pb" bake "$demo" --guide 7 -o "$tmp/x.probes"
+    # --schedule wavefront: the default's volume byte for byte (bytes 185-248 are timings), validation silent
+    expect bake-schedule-wavefront 0 "wrote $tmp/w.probes" -- "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 \
+        --octmap-res 4 --bounces 3 --schedule wavefront --validation -o "$tmp/w.probes"
+    "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --bounces 3 -o "$tmp/m.probes" >/dev/null 2>&1
+    expect bake-schedule-same-bytes 0 '^0$' -- \
+        bash -c "cmp -l '$tmp/m.probes' '$tmp/w.probes' | awk '\$1 < 185 || \$1 > 248' | wc -l"
+    expect bake-bad-schedule 2 '--schedule takes megakernel or wavefront' -- \
+        "$pb" bake "$demo" --schedule fast -o "$tmp/x.probes"
     expect bake-probe-nee-off 0 'probe NEE off' -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --probe-nee off -o "$tmp/q.probes"
     expect bake-probe-nee-off-inspect 0 'probe NEE off' -- "$pb" inspect "$tmp/q.probes"

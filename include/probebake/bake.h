@@ -68,6 +68,17 @@ void pb_points_free(pb_points *p);
 /* Progress: fraction done in [0,1] and a label; return nonzero to cancel. */
 typedef int (*pb_progress_fn)(float fraction, const char *label, void *user_data);
 
+/* How a bake pass's paths run on the device (docs/bake.md, "Schedules"):
+ * one invocation per path that traces all of its rays, or a wavefront whose
+ * dispatches each trace one ray of every path waiting for that kind of ray
+ * (closest hit or shadow). Both write the same volume, bit for bit; on
+ * lavapipe the wavefront is 1.2-2x slower (bench/RESULTS.md, "A wavefront
+ * bake"). */
+typedef enum pb_bake_schedule {
+    PB_SCHEDULE_MEGAKERNEL = 0,
+    PB_SCHEDULE_WAVEFRONT = 1
+} pb_bake_schedule;
+
 /* Zero fields mean the defaults listed on each line. */
 typedef struct pb_bake_desc {
     pb_probe_grid grid;           /* counts >= 1 (pb_probe_grid_fit helps), unless points is set */
@@ -118,6 +129,8 @@ typedef struct pb_bake_desc {
     uint32_t emitters_by_area;    /* 1: next-event estimation draws a uniform point on the emitter triangle
                                      (the density swings near it); 0: a uniform direction toward it where
                                      it spans 0.01 sr or more (docs/bake.md, "Emitters by solid angle") */
+    uint32_t schedule;            /* pb_bake_schedule of the bake passes (relocation always runs as one kernel);
+                                     default PB_SCHEDULE_MEGAKERNEL */
     uint32_t shard_index, shard_count; /* count > 0: bake part `index` (0-based) of `count` only: a contiguous
                                      range of the probes (grid or points), undilated, as a volume with
                                      PB_VOLUME_SHARD; pb_volume_merge joins the parts into the very bytes

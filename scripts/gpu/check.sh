@@ -7,11 +7,11 @@
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
 # STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads peer sweep test_bake test_trace traceab tests
-# vsbake (default: compile bake vsbake peer bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
+# vsbake wavefront (default: compile bake wavefront vsbake peer bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
 out=${OUT:?OUT must name the folder that comes back}
-steps=${*:-compile bake vsbake peer bench clocks loads tests}
+steps=${*:-compile bake wavefront vsbake peer bench clocks loads tests}
 log=$out/log.txt
 say() { echo "== $(date +%T) $*" | tee -a "$log"; }
 run() { local limit=$1; shift; say "$*"; timeout "$limit" "$@" >>"$log" 2>&1; local rc=$?; [ $rc = 0 ] || say "rc $rc"; }
@@ -89,6 +89,18 @@ for s in $steps; do
             timeout 120 build/probebake bake $crypt --counts 32,16,32 --rays 256 --passes 1 --bounces 3 \
                 --verbose -o /tmp/c16k.probes >>"$log" 2>&1
             say "rc $? wall $(( ($(date +%s%N) - start) / 1000000 )) ms"
+        done ;;
+    wavefront) # --schedule megakernel against wavefront (docs/bake.md, "Schedules"), alternately, on
+        # the issue's bake and the Cornell box: the stages' times of each, and whether the volumes
+        # are the same bytes outside the timings (bytes 185-248), as on lavapipe
+        for sc in $crypt $cornell; do
+            for sched in megakernel wavefront megakernel wavefront; do
+                say "bake $(basename $sc), $sched"
+                timeout 60 build/probebake bake $sc --counts 32,16,32 --rays 256 --passes 1 --bounces 3 \
+                    --schedule $sched --verbose -o /tmp/sched-$sched.probes 2>&1 | grep -E "stages|^time" >>"$log"
+            done
+            say "volumes differ outside the timings in $(cmp -l /tmp/sched-megakernel.probes /tmp/sched-wavefront.probes \
+                | awk '$1 < 185 || $1 > 248' | wc -l) bytes"
         done ;;
     vsbake) # issue 11's bake ratio on the device, at a size that fills it: bake_bench's "vs trc"
         # (bake traversals per second of GPU time over the trace kernel's probe-ray rate on the same

@@ -155,34 +155,47 @@ float probe_emitter_share(BakeParams P)
     return bake_emitters(P) ? (bake_env(P).count > 0u ? 0.5 : 1.0) : 0.0;
 }
 
-vec4[2] probe_light_nee(BakeParams P, vec3 x, inout uint state)
+// The light sample of probe_light_nee before its shadow ray: the direction
+// w, the distance to trace, the radiance and the factor k = weight / (4pi pdf)
+// it is scaled by; false when there is none.
+bool probe_nee_sample(BakeParams P, vec3 x, inout uint state, out vec3 w, out vec3 L, out float tmax, out float k)
 {
-    vec4 r[2];
-    r[0] = vec4(0.0);
-    r[1] = vec4(0.0, 1.0, 0.0, 0.0);
     Env env = bake_env(P);
     float share = probe_emitter_share(P);
     float us = rng_next(state);
-    vec3 w, L;
-    float tmax, pdf;
+    float pdf;
+    w = vec3(0.0, 1.0, 0.0), L = vec3(0.0), tmax = -1.0, k = 0.0;
     if (us < share) {
         EmitterSample es = sample_emitter(P, x, state);
         w = es.w, L = es.Le, tmax = es.dist * 0.9999, pdf = share * es.pdf;
     } else {
         if (env.count == 0u)
-            return r;
+            return false;
         float u0 = rng_next(state), u1 = rng_next(state), u2 = rng_next(state);
         w = env_sample(env, u0, u1, u2).xyz;
         L = env_radiance(env, w), tmax = PB_INF, pdf = (1.0 - share) * env_pdf(env, w);
     }
     if (!(pdf > 0.0))
+        return false;
+    float wl = power_heuristic(pdf, 1.0 / (4.0 * PB_PI));
+    k = wl / (4.0 * PB_PI * pdf);
+    return true;
+}
+
+vec4[2] probe_light_nee(BakeParams P, vec3 x, inout uint state)
+{
+    vec4 r[2];
+    r[0] = vec4(0.0);
+    r[1] = vec4(0.0, 1.0, 0.0, 0.0);
+    vec3 w, L;
+    float tmax, k;
+    if (!probe_nee_sample(P, x, state, w, L, tmax, k))
         return r;
     r[1] = vec4(w, 0.0);
     vec3 T = shadow_transmittance(P, x, w, tmax);
     if (T == vec3(0.0))
         return r;
-    float wl = power_heuristic(pdf, 1.0 / (4.0 * PB_PI));
-    r[0] = vec4(L * T * (wl / (4.0 * PB_PI * pdf)), 0.0);
+    r[0] = vec4(L * T * k, 0.0);
     return r;
 }
 
@@ -257,233 +270,270 @@ void add_found(inout PathResult res, vec3 c, uint bounce, float clamp_limit)
 #define PB_NEXT_ENV 2u
 #define PB_NEXT_BOUNCE 3u
 
+// What path_radiance's loop carries from one ray to the next: the path's
+// result so far, the ray in flight and the current reflecting hit (where its
+// shadow rays start, what they add to). A wavefront bake (bake_wave.comp)
+// keeps it in memory between its dispatches.
+struct PathState {
+    PathResult res;
+    vec3 o, dir, throughput;
+    float bsdf_pdf; // of the direction that led to the current hit (0: the first ray, not MIS-weighted)
+    uvec2 ray;      // (in flight, next light sample)
+    uint bounce, light;
+    vec3 x, ng, ns, albedo, E, c;
+    int ge;
+    ShadowRay sr;
+    // Thin glass (bake.glsl, glass_step): a ray it lets through goes on from
+    // its far side, `past` along, tinted; shadow rays then find their hits
+    // nearest first (closest hit), so that each layer is met in order.
+    vec3 beyond;
+    float past;
+    uint layers;
+};
+
+PathState path_begin(vec3 o, vec3 dir)
+{
+    PathState ps;
+    ps.res.L = vec3(0.0);
+    ps.res.L_direct = vec3(0.0);
+    ps.res.L_seen = vec3(0.0);
+    ps.res.first_t = PB_INF;
+    ps.res.shade = false;
+    ps.res.x = o;
+    ps.res.n = vec3(0.0, 1.0, 0.0);
+    ps.res.albedo = vec3(0.0);
+    ps.o = o;
+    ps.dir = dir;
+    ps.throughput = vec3(1.0);
+    ps.bsdf_pdf = 0.0;
+    ps.ray = uvec2(PB_RAY_BOUNCE, PB_NEXT_LIGHTS);
+    ps.bounce = 0u;
+    ps.light = 0u;
+    ps.x = o;
+    ps.ng = vec3(0.0, 1.0, 0.0);
+    ps.ns = ps.ng;
+    ps.albedo = vec3(0.0);
+    ps.E = vec3(0.0);
+    ps.c = vec3(0.0);
+    ps.ge = -1;
+    ps.sr = no_shadow_ray();
+    ps.beyond = vec3(0.0);
+    ps.past = 0.0;
+    ps.layers = 0u;
+    return ps;
+}
+
+// One ray of a path: the ray in flight is traced, what it finds is taken,
+// and the next ray is chosen: at each reflecting hit the shadow rays of its
+// light samples (punctual lights, one emitter, the environment) one at a
+// time, then the next bounce. Returns false when the path is done.
+//
 // `bounces`: reflections after the first hit; `see_direct`: count light that
 // reaches the origin unreflected (emission or sky seen along the ray itself);
 // `first_hit_only`: stop at the first hit, having set first_t (relocation
-// needs no light).
-//
-// One loop around one trace_ray: the bounce ray, then at each reflecting hit
-// the shadow rays of its light samples (punctual lights, one emitter, the
-// environment) one at a time, then the next bounce. The compiled kernel holds
-// one traversal instead of one per kind of ray, and lanes whose rays are of
-// different kinds traverse together. Random numbers are drawn in the order
-// of the CPU reference (src/bake/bake_cpu.c), which traces each ray where it
-// is drawn.
-PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_direct, bool first_hit_only,
-                         inout uint state)
+// needs no light). Random numbers are drawn in the order of the CPU
+// reference (src/bake/bake_cpu.c), which traces each ray where it is drawn.
+bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, bool first_hit_only,
+               inout uint state)
 {
     SceneRefs s = P.scene;
     Env env = bake_env(P);
     LightBuf lights = LightBuf(P.lights);
-    PathResult res;
-    res.L = vec3(0.0);
-    res.L_direct = vec3(0.0);
-    res.L_seen = vec3(0.0);
-    res.first_t = PB_INF;
-    res.shade = false;
-    res.x = o;
-    res.n = vec3(0.0, 1.0, 0.0);
-    res.albedo = vec3(0.0);
-    vec3 throughput = vec3(1.0);
-    float bsdf_pdf = 0.0; // of the direction that led to the current hit (0: the first ray, not MIS-weighted)
     FloatBuf emit_pdf = FloatBuf(P.emit_pdf);
-    // the ray in flight and the current reflecting hit: where its shadow rays
-    // start, what they add to
-    uvec2 ray = uvec2(PB_RAY_BOUNCE, PB_NEXT_LIGHTS); // (in flight, next light sample)
-    uint bounce = 0u, light = 0u;
-    vec3 x = o, ng = vec3(0.0, 1.0, 0.0), ns = ng, albedo = vec3(0.0), E = vec3(0.0), c = vec3(0.0);
-    int ge = -1;
-    ShadowRay sr = no_shadow_ray();
     bool light_select = bake_feature(PB_FEATURE_LIGHT_SELECT) && P.light_select != 0u;
-    // Thin glass (bake.glsl, glass_step): a ray it lets through goes on from
-    // its far side, `past` along, tinted; shadow rays then find their hits
-    // nearest first (closest hit), so that each layer is met in order.
     bool glass = bake_glass(P);
-    vec3 beyond = vec3(0.0);
-    float past = 0.0;
-    uint layers = 0u;
-    for (;;) {
-        bool bounce_ray = ray.x == PB_RAY_BOUNCE;
-        vec3 rd = bounce_ray ? dir : sr.w;
-        TraceResult tr = trace_ray(s, layers != 0u ? beyond : bounce_ray ? o : x, rd, 0.0,
-                                   (bounce_ray ? PB_INF : sr.tmax) - past, !bounce_ray && !glass);
-        if (glass) {
-            GlassStep g = layers < PB_GLASS_LAYERS ? glass_step(P, tr, rd) : GlassStep(false, vec3(1.0), vec3(0.0));
-            if (g.pass) {
-                if (bounce_ray)
-                    throughput *= g.w;
-                else
-                    sr.L *= g.w;
-                beyond = g.origin;
-                past += tr.t;
-                ++layers;
-                continue;
-            }
-            tr.t += past; // from the ray's origin: the probe's depth, the emitter's MIS density
-            past = 0.0;
-            layers = 0u;
+    bool bounce_ray = ps.ray.x == PB_RAY_BOUNCE;
+    vec3 rd = bounce_ray ? ps.dir : ps.sr.w;
+    TraceResult tr = trace_ray(s, ps.layers != 0u ? ps.beyond : bounce_ray ? ps.o : ps.x, rd, 0.0,
+                               (bounce_ray ? PB_INF : ps.sr.tmax) - ps.past, !bounce_ray && !glass);
+    if (glass) {
+        GlassStep g = ps.layers < PB_GLASS_LAYERS ? glass_step(P, tr, rd) : GlassStep(false, vec3(1.0), vec3(0.0));
+        if (g.pass) {
+            if (bounce_ray)
+                ps.throughput *= g.w;
+            else
+                ps.sr.L *= g.w;
+            ps.beyond = g.origin;
+            ps.past += tr.t;
+            ++ps.layers;
+            return true;
         }
-        if (ray.x == PB_RAY_LIGHT) {
-            E += tr.tri == PB_NO_HIT ? sr.L : vec3(0.0);
-        } else if (ray.x == PB_RAY_NEE) {
-            c += throughput * albedo * (tr.tri == PB_NO_HIT ? sr.L : vec3(0.0));
-        } else if (tr.tri == PB_NO_HIT) {
-            if (bounce > 0u || see_direct) {
-                float w = 1.0;
-                // the density of the ray that found it: its bounce's, or for a probe
-                // ray under probe NEE the uniform sphere's (else 0: weight 1)
-                bool probe_nee = bounce == 0u && bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee);
-                float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
-                if (found_pdf > 0.0 && env.count > 0u) { // the environment could also have been sampled: MIS
-                    float pe = env_pdf(env, dir) * (probe_nee ? 1.0 - probe_emitter_share(P) : 1.0);
-                    w = power_heuristic(found_pdf, pe);
-                }
-                add_found(res, throughput * env_radiance(env, dir) * w, bounce, P.indirect_clamp);
-            }
-            break;
-        } else {
-            Tri t = load_tri(s.tris, tr.tri);
-            vec3 e1 = t.v1 - t.v0, e2 = t.v2 - t.v0;
-            ng = normalize(cross(e1, e2));
-            bool back = dot(ng, dir) > 0.0;
-            if (bounce == 0u)
-                res.first_t = back ? -tr.t : tr.t;
-            if (first_hit_only)
-                break;
-            ShadeMaterial m = load_shade_material(P.materials, t.flags & ~PB_FLAG_ALPHA_MASK);
-            if (back) {
-                if (m.tex.z == 0)
-                    break; // inside a single-sided surface: no light
-                ng = -ng;
-            }
-            vec2 uv = m.tex.x >= 0 || m.tex.y >= 0 ? surface_uv(s, tr.tri, tr.u, tr.v) : vec2(0.0);
-            if ((bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
-                float w = 1.0;
-                // the density with which NEE at the ray's origin draws this point
-                float pa = bake_emitters(P) ? emit_pdf.v[tr.tri] * light_cell_ratio(P, light_cell(P, o), tr.tri) : 0.0;
-                bool probe_nee = bounce == 0u && bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee);
-                float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : bsdf_pdf;
-                if (found_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
-                    float pl = emitter_density(pa, 0.5 * length(cross(e1, e2)), emitter_solid_angle(P, o, t), tr.t,
-                                               abs(dot(ng, dir))) *
-                               (probe_nee ? probe_emitter_share(P) : 1.0);
-                    w = power_heuristic(found_pdf, pl);
-                }
-                add_found(res, throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w, bounce,
-                          P.indirect_clamp);
-            }
-            if (bounce > bounces)
-                break; // the terminal ray: it only gathers emission (see below)
-            albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * diffuse_share(m);
-            if (bake_feature(PB_FEATURE_VERTEX_COLORS) && (s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
-                albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
-            x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ng);
-            bool smooth_shaded = bake_feature(PB_FEATURE_SHADING_NORMALS) && (s.flags & PB_SCENE_SHADING_NORMALS) != 0u;
-            ns = smooth_shaded ? shading_normal(s, tr.tri, tr.u, tr.v, ng) : ng;
-            if (bounce == 0u) {
-                res.shade = true;
-                res.x = x;
-                res.n = ns;
-                res.albedo = albedo;
-            }
-            E = vec3(0.0);
-            light = 0u;
-            ray.y = PB_NEXT_LIGHTS;
-        }
-        // The next ray: this hit's next light sample that needs one, else the bounce
-        ray.x = PB_RAY_BOUNCE;
-        while (ray.y == PB_NEXT_LIGHTS) {
-            if (!bake_feature(PB_FEATURE_LIGHTS) || light >= (light_select ? 1u : P.light_count)) {
-                c = throughput * albedo * (E / PB_PI);
-                ge = guide_entry(P, x, ng);
-                ray.y = PB_NEXT_EMITTER;
-            } else if (light_select) {
-                // many lights: one, drawn in proportion to its power, over its probability
-                EmitterBuf table = EmitterBuf(P.light_table);
-                float xl = rng_next(state) * float(P.light_count);
-                uint li = min(uint(xl), P.light_count - 1u);
-                Emitter le = table.e[li];
-                uint pick = xl - float(li) < le.prob ? li : le.alias;
-                Emitter chosen = table.e[pick];
-                sr = surface_light_ray(lights.l[chosen.tri], x, ng, ns);
-                sr.L /= chosen.pad;
-                light = 1u;
-                if (sr.tmax >= 0.0) {
-                    ray.x = PB_RAY_LIGHT;
-                    break;
-                }
-            } else {
-                sr = surface_light_ray(lights.l[light], x, ng, ns);
-                ++light;
-                if (sr.tmax >= 0.0) {
-                    ray.x = PB_RAY_LIGHT;
-                    break;
-                }
-            }
-        }
-        if (ray.x != PB_RAY_BOUNCE)
-            continue;
-        if (ray.y == PB_NEXT_EMITTER) {
-            ray.y = PB_NEXT_ENV;
-            if (bake_emitters(P) && albedo != vec3(0.0)) {
-                sr = emitter_nee_ray(P, x, ng, ns, ge, state);
-                if (sr.tmax >= 0.0) {
-                    ray.x = PB_RAY_NEE;
-                    continue;
-                }
-            }
-        }
-        if (ray.y == PB_NEXT_ENV) {
-            ray.y = PB_NEXT_BOUNCE;
-            if (env.count > 0u && albedo != vec3(0.0)) {
-                sr = env_nee_ray(P, env, ng, ns, ge, state);
-                if (sr.tmax >= 0.0) {
-                    ray.x = PB_RAY_NEE;
-                    continue;
-                }
-            }
-        }
-        // every light sample of this hit is in: its light, then the bounce
-        c = clamp_indirect(c, P.indirect_clamp);
-        res.L += c;
-        if (bounce == 0u)
-            res.L_direct += c;
-        // After the last reflection one more (terminal) bounce ray gathers the
-        // emission and environment the light samples above are MIS-weighted
-        // against; without it their weights would miss the bounce share (a
-        // bias), and weight 1 instead gives fireflies near emitters.
-        if (bounce >= bounces && !bake_emitters(P) && env.count == 0u)
-            break;
-        if (bounce >= 1u) { // Russian roulette from the second reflection on
-            float q = min(0.95, max(albedo.r, max(albedo.g, albedo.b)));
-            if (rng_next(state) >= q)
-                break;
-            throughput /= q;
-        }
-        throughput *= albedo;
-        if (max(throughput.r, max(throughput.g, throughput.b)) <= 0.0)
-            break;
-        // The cosine lobe is the shading normal's; a direction below the
-        // geometric surface would leave through it, and no light comes from there.
-        if (ge >= 0) { // guided: the learned distribution or the cosine lobe, weighed by the mixture
-            float uc = rng_next(state), u1 = rng_next(state), u2 = rng_next(state), u3 = rng_next(state);
-            dir = uc < PB_GUIDE_SHARE ? guide_sample(P, ge, u1, u2, u3) : cosine_direction(ns, u1, u2);
-            float cosine = dot(ns, dir);
-            if (!(cosine > 0.0 && dot(ng, dir) > 0.0))
-                break;
-            bsdf_pdf = bounce_pdf(P, ge, cosine, dir);
-            throughput *= cosine / (PB_PI * bsdf_pdf);
-        } else {
-            float u1 = rng_next(state), u2 = rng_next(state);
-            dir = cosine_direction(ns, u1, u2);
-            if (!(dot(ng, dir) > 0.0))
-                break;
-            bsdf_pdf = max(0.0, dot(ns, dir)) / PB_PI;
-        }
-        o = x;
-        ++bounce;
+        tr.t += ps.past; // from the ray's origin: the probe's depth, the emitter's MIS density
+        ps.past = 0.0;
+        ps.layers = 0u;
     }
-    return res;
+    if (ps.ray.x == PB_RAY_LIGHT) {
+        ps.E += tr.tri == PB_NO_HIT ? ps.sr.L : vec3(0.0);
+    } else if (ps.ray.x == PB_RAY_NEE) {
+        ps.c += ps.throughput * ps.albedo * (tr.tri == PB_NO_HIT ? ps.sr.L : vec3(0.0));
+    } else if (tr.tri == PB_NO_HIT) {
+        if (ps.bounce > 0u || see_direct) {
+            float w = 1.0;
+            // the density of the ray that found it: its bounce's, or for a probe
+            // ray under probe NEE the uniform sphere's (else 0: weight 1)
+            bool probe_nee = ps.bounce == 0u && bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee);
+            float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : ps.bsdf_pdf;
+            if (found_pdf > 0.0 && env.count > 0u) { // the environment could also have been sampled: MIS
+                float pe = env_pdf(env, ps.dir) * (probe_nee ? 1.0 - probe_emitter_share(P) : 1.0);
+                w = power_heuristic(found_pdf, pe);
+            }
+            add_found(ps.res, ps.throughput * env_radiance(env, ps.dir) * w, ps.bounce, P.indirect_clamp);
+        }
+        return false;
+    } else {
+        Tri t = load_tri(s.tris, tr.tri);
+        vec3 e1 = t.v1 - t.v0, e2 = t.v2 - t.v0;
+        ps.ng = normalize(cross(e1, e2));
+        bool back = dot(ps.ng, ps.dir) > 0.0;
+        if (ps.bounce == 0u)
+            ps.res.first_t = back ? -tr.t : tr.t;
+        if (first_hit_only)
+            return false;
+        ShadeMaterial m = load_shade_material(P.materials, t.flags & ~PB_FLAG_ALPHA_MASK);
+        if (back) {
+            if (m.tex.z == 0)
+                return false; // inside a single-sided surface: no light
+            ps.ng = -ps.ng;
+        }
+        vec2 uv = m.tex.x >= 0 || m.tex.y >= 0 ? surface_uv(s, tr.tri, tr.u, tr.v) : vec2(0.0);
+        if ((ps.bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
+            float w = 1.0;
+            // the density with which NEE at the ray's origin draws this point
+            float pa = bake_emitters(P) ? emit_pdf.v[tr.tri] * light_cell_ratio(P, light_cell(P, ps.o), tr.tri) : 0.0;
+            bool probe_nee = ps.bounce == 0u && bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee);
+            float found_pdf = probe_nee ? 1.0 / (4.0 * PB_PI) : ps.bsdf_pdf;
+            if (found_pdf > 0.0 && pa > 0.0) { // this emitter could also have been sampled: MIS
+                float pl = emitter_density(pa, 0.5 * length(cross(e1, e2)), emitter_solid_angle(P, ps.o, t), tr.t,
+                                           abs(dot(ps.ng, ps.dir))) *
+                           (probe_nee ? probe_emitter_share(P) : 1.0);
+                w = power_heuristic(found_pdf, pl);
+            }
+            add_found(ps.res, ps.throughput * m.emissive_metallic.rgb * texture_rgb(s, m.tex.y, uv) * w, ps.bounce,
+                      P.indirect_clamp);
+        }
+        if (ps.bounce > bounces)
+            return false; // the terminal ray: it only gathers emission (see below)
+        ps.albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * diffuse_share(m);
+        if (bake_feature(PB_FEATURE_VERTEX_COLORS) && (s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
+            ps.albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
+        ps.x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ps.ng);
+        bool smooth_shaded = bake_feature(PB_FEATURE_SHADING_NORMALS) && (s.flags & PB_SCENE_SHADING_NORMALS) != 0u;
+        ps.ns = smooth_shaded ? shading_normal(s, tr.tri, tr.u, tr.v, ps.ng) : ps.ng;
+        if (ps.bounce == 0u) {
+            ps.res.shade = true;
+            ps.res.x = ps.x;
+            ps.res.n = ps.ns;
+            ps.res.albedo = ps.albedo;
+        }
+        ps.E = vec3(0.0);
+        ps.light = 0u;
+        ps.ray.y = PB_NEXT_LIGHTS;
+    }
+    // The next ray: this hit's next light sample that needs one, else the bounce
+    ps.ray.x = PB_RAY_BOUNCE;
+    while (ps.ray.y == PB_NEXT_LIGHTS) {
+        if (!bake_feature(PB_FEATURE_LIGHTS) || ps.light >= (light_select ? 1u : P.light_count)) {
+            ps.c = ps.throughput * ps.albedo * (ps.E / PB_PI);
+            ps.ge = guide_entry(P, ps.x, ps.ng);
+            ps.ray.y = PB_NEXT_EMITTER;
+        } else if (light_select) {
+            // many lights: one, drawn in proportion to its power, over its probability
+            EmitterBuf table = EmitterBuf(P.light_table);
+            float xl = rng_next(state) * float(P.light_count);
+            uint li = min(uint(xl), P.light_count - 1u);
+            Emitter le = table.e[li];
+            uint pick = xl - float(li) < le.prob ? li : le.alias;
+            Emitter chosen = table.e[pick];
+            ps.sr = surface_light_ray(lights.l[chosen.tri], ps.x, ps.ng, ps.ns);
+            ps.sr.L /= chosen.pad;
+            ps.light = 1u;
+            if (ps.sr.tmax >= 0.0) {
+                ps.ray.x = PB_RAY_LIGHT;
+                break;
+            }
+        } else {
+            ps.sr = surface_light_ray(lights.l[ps.light], ps.x, ps.ng, ps.ns);
+            ++ps.light;
+            if (ps.sr.tmax >= 0.0) {
+                ps.ray.x = PB_RAY_LIGHT;
+                break;
+            }
+        }
+    }
+    if (ps.ray.x != PB_RAY_BOUNCE)
+        return true;
+    if (ps.ray.y == PB_NEXT_EMITTER) {
+        ps.ray.y = PB_NEXT_ENV;
+        if (bake_emitters(P) && ps.albedo != vec3(0.0)) {
+            ps.sr = emitter_nee_ray(P, ps.x, ps.ng, ps.ns, ps.ge, state);
+            if (ps.sr.tmax >= 0.0) {
+                ps.ray.x = PB_RAY_NEE;
+                return true;
+            }
+        }
+    }
+    if (ps.ray.y == PB_NEXT_ENV) {
+        ps.ray.y = PB_NEXT_BOUNCE;
+        if (env.count > 0u && ps.albedo != vec3(0.0)) {
+            ps.sr = env_nee_ray(P, env, ps.ng, ps.ns, ps.ge, state);
+            if (ps.sr.tmax >= 0.0) {
+                ps.ray.x = PB_RAY_NEE;
+                return true;
+            }
+        }
+    }
+    // every light sample of this hit is in: its light, then the bounce
+    ps.c = clamp_indirect(ps.c, P.indirect_clamp);
+    ps.res.L += ps.c;
+    if (ps.bounce == 0u)
+        ps.res.L_direct += ps.c;
+    // After the last reflection one more (terminal) bounce ray gathers the
+    // emission and environment the light samples above are MIS-weighted
+    // against; without it their weights would miss the bounce share (a
+    // bias), and weight 1 instead gives fireflies near emitters.
+    if (ps.bounce >= bounces && !bake_emitters(P) && env.count == 0u)
+        return false;
+    if (ps.bounce >= 1u) { // Russian roulette from the second reflection on
+        float q = min(0.95, max(ps.albedo.r, max(ps.albedo.g, ps.albedo.b)));
+        if (rng_next(state) >= q)
+            return false;
+        ps.throughput /= q;
+    }
+    ps.throughput *= ps.albedo;
+    if (max(ps.throughput.r, max(ps.throughput.g, ps.throughput.b)) <= 0.0)
+        return false;
+    // The cosine lobe is the shading normal's; a direction below the
+    // geometric surface would leave through it, and no light comes from there.
+    if (ps.ge >= 0) { // guided: the learned distribution or the cosine lobe, weighed by the mixture
+        float uc = rng_next(state), u1 = rng_next(state), u2 = rng_next(state), u3 = rng_next(state);
+        ps.dir = uc < PB_GUIDE_SHARE ? guide_sample(P, ps.ge, u1, u2, u3) : cosine_direction(ps.ns, u1, u2);
+        float cosine = dot(ps.ns, ps.dir);
+        if (!(cosine > 0.0 && dot(ps.ng, ps.dir) > 0.0))
+            return false;
+        ps.bsdf_pdf = bounce_pdf(P, ps.ge, cosine, ps.dir);
+        ps.throughput *= cosine / (PB_PI * ps.bsdf_pdf);
+    } else {
+        float u1 = rng_next(state), u2 = rng_next(state);
+        ps.dir = cosine_direction(ps.ns, u1, u2);
+        if (!(dot(ps.ng, ps.dir) > 0.0))
+            return false;
+        ps.bsdf_pdf = max(0.0, dot(ps.ns, ps.dir)) / PB_PI;
+    }
+    ps.o = ps.x;
+    ++ps.bounce;
+    return true;
+}
+
+// The radiance arriving along one ray: path_step until the path is done. The
+// compiled kernel holds one traversal instead of one per kind of ray, and
+// lanes whose rays are of different kinds traverse together.
+PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_direct, bool first_hit_only,
+                         inout uint state)
+{
+    PathState ps = path_begin(o, dir);
+    while (path_step(P, ps, bounces, see_direct, first_hit_only, state)) {
+    }
+    return ps.res;
 }
 
 #endif

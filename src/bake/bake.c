@@ -81,6 +81,9 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u bounces: at most 64", d->bounces);
     if (d->octmap_res > 64)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "octahedral map %u: at most 64 texels per side", d->octmap_res);
+    if (d->schedule > PB_SCHEDULE_WAVEFRONT)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "schedule %u: 0 (one kernel per path) or 1 (a wavefront)",
+                       d->schedule);
     pb_result r = pb_bake_check_light(s, d->sky, d->environment, err);
     if (r != PB_OK)
         return r;

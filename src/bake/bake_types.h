@@ -78,6 +78,16 @@ typedef struct bake_push {
     uint64_t params;
 } bake_push;
 
+/* bake_wave.comp's push constants (src/bake/stages/wave.c). */
+typedef struct wave_push {
+    uint64_t params, wave, paths;
+    uint32_t mode, in_q, out_c, out_s, zero_q, capacity;
+} wave_push;
+_Static_assert(sizeof(wave_push) == 48, "bake_wave push layout");
+
+/* A wavefront path's state: bake_wave.comp's PB_WAVE_VEC4 + PB_WAVE_UVEC4. */
+#define PB_WAVE_PATH_VEC4 16u
+
 /* The depth filter ignores rays whose lobe weight cos^power is below 1e-4 of
  * the peak: cutoff = 1e-4^(1/power) (0.83 at power 50). */
 float pb_depth_lobe_cutoff(float power);

@@ -75,6 +75,9 @@ void cli_print_help(void)
            "  --emitter-sampling solid-angle|area   light samples on an emissive triangle: uniform in the\n"
            "                                 solid angle it spans where that is 0.01 sr or more (default),\n"
            "                                 or a uniform point on it (noisier near it; both unbiased)\n"
+           "  --schedule megakernel|wavefront   each path traced by one invocation (default; faster on\n"
+           "                                 lavapipe) or as a wavefront, one kind of ray per dispatch; the\n"
+           "                                 same volume, bit for bit (docs/bake.md, \"Schedules\")\n"
            "  --shading-normals vertex|face  reflect with the file's vertex normals interpolated (default)\n"
            "                                 or each triangle's face normal (flat); render too, info counts\n"
            "  --sh-window none|hanning[:W]|lanczos[:W]   taper SH bands against ringing (default none; W 3)\n"
@@ -204,7 +207,8 @@ static int parse_open_range(const char *s, float lo, float hi, float *out)
     X(OPT_SEAM_ERROR, "seam-error", required_argument) \
     X(OPT_SCENE_LOADS, "scene-loads", required_argument) \
     X(OPT_SHADING_NORMALS, "shading-normals", required_argument) \
-    X(OPT_EMITTER_SAMPLING, "emitter-sampling", required_argument)
+    X(OPT_EMITTER_SAMPLING, "emitter-sampling", required_argument) \
+    X(OPT_SCHEDULE, "schedule", required_argument)
 
 enum {
     OPT_FIRST = 256,
@@ -372,6 +376,10 @@ static int apply(options *o, const char *a, const char *next)
             return cli_usage_error("%s takes auto, address or texel", a);
         o->scene_loads = !strcmp(next, "address") ? PB_SCENE_LOADS_ADDRESS
                          : !strcmp(next, "texel") ? PB_SCENE_LOADS_TEXEL : PB_SCENE_LOADS_AUTO;
+    } else if (!strcmp(a, "--schedule")) {
+        if (!next || (strcmp(next, "megakernel") && strcmp(next, "wavefront")))
+            return cli_usage_error("%s takes megakernel or wavefront", a);
+        o->schedule = !strcmp(next, "wavefront") ? PB_SCHEDULE_WAVEFRONT : PB_SCHEDULE_MEGAKERNEL;
     } else if (!strcmp(a, "--emitter-sampling")) {
         if (!next || (strcmp(next, "solid-angle") && strcmp(next, "area")))
             return cli_usage_error("%s takes solid-angle or area", a);

@@ -66,7 +66,7 @@ pb_result pb_buffer_create(pb_context *ctx, VkDeviceSize size, pb_memory_kind ki
     bci.size = size;
     /* texel buffers: the scene's BVH views (gpu_scene.c); harmless on the rest */
     bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_TEXEL_BUFFER_BIT |
-                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                 VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
     bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
     VkResult vr = ctx->vk.vkCreateBuffer(ctx->device, &bci, NULL, &out->buffer);

@@ -192,8 +192,12 @@ void pb_cmd_dispatch(pb_context *ctx, const pb_pipeline *p, const void *push, ui
 void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups_x, uint32_t groups_y);
 /* Binds descriptor set 0 (a scene's texel views) for p's next dispatches:
  * kernels that read the scene need it bound whichever loads they use. */
+/* A dispatch whose group counts the device wrote (uvec3 at `offset` of `args`). */
+void pb_cmd_dispatch_indirect(pb_context *ctx, const pb_pipeline *p, const void *push, const pb_buffer *args,
+                              VkDeviceSize offset);
 void pb_cmd_bind_set(pb_context *ctx, const pb_pipeline *p, VkDescriptorSet set);
 void pb_cmd_barrier(pb_context *ctx); /* all compute/transfer writes -> reads */
+void pb_cmd_barrier_indirect(pb_context *ctx); /* compute writes -> indirect dispatch arguments and reads */
 void pb_cmd_barrier_to_host(pb_context *ctx); /* device writes -> host reads after the wait */
 void pb_cmd_copy(pb_context *ctx, const pb_buffer *src, VkDeviceSize src_offset, const pb_buffer *dst,
                  VkDeviceSize dst_offset, VkDeviceSize size);

@@ -27,6 +27,15 @@ void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, u
     ctx->vk.vkCmdDispatch(ctx->cmd, groups_x, groups_y, 1);
 }
 
+void pb_cmd_dispatch_indirect(pb_context *ctx, const pb_pipeline *p, const void *push, const pb_buffer *args,
+                              VkDeviceSize offset)
+{
+    ctx->vk.vkCmdBindPipeline(ctx->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
+    if (p->push_size)
+        ctx->vk.vkCmdPushConstants(ctx->cmd, p->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, p->push_size, push);
+    ctx->vk.vkCmdDispatchIndirect(ctx->cmd, args->buffer, offset);
+}
+
 void pb_cmd_bind_set(pb_context *ctx, const pb_pipeline *p, VkDescriptorSet set)
 {
     ctx->vk.vkCmdBindDescriptorSets(ctx->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->layout, 0, 1, &set, 0, NULL);
@@ -45,6 +54,16 @@ void pb_cmd_barrier(pb_context *ctx)
                        VK_ACCESS_TRANSFER_WRITE_BIT;
     VkPipelineStageFlags stages = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
     ctx->vk.vkCmdPipelineBarrier(ctx->cmd, stages, stages, 0, 1, &mb, 0, NULL, 0, NULL);
+}
+
+void pb_cmd_barrier_indirect(pb_context *ctx)
+{
+    VkMemoryBarrier mb = {VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    mb.dstAccessMask = VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+    ctx->vk.vkCmdPipelineBarrier(ctx->cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                                 VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &mb, 0,
+                                 NULL, 0, NULL);
 }
 
 void pb_cmd_copy(pb_context *ctx, const pb_buffer *src, VkDeviceSize src_offset, const pb_buffer *dst,

@@ -8,6 +8,7 @@
  *   passes.c     6 the trace passes (and --target-error's stopping)
  *   volume.c     7 SH, depth tiles and validity into the volume
  *   pass.c       one relocation or bake pass in bounded submissions, shared by 4-6
+ *   wave.c       a bake pass's paths as a wavefront (--schedule wavefront), for pass.c
  *
  * Dilation (8) is dilate_gpu.c's; the write is the caller's. */
 #ifndef PB_BAKE_STAGES_JOB_H
@@ -36,6 +37,9 @@ typedef struct bake_buffers {
     pb_shading shading;
     pb_sample_buffers feedback;
     pb_pipeline trace, sh, depth;
+    pb_pipeline wave;              /* bake_wave, --schedule wavefront only (else unmade) */
+    pb_buffer wave_queues, wave_paths, wave_counts; /* its queues, path states, and queue sizes read back */
+    uint32_t wave_capacity;        /* paths per wavefront submission (0: megakernel) */
     uint32_t features;             /* PB_FEATURE_*: the code the pipelines were specialised to keep */
 } bake_buffers;
 
@@ -74,6 +78,7 @@ typedef struct bake_job {
                                             own of them); traced here (own + samples) */
     uint32_t stride;               /* of the floor sample (shard.h) */
     uint32_t rpp, n, chunk;
+    uint32_t wave_capacity;        /* --schedule wavefront: paths per submission (wave.c), else 0 */
     uint64_t reduced_floats;
     uint32_t *global;              /* per local probe: its global index */
     uint32_t *floor_list, floor_count; /* local indices of the floor sample */
@@ -106,6 +111,17 @@ void pb_bake_pass_params(const bake_run *run, uint32_t pass, int relocating, con
  * submissions, its results added to the run's sums (pass.c). */
 pb_result pb_bake_run_pass(bake_run *run, uint32_t pass, int relocating, const uint32_t *list, uint32_t total,
                            pb_error *err);
+/* Paths per wavefront submission on this device for `paths` rays of the
+ * largest submission (0 unless d->schedule is the wavefront), and the
+ * device memory its buffers take (wave.c). */
+uint32_t pb_bake_wave_capacity(const pb_context *ctx, const pb_bake_desc *d, uint32_t rpp, uint64_t paths);
+uint64_t pb_bake_wave_bytes(uint32_t capacity);
+/* Its buffers, when capacity > 0 (wave.c). */
+pb_result pb_bake_wave_buffers(pb_context *ctx, bake_buffers *B, uint32_t capacity, pb_error *err);
+/* bake_wave's share of one submission: its `paths` rays, traced to the end
+ * in one or more submissions before the caller's SH and depth (wave.c). */
+pb_result pb_bake_wave_trace(bake_run *run, const gpu_bake_params *prm, uint32_t paths, pb_error *err);
+
 /* The back-face share of the last relocation pass for the `count` probes of
  * `list` (NULL: all) where they stand, into j->inside (relocate.c). */
 void pb_bake_record_inside(bake_job *j, const uint32_t *list, uint32_t count);

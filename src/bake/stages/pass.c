@@ -89,7 +89,8 @@ static void add_pass_results(void *user, uint64_t begin, uint64_t end)
     }
 }
 
-/* One pass over every probe, in bounded submissions. A relocation pass
+/* One pass over every probe, in bounded submissions (a wavefront's trace
+ * in submissions of its own before each one: wave.c). A relocation pass
  * (relocating = 1) skips the depth filter and only records back faces and
  * the nearest hits; a bake pass accumulates SH, depth, back faces and hits. */
 pb_result pb_bake_run_pass(bake_run *run, uint32_t pass, int relocating, const uint32_t *list, uint32_t total,
@@ -108,8 +109,11 @@ pb_result pb_bake_run_pass(bake_run *run, uint32_t pass, int relocating, const u
         run->chunk_now = start < 1 ? 1 : (start > run->chunk ? run->chunk : start);
     }
     uint32_t count = 0;
+    int wave = B->wave_capacity && !relocating; /* relocation traces first hits only: one kernel */
     for (uint32_t first = 0; r == PB_OK && first < total; first += count) {
         count = total - first < run->chunk_now ? total - first : run->chunk_now;
+        if (wave && (uint64_t)count * rpp > B->wave_capacity)
+            count = B->wave_capacity / rpp;
         double t_submit = pb_now_ms();
         gpu_bake_params prm;
         pb_bake_pass_params(run, pass, relocating, list, &prm);
@@ -119,14 +123,18 @@ pb_result pb_bake_run_pass(bake_run *run, uint32_t pass, int relocating, const u
                            pass, pb_bake_features(&prm), B->features);
         memset(B->counters.mapped, 0, 8);
         memcpy(B->params.mapped, &prm, sizeof prm);
+        if (wave && (r = pb_bake_wave_trace(run, &prm, count * rpp, err)) != PB_OK)
+            break;
         if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
             break;
         bake_push push = {B->params.address};
-        pb_cmd_timestamp(ctx);
-        pb_cmd_bind_set(ctx, &B->trace, run->gs->set);
-        pb_cmd_dispatch(ctx, &B->trace, &push, (count * rpp + 63) / 64);
-        pb_cmd_timestamp(ctx);
-        pb_cmd_barrier(ctx);
+        if (!wave) {
+            pb_cmd_timestamp(ctx);
+            pb_cmd_bind_set(ctx, &B->trace, run->gs->set);
+            pb_cmd_dispatch(ctx, &B->trace, &push, (count * rpp + 63) / 64);
+            pb_cmd_timestamp(ctx);
+            pb_cmd_barrier(ctx);
+        }
         pb_cmd_timestamp(ctx);
         pb_cmd_bind_set(ctx, &B->sh, run->gs->set);
         pb_cmd_dispatch(ctx, &B->sh, &push, (count + 63) / 64);
@@ -148,10 +156,11 @@ pb_result pb_bake_run_pass(bake_run *run, uint32_t pass, int relocating, const u
             run->chunk_now = run->chunk_now / 2 > 1 ? run->chunk_now / 2 : 1;
         else if (took < 60.0 && run->chunk_now < run->chunk)
             run->chunk_now = run->chunk_now * 2 < run->chunk ? run->chunk_now * 2 : run->chunk;
-        if (ctx->interval_count >= 2) {
-            run->t_trace += ctx->intervals_ms[0];
-            run->t_sh += ctx->intervals_ms[1];
-            run->t_depth += ctx->interval_count >= 3 ? ctx->intervals_ms[2] : 0.0;
+        const double *ms = ctx->intervals_ms + (wave ? 0 : 1); /* the wavefront timed its own submissions */
+        if (ctx->interval_count >= 2 - (uint32_t)wave) {
+            run->t_trace += wave ? 0.0 : ctx->intervals_ms[0];
+            run->t_sh += ms[0];
+            run->t_depth += ctx->interval_count >= 3 - (uint32_t)wave ? ms[1] : 0.0;
         }
         uint32_t n_trav[2];
         memcpy(n_trav, B->counters.mapped, 8);

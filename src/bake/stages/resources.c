@@ -10,16 +10,18 @@
 #include "bake_sh_native64.spv.h"
 #include "bake_trace.spv.h"
 #include "bake_trace_native64.spv.h"
+#include "bake_wave.spv.h"
+#include "bake_wave_native64.spv.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 void pb_bake_buffers_release(pb_context *ctx, bake_buffers *b)
 {
-    pb_buffer *bufs[13] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
+    pb_buffer *bufs[16] = {&b->params, &b->probes, &b->rotations, &b->directions, &b->rays, &b->reduced,
                            &b->list, &b->counters, &b->nee, &b->guide, &b->guide_slots, &b->depth_lists,
-                           &b->relocation_directions};
-    for (int i = 0; i < 13; ++i)
+                           &b->relocation_directions, &b->wave_queues, &b->wave_paths, &b->wave_counts};
+    for (int i = 0; i < 16; ++i)
         pb_buffer_destroy(ctx, bufs[i]);
     pb_depth_sums_destroy(ctx, &b->sums);
     pb_guide_free(&b->guide_host);
@@ -28,6 +30,7 @@ void pb_bake_buffers_release(pb_context *ctx, bake_buffers *b)
     pb_pipeline_destroy(ctx, &b->trace);
     pb_pipeline_destroy(ctx, &b->sh);
     pb_pipeline_destroy(ctx, &b->depth);
+    pb_pipeline_destroy(ctx, &b->wave);
 }
 
 static pb_result make_buffer(pb_context *ctx, pb_buffer *b, uint64_t bytes, pb_memory_kind kind, const char *what,
@@ -167,13 +170,16 @@ pb_result pb_bake_stage_resources(bake_job *j, const pb_sample_volume *feedback,
     if (d->light_cells && B->shading.emit.count && j->scene->triangle_count)
         planned |= PB_FEATURE_LIGHT_CELLS;
     uint32_t spec[3] = {j->gs->stack_size, j->gs->texel_loads, planned};
-    pb_pipeline_request kernels[3] = {
+    if (r == PB_OK)
+        r = pb_bake_wave_buffers(ctx, B, j->wave_capacity, err);
+    pb_pipeline_request kernels[4] = {
         {PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 3, 64, "bake_trace", &B->trace},
         {PB_KERNEL_SPIRV(ctx, bake_sh), sizeof(bake_push), spec, 3, 64, "bake_sh", &B->sh},
-        {pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 3, 64, "bake_depth", &B->depth}};
+        {pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 3, 64, "bake_depth", &B->depth},
+        {PB_KERNEL_SPIRV(ctx, bake_wave), sizeof(wave_push), spec, 3, 64, "bake_wave", &B->wave}};
     pb_pipeline_batch batch;
     if (r == PB_OK)
-        r = pb_pipelines_begin(ctx, kernels, 3, &batch, err);
+        r = pb_pipelines_begin(ctx, kernels, B->wave_capacity ? 4 : 3, &batch, err);
     if (r == PB_OK) {
         pb_result learned = PB_OK;
         if (d->light_cells)
