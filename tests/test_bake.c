@@ -1881,8 +1881,9 @@ static void count_wave_submissions(pb_log_level level, const char *msg, void *us
  * the path state carries: punctual lights one by one and one drawn by power,
  * emitters with light cells, probe NEE, guiding, shading normals, the
  * environment and thin glass (a shadow ray through layers, and rays that
- * outlast a submission's rounds), and --indirect volume's first-hit shading.
- * Relocation runs as one kernel in both. */
+ * outlast a submission's rounds, as 20 lights' shadow rays do), --indirect
+ * volume's first-hit shading, and --target-error's later passes over a list
+ * of the probes still short of it. Relocation runs as one kernel in both. */
 static void wavefront_writes_the_megakernel_volume(void)
 {
     struct {
@@ -1893,7 +1894,7 @@ static void wavefront_writes_the_megakernel_volume(void)
         {"demo: lights, guiding", "demo.gltf", 3, 1, 1u << 12, 1, 8, 0},
         {"demo: one light drawn per hit", "demo.gltf", 2, 0, 0, 0, 1, 0},
         {"demo: 20 lights, each one's shadow ray", "demo.gltf", 2, 0, 0, 0, 32, 0},
-        {"lamps: emitters, light cells, probe NEE", "lamps.gltf", 3, 1, 0, 1, 8, 0},
+        {"lamps: emitters, light cells, probe NEE, --target-error", "lamps.gltf", 3, 1, 0, 1, 8, 0},
         {"skylight: the sky", "skylight.gltf", 2, 1, 0, 1, 8, 0},
         {"doorway: --indirect volume", "doorway.gltf", 1, 0, 0, 1, 8, 1},
         {"thin glass, environment, a directional light", NULL, 3, 1, 0, 1, 8, 0},
@@ -1926,6 +1927,8 @@ static void wavefront_writes_the_megakernel_volume(void)
         d.bounces = cases[c].bounces, d.probe_nee = cases[c].nee, d.guide_paths = cases[c].guide;
         d.light_cells = cases[c].cells, d.max_lights_per_hit = cases[c].lights_per_hit;
         d.indirect_volume = cases[c].indirect_volume;
+        if (strstr(cases[c].label, "--target-error")) /* later passes over the probes still above it: a list */
+            d.target_error = 0.05f, d.passes = 6;
         baked mega = bake(s, &d);
         d.schedule = PB_SCHEDULE_WAVEFRONT;
         uint32_t made_before = ctx->pipelines_created;
@@ -1945,6 +1948,15 @@ static void wavefront_writes_the_megakernel_volume(void)
                                                                       outlast a submission's rounds */
                 CHECK(wave_continued > 0);
             CHECK(mega.vol.traversals > mega.vol.rays_traced); /* paths went past their first hit */
+            if (d.target_error > 0.f) { /* some probes stopped before others */
+                uint32_t least = UINT32_MAX, most = 0;
+                for (uint32_t p = 0; p < mega.vol.probe_count; ++p)
+                    if (mega.vol.probe_paths[p])
+                        least = mega.vol.probe_paths[p] < least ? mega.vol.probe_paths[p] : least,
+                        most = mega.vol.probe_paths[p] > most ? mega.vol.probe_paths[p] : most;
+                fprintf(stderr, "    paths per traced probe %u to %u\n", least, most);
+                CHECK(least < most);
+            }
         }
         release(&mega), release(&wave);
         pb_scene_destroy(s);
