@@ -1,6 +1,7 @@
 /* bake_bench: bake time per stage and error against a long bake.
  *
- *   bake_bench [--probes N] [--reference-passes N] [--bounces N] [--repeat N] [--json FILE] [SCENE ...]
+ *   bake_bench [--probes N] [--reference-passes N] [--bounces N] [--repeat N] [--schedule megakernel|wavefront]
+ *              [--json FILE] [SCENE ...]
  *
  * For each scene: a reference bake (256 rays x --reference-passes passes,
  * default 32), then bakes at 64, 128 and 256 rays per probe (1 pass, other
@@ -17,6 +18,11 @@
  * bounce rays of those probe rays instead (one cosine ray from each first
  * front hit, bounce_rays.h): most of the bake's traversals are such rays,
  * which start on surfaces and cost more than probe rays on any tracer.
+ * "vs own" divides by the trace kernel's rate on the bake's own probe rays:
+ * the same 256 rays per probe, from where the bake traced each probe (after
+ * relocation) and only from the probes it traced (not those it found inside
+ * geometry); the grid's probe rays include rays from probes in rock or
+ * outside the level, which the bake never traces.
  *
  * --repeat N (default 3): each row is N rounds of one timed trace of the
  * probe rays, one of their bounce rays and one bake (same seed: their
@@ -47,6 +53,28 @@ static double trace_rate(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, 
     return n / (st.kernel_ms * 1e3);
 }
 
+/* The bake's own probe rays: of the grid's rays (`per_probe` per probe), those
+ * of each probe v traced (not flagged inside geometry), moved to where it
+ * traced them (its relocated position, in the scene's local frame). Returns
+ * how many were written to out. */
+static uint32_t own_probe_rays(const pb_scene *s, const pb_volume *v, const pb_ray *grid_rays, uint32_t per_probe,
+                               pb_ray *out)
+{
+    uint32_t n = 0;
+    for (uint32_t p = 0; p < v->probe_count; ++p) {
+        if (v->probe_flags[p] & PB_PROBE_INSIDE)
+            continue;
+        float at[3];
+        for (int c = 0; c < 3; ++c)
+            at[c] = (float)(v->origin[c] + (double)v->base[3 * p + c] + (double)v->offset[3 * p + c] - s->origin[c]);
+        for (uint32_t r = 0; r < per_probe; ++r) {
+            out[n] = grid_rays[(size_t)p * per_probe + r];
+            memcpy(out[n++].origin, at, sizeof at);
+        }
+    }
+    return n;
+}
+
 typedef struct row {
     char scene[128];
     uint32_t probes, rays, passes;
@@ -54,7 +82,8 @@ typedef struct row {
     uint64_t traversals;
     double trace_kernel_mrays;    /* trace.comp on this scene's probe rays */
     double bounce_kernel_mrays;   /* trace.comp on their bounce rays */
-    double vs_trace, vs_bounce;   /* the bake's traversal rate over those, medians of the rounds */
+    double own_kernel_mrays;      /* trace.comp on the bake's own probe rays (its traced probes, relocated) */
+    double vs_trace, vs_bounce, vs_own; /* the bake's traversal rate over those, medians of the rounds */
 } row;
 
 
@@ -63,6 +92,7 @@ int main(int argc, char **argv)
     uint32_t probes = 256, ref_passes = 32, bounces = 2, repeat = 3;
     const char *json = "bench/out/bake_bench.json";
     int validation = 0; /* --validation: fail on any Vulkan validation message */
+    uint32_t schedule = PB_SCHEDULE_MEGAKERNEL; /* of the timed bakes (the reference's does not matter) */
     const char *scenes[16];
     int nscenes = 0;
     for (int i = 1; i < argc; ++i) {
@@ -78,6 +108,10 @@ int main(int argc, char **argv)
             json = argv[++i];
         else if (!strcmp(argv[i], "--validation"))
             validation = 1;
+        else if (!strcmp(argv[i], "--schedule") && i + 1 < argc && !strcmp(argv[i + 1], "wavefront"))
+            schedule = PB_SCHEDULE_WAVEFRONT, ++i;
+        else if (!strcmp(argv[i], "--schedule") && i + 1 < argc && !strcmp(argv[i + 1], "megakernel"))
+            schedule = PB_SCHEDULE_MEGAKERNEL, ++i;
         else if (argv[i][0] == '-') {
             fprintf(stderr, "bake_bench: unknown option %s\n", argv[i]);
             return 2;
@@ -97,10 +131,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "bake_bench: %s\n", err.message);
         return 1;
     }
-    printf("device: %s; %u probes, %u bounces, reference 256 rays x %u passes; medians of %u runs\n",
-           pb_context_device(ctx)->name, probes, bounces, ref_passes, repeat);
-    printf("%-18s %6s %6s %9s %8s %8s %9s %9s %9s %7s %7s %8s\n", "scene", "rays", "passes", "trace ms", "sh ms",
-           "depth ms", "wall ms", "Mrays/s", "Mtrav/s", "vs trc", "vs bnc", "rel RMSE");
+    printf("device: %s; %u probes, %u bounces, reference 256 rays x %u passes; medians of %u runs; schedule %s\n",
+           pb_context_device(ctx)->name, probes, bounces, ref_passes, repeat,
+           schedule == PB_SCHEDULE_WAVEFRONT ? "wavefront" : "megakernel");
+    printf("%-18s %6s %6s %9s %8s %8s %9s %9s %9s %7s %7s %7s %8s\n", "scene", "rays", "passes", "trace ms", "sh ms",
+           "depth ms", "wall ms", "Mrays/s", "Mtrav/s", "vs trc", "vs bnc", "vs own", "rel RMSE");
     row rows[64];
     int nrows = 0, nondeterministic = 0;
     for (int si = 0; si < nscenes; ++si) {
@@ -125,8 +160,9 @@ int main(int argc, char **argv)
          * their bounce rays, timed beside each bake below (one warm-up each) */
         uint32_t P = pb_probe_grid_count(&d.grid), n = P * 256, nb = 0;
         pb_ray *rays = malloc((size_t)n * sizeof *rays), *brays = malloc((size_t)n * sizeof *brays);
+        pb_ray *orays = malloc((size_t)n * sizeof *orays);
         pb_hit *hits = malloc((size_t)n * sizeof *hits);
-        if (rays && brays && hits && pb_probe_rays(&d.grid, 0, P, 256, 1, rays) == PB_OK &&
+        if (rays && brays && orays && hits && pb_probe_rays(&d.grid, 0, P, 256, 1, rays) == PB_OK &&
             pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, NULL, &err) == PB_OK) {
             memcpy(brays, rays, (size_t)n * sizeof *rays);
             nb = bench_bounce_rays(s, brays, hits, n, 0);
@@ -135,7 +171,7 @@ int main(int argc, char **argv)
         } else {
             n = 0;
         }
-        double all_trace[48], all_bounce[48];
+        double all_trace[48], all_bounce[48], all_own[48];
         uint32_t nall = 0;
         pb_volume ref;
         d.rays_per_probe = 256;
@@ -146,18 +182,21 @@ int main(int argc, char **argv)
             fprintf(stderr, "bake_bench: %s: %s\n", name, err.message);
         } else {
             double ref_ms = pb_now_ms() - t0;
+            uint32_t no = own_probe_rays(s, &ref, rays, n / P, orays);
             uint32_t rays_list[3] = {64, 128, 256};
             for (int ri = 0; ri < 3; ++ri) {
                 d.rays_per_probe = rays_list[ri];
                 d.passes = 1;
                 d.seed = 7;
+                d.schedule = schedule;
                 row run[16];
-                double vs_trace[16], vs_bounce[16];
+                double vs_trace[16], vs_bounce[16], vs_own[16];
                 uint32_t done = 0;
                 for (; done < repeat; ++done) {
                     double tr = trace_rate(ctx, gs, rays, n, hits), br = trace_rate(ctx, gs, brays, nb, hits);
+                    double orate = trace_rate(ctx, gs, orays, no, hits);
                     if (nall < 48)
-                        all_trace[nall] = tr, all_bounce[nall++] = br;
+                        all_trace[nall] = tr, all_bounce[nall] = br, all_own[nall++] = orate;
                     pb_volume v;
                     t0 = pb_now_ms();
                     if (pb_bake(ctx, s, gs, &d, &v, &err) != PB_OK) {
@@ -176,11 +215,13 @@ int main(int argc, char **argv)
                     r->traversals = v.traversals;
                     r->trace_kernel_mrays = tr;
                     r->bounce_kernel_mrays = br;
+                    r->own_kernel_mrays = orate;
                     pb_volume_free(&v);
                     double gpu = r->trace_ms + r->sh_ms + r->depth_ms;
                     double mtrav = gpu > 0 ? (double)r->traversals / (gpu * 1e3) : 0.0;
                     vs_trace[done] = tr > 0 ? mtrav / tr : 0.0;
                     vs_bounce[done] = br > 0 ? mtrav / br : 0.0;
+                    vs_own[done] = orate > 0 ? mtrav / orate : 0.0;
                     if (r->traversals != run[0].traversals || r->rmse != run[0].rmse) {
                         fprintf(stderr, "bake_bench: %s, %u rays: the same bake gave %llu traversals and RMSE %.6f, then %llu and %.6f\n",
                                 name, r->rays, (unsigned long long)run[0].traversals, run[0].rmse,
@@ -205,25 +246,30 @@ int main(int argc, char **argv)
                 }
                 row *r = &rows[nrows++];
                 *r = run[pick];
-                double trace_rates[16], bounce_rates[16];
+                double trace_rates[16], bounce_rates[16], own_rates[16];
                 for (uint32_t k = 0; k < repeat; ++k)
-                    trace_rates[k] = run[k].trace_kernel_mrays, bounce_rates[k] = run[k].bounce_kernel_mrays;
+                    trace_rates[k] = run[k].trace_kernel_mrays, bounce_rates[k] = run[k].bounce_kernel_mrays,
+                    own_rates[k] = run[k].own_kernel_mrays;
                 r->trace_kernel_mrays = bench_median(trace_rates, repeat);
                 r->bounce_kernel_mrays = bench_median(bounce_rates, repeat);
+                r->own_kernel_mrays = bench_median(own_rates, repeat);
                 r->vs_trace = bench_median(vs_trace, repeat);
                 r->vs_bounce = bench_median(vs_bounce, repeat);
+                r->vs_own = bench_median(vs_own, repeat);
                 double probe_rays = (double)r->probes * r->rays, gpu_ms = r->trace_ms + r->sh_ms + r->depth_ms;
                 double mtrav = gpu_ms > 0 ? (double)r->traversals / (gpu_ms * 1e3) : 0.0;
-                printf("%-18.18s %6u %6u %9.1f %8.1f %8.1f %9.1f %9.3f %9.3f %7.2f %7.2f %8.4f\n", name, r->rays, 1u,
+                printf("%-18.18s %6u %6u %9.1f %8.1f %8.1f %9.1f %9.3f %9.3f %7.2f %7.2f %7.2f %8.4f\n", name, r->rays, 1u,
                        r->trace_ms, r->sh_ms, r->depth_ms, r->wall_ms, r->trace_ms > 0 ? probe_rays / (r->trace_ms * 1e3) : 0.0,
-                       mtrav, r->vs_trace, r->vs_bounce, r->rmse);
+                       mtrav, r->vs_trace, r->vs_bounce, r->vs_own, r->rmse);
                 fflush(stdout);
             }
-            printf("%-18.18s reference: %.0f ms wall; trace kernel alone %.3f Mrays/s on probe rays, %.3f on bounce rays\n",
-                   name, ref_ms, bench_median(all_trace, nall), bench_median(all_bounce, nall));
+            printf("%-18.18s reference: %.0f ms wall; trace kernel alone %.3f Mrays/s on probe rays, %.3f on bounce rays, "
+                   "%.3f on the bake's own probe rays (%u of %u probes)\n",
+                   name, ref_ms, bench_median(all_trace, nall), bench_median(all_bounce, nall), bench_median(all_own, nall),
+                   no / (n / P), P);
             pb_volume_free(&ref);
         }
-        free(rays), free(brays), free(hits);
+        free(rays), free(brays), free(orays), free(hits);
         pb_gpu_scene_destroy(gs);
         pb_bvh_destroy(bvh);
         pb_scene_destroy(s);
@@ -232,17 +278,18 @@ int main(int argc, char **argv)
     FILE *f = fopen(json, "w");
     if (f) {
         fprintf(f, "{\n  \"bench\": \"bake\",\n  \"device\": \"%s\",\n  \"bounces\": %u,\n  \"reference_passes\": %u,\n"
-                   "  \"repeat\": %u,\n  \"results\": [\n", pb_context_device(ctx)->name, bounces, ref_passes, repeat);
+                   "  \"repeat\": %u,\n  \"schedule\": \"%s\",\n  \"results\": [\n", pb_context_device(ctx)->name, bounces,
+                ref_passes, repeat, schedule == PB_SCHEDULE_WAVEFRONT ? "wavefront" : "megakernel");
         for (int i = 0; i < nrows; ++i)
             fprintf(f,
                     "    {\"scene\": \"%s\", \"probes\": %u, \"rays_per_probe\": %u, \"passes\": %u, \"trace_ms\": %.3f, "
                     "\"sh_ms\": %.3f, \"depth_ms\": %.3f, \"wall_ms\": %.3f, \"relative_rmse\": %.6f, "
                     "\"traversals\": %llu, \"trace_kernel_mrays_per_s\": %.4f, \"bounce_kernel_mrays_per_s\": %.4f, "
-                    "\"vs_trace\": %.4f, \"vs_bounce\": %.4f}%s\n",
+                    "\"own_kernel_mrays_per_s\": %.4f, \"vs_trace\": %.4f, \"vs_bounce\": %.4f, \"vs_own\": %.4f}%s\n",
                     rows[i].scene, rows[i].probes, rows[i].rays, rows[i].passes, rows[i].trace_ms, rows[i].sh_ms,
                     rows[i].depth_ms, rows[i].wall_ms, rows[i].rmse, (unsigned long long)rows[i].traversals,
-                    rows[i].trace_kernel_mrays, rows[i].bounce_kernel_mrays, rows[i].vs_trace, rows[i].vs_bounce,
-                    i + 1 < nrows ? "," : "");
+                    rows[i].trace_kernel_mrays, rows[i].bounce_kernel_mrays, rows[i].own_kernel_mrays, rows[i].vs_trace,
+                    rows[i].vs_bounce, rows[i].vs_own, i + 1 < nrows ? "," : "");
         fprintf(f, "  ]\n}\n");
         fclose(f);
         printf("wrote %s\n", json);
