@@ -12,17 +12,19 @@
 
 #define PB_COUNT_TRAVERSALS
 #include "path.glsl"
+#include "dispatch_order.glsl"
 
 layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push {
     pb_addr params;
+    uint spread; // dispatch_order.glsl
 } pc;
 
 void main()
 {
     BakeParams P = BakeParamsBuf(pc.params).p;
-    uint i = gl_GlobalInvocationID.x;
+    uint i = spread_group(gl_WorkGroupID.x, gl_NumWorkGroups.x, pc.spread) * 64u + gl_LocalInvocationID.x;
     if (i >= P.probe_count * P.rays_per_probe)
         return;
     uint probe = probe_slot(P, i / P.rays_per_probe), ray = i % P.rays_per_probe;

@@ -5,6 +5,7 @@
 #extension GL_GOOGLE_include_directive : require
 
 #include "traverse.glsl"
+#include "dispatch_order.glsl"
 
 layout(local_size_x = 64) in;
 layout(constant_id = 2) const uint ANY_HIT = 0u;
@@ -30,11 +31,12 @@ layout(push_constant) uniform Push {
     pb_addr rays;
     pb_addr hits;
     uint count;
+    uint spread; // dispatch_order.glsl
 } pc;
 
 void main()
 {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = spread_group(gl_WorkGroupID.x, gl_NumWorkGroups.x, pc.spread) * 64u + gl_LocalInvocationID.x;
     if (i >= pc.count)
         return;
     Ray ray = RayBuf(pc.rays).r[i];

@@ -76,7 +76,9 @@ _Static_assert(sizeof(gpu_emitter) == 16, "Emitter layout");
 
 typedef struct bake_push {
     uint64_t params;
+    uint32_t spread, pad; /* bake_trace's workgroup stride (pb_dispatch_spread) */
 } bake_push;
+_Static_assert(sizeof(bake_push) == 16, "bake push layout");
 
 /* bake_wave.comp's push constants (src/bake/stages/wave.c). */
 typedef struct wave_push {

@@ -62,7 +62,7 @@ _Static_assert(sizeof(pb_hit) == 20 && offsetof(pb_hit, backface) == 16, "Hit la
 typedef struct trace_push {
     gpu_scene_refs scene;
     uint64_t rays, hits;
-    uint32_t count, pad;
+    uint32_t count, spread; /* spread: the workgroup stride (pb_dispatch_spread) */
 } trace_push;
 _Static_assert(sizeof(trace_push) == 80, "trace.comp push constants");
 

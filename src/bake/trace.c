@@ -63,7 +63,7 @@ pb_result pb_trace(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, uint32
             pb_cmd_copy(ctx, &in_staging, 0, &gs->rays, 0, (uint64_t)n * sizeof(pb_ray));
             pb_cmd_barrier(ctx);
         }
-        trace_push push = {gs->refs, gs->rays.address, gs->hits.address, n, 0};
+        trace_push push = {gs->refs, gs->rays.address, gs->hits.address, n, pb_dispatch_spread((n + 63) / 64)};
         pb_cmd_timestamp(ctx);
         pb_cmd_bind_set(ctx, pipe, gs->set);
         pb_cmd_dispatch(ctx, pipe, &push, (n + 63) / 64);

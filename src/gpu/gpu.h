@@ -192,6 +192,9 @@ void pb_cmd_dispatch(pb_context *ctx, const pb_pipeline *p, const void *push, ui
 void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups_x, uint32_t groups_y);
 /* Binds descriptor set 0 (a scene's texel views) for p's next dispatches:
  * kernels that read the scene need it bound whichever loads they use. */
+/* The stride that spreads a dispatch of `groups` workgroups over lavapipe's
+ * threads, for kernels that read it (dispatch_order.c); 1 keeps the order. */
+uint32_t pb_dispatch_spread(uint32_t groups);
 /* A dispatch whose group counts the device wrote (uvec3 at `offset` of `args`). */
 void pb_cmd_dispatch_indirect(pb_context *ctx, const pb_pipeline *p, const void *push, const pb_buffer *args,
                               VkDeviceSize offset);
