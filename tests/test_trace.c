@@ -490,6 +490,34 @@ static void sync_validation_catches_a_missing_barrier(void)
     pb_context_destroy(c);
 }
 
+/* pb_dispatch_spread (src/gpu/dispatch_order.c): for every dispatch of 40
+ * to 8 x 65535 workgroups whose blocks of 8 admit one, the stride is coprime
+ * to the number of blocks, so the kernels' block b -> b s mod blocks is a
+ * permutation, and it is neither the identity (1) nor the mirror (blocks - 1);
+ * where no such stride exists (fewer than 5 blocks, or 6), and above 8 x 65535
+ * workgroups, the order is kept. (The kernels' results against the CPU
+ * references, in this suite and test_bake, run with dispatches above 40
+ * workgroups.) */
+static void dispatch_spread_permutes_blocks(void)
+{
+    uint32_t bad = 0, checked = 0, kept = 0;
+    for (uint32_t n = 1; n <= 8u * 65535u; n += n < 4096 ? 1 : 97) {
+        uint32_t blocks = n / 8, s = pb_dispatch_spread(n), a = s, b = blocks;
+        while (b) {
+            uint32_t t = a % b;
+            a = b, b = t;
+        }
+        /* a spreading stride exists: blocks >= 5 but 6 (7 has 2..5, 8 has 3, 5, ...) */
+        int exists = blocks >= 5 && blocks != 6;
+        bad += exists ? (a != 1 || s <= 1 || s >= blocks - 1) : s != 1;
+        kept += !exists;
+        ++checked;
+    }
+    fprintf(stderr, "  %u dispatch sizes (%u too small to spread), %u strides wrong\n", checked, kept, bad);
+    CHECK(checked > 8000 && bad == 0 && kept == 47); /* n 1-39 and 48-55 */
+    CHECK(pb_dispatch_spread(8u * 65536u) == 1);
+}
+
 /* Splitting the work into many submissions, and copying through staging
  * buffers (the discrete-GPU path) instead of mapped memory, changes no result. */
 static void bounded_submissions_same_bytes(void)
@@ -957,6 +985,7 @@ int main(void)
     RUN(alpha_mask_cuts_out);
     RUN(alpha_blend_stochastic);
     RUN(sync_validation_catches_a_missing_barrier);
+    RUN(dispatch_spread_permutes_blocks);
     RUN(bounded_submissions_same_bytes);
     RUN(ray_offset_gpu_matches_cpu);
     RUN(exact_diff_gpu_matches_cpu);

@@ -72,7 +72,7 @@ typedef int (*pb_progress_fn)(float fraction, const char *label, void *user_data
  * one invocation per path that traces all of its rays, or a wavefront whose
  * dispatches each trace one ray of every path waiting for that kind of ray
  * (closest hit or shadow). Both write the same volume, bit for bit; on
- * lavapipe the wavefront is 1.2-2x slower (bench/RESULTS.md, "A wavefront
+ * lavapipe the wavefront is 1.1-1.8x slower (bench/RESULTS.md, "A wavefront
  * bake"). */
 typedef enum pb_bake_schedule {
     PB_SCHEDULE_MEGAKERNEL = 0,

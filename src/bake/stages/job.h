@@ -39,7 +39,7 @@ typedef struct bake_buffers {
     pb_pipeline trace, sh, depth;
     pb_pipeline wave;              /* bake_wave, --schedule wavefront only (else unmade) */
     pb_buffer wave_queues, wave_paths, wave_counts; /* its queues, path states, and queue sizes read back */
-    uint32_t wave_capacity;        /* paths per wavefront submission (0: megakernel) */
+    uint32_t wave_capacity;        /* paths per wavefront submission (0: megakernel); set by stage 1 */
     uint32_t features;             /* PB_FEATURE_*: the code the pipelines were specialised to keep */
 } bake_buffers;
 
@@ -78,7 +78,6 @@ typedef struct bake_job {
                                             own of them); traced here (own + samples) */
     uint32_t stride;               /* of the floor sample (shard.h) */
     uint32_t rpp, n, chunk;
-    uint32_t wave_capacity;        /* --schedule wavefront: paths per submission (wave.c), else 0 */
     uint64_t reduced_floats;
     uint32_t *global;              /* per local probe: its global index */
     uint32_t *floor_list, floor_count; /* local indices of the floor sample */
@@ -116,8 +115,8 @@ pb_result pb_bake_run_pass(bake_run *run, uint32_t pass, int relocating, const u
  * device memory its buffers take (wave.c). */
 uint32_t pb_bake_wave_capacity(const pb_context *ctx, const pb_bake_desc *d, uint32_t rpp, uint64_t paths);
 uint64_t pb_bake_wave_bytes(uint32_t capacity);
-/* Its buffers, when capacity > 0 (wave.c). */
-pb_result pb_bake_wave_buffers(pb_context *ctx, bake_buffers *B, uint32_t capacity, pb_error *err);
+/* Its buffers, for B->wave_capacity paths (none when 0; wave.c). */
+pb_result pb_bake_wave_buffers(pb_context *ctx, bake_buffers *B, pb_error *err);
 /* bake_wave's share of one submission: its `paths` rays, traced to the end
  * in one or more submissions before the caller's SH and depth (wave.c). */
 pb_result pb_bake_wave_trace(bake_run *run, const gpu_bake_params *prm, uint32_t paths, pb_error *err);

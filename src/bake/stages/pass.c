@@ -128,12 +128,11 @@ pb_result pb_bake_run_pass(bake_run *run, uint32_t pass, int relocating, const u
             break;
         if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
             break;
-        bake_push push = {B->params.address, 1, 0};
+        bake_push push = {B->params.address, pb_dispatch_spread((count * rpp + 63) / 64), 0}; /* spread: bake_trace's */
         if (!wave) {
             pb_cmd_timestamp(ctx);
-            bake_push spread = {B->params.address, pb_dispatch_spread((count * rpp + 63) / 64), 0};
             pb_cmd_bind_set(ctx, &B->trace, run->gs->set);
-            pb_cmd_dispatch(ctx, &B->trace, &spread, (count * rpp + 63) / 64);
+            pb_cmd_dispatch(ctx, &B->trace, &push, (count * rpp + 63) / 64);
             pb_cmd_timestamp(ctx);
             pb_cmd_barrier(ctx);
         }

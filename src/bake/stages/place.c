@@ -34,10 +34,10 @@ pb_result pb_bake_stage_probe_set(bake_job *j, pb_error *err)
         chunk = ctx->limits.maxComputeWorkGroupCount[1];
     j->chunk = chunk;
     uint64_t reduced_floats = j->reduced_floats = (uint64_t)chunk * PB_REDUCED_SH_STRIDE;
-    j->wave_capacity = pb_bake_wave_capacity(ctx, d, rpp, (uint64_t)chunk * rpp);
+    uint32_t wave_capacity = j->B.wave_capacity = pb_bake_wave_capacity(ctx, d, rpp, (uint64_t)chunk * rpp);
     uint64_t need = (uint64_t)P * (16 + 48 + (uint64_t)texels * 8) + (uint64_t)rpp * 16 +
                     (uint64_t)chunk * rpp * (d->probe_nee ? 48 : 16) + reduced_floats * 4 +
-                    (j->wave_capacity ? pb_bake_wave_bytes(j->wave_capacity) : 0);
+                    (wave_capacity ? pb_bake_wave_bytes(wave_capacity) : 0);
     if (ctx->info.device_local_bytes && need > ctx->info.device_local_bytes / 2)
         return pb_fail(err, PB_ERROR_TOO_LARGE,
                        "%u probes x %u rays need %.1f MiB of device memory; the budget is half of %s's %.1f MiB "

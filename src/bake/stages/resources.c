@@ -171,7 +171,7 @@ pb_result pb_bake_stage_resources(bake_job *j, const pb_sample_volume *feedback,
         planned |= PB_FEATURE_LIGHT_CELLS;
     uint32_t spec[3] = {j->gs->stack_size, j->gs->texel_loads, planned};
     if (r == PB_OK)
-        r = pb_bake_wave_buffers(ctx, B, j->wave_capacity, err);
+        r = pb_bake_wave_buffers(ctx, B, err);
     pb_pipeline_request kernels[4] = {
         {PB_KERNEL_SPIRV(ctx, bake_trace), sizeof(bake_push), spec, 3, 64, "bake_trace", &B->trace},
         {PB_KERNEL_SPIRV(ctx, bake_sh), sizeof(bake_push), spec, 3, 64, "bake_sh", &B->sh},

@@ -29,21 +29,31 @@ uint32_t pb_bake_wave_capacity(const pb_context *ctx, const pb_bake_desc *d, uin
     return (uint32_t)(cap > rpp ? cap : rpp); /* at least one probe's rays */
 }
 
-uint64_t pb_bake_wave_bytes(uint32_t capacity)
+/* The queues' buffer: 4 sizes and the indirect dispatch's arguments, then 4 queues of indices. */
+static uint64_t queue_bytes(uint32_t capacity)
 {
-    return 32 + 4ull * 4 * capacity + 16ull * PB_WAVE_PATH_VEC4 * capacity;
+    return 32 + 4ull * 4 * capacity;
 }
 
-pb_result pb_bake_wave_buffers(pb_context *ctx, bake_buffers *B, uint32_t capacity, pb_error *err)
+static uint64_t path_bytes(uint32_t capacity)
 {
-    B->wave_capacity = capacity;
+    return 16ull * PB_WAVE_PATH_VEC4 * capacity;
+}
+
+uint64_t pb_bake_wave_bytes(uint32_t capacity)
+{
+    return queue_bytes(capacity) + path_bytes(capacity) + 16; /* and the sizes read back */
+}
+
+pb_result pb_bake_wave_buffers(pb_context *ctx, bake_buffers *B, pb_error *err)
+{
+    uint32_t capacity = B->wave_capacity;
     if (!capacity)
         return PB_OK;
-    pb_result r = pb_buffer_create(ctx, 32 + 16ull * capacity, PB_MEMORY_DEVICE, "wavefront queues", &B->wave_queues,
-                                   err);
+    pb_result r = pb_buffer_create(ctx, queue_bytes(capacity), PB_MEMORY_DEVICE, "wavefront queues",
+                                   &B->wave_queues, err);
     if (r == PB_OK)
-        r = pb_buffer_create(ctx, 16ull * PB_WAVE_PATH_VEC4 * capacity, PB_MEMORY_DEVICE, "wavefront paths",
-                             &B->wave_paths, err);
+        r = pb_buffer_create(ctx, path_bytes(capacity), PB_MEMORY_DEVICE, "wavefront paths", &B->wave_paths, err);
     if (r == PB_OK)
         r = pb_buffer_create(ctx, 16, PB_MEMORY_DOWNLOAD, "wavefront queue sizes", &B->wave_counts, err);
     return r;
