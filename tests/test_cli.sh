@@ -80,13 +80,13 @@ expect shard-out-of-range 2 "--shard '3/3' is not I/N with 0 <= I < N" -- "$pb" 
 expect shard-garbage 2 "--shard 'half' is not I/N" -- "$pb" bake "$demo" --shard half -o "$tmp/x.probes"
 expect merge-needs-parts 2 'merge needs OUT.probes and the parts' -- "$pb" merge "$tmp/m.probes"
 expect merge-missing-part-file 1 "error: $tmp/nope.probes: " -- "$pb" merge "$tmp/m.probes" "$tmp/nope.probes"
-expect devices-and-device 1 '--devices splits the bake by device: drop --device' -- \
+expect devices-and-device 2 '--devices splits the bake by device: drop --device' -- \
     "$pb" bake "$demo" --devices 0,0 --device 0 -o "$tmp/x.probes"
 expect layout-garbage 2 "--layout 'octree' is not grid or sparse" -- "$pb" bake "$demo" --layout octree -o "$tmp/x.probes"
 expect max-level-range 2 "--max-level '3' is not an integer in \[0, 2\]" -- "$pb" bake "$demo" --max-level 3 -o "$tmp/x.probes"
 expect refine-error-garbage 2 "--refine-error '-1' is not a relative error" -- "$pb" bake "$demo" --refine-error -1 -o "$tmp/x.probes"
 expect target-error-range 2 "--target-error '1' is not a relative error in \(0, 1\)" -- "$pb" bake "$demo" --target-error 1 -o "$tmp/x.probes"
-expect max-level-needs-sparse 1 '--max-level, --refine-error, --refine-test, --refine-seams and --seam-error shape a sparse layout: add --layout sparse' -- \
+expect max-level-needs-sparse 2 '--max-level, --refine-error, --refine-test, --refine-seams and --seam-error shape a sparse layout: add --layout sparse' -- \
     "$pb" bake "$demo" --max-level 1 -o "$tmp/x.probes"
 expect refine-test-garbage 2 "--refine-test 'pixel' is not surface or probe" -- \
     "$pb" bake "$demo" --layout sparse --refine-test pixel -o "$tmp/x.probes"
@@ -94,9 +94,15 @@ expect refine-seams-range 2 "--refine-seams '9' is not a number of rounds from 0
     "$pb" bake "$demo" --layout sparse --refine-seams 9 -o "$tmp/x.probes"
 expect seam-error-garbage 2 "--seam-error '0' is not a relative error in \(0, 100\)" -- \
     "$pb" bake "$demo" --layout sparse --refine-seams 1 --seam-error 0 -o "$tmp/x.probes"
-expect seam-error-needs-seams 1 '--seam-error sets the seam test.s threshold: add --refine-seams N' -- \
+expect seam-error-needs-seams 2 '--seam-error sets the seam test.s threshold: add --refine-seams N' -- \
     "$pb" bake "$demo" --layout sparse --seam-error 0.5 -o "$tmp/x.probes"
 expect seam-error-needs-seams-no-file 0 '' -- test ! -e "$tmp/x.probes"
+# option combinations are refused before any file is read: the scene here does not exist
+expect combination-before-scene 2 'add --layout sparse' -- "$pb" bake "$tmp/missing.gltf" --refine-seams 1 -o "$tmp/x.probes"
+expect devices-and-shard 2 '--devices splits the bake by device: drop --shard' -- \
+    "$pb" bake "$tmp/missing.gltf" --devices 0,0 --shard 0/2 -o "$tmp/x.probes"
+expect sparse-and-points 2 '--layout sparse places its own probes: not with --points' -- \
+    "$pb" bake "$tmp/missing.gltf" --layout sparse --points "$tmp/missing.json" -o "$tmp/x.probes"
 
 # inspect: a fixture volume (tests/make_test_volume.c)
 "$make_volume" "$tmp/v.probes"

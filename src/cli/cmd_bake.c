@@ -85,7 +85,8 @@ static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_b
     return r;
 }
 
-int cmd_bake(const options *o)
+/* Option combinations, refused before any file is read (usage errors, exit 2). */
+static int check_combinations(const options *o)
 {
     if (!o->scene)
         return cli_usage_error("%s needs a SCENE file", "bake");
@@ -95,21 +96,251 @@ int cmd_bake(const options *o)
         return cli_usage_error("%s: give --spacing or --counts, not both", "bake");
     if (o->points && (o->has_spacing || o->has_counts || o->has_bounds))
         return cli_usage_error("%s: --points replaces the grid; drop --spacing, --counts and --bounds", "bake");
-    pb_log log = {cli_log_to_stderr, (void *)&o->log};
-    pb_scene_desc sd = {log, 0};
-    sd.face_normals = (uint32_t)o->face_normals;
-    pb_scene *s = NULL;
-    pb_bvh *bvh = NULL;
+    if (!o->sparse && (o->has_max_level || o->refine_error > 0.f || o->has_refine_test || o->has_refine_seams ||
+                       o->seam_error > 0.f))
+        return cli_usage_error("%s: --max-level, --refine-error, --refine-test, --refine-seams and --seam-error "
+                               "shape a sparse layout: add --layout sparse", "bake");
+    if (o->seam_error > 0.f && !o->refine_seams)
+        return cli_usage_error("%s: --seam-error sets the seam test's threshold: add --refine-seams N", "bake");
+    if (o->sparse && o->points)
+        return cli_usage_error("%s: --layout sparse places its own probes: not with --points", "bake");
+    if (o->devices && (o->device || o->shard_count))
+        return cli_usage_error(o->device ? "%s: --devices splits the bake by device: drop --device"
+                                         : "%s: --devices splits the bake by device: drop --shard", "bake");
+    return 0;
+}
+
+/* The grid from --counts, --spacing or the default fit, over --bounds or the
+ * scene's bounds, in the scene's local frame. */
+static pb_result grid_from_options(const options *o, const pb_scene *s, pb_probe_grid *g, pb_error *err)
+{
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = o->has_bounds ? (float)(o->bounds[k] - s->origin[k]) : s->bounds_min[k];
+        hi[k] = o->has_bounds ? (float)(o->bounds[3 + k] - s->origin[k]) : s->bounds_max[k];
+    }
+    memset(g, 0, sizeof *g);
+    if (o->has_counts) {
+        for (int k = 0; k < 3; ++k) {
+            g->counts[k] = o->counts[k];
+            g->spacing[k] = (hi[k] - lo[k]) / (float)o->counts[k];
+            g->origin[k] = lo[k] + 0.5f * g->spacing[k];
+        }
+    } else if (o->has_spacing) {
+        for (int k = 0; k < 3; ++k) {
+            double n = floor((hi[k] - lo[k]) / o->spacing);
+            if (n > 65536) {
+                snprintf(err->message, sizeof err->message,
+                         "--spacing %g gives %.0f probes along an axis; at most 65536", o->spacing, n);
+                return err->code = PB_ERROR_INVALID_ARGUMENT;
+            }
+            g->counts[k] = n < 1 ? 1u : (uint32_t)n;
+            g->spacing[k] = o->spacing;
+            g->origin[k] = 0.5f * (lo[k] + hi[k]) - 0.5f * o->spacing * (float)(g->counts[k] - 1);
+        }
+    } else {
+        pb_probe_grid_fit(lo, hi, 2048, g); /* a room at roughly 0.3 m */
+    }
+    return PB_OK;
+}
+
+/* The bake's settings: the command line, then the preset q (may be NULL)
+ * for what it leaves out, then the defaults. */
+static void desc_from_options(const options *o, const pb_bake_quality *q, const pb_environment *env, pb_bake_desc *d)
+{
+    d->rays_per_probe = o->has_rays ? o->rays : q ? q->rays_per_probe : 256;
+    d->target_error = o->target_error > 0.f ? o->target_error : q ? q->target_error : 0.f;
+    d->passes = o->passes ? o->passes : q ? q->passes : (d->target_error > 0.f ? 64 : 4);
+    d->bounces = o->has_bounces ? o->bounces : 2;
+    d->octmap_res = o->octmap_res ? o->octmap_res : 16;
+    d->seed = o->has_seed ? o->seed : 1;
+    d->exclude_direct = o->direct && !strcmp(o->direct, "exclude");
+    d->probe_nee = o->probe_nee ? !strcmp(o->probe_nee, "on") : q ? q->probe_nee : 1u;
+    d->guide_paths = o->guide ? (!strcmp(o->guide, "on") ? PB_GUIDE_DEFAULT_PATHS : 0u) : q ? q->guide_paths : 0u;
+    d->light_cells = o->light_cells ? !strcmp(o->light_cells, "on") : q ? q->light_cells : 1u;
+    d->emitters_by_area = (uint32_t)o->emitters_by_area;
+    d->schedule = o->schedule;
+    memcpy(d->sky, o->sky, sizeof d->sky);
+    d->environment = o->env ? env : NULL;
+    d->indirect_volume = (uint32_t)o->indirect_volume;
+    d->sh_window = o->sh_window;
+    d->indirect_clamp = o->indirect_clamp;
+    d->max_lights_per_hit = o->max_lights_per_hit;
+    d->relocation_rays = o->relocation_rays;
+    d->inside_fraction = o->skip_inside && !strcmp(o->skip_inside, "off") ? 1.f : 0.f; /* 0: the library's default */
+    d->sh_window_width = o->sh_window_width;
+    d->shard_index = o->shard_index, d->shard_count = o->shard_count;
+}
+
+/* "probebake: baking ...": every setting the bake runs with, and what is
+ * biased on request. */
+static void print_banner(const options *o, const pb_bake_quality *q, const pb_bake_desc *d, const pb_environment *env,
+                         const pb_points *pts, uint64_t probes)
+{
+    char light[1200], clamp_text[32], part[96] = "", where[160];
+    if (o->env)
+        snprintf(light, sizeof light, "environment %s (%ux%u, x%g, turned %g deg)", o->env, env->width, env->height,
+                 o->env_intensity, o->env_rotation);
+    else
+        snprintf(light, sizeof light, "sky (%g, %g, %g)", d->sky[0], d->sky[1], d->sky[2]);
+    if (o->points)
+        snprintf(where, sizeof where, "%u points from %.100s", pts->count, o->points);
+    else if (o->sparse)
+        snprintf(where, sizeof where, "sparse bricks over %u x %u x %u finest lattice points, spacing %.3g m, "
+                 "max level %u, refine error %g", d->grid.counts[0], d->grid.counts[1], d->grid.counts[2],
+                 d->grid.spacing[0], o->has_max_level ? o->max_level : PB_SPARSE_MAX_LEVELS - 1,
+                 o->refine_error > 0.f ? o->refine_error : 0.1);
+    else
+        snprintf(where, sizeof where, "%u x %u x %u = %llu probes, spacing %.3g m", d->grid.counts[0],
+                 d->grid.counts[1], d->grid.counts[2], (unsigned long long)probes, d->grid.spacing[0]);
+    if (o->shard_count && o->sparse)
+        snprintf(part, sizeof part, ", part %u of %u (a range of coarsest bricks)", o->shard_index, o->shard_count);
+    else if (o->shard_count) /* dealt (shard.h) */
+        snprintf(part, sizeof part, ", part %u of %u (probes %u, %u, ... every %u: %u of them)", o->shard_index,
+                 o->shard_count, o->shard_index, o->shard_index + o->shard_count, o->shard_count,
+                 pb_shard_dealt_count((uint32_t)probes, o->shard_index, o->shard_count));
+    fprintf(stderr,
+            "probebake: baking %s%s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
+            "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, light cells %s, emitters by %s, seed %u\n",
+            o->scene, q ? " at quality " : "", q ? q->name : "", part, where, d->rays_per_probe,
+            d->target_error > 0.f ? "up to " : "", d->passes, d->target_error > 0.f ? " (until converged)" : "",
+            d->bounces, light, d->octmap_res, d->exclude_direct ? "excluded" : "included",
+            d->indirect_volume ? "volume" : "path", d->probe_nee ? "on" : "off",
+            /* --indirect volume bakes one bounce at a time: no bounce rays to guide */
+            d->guide_paths && d->bounces && !d->indirect_volume ? "on" : "off", d->light_cells ? "on" : "off",
+            d->emitters_by_area ? "area" : "solid angle", d->seed);
+    if (d->indirect_clamp > 0.f || d->sh_window)
+        fprintf(stderr, "probebake: biased on request:%s%s%s\n",
+                d->indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
+                d->indirect_clamp > 0.f ? (snprintf(clamp_text, sizeof clamp_text, "%g", d->indirect_clamp), clamp_text)
+                                        : "",
+                d->sh_window == 1 ? " SH Hanning window" : d->sh_window == 2 ? " SH Lanczos window" : "");
+}
+
+/* The sparse layout's line of the report: bricks and probes per level, and
+ * what refinement tested (a --devices bake's parts keep their own counts). */
+static void print_sparse_report(FILE *report, const options *o, const pb_volume *vol, const pb_sparse_stats *st)
+{
+    fprintf(report, "sparse: %u levels, bricks", vol->sparse->levels);
+    if (o->devices) {
+        uint32_t per_level[3] = {0, 0, 0};
+        for (uint32_t b = 0; b < vol->sparse->brick_count; ++b)
+            per_level[vol->sparse->bricks[b].level]++;
+        for (uint32_t l = 0; l < vol->sparse->levels; ++l)
+            fprintf(report, " %u", per_level[l]);
+        fprintf(report, "\n");
+        return;
+    }
+    for (uint32_t l = 0; l < vol->sparse->levels; ++l)
+        fprintf(report, " %u", st->bricks[l]);
+    fprintf(report, " (%u dropped inside geometry), probes baked per level", st->dropped[0] + st->dropped[1] + st->dropped[2]);
+    for (uint32_t l = 0; l < vol->sparse->levels; ++l)
+        fprintf(report, " %u", st->probes[l]);
+    fprintf(report, "; cells tested %u, refined %u (%u at seams), not tested (no surface near or inside, or solid) %u, "
+                    "beyond the bounds %u; %u bakes, %u test probes thrown away",
+            st->tested[0] + st->tested[1], st->refined[0] + st->refined[1], st->seam_refined[0] + st->seam_refined[1],
+            st->skipped[0] + st->skipped[1], st->beyond[0] + st->beyond[1], st->bakes,
+            st->test_probes[0] + st->test_probes[1]);
+    if (!o->shard_count)
+        fprintf(report, "; %u probes inside geometry dropped (no lookup weighs them)", vol->probes_dropped);
+    fprintf(report, "\n");
+}
+
+/* What was written: probes by flag, paths and their error, and time. */
+static void print_report(FILE *report, const options *o, const pb_bake_desc *d, const pb_volume *vol,
+                         const pb_sparse_stats *st, uint64_t probes)
+{
+    uint32_t valid = 0, outside = 0, relocated = 0, dilated = 0, converged = 0, inside = 0;
+    for (uint32_t i = 0; i < vol->probe_count; ++i) {
+        valid += (vol->probe_flags[i] & PB_PROBE_VALID) != 0;
+        outside += (vol->probe_flags[i] & PB_PROBE_OUTSIDE) != 0;
+        relocated += (vol->probe_flags[i] & PB_PROBE_RELOCATED) != 0;
+        dilated += (vol->probe_flags[i] & PB_PROBE_DILATED) != 0;
+        converged += (vol->probe_flags[i] & PB_PROBE_CONVERGED) != 0;
+        inside += (vol->probe_flags[i] & PB_PROBE_INSIDE) != 0;
+    }
+    if (o->sparse)
+        print_sparse_report(report, o, vol, st);
+    if (o->shard_count && o->sparse)
+        fprintf(report, "wrote %s: part %u of %u, %u probes in %u bricks grown from coarsest brick %u on (of %u), "
+                "undilated (probebake merge joins the parts) (%u valid, %u relocated, %u invalid, %u outside",
+                o->output, o->shard_index, o->shard_count, vol->probe_count, vol->sparse->brick_count,
+                vol->shard.first, vol->shard.total, valid, relocated, vol->probe_count - valid, outside);
+    else if (o->shard_count)
+        fprintf(report, "wrote %s: part %u of %u, %u of %llu probes, undilated (probebake merge joins the parts) (%u "
+                "valid, %u relocated, %u invalid of which %u inside geometry, not traced, %u outside", o->output,
+                o->shard_index, o->shard_count, vol->probe_count, (unsigned long long)probes, valid, relocated,
+                vol->probe_count - valid, inside, outside);
+    else if (o->sparse && vol->probes_dropped) /* the one invalid probe left is the empty one of step 7 */
+        fprintf(report, "wrote %s: %u probes (%u valid, %u relocated, %u inside geometry dropped for one empty probe, "
+                "%u outside", o->output, vol->probe_count, valid, relocated, vol->probes_dropped, outside);
+    else
+        fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated and %u inside "
+                "geometry, not traced, %u outside", o->output, (unsigned long long)probes, valid, relocated,
+                vol->probe_count - valid, dilated, inside, outside);
+    if (d->target_error > 0.f)
+        fprintf(report, ", %u converged before the last pass", converged);
+    double rays = (double)vol->rays_traced;
+    fprintf(report, "), %.3g probe rays in %s%u passes\n", rays, d->target_error > 0.f ? "up to " : "",
+            vol->settings.passes);
+    cli_print_error_summary(report, vol);
+    const pb_volume_timings *t = &vol->timings;
+    fprintf(report, "time: bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, "
+                    "depth %.0f ms; total %.0f ms wall\n",
+            t->bvh, t->trace, t->trace > 0 ? rays / (t->trace * 1e3) : 0.0,
+            t->trace > 0 ? (double)vol->traversals / (t->trace * 1e3) : 0.0, t->sh, t->octmap, t->total);
+}
+
+/* The bake on one device (--device, or the default pick). */
+static pb_result bake_on_device(const options *o, const pb_scene *s, const pb_bvh *bvh, const pb_bake_desc *d,
+                                pb_log log, pb_volume *vol, pb_sparse_stats *stats, pb_error *err)
+{
     pb_context *ctx = NULL;
     pb_gpu_scene *gs = NULL;
+    pb_context_desc cd = cli_context_desc(o, o->device, log);
+    pb_result r = pb_context_create(&cd, &ctx, err);
+    if (r == PB_OK)
+        r = pb_gpu_scene_create(ctx, s, bvh, &gs, err);
+    if (r == PB_OK) {
+        cli_defer_signals(); /* from here a signal cancels the bake or the write */
+        if (o->sparse) {
+            pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test, 0,
+                                 o->refine_seams, o->seam_error};
+            r = pb_bake_sparse(ctx, s, gs, d, &sd, vol, stats, err);
+        } else {
+            r = pb_bake(ctx, s, gs, d, vol, err);
+        }
+    }
+    if (r == PB_OK && o->validation && pb_context_validation_messages(ctx)) {
+        snprintf(err->message, sizeof err->message, "%u Vulkan validation messages",
+                 pb_context_validation_messages(ctx));
+        r = err->code = PB_ERROR_VULKAN;
+    }
+    pb_gpu_scene_destroy(gs);
+    pb_context_destroy(ctx);
+    return r;
+}
+
+int cmd_bake(const options *o)
+{
+    int usage = check_combinations(o);
+    if (usage)
+        return usage;
+    pb_log log = {cli_log_to_stderr, (void *)&o->log};
+    pb_scene_desc scd = {log, 0};
+    scd.face_normals = (uint32_t)o->face_normals;
+    pb_scene *s = NULL;
+    pb_bvh *bvh = NULL;
     pb_volume vol;
-    pb_sparse_stats sparse_stats;
-    memset(&sparse_stats, 0, sizeof sparse_stats);
-    memset(&vol, 0, sizeof vol);
+    pb_sparse_stats stats;
     pb_points pts;
-    memset(&pts, 0, sizeof pts);
     pb_environment env;
+    pb_bake_desc d;
+    memset(&vol, 0, sizeof vol);
+    memset(&stats, 0, sizeof stats);
+    memset(&pts, 0, sizeof pts);
     memset(&env, 0, sizeof env);
+    memset(&d, 0, sizeof d);
     pb_error err;
     int rc = 1;
     double t0 = cli_now_ms();
@@ -122,244 +353,52 @@ int cmd_bake(const options *o)
         goto out;
     if (cli_environment(o, &env, &err) != PB_OK)
         goto out;
-    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK ||
+    if (pb_scene_load(o->scene, &scd, &s, &err) != PB_OK ||
         pb_bake_check_light(s, o->sky, o->env ? &env : NULL, &err) != PB_OK)
         goto out;
     if (s->triangle_count == 0 && !o->has_bounds && !o->points) {
         snprintf(err.message, sizeof err.message, "%s: no triangles and no --bounds: nowhere to put probes", o->scene);
         goto out;
     }
-    /* grid in the scene's local frame */
-    float lo[3], hi[3];
-    for (int k = 0; k < 3; ++k) {
-        lo[k] = o->has_bounds ? (float)(o->bounds[k] - s->origin[k]) : s->bounds_min[k];
-        hi[k] = o->has_bounds ? (float)(o->bounds[3 + k] - s->origin[k]) : s->bounds_max[k];
-    }
-    pb_bake_desc d;
-    memset(&d, 0, sizeof d);
-    if (o->has_counts) {
-        for (int k = 0; k < 3; ++k) {
-            d.grid.counts[k] = o->counts[k];
-            d.grid.spacing[k] = (hi[k] - lo[k]) / (float)o->counts[k];
-            d.grid.origin[k] = lo[k] + 0.5f * d.grid.spacing[k];
-        }
-    } else if (o->has_spacing) {
-        for (int k = 0; k < 3; ++k) {
-            double n = floor((hi[k] - lo[k]) / o->spacing);
-            if (n > 65536) {
-                snprintf(err.message, sizeof err.message, "--spacing %g gives %.0f probes along an axis; at most 65536",
-                         o->spacing, n);
-                goto out;
-            }
-            d.grid.counts[k] = n < 1 ? 1u : (uint32_t)n;
-            d.grid.spacing[k] = o->spacing;
-            d.grid.origin[k] = 0.5f * (lo[k] + hi[k]) - 0.5f * o->spacing * (float)(d.grid.counts[k] - 1);
-        }
-    } else {
-        pb_probe_grid_fit(lo, hi, 2048, &d.grid); /* a room at roughly 0.3 m */
-    }
-    if (o->points) {
-        d.points = &pts;
-        memset(&d.grid, 0, sizeof d.grid);
-    }
-    /* a preset fills what the command line leaves out */
-    const pb_bake_quality *q = pb_bake_quality_find(o->quality);
-    d.rays_per_probe = o->has_rays ? o->rays : q ? q->rays_per_probe : 256;
-    d.target_error = o->target_error > 0.f ? o->target_error : q ? q->target_error : 0.f;
-    d.passes = o->passes ? o->passes : q ? q->passes : (d.target_error > 0.f ? 64 : 4);
-    d.bounces = o->has_bounces ? o->bounces : 2;
-    d.octmap_res = o->octmap_res ? o->octmap_res : 16;
-    d.seed = o->has_seed ? o->seed : 1;
-    d.exclude_direct = o->direct && !strcmp(o->direct, "exclude");
-    d.probe_nee = o->probe_nee ? !strcmp(o->probe_nee, "on") : q ? q->probe_nee : 1u;
-    d.guide_paths = o->guide ? (!strcmp(o->guide, "on") ? PB_GUIDE_DEFAULT_PATHS : 0u) : q ? q->guide_paths : 0u;
-    d.light_cells = o->light_cells ? !strcmp(o->light_cells, "on") : q ? q->light_cells : 1u;
-    d.emitters_by_area = (uint32_t)o->emitters_by_area;
-    d.schedule = o->schedule;
-    memcpy(d.sky, o->sky, sizeof d.sky);
-    d.environment = o->env ? &env : NULL;
-    d.indirect_volume = (uint32_t)o->indirect_volume;
-    d.sh_window = o->sh_window;
-    d.indirect_clamp = o->indirect_clamp;
-    d.max_lights_per_hit = o->max_lights_per_hit;
-    d.relocation_rays = o->relocation_rays;
-    d.inside_fraction = o->skip_inside && !strcmp(o->skip_inside, "off") ? 1.f : 0.f; /* 0: the library's default */
-    d.sh_window_width = o->sh_window_width;
-    d.shard_index = o->shard_index, d.shard_count = o->shard_count;
-    char light[1200], clamp_text[32], part[96] = "";
-    if (o->env)
-        snprintf(light, sizeof light, "environment %s (%ux%u, x%g, turned %g deg)", o->env, env.width, env.height,
-                 o->env_intensity, o->env_rotation);
-    else
-        snprintf(light, sizeof light, "sky (%g, %g, %g)", d.sky[0], d.sky[1], d.sky[2]);
-    uint64_t probes = o->points ? pts.count : (uint64_t)d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
-    char where[160];
     if (o->points)
-        snprintf(where, sizeof where, "%u points from %.100s", pts.count, o->points);
-    else if (o->sparse)
-        snprintf(where, sizeof where, "sparse bricks over %u x %u x %u finest lattice points, spacing %.3g m, "
-                 "max level %u, refine error %g", d.grid.counts[0], d.grid.counts[1], d.grid.counts[2],
-                 d.grid.spacing[0], o->has_max_level ? o->max_level : PB_SPARSE_MAX_LEVELS - 1,
-                 o->refine_error > 0.f ? o->refine_error : 0.1);
-    else
-        snprintf(where, sizeof where, "%u x %u x %u = %llu probes, spacing %.3g m", d.grid.counts[0], d.grid.counts[1],
-                 d.grid.counts[2], (unsigned long long)probes, d.grid.spacing[0]);
-    if (o->shard_count) {
-        if (o->shard_count > probes) {
-            snprintf(err.message, sizeof err.message, "--shard %u/%u: only %llu probes to share", o->shard_index,
-                     o->shard_count, (unsigned long long)probes);
-            goto out;
-        }
-        if (o->sparse)
-            snprintf(part, sizeof part, ", part %u of %u (a range of coarsest bricks)", o->shard_index,
-                     o->shard_count);
-        else /* dealt (shard.h) */
-            snprintf(part, sizeof part, ", part %u of %u (probes %u, %u, ... every %u: %u of them)", o->shard_index,
-                     o->shard_count, o->shard_index, o->shard_index + o->shard_count, o->shard_count,
-                     pb_shard_dealt_count((uint32_t)probes, o->shard_index, o->shard_count));
+        d.points = &pts;
+    else if (grid_from_options(o, s, &d.grid, &err) != PB_OK)
+        goto out;
+    const pb_bake_quality *q = pb_bake_quality_find(o->quality);
+    desc_from_options(o, q, &env, &d);
+    uint64_t probes = o->points ? pts.count : (uint64_t)d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+    if (o->shard_count > probes) {
+        snprintf(err.message, sizeof err.message, "--shard %u/%u: only %llu probes to share", o->shard_index,
+                 o->shard_count, (unsigned long long)probes);
+        goto out;
     }
     if (!o->log.quiet)
-        fprintf(stderr,
-                "probebake: baking %s%s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
-                "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, light cells %s, emitters by %s, seed %u\n",
-                o->scene, q ? " at quality " : "", q ? q->name : "", part, where, d.rays_per_probe,
-                d.target_error > 0.f ? "up to " : "", d.passes, d.target_error > 0.f ? " (until converged)" : "",
-                d.bounces, light, d.octmap_res,
-                d.exclude_direct ? "excluded" : "included", d.indirect_volume ? "volume" : "path",
-                d.probe_nee ? "on" : "off",
-                /* --indirect volume bakes one bounce at a time: no bounce rays to guide */
-                d.guide_paths && d.bounces && !d.indirect_volume ? "on" : "off", d.light_cells ? "on" : "off",
-                d.emitters_by_area ? "area" : "solid angle", d.seed);
-    if (!o->log.quiet && (d.indirect_clamp > 0.f || d.sh_window))
-        fprintf(stderr, "probebake: biased on request:%s%s%s\n",
-                d.indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
-                d.indirect_clamp > 0.f ? (snprintf(clamp_text, sizeof clamp_text, "%g", d.indirect_clamp), clamp_text) : "",
-                d.sh_window == 1 ? " SH Hanning window" : d.sh_window == 2 ? " SH Lanczos window" : "");
-    if (!o->sparse && (o->has_max_level || o->refine_error > 0.f || o->has_refine_test || o->has_refine_seams ||
-                       o->seam_error > 0.f)) {
-        snprintf(err.message, sizeof err.message,
-                 "--max-level, --refine-error, --refine-test, --refine-seams and --seam-error shape a sparse layout: "
-                 "add --layout sparse");
-        goto out;
-    }
-    if (o->seam_error > 0.f && !o->refine_seams) {
-        snprintf(err.message, sizeof err.message, "--seam-error sets the seam test's threshold: add --refine-seams N");
-        goto out;
-    }
-    if (o->sparse && o->points) {
-        snprintf(err.message, sizeof err.message, "--layout sparse places its own probes: not with --points");
-        goto out;
-    }
-    if (o->devices && (o->device || o->shard_count)) {
-        snprintf(err.message, sizeof err.message, "--devices splits the bake by device: drop %s",
-                 o->device ? "--device" : "--shard");
-        goto out;
-    }
+        print_banner(o, q, &d, &env, &pts, probes);
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};
     d.progress = cli_progress;
     d.progress_user = &ps;
-    pb_result r;
-    if (o->devices) {
-        r = bake_on_devices(o, s, bvh, &d, log, &vol, &err);
-        if (r == PB_OK && o->sparse)
-            probes = vol.probe_count;
-    } else {
-        pb_context_desc cd = cli_context_desc(o, o->device, log);
-        if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
-            goto out;
-        cli_defer_signals(); /* from here a signal cancels the bake or the write */
-        if (o->sparse) {
-            pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test, 0,
-                                 o->refine_seams, o->seam_error};
-            r = pb_bake_sparse(ctx, s, gs, &d, &sd, &vol, &sparse_stats, &err);
-            probes = vol.probe_count;
-        } else {
-            r = pb_bake(ctx, s, gs, &d, &vol, &err);
-        }
-    }
+    pb_result r = o->devices ? bake_on_devices(o, s, bvh, &d, log, &vol, &err)
+                             : bake_on_device(o, s, bvh, &d, log, &vol, &stats, &err);
     if (ps.show)
         fprintf(stderr, "\n");
     if (r != PB_OK)
         goto out;
-    if (o->validation && ctx && pb_context_validation_messages(ctx)) {
-        snprintf(err.message, sizeof err.message, "%u Vulkan validation messages", pb_context_validation_messages(ctx));
-        goto out;
-    }
+    if (o->sparse)
+        probes = vol.probe_count;
     vol.timings.load = 0;
     vol.timings.bvh = bvh->stats.build_ms;
     vol.timings.total = cli_now_ms() - t0;
     if (pb_volume_write_ex(o->output, &vol, cli_interrupted, NULL, &err) != PB_OK)
         goto out;
-    FILE *report = strcmp(o->output, "-") ? stdout : stderr; /* stdout carries the volume for -o - */
-    uint32_t valid = 0, outside = 0, relocated = 0, dilated = 0, converged = 0, inside = 0;
-    for (uint32_t i = 0; i < vol.probe_count; ++i) {
-        valid += (vol.probe_flags[i] & PB_PROBE_VALID) != 0;
-        outside += (vol.probe_flags[i] & PB_PROBE_OUTSIDE) != 0;
-        relocated += (vol.probe_flags[i] & PB_PROBE_RELOCATED) != 0;
-        dilated += (vol.probe_flags[i] & PB_PROBE_DILATED) != 0;
-        converged += (vol.probe_flags[i] & PB_PROBE_CONVERGED) != 0;
-        inside += (vol.probe_flags[i] & PB_PROBE_INSIDE) != 0;
-    }
-    double rays = (double)vol.rays_traced;
-    if (o->sparse && o->devices) { /* the parts' refinement counts stay with them */
-        uint32_t per_level[3] = {0, 0, 0};
-        for (uint32_t b = 0; b < vol.sparse->brick_count; ++b)
-            per_level[vol.sparse->bricks[b].level]++;
-        fprintf(report, "sparse: %u levels, bricks", vol.sparse->levels);
-        for (uint32_t l = 0; l < vol.sparse->levels; ++l)
-            fprintf(report, " %u", per_level[l]);
-        fprintf(report, "\n");
-    } else if (o->sparse) {
-        const pb_sparse_stats *st = &sparse_stats;
-        fprintf(report, "sparse: %u levels, bricks", vol.sparse->levels);
-        for (uint32_t l = 0; l < vol.sparse->levels; ++l)
-            fprintf(report, " %u", st->bricks[l]);
-        fprintf(report, " (%u dropped inside geometry), probes baked per level", st->dropped[0] + st->dropped[1] + st->dropped[2]);
-        for (uint32_t l = 0; l < vol.sparse->levels; ++l)
-            fprintf(report, " %u", st->probes[l]);
-        fprintf(report, "; cells tested %u, refined %u (%u at seams), not tested (no surface near or inside, or solid) %u, beyond the bounds %u; %u bakes, %u test probes thrown away",
-                st->tested[0] + st->tested[1], st->refined[0] + st->refined[1],
-                st->seam_refined[0] + st->seam_refined[1], st->skipped[0] + st->skipped[1],
-                st->beyond[0] + st->beyond[1], st->bakes, st->test_probes[0] + st->test_probes[1]);
-        if (!o->shard_count)
-            fprintf(report, "; %u probes inside geometry dropped (no lookup weighs them)", vol.probes_dropped);
-        fprintf(report, "\n");
-    }
-    if (o->shard_count && o->sparse)
-        fprintf(report, "wrote %s: part %u of %u, %u probes in %u bricks grown from coarsest brick %u on (of %u), "
-                "undilated (probebake merge joins the parts) (%u valid, %u relocated, %u invalid, %u outside",
-                o->output, o->shard_index, o->shard_count, vol.probe_count, vol.sparse->brick_count, vol.shard.first,
-                vol.shard.total, valid, relocated, vol.probe_count - valid, outside);
-    else if (o->shard_count)
-        fprintf(report, "wrote %s: part %u of %u, %u of %llu probes, undilated (probebake merge joins the parts) (%u "
-                "valid, %u relocated, %u invalid of which %u inside geometry, not traced, %u outside", o->output,
-                o->shard_index, o->shard_count, vol.probe_count, (unsigned long long)probes, valid, relocated,
-                vol.probe_count - valid, inside, outside);
-    else if (o->sparse && vol.probes_dropped) /* the one invalid probe left is the empty one of step 7 */
-        fprintf(report, "wrote %s: %u probes (%u valid, %u relocated, %u inside geometry dropped for one empty probe, "
-                "%u outside", o->output, vol.probe_count, valid, relocated, vol.probes_dropped, outside);
-    else
-        fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated and %u inside "
-                "geometry, not traced, %u outside", o->output, (unsigned long long)probes, valid, relocated,
-                vol.probe_count - valid, dilated, inside, outside);
-    if (d.target_error > 0.f)
-        fprintf(report, ", %u converged before the last pass", converged);
-    fprintf(report, "), %.3g probe rays in %s%u passes\n", rays, d.target_error > 0.f ? "up to " : "", vol.settings.passes);
-    cli_print_error_summary(report, &vol);
-    fprintf(report, "time: bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, depth %.0f ms; "
-           "total %.0f ms wall\n",
-           vol.timings.bvh, vol.timings.trace, vol.timings.trace > 0 ? rays / (vol.timings.trace * 1e3) : 0.0,
-           vol.timings.trace > 0 ? (double)vol.traversals / (vol.timings.trace * 1e3) : 0.0, vol.timings.sh,
-           vol.timings.octmap, vol.timings.total);
+    print_report(strcmp(o->output, "-") ? stdout : stderr, /* stdout carries the volume for -o - */
+                 o, &d, &vol, &stats, probes);
     rc = 0;
 out:
     pb_volume_free(&vol);
     pb_points_free(&pts);
     pb_environment_free(&env);
-    pb_gpu_scene_destroy(gs);
-    pb_context_destroy(ctx);
     pb_bvh_destroy(bvh);
     pb_scene_destroy(s);
     return rc ? cli_fail(&err) : 0;
