@@ -249,7 +249,7 @@ expect render-eye-without-target 2 '--eye and --target go together' -- "$pb" ren
 expect render-up-parallel 1 'up vector is parallel' -- \
     "$pb" render "$demo" --eye 0,1,0 --target 0,2,0 -o "$tmp/r.png"
 expect render-bad-eye 2 "--eye '1,2' is not three" -- "$pb" render "$demo" --eye 1,2 --target 0,0,0 -o "$tmp/r.png"
-expect render-spheres-need-volume 1 '--show-probes needs --volume' -- "$pb" render "$demo" --show-probes -o "$tmp/r.png"
+expect render-spheres-need-volume 2 '--show-probes needs --volume' -- "$pb" render "$demo" --show-probes -o "$tmp/r.png"
 expect render-no-partial-file 0 '^absent$' -- bash -c "[ -e '$tmp/r.png' ] && echo present || echo absent"
 expect render-bad-emitter-sampling 2 '--emitter-sampling takes solid-angle or area' -- \
     "$pb" render "$demo" --emitter-sampling cosine -o "$tmp/r.png"

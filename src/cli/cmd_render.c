@@ -58,17 +58,13 @@ static pb_result sampler_of(const options *o, const char *path, pb_volume *v, co
     return r;
 }
 
-int cmd_render(const options *o)
+/* Option combinations, refused before any file is read (usage errors, exit 2). */
+static int check_combinations(const options *o, const char *mode_name, pb_render_mode mode, int diff)
 {
     if (!o->scene)
         return cli_usage_error("%s needs a SCENE", "render");
     if (!o->output)
         return cli_usage_error("%s needs -o IMG.png", "render");
-    pb_render_mode mode;
-    int diff;
-    const char *mode_name = o->mode ? o->mode : (o->volume ? "probes" : "reference");
-    if (!mode_of(mode_name, &mode, &diff))
-        return cli_usage_error("--mode '%s': use probes, reference, direct, indirect or diff", mode_name);
     if ((mode == PB_RENDER_PROBES || mode == PB_RENDER_INDIRECT) && !o->volume)
         return cli_usage_error("--mode %s needs --volume V.probes", mode_name);
     if (o->has_camera && (o->has_eye || o->has_target))
@@ -81,6 +77,194 @@ int cmd_render(const options *o)
         return cli_usage_error("%s: --reference REF.pfm is for --mode diff", "render");
     if (o->seams_of && !diff)
         return cli_usage_error("%s: --seams-of SPARSE.probes is for --mode diff", "render");
+    if (o->show_probes && !o->volume)
+        return cli_usage_error("%s: --show-probes needs --volume V.probes", "render");
+    return 0;
+}
+
+/* The camera: --eye/--target, else the scene's (--camera, default its
+ * first), else a view of the bounds' centre from the front, above. */
+static pb_result camera_from_options(const options *o, const pb_scene *s, pb_camera_view *cam, pb_error *err)
+{
+    float yfov = (o->fov_deg > 0.f ? o->fov_deg : 50.f) * 0.017453293f;
+    if (o->has_eye) {
+        for (int k = 0; k < 3; ++k) {
+            cam->eye[k] = (float)(o->eye[k] - s->origin[k]);
+            cam->forward[k] = o->target[k] - o->eye[k];
+            cam->up[k] = o->has_up ? o->up[k] : (k == 1 ? 1.f : 0.f);
+        }
+        cam->yfov = yfov;
+    } else if (s->camera_count > 0) {
+        if (o->camera >= s->camera_count) {
+            snprintf(err->message, sizeof err->message, "%s: camera %u does not exist (%u cameras)", o->scene,
+                     o->camera, s->camera_count);
+            return err->code = PB_ERROR_INVALID_ARGUMENT;
+        }
+        pb_camera_from_scene(&s->cameras[o->camera], cam);
+        if (o->fov_deg > 0.f)
+            cam->yfov = yfov;
+    } else if (o->has_camera) {
+        snprintf(err->message, sizeof err->message, "%s: the scene has no cameras", o->scene);
+        return err->code = PB_ERROR_INVALID_ARGUMENT;
+    } else {
+        float c[3], ext = 0.f;
+        for (int k = 0; k < 3; ++k) {
+            c[k] = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
+            ext = fmaxf(ext, s->bounds_max[k] - s->bounds_min[k]);
+        }
+        float eye[3] = {c[0], c[1] + 0.3f * ext, c[2] + 1.2f * ext};
+        for (int k = 0; k < 3; ++k) {
+            cam->eye[k] = eye[k];
+            cam->forward[k] = c[k] - eye[k];
+            cam->up[k] = k == 1 ? 1.f : 0.f;
+        }
+        cam->yfov = yfov;
+    }
+    return PB_OK;
+}
+
+/* --mode diff's measurements: the probe image against the reference, on
+ * the whole image, its indirect part, its non-emissive surfaces, and for a
+ * sparse volume where its levels meet, elsewhere and per level. */
+typedef struct diff_metrics {
+    double rmse, rmse_indirect; /* NaN indirect: a given reference has no direct part to take away */
+    double ms_ref;
+    uint32_t ref_spp;
+    pb_image_metrics surf, seams, off_seams, at_level[PB_SPARSE_MAX_LEVELS];
+    uint64_t unserved;
+    uint32_t levels; /* 0: no sparse volume, so no seams */
+} diff_metrics;
+
+/* The diff of `img` (probes, rendered with d): the reference rendered
+ * unless `ref` was read from --reference, the direct image subtracted from
+ * both for the indirect metric (img_direct, ref_direct: scratch of the
+ * image's size), the heat map into rgb8. */
+static pb_result measure_diff(const options *o, pb_context *ctx, const pb_scene *s, pb_gpu_scene *gs,
+                              const pb_bvh *bvh, const pb_render_desc *d, const pb_volume *mv,
+                              const pb_sample_volume *msv, const float *img, float *img_direct, float *ref,
+                              float *ref_direct, unsigned char *rgb8, diff_metrics *m, pb_error *err)
+{
+    uint64_t pixels = (uint64_t)d->width * d->height;
+    memset(m, 0, sizeof *m);
+    m->levels = msv->levels > 0 && mv->sparse ? mv->sparse->levels : 0;
+    pb_render_desc dr = *d;
+    dr.mode = PB_RENDER_REFERENCE;
+    dr.spp = m->ref_spp = o->has_spp ? o->spp * 16 : 256;
+    if (!o->reference && pb_render(ctx, s, gs, &dr, ref, ref_direct, &m->ms_ref, err) != PB_OK)
+        return err->code;
+    if (o->reference) /* coverage is the camera's: the probe image's (a PFM has no alpha) */
+        for (uint64_t i = 0; i < pixels; ++i)
+            ref[4 * i + 3] = img[4 * i + 3];
+    pb_render_desc dd = *d;
+    dd.mode = PB_RENDER_DIRECT;
+    float *direct_img = malloc(pixels * 16);
+    uint8_t *cls = malloc(pixels);
+    uint8_t *seam = m->levels ? malloc(pixels) : NULL, *level = m->levels ? malloc(pixels) : NULL;
+    pb_result r = PB_OK;
+    if (!direct_img || !cls || (m->levels && (!seam || !level))) {
+        snprintf(err->message, sizeof err->message, "out of host memory for a %ux%u image", d->width, d->height);
+        r = err->code = PB_ERROR_OUT_OF_HOST_MEMORY;
+    } else {
+        r = pb_render(ctx, s, gs, &dd, direct_img, NULL, NULL, err);
+    }
+    if (r == PB_OK) {
+        m->rmse = pb_image_relative_rmse(img, ref, d->width, d->height);
+        pb_render_pixel_classes(s, bvh, d, cls);
+        pb_image_surface_metrics(img, ref, cls, d->width, d->height, &m->surf);
+        if (m->levels) {
+            pb_render_seam_pixels(s, bvh, d, msv, mv->sparse, cls, seam, level);
+            pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_LEVELS, d->width, d->height, &m->seams);
+            pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_NONE, d->width, d->height, &m->off_seams);
+            for (uint32_t l = 0; l < m->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
+                pb_image_surface_metrics_where(img, ref, cls, level, (uint8_t)l, d->width, d->height, &m->at_level[l]);
+            for (uint64_t i = 0; i < pixels; ++i)
+                m->unserved += seam[i] == PB_SEAM_UNSERVED;
+        }
+        for (uint64_t i = 0; i < pixels; ++i) {
+            for (int c = 0; c < 3; ++c) {
+                img_direct[4 * i + c] = img[4 * i + c] - direct_img[4 * i + c]; /* probes: indirect part */
+                ref_direct[4 * i + c] = ref[4 * i + c] - ref_direct[4 * i + c]; /* reference: indirect part */
+            }
+            img_direct[4 * i + 3] = img[4 * i + 3], ref_direct[4 * i + 3] = ref[4 * i + 3];
+        }
+        m->rmse_indirect = o->reference ? NAN : pb_image_relative_rmse(img_direct, ref_direct, d->width, d->height);
+        pb_error_heatmap(img, ref, d->width, d->height, 0.5f, rgb8);
+    }
+    free(direct_img), free(cls), free(seam), free(level);
+    return r;
+}
+
+static void print_json(FILE *report, const options *o, const char *mode_name, const pb_render_desc *d, uint32_t spp,
+                       double ms, const diff_metrics *m)
+{
+    fprintf(report, "{\"image\": \"%s\", \"mode\": \"%s\", \"width\": %u, \"height\": %u, \"spp\": %u, \"gpu_ms\": %.3f",
+            o->output, mode_name, d->width, d->height, spp, ms);
+    if (m) {
+        char ind[32] = "null";
+        if (!o->reference)
+            snprintf(ind, sizeof ind, "%.6f", m->rmse_indirect);
+        if (o->reference)
+            fprintf(report, ", \"reference\": \"%s\"", o->reference);
+        else
+            fprintf(report, ", \"reference_spp\": %u, \"reference_gpu_ms\": %.3f", m->ref_spp, m->ms_ref);
+        fprintf(report, ", \"relative_rmse\": %.6f, \"relative_rmse_indirect\": %s, \"relative_rmse_surfaces\": %.6f, "
+                "\"p95_relative_error\": %.6f, \"surface_pixels\": %llu",
+                m->rmse, ind, m->surf.relative_rmse, m->surf.p95_relative, (unsigned long long)m->surf.pixels);
+        if (m->levels) {
+            fprintf(report, ", \"seam_pixels\": %llu, \"relative_rmse_seams\": %.6f, \"p95_relative_error_seams\": %.6f, "
+                    "\"off_seam_pixels\": %llu, \"relative_rmse_off_seams\": %.6f, \"p95_relative_error_off_seams\": %.6f, "
+                    "\"unserved_pixels\": %llu",
+                    (unsigned long long)m->seams.pixels, m->seams.relative_rmse, m->seams.p95_relative,
+                    (unsigned long long)m->off_seams.pixels, m->off_seams.relative_rmse, m->off_seams.p95_relative,
+                    (unsigned long long)m->unserved);
+            fprintf(report, ", \"levels\": ["); /* where the error sits: the pixels each level serves */
+            for (uint32_t l = 0; l < m->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
+                fprintf(report, "%s{\"level\": %u, \"pixels\": %llu, \"relative_rmse\": %.6f, "
+                        "\"p95_relative_error\": %.6f}", l ? ", " : "", l, (unsigned long long)m->at_level[l].pixels,
+                        m->at_level[l].relative_rmse, m->at_level[l].p95_relative);
+            fprintf(report, "]");
+        }
+    }
+    fprintf(report, "}\n");
+}
+
+static void print_text(FILE *report, const options *o, const char *mode_name, const pb_render_desc *d, uint32_t spp,
+                       double ms, const diff_metrics *m)
+{
+    fprintf(report, "wrote %s: %ux%u, %s, %u spp, GPU %.0f ms\n", o->output, d->width, d->height, mode_name, spp, ms);
+    if (!m)
+        return;
+    if (o->reference)
+        fprintf(report, "probes vs %s: relative RMSE %.4f of the image; non-emissive surfaces (%llu pixels): "
+                "relative RMSE %.4f, p95 per-pixel error %.4f; heat map: black 0, red >= 50 %%\n",
+                o->reference, m->rmse, (unsigned long long)m->surf.pixels, m->surf.relative_rmse, m->surf.p95_relative);
+    else
+        fprintf(report, "probes vs reference (%u spp, GPU %.0f ms): relative RMSE %.4f of the image, %.4f of the indirect "
+                "light; non-emissive surfaces (%llu pixels): relative RMSE %.4f, p95 per-pixel error %.4f; heat map: "
+                "black 0, red >= 50 %%\n",
+                m->ref_spp, m->ms_ref, m->rmse, m->rmse_indirect, (unsigned long long)m->surf.pixels,
+                m->surf.relative_rmse, m->surf.p95_relative);
+    if (m->levels)
+        fprintf(report, "where levels meet (%llu pixels): relative RMSE %.4f, p95 %.4f; elsewhere (%llu): %.4f, p95 "
+                "%.4f; %llu surface pixels served by no brick\n", (unsigned long long)m->seams.pixels,
+                m->seams.relative_rmse, m->seams.p95_relative, (unsigned long long)m->off_seams.pixels,
+                m->off_seams.relative_rmse, m->off_seams.p95_relative, (unsigned long long)m->unserved);
+    for (uint32_t l = 0; l < m->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
+        fprintf(report, "%s level %u: %llu pixels, relative RMSE %.4f, p95 %.4f%s", l ? ";" : "served by", l,
+                (unsigned long long)m->at_level[l].pixels, m->at_level[l].relative_rmse, m->at_level[l].p95_relative,
+                l + 1 == m->levels ? "\n" : "");
+}
+
+int cmd_render(const options *o)
+{
+    pb_render_mode mode;
+    int diff;
+    const char *mode_name = o->mode ? o->mode : (o->volume ? "probes" : "reference");
+    if (!mode_of(mode_name, &mode, &diff))
+        return cli_usage_error("--mode '%s': use probes, reference, direct, indirect or diff", mode_name);
+    int usage = check_combinations(o, mode_name, mode, diff);
+    if (usage)
+        return usage;
     char pfm[1100];
     sibling(o->output, ".pfm", pfm, sizeof pfm);
     pb_log log = {cli_log_to_stderr, (void *)&o->log};
@@ -90,24 +274,20 @@ int cmd_render(const options *o)
     pb_bvh *bvh = NULL;
     pb_context *ctx = NULL;
     pb_gpu_scene *gs = NULL;
-    pb_volume vol;
-    memset(&vol, 0, sizeof vol);
-    pb_sample_volume sv;
-    memset(&sv, 0, sizeof sv);
-    /* whose seams and levels the diff measures: the volume's, or --seams-of's */
-    pb_volume seams_vol;
-    memset(&seams_vol, 0, sizeof seams_vol);
-    pb_sample_volume seams_sv;
-    memset(&seams_sv, 0, sizeof seams_sv);
-    const pb_volume *mv = o->seams_of ? &seams_vol : &vol;
-    const pb_sample_volume *msv = o->seams_of ? &seams_sv : &sv;
+    pb_volume vol, seams_vol; /* the volume lit by, and --seams-of's, whose seams and levels the diff measures */
+    pb_sample_volume sv, seams_sv;
     pb_environment env;
-    memset(&env, 0, sizeof env);
     pb_error err;
+    memset(&vol, 0, sizeof vol);
+    memset(&seams_vol, 0, sizeof seams_vol);
+    memset(&sv, 0, sizeof sv);
+    memset(&seams_sv, 0, sizeof seams_sv);
+    memset(&env, 0, sizeof env);
     memset(&err, 0, sizeof err);
     float *img = NULL, *img_direct = NULL, *ref = NULL, *ref_direct = NULL;
     unsigned char *rgb8 = NULL;
     int rc = 1;
+    uint32_t width = o->width ? o->width : 640, height = o->height ? o->height : 480;
     /* outputs checked before any work: not a directory, writable, no input */
     const char *inputs[5] = {o->scene, o->env, o->volume, o->reference, o->seams_of};
     if (pb_output_check(o->output, inputs, 5, &err) != PB_OK || (o->pfm && pb_output_check(pfm, inputs, 5, &err) != PB_OK))
@@ -125,9 +305,9 @@ int cmd_render(const options *o)
         uint32_t rw = 0, rh = 0;
         if (pb_read_pfm(o->reference, &ref, &rw, &rh, &err) != PB_OK)
             goto out;
-        if (rw != (o->width ? o->width : 640) || rh != (o->height ? o->height : 480)) {
+        if (rw != width || rh != height) {
             snprintf(err.message, sizeof err.message, "%s: the reference is %ux%u, the render %ux%u (--size)",
-                     o->reference, rw, rh, o->width ? o->width : 640, o->height ? o->height : 480);
+                     o->reference, rw, rh, width, height);
             err.code = PB_ERROR_INVALID_ARGUMENT;
             goto out;
         }
@@ -142,8 +322,8 @@ int cmd_render(const options *o)
         goto out;
     pb_render_desc d;
     memset(&d, 0, sizeof d);
-    d.width = o->width ? o->width : 640;
-    d.height = o->height ? o->height : 480;
+    d.width = width;
+    d.height = height;
     d.mode = mode;
     /* a diff's probe image: 16 samples per pixel unless told (its own noise
      * stays out of the metric: the reference has 16x more) */
@@ -158,44 +338,8 @@ int cmd_render(const options *o)
     memcpy(d.sky, o->sky, sizeof d.sky);
     d.environment = o->env ? &env : NULL;
     d.show_probes = (uint32_t)o->show_probes;
-    if (o->show_probes && !o->volume) {
-        snprintf(err.message, sizeof err.message, "--show-probes needs --volume V.probes");
+    if (camera_from_options(o, s, &d.camera, &err) != PB_OK)
         goto out;
-    }
-    if (o->has_eye) {
-        for (int k = 0; k < 3; ++k) {
-            d.camera.eye[k] = (float)(o->eye[k] - s->origin[k]);
-            d.camera.forward[k] = o->target[k] - o->eye[k];
-            d.camera.up[k] = o->has_up ? o->up[k] : (k == 1 ? 1.f : 0.f);
-        }
-        d.camera.yfov = (o->fov_deg > 0.f ? o->fov_deg : 50.f) * 0.017453293f;
-    } else if (s->camera_count > 0) {
-        if (o->camera >= s->camera_count) {
-            snprintf(err.message, sizeof err.message, "%s: camera %u does not exist (%u cameras)", o->scene, o->camera,
-                     s->camera_count);
-            goto out;
-        }
-        pb_camera_from_scene(&s->cameras[o->camera], &d.camera);
-        if (o->fov_deg > 0.f)
-            d.camera.yfov = o->fov_deg * 0.017453293f;
-    } else if (o->has_camera) {
-        snprintf(err.message, sizeof err.message, "%s: the scene has no cameras", o->scene);
-        goto out;
-    } else {
-        /* no camera: look at the bounds' centre from the front, above */
-        float c[3], ext = 0.f;
-        for (int k = 0; k < 3; ++k) {
-            c[k] = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
-            ext = fmaxf(ext, s->bounds_max[k] - s->bounds_min[k]);
-        }
-        float eye[3] = {c[0], c[1] + 0.3f * ext, c[2] + 1.2f * ext};
-        for (int k = 0; k < 3; ++k) {
-            d.camera.eye[k] = eye[k];
-            d.camera.forward[k] = c[k] - eye[k];
-            d.camera.up[k] = k == 1 ? 1.f : 0.f;
-        }
-        d.camera.yfov = (o->fov_deg > 0.f ? o->fov_deg : 50.f) * 0.017453293f;
-    }
     if (pb_render_check(&d, &err) != PB_OK) /* before any device work */
         goto out;
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
@@ -213,9 +357,9 @@ int cmd_render(const options *o)
         snprintf(err.message, sizeof err.message, "out of host memory for a %ux%u image", d.width, d.height);
         goto out;
     }
-    double ms = 0, ms_ref = 0;
-    cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(),
-                             (uint64_t)d.width * d.height * (d.spp ? d.spp : (mode == PB_RENDER_REFERENCE ? 64 : 1))};
+    double ms = 0;
+    uint32_t spp = d.spp ? d.spp : (mode == PB_RENDER_REFERENCE ? 64 : 1);
+    cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), pixels * spp};
     d.progress = cli_progress;
     d.progress_user = &ps;
     cli_defer_signals(); /* from here a signal cancels the render; no image is written */
@@ -224,63 +368,11 @@ int cmd_render(const options *o)
         fprintf(stderr, "\n");
     if (rr != PB_OK)
         goto out;
-    double rmse = 0, rmse_indirect = 0;
-    pb_image_metrics surf, seams, off_seams, at_level[PB_SPARSE_MAX_LEVELS];
-    memset(at_level, 0, sizeof at_level);
-    memset(&surf, 0, sizeof surf);
-    memset(&seams, 0, sizeof seams);
-    memset(&off_seams, 0, sizeof off_seams);
-    uint64_t unserved = 0;
-    int sparse = msv->levels > 0 && mv->sparse;
+    diff_metrics m;
     if (diff) {
-        /* the reference (path traced), and the direct image the probe image's indirect part is measured against */
-        pb_render_desc dr = d;
-        dr.mode = PB_RENDER_REFERENCE;
-        dr.spp = o->has_spp ? o->spp * 16 : 256;
-        if (!o->reference && pb_render(ctx, s, gs, &dr, ref, ref_direct, &ms_ref, &err) != PB_OK)
+        if (measure_diff(o, ctx, s, gs, bvh, &d, o->seams_of ? &seams_vol : &vol, o->seams_of ? &seams_sv : &sv, img,
+                         img_direct, ref, ref_direct, rgb8, &m, &err) != PB_OK)
             goto out;
-        if (o->reference) /* coverage is the camera's: the probe image's (a PFM has no alpha) */
-            for (uint64_t i = 0; i < pixels; ++i)
-                ref[4 * i + 3] = img[4 * i + 3];
-        pb_render_desc dd = d;
-        dd.mode = PB_RENDER_DIRECT;
-        float *direct_img = malloc(pixels * 16);
-        if (!direct_img || pb_render(ctx, s, gs, &dd, direct_img, NULL, NULL, &err) != PB_OK) {
-            free(direct_img);
-            goto out;
-        }
-        rmse = pb_image_relative_rmse(img, ref, d.width, d.height);
-        uint8_t *cls = malloc(pixels);
-        if (!cls) {
-            free(direct_img);
-            snprintf(err.message, sizeof err.message, "out of host memory for a %ux%u image", d.width, d.height);
-            goto out;
-        }
-        pb_render_pixel_classes(s, bvh, &d, cls);
-        pb_image_surface_metrics(img, ref, cls, d.width, d.height, &surf);
-        uint8_t *seam = sparse ? malloc(pixels) : NULL, *level = sparse ? malloc(pixels) : NULL;
-        if (seam && level) { /* a sparse volume: the error where its levels meet, elsewhere, and per level */
-            pb_render_seam_pixels(s, bvh, &d, msv, mv->sparse, cls, seam, level);
-            pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_LEVELS, d.width, d.height, &seams);
-            pb_image_surface_metrics_where(img, ref, cls, seam, PB_SEAM_NONE, d.width, d.height, &off_seams);
-            for (uint32_t l = 0; l < mv->sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
-                pb_image_surface_metrics_where(img, ref, cls, level, (uint8_t)l, d.width, d.height, &at_level[l]);
-            for (uint64_t i = 0; i < pixels; ++i)
-                unserved += seam[i] == PB_SEAM_UNSERVED;
-        }
-        free(seam), free(level);
-        free(cls);
-        for (uint64_t i = 0; i < pixels; ++i)
-            for (int c = 0; c < 3; ++c) {
-                img_direct[4 * i + c] = img[4 * i + c] - direct_img[4 * i + c]; /* probes: indirect part */
-                ref_direct[4 * i + c] = ref[4 * i + c] - ref_direct[4 * i + c]; /* reference: indirect part */
-            }
-        for (uint64_t i = 0; i < pixels; ++i)
-            img_direct[4 * i + 3] = img[4 * i + 3], ref_direct[4 * i + 3] = ref[4 * i + 3];
-        /* a given reference comes without its direct part: no indirect metric */
-        rmse_indirect = o->reference ? NAN : pb_image_relative_rmse(img_direct, ref_direct, d.width, d.height);
-        free(direct_img);
-        pb_error_heatmap(img, ref, d.width, d.height, 0.5f, rgb8);
     } else {
         float ev = o->has_exposure ? o->exposure : pb_auto_exposure(img, d.width, d.height);
         pb_tonemap_image(img, d.width, d.height, ev, rgb8);
@@ -299,61 +391,10 @@ int cmd_render(const options *o)
     if (pb_write_png(o->output, rgb8, d.width, d.height, &err) != PB_OK)
         goto out;
     FILE *report = strcmp(o->output, "-") ? stdout : stderr; /* stdout carries the image for -o - */
-    uint32_t spp = d.spp ? d.spp : (mode == PB_RENDER_REFERENCE ? 64 : 1);
-    if (o->json) {
-        fprintf(report, "{\"image\": \"%s\", \"mode\": \"%s\", \"width\": %u, \"height\": %u, \"spp\": %u, \"gpu_ms\": %.3f",
-               o->output, mode_name, d.width, d.height, spp, ms);
-        if (diff) {
-            char ind[32] = "null";
-            if (!o->reference)
-                snprintf(ind, sizeof ind, "%.6f", rmse_indirect);
-            if (o->reference)
-                fprintf(report, ", \"reference\": \"%s\"", o->reference);
-            else
-                fprintf(report, ", \"reference_spp\": %u, \"reference_gpu_ms\": %.3f", o->has_spp ? o->spp * 16 : 256,
-                        ms_ref);
-            fprintf(report, ", \"relative_rmse\": %.6f, \"relative_rmse_indirect\": %s, \"relative_rmse_surfaces\": %.6f, "
-                   "\"p95_relative_error\": %.6f, \"surface_pixels\": %llu",
-                   rmse, ind, surf.relative_rmse, surf.p95_relative, (unsigned long long)surf.pixels);
-            if (sparse)
-                fprintf(report, ", \"seam_pixels\": %llu, \"relative_rmse_seams\": %.6f, \"p95_relative_error_seams\": %.6f, "
-                        "\"off_seam_pixels\": %llu, \"relative_rmse_off_seams\": %.6f, \"p95_relative_error_off_seams\": %.6f, "
-                        "\"unserved_pixels\": %llu",
-                        (unsigned long long)seams.pixels, seams.relative_rmse, seams.p95_relative,
-                        (unsigned long long)off_seams.pixels, off_seams.relative_rmse, off_seams.p95_relative,
-                        (unsigned long long)unserved);
-            if (sparse) { /* where the error sits: the pixels each level serves */
-                fprintf(report, ", \"levels\": [");
-                for (uint32_t l = 0; l < mv->sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
-                    fprintf(report, "%s{\"level\": %u, \"pixels\": %llu, \"relative_rmse\": %.6f, "
-                            "\"p95_relative_error\": %.6f}", l ? ", " : "", l, (unsigned long long)at_level[l].pixels,
-                            at_level[l].relative_rmse, at_level[l].p95_relative);
-                fprintf(report, "]");
-            }
-        }
-        fprintf(report, "}\n");
-    } else {
-        fprintf(report, "wrote %s: %ux%u, %s, %u spp, GPU %.0f ms\n", o->output, d.width, d.height, mode_name, spp, ms);
-        if (diff && o->reference)
-            fprintf(report, "probes vs %s: relative RMSE %.4f of the image; non-emissive surfaces (%llu pixels): "
-                   "relative RMSE %.4f, p95 per-pixel error %.4f; heat map: black 0, red >= 50 %%\n",
-                   o->reference, rmse, (unsigned long long)surf.pixels, surf.relative_rmse, surf.p95_relative);
-        else if (diff)
-            fprintf(report, "probes vs reference (%u spp, GPU %.0f ms): relative RMSE %.4f of the image, %.4f of the indirect "
-                   "light; non-emissive surfaces (%llu pixels): relative RMSE %.4f, p95 per-pixel error %.4f; heat map: "
-                   "black 0, red >= 50 %%\n",
-                   o->has_spp ? o->spp * 16 : 256, ms_ref, rmse, rmse_indirect, (unsigned long long)surf.pixels,
-                   surf.relative_rmse, surf.p95_relative);
-        if (diff && sparse)
-            fprintf(report, "where levels meet (%llu pixels): relative RMSE %.4f, p95 %.4f; elsewhere (%llu): %.4f, p95 "
-                    "%.4f; %llu surface pixels served by no brick\n", (unsigned long long)seams.pixels,
-                    seams.relative_rmse, seams.p95_relative, (unsigned long long)off_seams.pixels,
-                    off_seams.relative_rmse, off_seams.p95_relative, (unsigned long long)unserved);
-        for (uint32_t l = 0; diff && sparse && l < mv->sparse->levels && l < PB_SPARSE_MAX_LEVELS; ++l)
-            fprintf(report, "%s level %u: %llu pixels, relative RMSE %.4f, p95 %.4f%s", l ? ";" : "served by", l,
-                    (unsigned long long)at_level[l].pixels, at_level[l].relative_rmse, at_level[l].p95_relative,
-                    l + 1 == mv->sparse->levels ? "\n" : "");
-    }
+    if (o->json)
+        print_json(report, o, mode_name, &d, spp, ms, diff ? &m : NULL);
+    else
+        print_text(report, o, mode_name, &d, spp, ms, diff ? &m : NULL);
     rc = 0;
 out:
     free(img), free(img_direct), free(ref), free(ref_direct), free(rgb8);
