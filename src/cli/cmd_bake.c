@@ -331,17 +331,12 @@ int cmd_bake(const options *o)
     scd.face_normals = (uint32_t)o->face_normals;
     pb_scene *s = NULL;
     pb_bvh *bvh = NULL;
-    pb_volume vol;
-    pb_sparse_stats stats;
-    pb_points pts;
-    pb_environment env;
-    pb_bake_desc d;
-    memset(&vol, 0, sizeof vol);
-    memset(&stats, 0, sizeof stats);
-    memset(&pts, 0, sizeof pts);
-    memset(&env, 0, sizeof env);
-    memset(&d, 0, sizeof d);
-    pb_error err;
+    pb_volume vol = {0};
+    pb_sparse_stats stats = {0};
+    pb_points pts = {0};
+    pb_environment env = {0};
+    pb_bake_desc d = {0};
+    pb_error err = {0};
     int rc = 1;
     double t0 = cli_now_ms();
     /* the output is checked before any work: not a directory, writable,

@@ -274,16 +274,11 @@ int cmd_render(const options *o)
     pb_bvh *bvh = NULL;
     pb_context *ctx = NULL;
     pb_gpu_scene *gs = NULL;
-    pb_volume vol, seams_vol; /* the volume lit by, and --seams-of's, whose seams and levels the diff measures */
-    pb_sample_volume sv, seams_sv;
-    pb_environment env;
-    pb_error err;
-    memset(&vol, 0, sizeof vol);
-    memset(&seams_vol, 0, sizeof seams_vol);
-    memset(&sv, 0, sizeof sv);
-    memset(&seams_sv, 0, sizeof seams_sv);
-    memset(&env, 0, sizeof env);
-    memset(&err, 0, sizeof err);
+    /* the volume lit by, and --seams-of's, whose seams and levels the diff measures */
+    pb_volume vol = {0}, seams_vol = {0};
+    pb_sample_volume sv = {0}, seams_sv = {0};
+    pb_environment env = {0};
+    pb_error err = {0};
     float *img = NULL, *img_direct = NULL, *ref = NULL, *ref_direct = NULL;
     unsigned char *rgb8 = NULL;
     int rc = 1;
@@ -320,8 +315,7 @@ int cmd_render(const options *o)
     if ((o->volume && sampler_of(o, o->volume, &vol, s, &sv, &err) != PB_OK) ||
         (o->seams_of && sampler_of(o, o->seams_of, &seams_vol, s, &seams_sv, &err) != PB_OK))
         goto out;
-    pb_render_desc d;
-    memset(&d, 0, sizeof d);
+    pb_render_desc d = {0};
     d.width = width;
     d.height = height;
     d.mode = mode;
