@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs dependencies, builds, and runs every test: the full suite on the
 # Vulkan device (lavapipe unless PB_TEST_DEVICE / VK_DRIVER_FILES say
-# otherwise), then the CPU-side tests again under ASan + UBSan.
+# otherwise), then the CPU-side tests, the bake's and the command line's
+# again under ASan + UBSan.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
@@ -20,6 +21,15 @@ cmake --build build-asan -j"$jobs"
 echo "== CPU-side tests under AddressSanitizer + UndefinedBehaviorSanitizer (PB_TEST_QUICK: a tenth of the rays) ($(date +%T))"
 PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan -L cpu --output-on-failure
+# The bake's stages and the command line's error paths (fault injection,
+# Ctrl-C) under the same sanitizers, on the Vulkan device: host code that only
+# runs beside a device (pipelines, staging, the stages) is not in the CPU
+# tests. Leak checks off here: Mesa's llvmpipe keeps JIT and LLVM allocations
+# to the end of the process, which LeakSanitizer reports without a usable
+# stack; leaks in our code are the CPU run's to find.
+echo "== test_bake and test_cli under AddressSanitizer + UndefinedBehaviorSanitizer on the device ($(date +%T))"
+PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --test-dir build-asan -R '^(test_bake|test_cli)$' --output-on-failure
 
 # A short libFuzzer run of the glTF loader (scripts/fuzz.sh is the long one):
 # from the committed corpus into a scratch folder, so the repository does not

@@ -134,7 +134,8 @@ static pb_result batch_add(pb_context *ctx, pb_pipeline_batch *batch, const pb_p
     job->ctx = ctx;
     job->request = q;
     job->inject = ++ctx->pipeline_jobs == ctx->desc.fail_pipeline;
-    memcpy(job->spec, q.spec, q.spec_count * sizeof *q.spec); /* the caller's array may not outlive the call */
+    if (q.spec_count) /* the caller's array may not outlive the call (and may be NULL when empty) */
+        memcpy(job->spec, q.spec, q.spec_count * sizeof *q.spec);
     job->request.spec = job->spec;
     job->threaded = threaded && pthread_create(&job->thread, NULL, make_pipeline_job, job) == 0;
     return PB_OK;
