@@ -188,6 +188,8 @@ expect emission-overflow 1 "error: $tmp/hot-panel.gltf: material [0-9]+ '[^']*' 
     "$pb" bake "$tmp/hot-panel.gltf" -o "$tmp/x.probes"
 sed 's/"emissiveStrength": 8.0/"emissiveStrength": 1e39/' "$demo" >"$tmp/inf-panel.gltf"
 expect emission-infinite 1 "emits inf" -- "$pb" bake "$tmp/inf-panel.gltf" -o "$tmp/x.probes"
+expect sky-infinite 2 "--sky needs 3 comma-separated finite numbers, got 'inf,0,0'" -- \
+    "$pb" bake "$demo" --sky inf,0,0 -o "$tmp/x.probes"
 expect sky-overflow 1 'error: sky radiance \(1e\+38, 1e\+38, 1e\+38\): each must be finite, >= 0 and at most 1e\+20' -- \
     "$pb" bake "$demo" --sky 1e38,1e38,1e38 -o "$tmp/x.probes"
 printf '{"points": [[0, 1, 0], [1e39, 0, 0]]}' >"$tmp/far.json"
@@ -389,7 +391,7 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect bake-no-output 2 'needs -o OUT.probes' -- "$pb" bake "$demo"
     expect bake-both-grids 2 'give --spacing or --counts, not both' -- \
         "$pb" bake "$demo" --spacing 1 --counts 2,2,2 -o "$tmp/x.probes"
-    expect bake-bad-counts 2 "--counts needs 3 comma-separated numbers" -- "$pb" bake "$demo" --counts 2,2 -o "$tmp/x.probes"
+    expect bake-bad-counts 2 "--counts needs 3 comma-separated finite numbers" -- "$pb" bake "$demo" --counts 2,2 -o "$tmp/x.probes"
     expect bake-missing-scene 1 "error: $tmp/none.gltf: cannot open" -- "$pb" bake "$tmp/none.gltf" -o "$tmp/x.probes"
     expect bake-no-partial-file 0 '^absent$' -- bash -c "[ -e '$tmp/x.probes' ] && echo present || echo absent"
     printf '{"spacing": 0.5, "points": [[0, 1.5, 0], {"id": 7, "position": [1, 1, -1]}, [-1.2, 2.5, 2]]}' >"$tmp/p.json"

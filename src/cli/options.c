@@ -435,7 +435,7 @@ static int apply(options *o, const char *a, const char *next)
                 break;
         }
         if (!next || got != want || (c && *c)) {
-            fprintf(stderr, "probebake: error: %s needs %d comma-separated numbers, got '%s'\n", a, want,
+            fprintf(stderr, "probebake: error: %s needs %d comma-separated finite numbers, got '%s'\n", a, want,
                     next ? next : "");
             return 2;
         }
