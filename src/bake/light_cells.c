@@ -108,54 +108,65 @@ static void make_shadow_rays(void *user, uint64_t begin, uint64_t end)
     }
 }
 
-pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb_error *err)
-{
-    memset(out, 0, sizeof *out);
-    const pb_scene *s = pass->scene;
-    const pb_bake_emitters *em = pass->emitters;
-    if (!em || !em->count || !s->triangle_count)
-        return PB_OK;
-    uint32_t E = em->count, T = s->triangle_count, N = PB_LIGHT_CELL_POINTS;
-    pb_result r = PB_OK;
+/* What the four steps of a build share; owned by it, freed together. */
+typedef struct cells_build {
+    const pb_bake_pass *pass;
+    const pb_scene *s;
+    pb_light_cells *out;
     pb_surface_sampler surface;
-    memset(&surface, 0, sizeof surface);
-    double *p = malloc(E * sizeof *p), *share = NULL, *U = NULL, *light = NULL, *q = NULL;
-    float *centroid = malloc(3 * (size_t)E * sizeof *centroid), *cen = NULL, *points = NULL, *keep = NULL;
-    keyed *k = malloc(E * sizeof *k);
-    uint32_t *point_cell = NULL, *first = NULL, *order = NULL, *slot_cell = NULL, *alias = NULL;
-    uint32_t *pair_slot = NULL, *pair_cluster = NULL;
-    pb_ray *rays = NULL;
-    pb_hit *hits = NULL;
-    probe_ray *meta = NULL;
-    out->cluster_of = calloc(T, sizeof *out->cluster_of);
-    out->member_tri = malloc(E * sizeof *out->member_tri);
-    out->member_keep = malloc(E * sizeof *out->member_keep);
-    out->member_alias = malloc(E * sizeof *out->member_alias);
-    if (!p || !centroid || !k || !out->cluster_of || !out->member_tri || !out->member_keep || !out->member_alias ||
-        !pb_surface_sampler_init(s, &surface))
-        goto oom;
+    uint32_t E, C;          /* emitters, clusters */
+    double *p;              /* per emitter: its probability by power */
+    float *centroid;        /* per emitter: 3 floats */
+    keyed *k;               /* emitters in cluster order */
+    double *share;          /* per cluster: its part of the power */
+    float *cen;             /* per cluster: power-weighted centre, squared radius */
+    float cell;             /* the cells' edge */
+    float *points;          /* surface points: position, normal */
+    uint32_t have, cells, slots;
+    uint32_t *first;        /* per cell + 1: its first point in `order` */
+    uint32_t *order;        /* points by cell */
+    uint32_t *slot_cell;    /* per slot (cell with enough points): its cell */
+    double *light;          /* per slot and cluster: measured unblocked light */
+} cells_build;
 
-    /* 1. clusters: emitters grouped by a grid over their centroids, coarsened
-     * until there are at most PB_LIGHT_CLUSTERS_MAX */
+static void cells_build_free(cells_build *b)
+{
+    pb_surface_sampler_free(&b->surface);
+    free(b->p), free(b->centroid), free(b->k), free(b->share), free(b->cen), free(b->points);
+    free(b->first), free(b->order), free(b->slot_cell), free(b->light);
+}
+
+/* 1. Clusters: emitters grouped by a grid over their centroids, coarsened
+ * until there are at most PB_LIGHT_CLUSTERS_MAX; each cluster's power,
+ * power-weighted centre and radius, and an alias table by power within it.
+ * Returns 0 when out of memory; b->C < 2 means one cluster (nothing to learn). */
+static int make_clusters(cells_build *b)
+{
+    const pb_scene *s = b->s;
+    const pb_bake_emitters *em = b->pass->emitters;
+    pb_light_cells *out = b->out;
+    uint32_t E = b->E;
     for (uint32_t i = 0; i < E; ++i) {
         const float *v = s->positions + 9 * (size_t)em->tri[i];
-        p[i] = (double)em->pdf_area[em->tri[i]] * pb_triangle_area(v); /* its probability by power */
+        b->p[i] = (double)em->pdf_area[em->tri[i]] * pb_triangle_area(v);
         for (int a = 0; a < 3; ++a)
-            centroid[3 * i + a] = (v[a] + v[3 + a] + v[6 + a]) / 3.f;
+            b->centroid[3 * i + a] = (v[a] + v[3 + a] + v[6 + a]) / 3.f;
     }
-    pb_cell_grid_fit(s, surface.area_total, PB_LIGHT_CELL_POINTS_PER_CELL, N, &out->grid);
-    float cell = 1.f / out->grid.inv_cell, h = 0.5f * cell;
-    uint32_t C;
-    while ((C = cluster_keys(s, centroid, E, h, k)) > PB_LIGHT_CLUSTERS_MAX)
+    pb_cell_grid_fit(s, b->surface.area_total, PB_LIGHT_CELL_POINTS_PER_CELL, PB_LIGHT_CELL_POINTS, &out->grid);
+    b->cell = 1.f / out->grid.inv_cell;
+    float h = 0.5f * b->cell;
+    while ((b->C = cluster_keys(s, b->centroid, E, h, b->k)) > PB_LIGHT_CLUSTERS_MAX)
         h *= 1.5f;
+    uint32_t C = b->C;
     if (C < 2)
-        goto done; /* one cluster: every cell would draw by power */
+        return 1;
     out->clusters = C;
     out->cluster_range = calloc(2 * (size_t)C, sizeof *out->cluster_range);
-    share = calloc(C, sizeof *share);
-    cen = calloc(4 * (size_t)C, sizeof *cen); /* power-weighted centre, squared radius */
-    if (!out->cluster_range || !share || !cen)
-        goto oom;
+    b->share = calloc(C, sizeof *b->share);
+    b->cen = calloc(4 * (size_t)C, sizeof *b->cen);
+    if (!out->cluster_range || !b->share || !b->cen)
+        return 0;
+    const keyed *k = b->k;
     for (uint32_t i = 0, c = 0; i < E; ++i) {
         if (i && k[i].key != k[i - 1].key)
             ++c;
@@ -165,123 +176,129 @@ pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb
         out->cluster_range[2 * c + 1]++;
         out->member_tri[i] = em->tri[e];
         out->cluster_of[em->tri[e]] = c;
-        share[c] += p[e];
+        b->share[c] += b->p[e];
     }
     for (uint32_t c = 0; c < C; ++c) {
         uint32_t f = out->cluster_range[2 * c], n = out->cluster_range[2 * c + 1];
         double w[3] = {0, 0, 0}, wsum = 0;
         for (uint32_t i = f; i < f + n; ++i) {
-            double pi = p[k[i].index] > 0 ? p[k[i].index] : 1e-30; /* zero-power members: the plain mean */
+            double pi = b->p[k[i].index] > 0 ? b->p[k[i].index] : 1e-30; /* zero-power members: the plain mean */
             wsum += pi;
             for (int a = 0; a < 3; ++a)
-                w[a] += pi * centroid[3 * k[i].index + a];
+                w[a] += pi * b->centroid[3 * k[i].index + a];
         }
+        float *cc = b->cen + 4 * c;
         for (int a = 0; a < 3; ++a)
-            cen[4 * c + a] = (float)(w[a] / wsum);
+            cc[a] = (float)(w[a] / wsum);
         float r2 = 0.f;
         for (uint32_t i = f; i < f + n; ++i) {
             float d2 = 0.f;
             for (int a = 0; a < 3; ++a) {
-                float d = centroid[3 * k[i].index + a] - cen[4 * c + a];
+                float d = b->centroid[3 * k[i].index + a] - cc[a];
                 d2 += d * d;
             }
             r2 = fmaxf(r2, d2);
         }
-        cen[4 * c + 3] = r2;
+        cc[3] = r2;
         /* within the cluster by power (alias indices local to it) */
         double *wm = malloc(n * sizeof *wm);
         if (!wm)
-            goto oom;
+            return 0;
         for (uint32_t i = 0; i < n; ++i)
-            wm[i] = p[k[f + i].index];
+            wm[i] = b->p[k[f + i].index];
         if (!pb_alias_build(wm, n, out->member_keep + f, out->member_alias + f))
             for (uint32_t i = 0; i < n; ++i) /* no power at all: never drawn (q = 0) */
                 out->member_keep[f + i] = 1.f, out->member_alias[f + i] = i;
         free(wm);
     }
+    return 1;
+}
 
-    /* 2. surface points by area (keyed by the seed only), bucketed by cell;
-     * the cells grow while their tables would pass PB_LIGHT_TABLE_MAX */
-    points = malloc(6 * (size_t)N * sizeof *points); /* position, normal */
-    point_cell = malloc(N * sizeof *point_cell);
-    order = malloc(N * sizeof *order);
-    if (!points || !point_cell || !order)
-        goto oom;
-    uint32_t have = 0;
-    for (uint32_t i = 0; i < N; ++i) {
-        uint32_t state = pb_rng_seed_cpu(pass->seed, i, PB_LIGHT_PASS, 0u);
-        if (pb_surface_point(s, &surface, &state, points + 6 * (size_t)have, points + 6 * (size_t)have + 3))
-            ++have;
+/* 2. Surface points by area (keyed by the seed only), bucketed by cell; the
+ * cells grow while their tables would pass PB_LIGHT_TABLE_MAX. Then the
+ * slots: the cells with enough points to learn from. */
+static int bucket_points(cells_build *b)
+{
+    const pb_scene *s = b->s;
+    pb_light_cells *out = b->out;
+    uint32_t N = PB_LIGHT_CELL_POINTS;
+    b->points = malloc(6 * (size_t)N * sizeof *b->points);
+    uint32_t *point_cell = malloc(N * sizeof *point_cell);
+    b->order = malloc(N * sizeof *b->order);
+    int ok = b->points && point_cell && b->order;
+    for (uint32_t i = 0; ok && i < N; ++i) {
+        uint32_t state = pb_rng_seed_cpu(b->pass->seed, i, PB_LIGHT_PASS, 0u);
+        float *x = b->points + 6 * (size_t)b->have;
+        b->have += pb_surface_point(s, &b->surface, &state, x, x + 3) != 0;
     }
-    uint32_t cells, learnable;
-    for (;;) {
-        cells = pb_cell_grid_cells(&out->grid);
-        free(first);
-        if (!(first = calloc((size_t)cells + 1, sizeof *first)))
-            goto oom;
-        for (uint32_t i = 0; i < have; ++i)
-            first[(point_cell[i] = pb_cell_grid_index(&out->grid, points + 6 * (size_t)i)) + 1]++;
-        learnable = 0;
-        for (uint32_t c = 0; c < cells; ++c)
-            learnable += first[c + 1] >= PB_LIGHT_CELL_MIN_POINTS;
-        if ((uint64_t)learnable * C <= PB_LIGHT_TABLE_MAX)
+    uint32_t learnable = 0;
+    while (ok) {
+        b->cells = pb_cell_grid_cells(&out->grid);
+        free(b->first);
+        if (!(b->first = calloc((size_t)b->cells + 1, sizeof *b->first))) {
+            ok = 0;
             break;
-        cell *= 1.5f;
-        pb_cell_grid_set(s, cell, &out->grid);
+        }
+        for (uint32_t i = 0; i < b->have; ++i)
+            b->first[(point_cell[i] = pb_cell_grid_index(&out->grid, b->points + 6 * (size_t)i)) + 1]++;
+        learnable = 0;
+        for (uint32_t c = 0; c < b->cells; ++c)
+            learnable += b->first[c + 1] >= PB_LIGHT_CELL_MIN_POINTS;
+        if ((uint64_t)learnable * b->C <= PB_LIGHT_TABLE_MAX)
+            break;
+        b->cell *= 1.5f;
+        pb_cell_grid_set(s, b->cell, &out->grid);
     }
-    for (uint32_t c = 0; c < cells; ++c)
-        first[c + 1] += first[c];
-    {
-        uint32_t *fill = calloc(cells, sizeof *fill);
-        if (!fill)
-            goto oom;
-        for (uint32_t i = 0; i < have; ++i)
-            order[first[point_cell[i]] + fill[point_cell[i]]++] = i; /* point order within a cell */
-        free(fill);
+    uint32_t *fill = ok ? calloc(b->cells, sizeof *fill) : NULL;
+    b->slot_cell = malloc((learnable ? learnable : 1) * sizeof *b->slot_cell);
+    if (!fill || !b->slot_cell) {
+        free(fill), free(point_cell);
+        return 0;
     }
+    for (uint32_t c = 0; c < b->cells; ++c) {
+        if (b->first[c + 1] >= PB_LIGHT_CELL_MIN_POINTS)
+            b->slot_cell[b->slots++] = c;
+        b->first[c + 1] += b->first[c];
+    }
+    for (uint32_t i = 0; i < b->have; ++i)
+        b->order[b->first[point_cell[i]] + fill[point_cell[i]]++] = i; /* point order within a cell */
+    free(fill), free(point_cell);
+    return 1;
+}
 
-    /* 3. per cell: candidate clusters by power over distance squared from
-     * the mean of its points, measured with shadow rays from its points */
-    uint32_t K = C < PB_LIGHT_CELL_CANDIDATES ? C : PB_LIGHT_CELL_CANDIDATES, R = PB_LIGHT_CELL_RAYS;
-    out->slot = malloc(cells * sizeof *out->slot);
-    slot_cell = malloc((learnable ? learnable : 1) * sizeof *slot_cell);
-    U = malloc(C * sizeof *U);
-    light = calloc((size_t)(learnable ? learnable : 1) * C, sizeof *light);
-    q = malloc(C * sizeof *q);
-    keep = malloc(C * sizeof *keep);
-    alias = malloc(C * sizeof *alias);
-    out->table = calloc((size_t)(learnable ? learnable : 1) * C * 4, sizeof *out->table);
+/* 3. Per slot: the candidate clusters by power over distance squared from
+ * the mean of its points, measured with shadow rays from its points, in
+ * batches of slots (b->light). */
+static int measure_cells(cells_build *b)
+{
+    const pb_scene *s = b->s;
+    uint32_t C = b->C, K = C < PB_LIGHT_CELL_CANDIDATES ? C : PB_LIGHT_CELL_CANDIDATES, R = PB_LIGHT_CELL_RAYS;
     uint32_t batch_cells = PB_LIGHT_RAYS_PER_BATCH / (K * R) ? PB_LIGHT_RAYS_PER_BATCH / (K * R) : 1;
     size_t batch_rays = (size_t)batch_cells * K * R;
-    rays = malloc(batch_rays * sizeof *rays);
-    hits = malloc(batch_rays * sizeof *hits);
-    meta = malloc(batch_rays * sizeof *meta);
-    pair_slot = malloc((size_t)batch_cells * K * sizeof *pair_slot);
-    pair_cluster = malloc((size_t)batch_cells * K * sizeof *pair_cluster);
-    if (!out->slot || !slot_cell || !U || !light || !q || !keep || !alias || !out->table || !rays || !hits || !meta ||
-        !pair_slot || !pair_cluster)
-        goto oom;
-    memset(out->slot, 0xff, cells * sizeof *out->slot);
-    uint32_t slots = 0;
-    for (uint32_t c = 0; c < cells; ++c)
-        if (first[c + 1] - first[c] >= PB_LIGHT_CELL_MIN_POINTS)
-            slot_cell[slots++] = c;
-    float near2 = 0.25f * cell * cell, min_d2 = 0.0625f * cell * cell;
-    for (uint32_t s0 = 0; s0 < slots; s0 += batch_cells) {
-        uint32_t s1 = s0 + batch_cells < slots ? s0 + batch_cells : slots, npairs = 0;
+    b->light = calloc((size_t)(b->slots ? b->slots : 1) * C, sizeof *b->light);
+    double *U = malloc(C * sizeof *U);
+    pb_ray *rays = malloc(batch_rays * sizeof *rays);
+    pb_hit *hits = malloc(batch_rays * sizeof *hits);
+    probe_ray *meta = malloc(batch_rays * sizeof *meta);
+    uint32_t *pair_slot = malloc((size_t)batch_cells * K * sizeof *pair_slot);
+    uint32_t *pair_cluster = malloc((size_t)batch_cells * K * sizeof *pair_cluster);
+    int ok = b->light && U && rays && hits && meta && pair_slot && pair_cluster;
+    float near2 = 0.25f * b->cell * b->cell, min_d2 = 0.0625f * b->cell * b->cell;
+    for (uint32_t s0 = 0; ok && s0 < b->slots; s0 += batch_cells) {
+        uint32_t s1 = s0 + batch_cells < b->slots ? s0 + batch_cells : b->slots, npairs = 0;
         for (uint32_t sl = s0; sl < s1; ++sl) {
-            uint32_t c = slot_cell[sl], f = first[c], np = first[c + 1] - f;
+            uint32_t c = b->slot_cell[sl], f = b->first[c], np = b->first[c + 1] - f;
             float m[3] = {0, 0, 0};
             for (uint32_t i = f; i < f + np; ++i)
                 for (int a = 0; a < 3; ++a)
-                    m[a] += points[6 * (size_t)order[i] + a] / (float)np;
+                    m[a] += b->points[6 * (size_t)b->order[i] + a] / (float)np;
             for (uint32_t cl = 0; cl < C; ++cl) {
                 float d2 = 0.f;
                 for (int a = 0; a < 3; ++a) {
-                    float d = cen[4 * cl + a] - m[a];
+                    float d = b->cen[4 * cl + a] - m[a];
                     d2 += d * d;
                 }
-                U[cl] = share[cl] / fmax(d2, near2 + cen[4 * cl + 3]);
+                U[cl] = b->share[cl] / fmax(d2, near2 + b->cen[4 * cl + 3]);
             }
             for (uint32_t kk = 0; kk < K; ++kk) { /* the K largest, in order */
                 uint32_t best = 0;
@@ -294,45 +311,82 @@ pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb
             }
         }
         size_t nr = (size_t)npairs * R;
-        ray_batch rb = {s, out, pair_slot, pair_cluster, slot_cell, first, order, points, pass->seed, R, min_d2, rays,
-                        meta};
+        ray_batch rb = {s, b->out, pair_slot, pair_cluster, b->slot_cell, b->first, b->order, b->points,
+                        b->pass->seed, R, min_d2, rays, meta};
         pb_parallel_for(nr, 1024, 0, make_shadow_rays, &rb);
-        pb_trace_cpu(s, pass->bvh, rays, (uint32_t)nr, PB_TRACE_ANY, hits, 0);
+        pb_trace_cpu(s, b->pass->bvh, rays, (uint32_t)nr, PB_TRACE_ANY, hits, 0);
         for (size_t i = 0; i < nr; ++i) /* in ray order: sums independent of the threads */
             if (hits[i].triangle == PB_NO_HIT)
-                light[(size_t)meta[i].slot * C + meta[i].cluster] += share[meta[i].cluster] * meta[i].weight / R;
+                b->light[(size_t)meta[i].slot * C + meta[i].cluster] += b->share[meta[i].cluster] * meta[i].weight / R;
     }
+    free(U), free(rays), free(hits), free(meta), free(pair_slot), free(pair_cluster);
+    return ok;
+}
 
-    /* 4. per cell: q = a share + (1 - a) measured / total, as an alias table
-     * with each cluster's ratio q / share */
-    for (uint32_t sl = 0; sl < slots; ++sl) {
-        const double *Lc = light + (size_t)sl * C;
+/* 4. Per slot: q = a share + (1 - a) measured / total, as an alias table
+ * with each cluster's ratio q / share. Slots that measured no light draw
+ * by power (no table). */
+static int make_tables(cells_build *b)
+{
+    pb_light_cells *out = b->out;
+    uint32_t C = b->C;
+    out->slot = malloc(b->cells * sizeof *out->slot);
+    out->table = calloc((size_t)(b->slots ? b->slots : 1) * C * 4, sizeof *out->table);
+    double *q = malloc(C * sizeof *q);
+    float *keep = malloc(C * sizeof *keep);
+    uint32_t *alias = malloc(C * sizeof *alias);
+    int ok = out->slot && out->table && q && keep && alias;
+    if (ok)
+        memset(out->slot, 0xff, b->cells * sizeof *out->slot);
+    for (uint32_t sl = 0; ok && sl < b->slots; ++sl) {
+        const double *Lc = b->light + (size_t)sl * C;
         double total = 0;
         for (uint32_t cl = 0; cl < C; ++cl)
             total += Lc[cl];
         if (!(total > 0.0) || !isfinite(total))
             continue; /* no emitter measured unblocked: by power */
         for (uint32_t cl = 0; cl < C; ++cl)
-            q[cl] = PB_LIGHT_CELL_POWER_SHARE * share[cl] + (1.0 - PB_LIGHT_CELL_POWER_SHARE) * Lc[cl] / total;
-        if (!pb_alias_build(q, C, keep, alias))
-            goto oom;
+            q[cl] = PB_LIGHT_CELL_POWER_SHARE * b->share[cl] + (1.0 - PB_LIGHT_CELL_POWER_SHARE) * Lc[cl] / total;
+        if (!(ok = pb_alias_build(q, C, keep, alias)))
+            break;
         float *tb = out->table + 4 * (size_t)out->learned * C;
         for (uint32_t cl = 0; cl < C; ++cl) {
             tb[4 * cl] = keep[cl];
             memcpy(&tb[4 * cl + 1], &alias[cl], 4);
-            tb[4 * cl + 2] = share[cl] > 0.0 ? (float)(q[cl] / share[cl]) : 1.f;
+            tb[4 * cl + 2] = b->share[cl] > 0.0 ? (float)(q[cl] / b->share[cl]) : 1.f;
             tb[4 * cl + 3] = 0.f;
         }
-        out->slot[slot_cell[sl]] = out->learned++;
+        out->slot[b->slot_cell[sl]] = out->learned++;
     }
-    goto done;
-oom:
-    r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for light cells (%u emitters)", E);
-done:
-    pb_surface_sampler_free(&surface);
-    free(p), free(share), free(U), free(light), free(q), free(centroid), free(cen), free(points), free(k);
-    free(point_cell), free(first), free(order), free(slot_cell), free(rays), free(hits), free(meta);
-    free(keep), free(alias), free(pair_slot), free(pair_cluster);
+    free(q), free(keep), free(alias);
+    return ok;
+}
+
+pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const pb_scene *s = pass->scene;
+    const pb_bake_emitters *em = pass->emitters;
+    if (!em || !em->count || !s->triangle_count)
+        return PB_OK;
+    uint32_t E = em->count, T = s->triangle_count;
+    cells_build b = {0};
+    b.pass = pass, b.s = s, b.out = out, b.E = E;
+    b.p = malloc(E * sizeof *b.p);
+    b.centroid = malloc(3 * (size_t)E * sizeof *b.centroid);
+    b.k = malloc(E * sizeof *b.k);
+    out->cluster_of = calloc(T, sizeof *out->cluster_of);
+    out->member_tri = malloc(E * sizeof *out->member_tri);
+    out->member_keep = malloc(E * sizeof *out->member_keep);
+    out->member_alias = malloc(E * sizeof *out->member_alias);
+    int ok = b.p && b.centroid && b.k && out->cluster_of && out->member_tri && out->member_keep &&
+             out->member_alias && pb_surface_sampler_init(s, &b.surface);
+    ok = ok && make_clusters(&b);
+    if (ok && b.C >= 2) /* one cluster: every cell would draw by power */
+        ok = bucket_points(&b) && measure_cells(&b) && make_tables(&b);
+    cells_build_free(&b);
+    pb_result r = ok ? PB_OK
+                     : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for light cells (%u emitters)", E);
     if (r != PB_OK || !out->learned)
         pb_light_cells_free(out);
     return r;
