@@ -450,6 +450,148 @@ static pb_result read_sparse(const unsigned char *q, pb_volume *v, pb_error *err
     return pb_sparse_layout_validate(sp, v->probe_count, err);
 }
 
+/* The header's fields into v (the file's layout: docs/format.md). */
+static void decode_header(const unsigned char *h, pb_volume *v)
+{
+    v->flags = get_u32(h + 16);
+    v->probe_count = get_u32(h + 20);
+    for (int k = 0; k < 3; ++k) {
+        v->counts[k] = get_u32(h + 24 + 4 * k);
+        v->origin[k] = get_f64(h + 40 + 8 * k);
+        v->spacing[k] = get_f64(h + 64 + 8 * k);
+    }
+    v->octmap_res = get_u32(h + 36);
+    v->settings.seed = get_u64(h + 88);
+    v->settings.scene_hash = get_u64(h + 96);
+    v->settings.rays_per_probe = get_u32(h + 104);
+    v->settings.passes = get_u32(h + 108);
+    v->settings.bounces = get_u32(h + 112);
+    v->settings.indirect_mode = get_u32(h + 116);
+    v->settings.target_error = get_f32(h + 120);
+    v->settings.max_distance = get_f32(h + 124);
+    pb_volume_timings *tm = &v->timings; /* in the file's order */
+    double *t[8] = {&tm->load, &tm->bvh, &tm->upload, &tm->trace, &tm->sh, &tm->octmap, &tm->relocate, &tm->total};
+    for (int i = 0; i < 8; ++i)
+        *t[i] = get_f64(h + 184 + 8 * i);
+    memcpy(v->device, h + 248, sizeof v->device - 1);
+    v->device[sizeof v->device - 1] = '\0';
+    /* zero in files written before these fields: none, default, off */
+    v->settings.sh_window = get_u32(h + 376);
+    v->settings.sh_window_width = get_f32(h + 380);
+    v->settings.indirect_clamp = get_f32(h + 384);
+    v->settings.techniques = get_u32(h + 388);
+    int sparse = (v->flags & PB_VOLUME_SPARSE) != 0;
+    v->settings.refine_error = sparse ? get_f32(h + 424) : 0.f;
+    v->settings.refine_test = sparse ? get_u32(h + 428) : 0u;
+    v->settings.test_pass_scale = sparse ? get_u32(h + 432) : 0u;
+    v->settings.seam_rounds = sparse ? get_u32(h + 436) : 0u;
+    v->settings.seam_error = sparse ? get_f32(h + 440) : 0.f;
+    v->settings.relocation_rays = get_u32(h + 448);
+    memset(&v->shard, 0, sizeof v->shard);
+    if (v->flags & PB_VOLUME_SHARD)
+        v->shard = (pb_volume_shard){get_u32(h + 400), get_u32(h + 404), get_u32(h + 408), get_u32(h + 412),
+                                     get_u32(h + 444) ? get_u32(h + 444) : 1u};
+}
+
+/* What is wrong with a decoded header, before any section is read; NULL
+ * when nothing is. */
+static const char *header_problem(const unsigned char *h, const pb_volume *v, uint32_t version)
+{
+    uint64_t grid_probes = v->flags & PB_VOLUME_SHARD ? v->shard.total : v->probe_count;
+    const pb_volume_shard *sd = &v->shard;
+    if (get_u32(h + 12) != HEADER_BYTES)
+        return "unexpected header size";
+    if (v->probe_count == 0 || v->probe_count > MAX_PROBES)
+        return "probe count out of range";
+    if (v->octmap_res < 1 || v->octmap_res > 256 || get_u32(h + 176) != v->octmap_res + 2)
+        return "octahedral map size out of range";
+    if (get_u32(h + 128) != (version == 1 ? DEPTH_FORMAT_F16_METRES : DEPTH_FORMAT_F16_UNITS) ||
+        get_u32(h + 132) != SH_FORMAT_F32)
+        return "unknown SH or depth format";
+    if (version >= 2 && (!(get_f32(h + 180) > 0.f) || !isfinite(get_f32(h + 180))))
+        return "depth unit not a positive finite number";
+    if ((v->flags & PB_VOLUME_SHARD) &&
+        (sd->index >= sd->count || sd->total > MAX_PROBES ||
+         ((v->flags & PB_VOLUME_SPARSE) ? sd->step > 1 || sd->first >= sd->total /* bricks */
+          : sd->step <= 1 ? (uint64_t)sd->first + v->probe_count > sd->total
+                          : sd->step != sd->count || sd->first != sd->index ||
+                                v->probe_count != pb_shard_dealt_count(sd->total, sd->index, sd->count))))
+        return "shard part out of range";
+    if ((v->flags & PB_VOLUME_GRID) && (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != grid_probes)
+        return "grid counts do not match the probe count";
+    if ((v->flags & PB_VOLUME_SPARSE) && (version < 4 || (v->flags & PB_VOLUME_GRID)))
+        return "sparse flag in a grid or a file older than version 4";
+    return NULL;
+}
+
+/* The sections' offsets: from the header's counts, the sparse section's
+ * size from its own head (read from f); what disagrees with the offsets the
+ * header states goes to *bad. */
+static layout sections_of(const unsigned char *h, const pb_volume *v, uint32_t version, FILE *f, uint64_t file_bytes,
+                          const char **bad)
+{
+    layout l = layout_of(v->probe_count, v->octmap_res, version);
+    unsigned char sh_head[SPARSE_HEAD];
+    if (v->flags & PB_VOLUME_SPARSE) {
+        uint64_t at = align16(l.end);
+        if (get_u64(h + 416) != at)
+            *bad = "section offsets do not match the sizes";
+        else if (file_bytes < at + SPARSE_HEAD || fseek(f, (long)at, SEEK_SET) != 0 ||
+                 fread(sh_head, 1, SPARSE_HEAD, f) != SPARSE_HEAD)
+            *bad = "truncated sparse layout";
+        else if (get_u32(sh_head + 4) >= (1u << 20) || get_u32(sh_head + 8) >= (1u << 20) ||
+                 get_u32(sh_head + 12) >= (1u << 20))
+            *bad = "sparse layout with too many cells";
+        else {
+            uint64_t cells = (uint64_t)get_u32(sh_head + 4) * get_u32(sh_head + 8) * get_u32(sh_head + 12);
+            if ((v->flags & PB_VOLUME_SHARD) && v->shard.total != cells)
+                *bad = "shard part out of range"; /* a sparse part counts coarsest bricks */
+            l.sparse = at;
+            l.end = at + sparse_bytes(cells, get_u32(sh_head + 16), get_u32(sh_head + 20));
+        }
+    } else if (version >= 4 && get_u64(h + 416) != 0) {
+        *bad = "sparse layout offset in a volume without the sparse flag";
+    }
+    if (!*bad && (get_u64(h + 136) != l.base || get_u64(h + 144) != l.offset || get_u64(h + 152) != l.flags ||
+                  get_u64(h + 160) != l.sh || get_u64(h + 168) != l.depth ||
+                  (version >= 3 && get_u64(h + 392) != l.accounting)))
+        *bad = "section offsets do not match the sizes";
+    return l;
+}
+
+/* The grid sections of the file's bytes b into v (allocated). Before version
+ * 3 a probe's paths are what the header says every probe got (an upper
+ * bound under --target-error) and its error is unknown. Returns the first
+ * probe whose standard error is negative or not finite, or UINT32_MAX. */
+static uint32_t decode_sections(const unsigned char *b, const layout *l, uint32_t version, pb_volume *v)
+{
+    size_t n = v->probe_count;
+    for (size_t i = 0; i < 3 * n; ++i) {
+        v->base[i] = get_f32(b + l->base + 4 * i);
+        v->offset[i] = get_f32(b + l->offset + 4 * i);
+    }
+    for (size_t i = 0; i < n; ++i)
+        v->probe_flags[i] = get_u32(b + l->flags + 4 * i);
+    for (size_t i = 0; i < 27 * n; ++i)
+        v->sh[i] = get_f32(b + l->sh + 4 * i);
+    uint64_t halves = n * pb_volume_tile_halves(v->octmap_res);
+    for (uint64_t i = 0; i < halves; ++i)
+        v->depth[i] = (uint16_t)(b[l->depth + 2 * i] | b[l->depth + 2 * i + 1] << 8);
+    uint32_t bad_probe = UINT32_MAX;
+    for (size_t i = 0; i < n; ++i) {
+        if (version < 3) {
+            uint64_t paths = (uint64_t)v->settings.passes * v->settings.rays_per_probe;
+            v->probe_paths[i] = paths > UINT32_MAX ? UINT32_MAX : (uint32_t)paths;
+            continue;
+        }
+        v->probe_paths[i] = get_u32(b + l->accounting + 8 * i);
+        v->probe_std_error[i] = get_f32(b + l->accounting + 8 * i + 4);
+        if (!std_error_ok(v->probe_std_error[i]) && bad_probe == UINT32_MAX)
+            bad_probe = (uint32_t)i;
+    }
+    return bad_probe;
+}
+
 pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
 {
     pb_error_clear(err);
@@ -475,95 +617,11 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         return pb_fail(err, PB_ERROR_UNSUPPORTED, "%s: volume format version %u; this build reads versions 1 to %u", path,
                        version, PB_VOLUME_VERSION);
     }
-    v->flags = get_u32(h + 16);
-    v->probe_count = get_u32(h + 20);
-    for (int k = 0; k < 3; ++k) {
-        v->counts[k] = get_u32(h + 24 + 4 * k);
-        v->origin[k] = get_f64(h + 40 + 8 * k);
-        v->spacing[k] = get_f64(h + 64 + 8 * k);
-    }
-    v->octmap_res = get_u32(h + 36);
-    v->settings.seed = get_u64(h + 88);
-    v->settings.scene_hash = get_u64(h + 96);
-    v->settings.rays_per_probe = get_u32(h + 104);
-    v->settings.passes = get_u32(h + 108);
-    v->settings.bounces = get_u32(h + 112);
-    v->settings.indirect_mode = get_u32(h + 116);
-    v->settings.target_error = get_f32(h + 120);
-    v->settings.max_distance = get_f32(h + 124);
-    pb_volume_timings *tm = &v->timings; /* in the file's order (docs/format.md) */
-    double *t[8] = {&tm->load, &tm->bvh, &tm->upload, &tm->trace, &tm->sh, &tm->octmap, &tm->relocate, &tm->total};
-    for (int i = 0; i < 8; ++i)
-        *t[i] = get_f64(h + 184 + 8 * i);
-    memcpy(v->device, h + 248, sizeof v->device - 1);
-    v->device[sizeof v->device - 1] = '\0';
-    /* zero in files written before these fields: none, default, off */
-    v->settings.sh_window = get_u32(h + 376);
-    v->settings.sh_window_width = get_f32(h + 380);
-    v->settings.indirect_clamp = get_f32(h + 384);
-    v->settings.techniques = get_u32(h + 388);
-    v->settings.refine_error = (v->flags & PB_VOLUME_SPARSE) ? get_f32(h + 424) : 0.f;
-    v->settings.refine_test = (v->flags & PB_VOLUME_SPARSE) ? get_u32(h + 428) : 0u;
-    v->settings.test_pass_scale = (v->flags & PB_VOLUME_SPARSE) ? get_u32(h + 432) : 0u;
-    v->settings.seam_rounds = (v->flags & PB_VOLUME_SPARSE) ? get_u32(h + 436) : 0u;
-    v->settings.seam_error = (v->flags & PB_VOLUME_SPARSE) ? get_f32(h + 440) : 0.f;
-    v->settings.relocation_rays = get_u32(h + 448);
-    memset(&v->shard, 0, sizeof v->shard);
-    if (v->flags & PB_VOLUME_SHARD)
-        v->shard = (pb_volume_shard){get_u32(h + 400), get_u32(h + 404), get_u32(h + 408), get_u32(h + 412),
-                                     get_u32(h + 444) ? get_u32(h + 444) : 1u};
-    uint64_t grid_probes = v->flags & PB_VOLUME_SHARD ? v->shard.total : v->probe_count;
-
-    const char *bad = NULL;
-    if (get_u32(h + 12) != HEADER_BYTES)
-        bad = "unexpected header size";
-    else if (v->probe_count == 0 || v->probe_count > MAX_PROBES)
-        bad = "probe count out of range";
-    else if (v->octmap_res < 1 || v->octmap_res > 256 || get_u32(h + 176) != v->octmap_res + 2)
-        bad = "octahedral map size out of range";
-    else if (get_u32(h + 128) != (version == 1 ? DEPTH_FORMAT_F16_METRES : DEPTH_FORMAT_F16_UNITS) ||
-             get_u32(h + 132) != SH_FORMAT_F32)
-        bad = "unknown SH or depth format";
-    else if (version >= 2 && (!(get_f32(h + 180) > 0.f) || !isfinite(get_f32(h + 180))))
-        bad = "depth unit not a positive finite number";
-    else if ((v->flags & PB_VOLUME_SHARD) &&
-             (v->shard.index >= v->shard.count || v->shard.total > MAX_PROBES ||
-              ((v->flags & PB_VOLUME_SPARSE) ? v->shard.step > 1 || v->shard.first >= v->shard.total /* bricks */
-               : v->shard.step <= 1 ? (uint64_t)v->shard.first + v->probe_count > v->shard.total
-                                    : v->shard.step != v->shard.count || v->shard.first != v->shard.index ||
-                                          v->probe_count != pb_shard_dealt_count(v->shard.total, v->shard.index,
-                                                                          v->shard.count))))
-        bad = "shard part out of range";
-    else if ((v->flags & PB_VOLUME_GRID) && (uint64_t)v->counts[0] * v->counts[1] * v->counts[2] != grid_probes)
-        bad = "grid counts do not match the probe count";
-    else if ((v->flags & PB_VOLUME_SPARSE) && (version < 4 || (v->flags & PB_VOLUME_GRID)))
-        bad = "sparse flag in a grid or a file older than version 4";
-    layout l = layout_of(v->probe_count, v->octmap_res, version);
-    /* the sparse section's size is in its head: read that first */
-    unsigned char sh_head[SPARSE_HEAD];
-    if (!bad && (v->flags & PB_VOLUME_SPARSE)) {
-        uint64_t at = align16(l.end);
-        if (get_u64(h + 416) != at)
-            bad = "section offsets do not match the sizes";
-        else if (file_bytes < at + SPARSE_HEAD || fseek(f, (long)at, SEEK_SET) != 0 ||
-                 fread(sh_head, 1, SPARSE_HEAD, f) != SPARSE_HEAD)
-            bad = "truncated sparse layout";
-        else if (get_u32(sh_head + 4) >= (1u << 20) || get_u32(sh_head + 8) >= (1u << 20) ||
-                 get_u32(sh_head + 12) >= (1u << 20))
-            bad = "sparse layout with too many cells";
-        else {
-            uint64_t cells = (uint64_t)get_u32(sh_head + 4) * get_u32(sh_head + 8) * get_u32(sh_head + 12);
-            if ((v->flags & PB_VOLUME_SHARD) && v->shard.total != cells)
-                bad = "shard part out of range"; /* a sparse part counts coarsest bricks */
-            l.sparse = at;
-            l.end = at + sparse_bytes(cells, get_u32(sh_head + 16), get_u32(sh_head + 20));
-        }
-    } else if (!bad && version >= 4 && get_u64(h + 416) != 0)
-        bad = "sparse layout offset in a volume without the sparse flag";
-    if (!bad && (get_u64(h + 136) != l.base || get_u64(h + 144) != l.offset || get_u64(h + 152) != l.flags ||
-                 get_u64(h + 160) != l.sh || get_u64(h + 168) != l.depth ||
-                 (version >= 3 && get_u64(h + 392) != l.accounting)))
-        bad = "section offsets do not match the sizes";
+    decode_header(h, v);
+    const char *bad = header_problem(h, v, version);
+    layout l = {0};
+    if (!bad)
+        l = sections_of(h, v, version, f, file_bytes, &bad);
     if (bad) {
         fclose(f);
         return pb_fail(err, PB_ERROR_PARSE, "%s: %s", path, bad);
@@ -583,19 +641,8 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
         pb_volume_free(v);
         return r;
     }
-    size_t n = v->probe_count;
-    for (size_t i = 0; i < 3 * n; ++i) {
-        v->base[i] = get_f32(b + l.base + 4 * i);
-        v->offset[i] = get_f32(b + l.offset + 4 * i);
-    }
-    for (size_t i = 0; i < n; ++i)
-        v->probe_flags[i] = get_u32(b + l.flags + 4 * i);
-    for (size_t i = 0; i < 27 * n; ++i)
-        v->sh[i] = get_f32(b + l.sh + 4 * i);
-    uint64_t halves = n * pb_volume_tile_halves(v->octmap_res);
-    for (uint64_t i = 0; i < halves; ++i)
-        v->depth[i] = (uint16_t)(b[l.depth + 2 * i] | b[l.depth + 2 * i + 1] << 8);
-    if (l.sparse) {
+    uint32_t bad_probe = decode_sections(b, &l, version, v);
+    if (l.sparse) { /* its errors come before a bad probe's, as they always did */
         pb_error why;
         r = read_sparse(b + l.sparse, v, &why);
         if (r != PB_OK) {
@@ -603,20 +650,6 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
             pb_volume_free(v);
             return pb_fail(err, r == PB_ERROR_OUT_OF_HOST_MEMORY ? r : PB_ERROR_PARSE, "%s: %s", path, why.message);
         }
-    }
-    /* before version 3 a probe's paths are what the header says every probe
-     * got (an upper bound under --target-error) and its error is unknown */
-    uint32_t bad_probe = UINT32_MAX;
-    for (size_t i = 0; i < n; ++i) {
-        if (version < 3) {
-            uint64_t paths = (uint64_t)v->settings.passes * v->settings.rays_per_probe;
-            v->probe_paths[i] = paths > UINT32_MAX ? UINT32_MAX : (uint32_t)paths;
-            continue;
-        }
-        v->probe_paths[i] = get_u32(b + l.accounting + 8 * i);
-        v->probe_std_error[i] = get_f32(b + l.accounting + 8 * i + 4);
-        if (!std_error_ok(v->probe_std_error[i]) && bad_probe == UINT32_MAX)
-            bad_probe = (uint32_t)i;
     }
     free(b);
     v->file_version = version;
