@@ -180,7 +180,8 @@ static pb_result measure_diff(const options *o, pb_context *ctx, const pb_scene 
             for (uint64_t i = 0; i < pixels; ++i)
                 m->unserved += seam[i] == PB_SEAM_UNSERVED;
         }
-        for (uint64_t i = 0; i < pixels; ++i) {
+        /* a given reference comes without its direct part (ref_direct was never written): no indirect metric */
+        for (uint64_t i = 0; !o->reference && i < pixels; ++i) {
             for (int c = 0; c < 3; ++c) {
                 img_direct[4 * i + c] = img[4 * i + c] - direct_img[4 * i + c]; /* probes: indirect part */
                 ref_direct[4 * i + c] = ref[4 * i + c] - ref_direct[4 * i + c]; /* reference: indirect part */
