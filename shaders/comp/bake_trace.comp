@@ -33,10 +33,7 @@ void main()
     uint state = rng_seed(P.seed, probe_id(P, probe), P.pass_index, ray);
     // a relocation pass reads only the first hits: no shading, no shadow or bounce rays
     PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, P.pass_index >= PB_RELOCATION_PASS, state);
-    if (bake_feature(PB_FEATURE_VOLUME) && !addr_null(P.volume.probes) && pr.shade) { // --indirect volume: light reflected at the hit from the last volume
-        pb_volume = P.volume;
-        pr.L += pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.n, -d);
-    }
+    store_probe_ray(P, i, d, pr);
     if (bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee)) { // probe NEE: one light sample from the probe per ray
         vec4 nr[2] = vec4[2](vec4(0.0), vec4(0.0, 1.0, 0.0, 0.0));
         if (P.direct != 0u && (bake_emitters(P) || bake_env(P).count > 0u))
@@ -44,8 +41,6 @@ void main()
         Vec4RW(P.nee).v[2u * i] = nr[0];
         Vec4RW(P.nee).v[2u * i + 1u] = nr[1];
     }
-    float first_distance = isinf(pr.first_t) ? P.max_distance : sign(pr.first_t) * min(abs(pr.first_t), P.max_distance);
-    Vec4RW(P.rays).v[i] = vec4(pr.L, first_distance);
     if (!addr_null(P.counters)) {
         atomicAdd(UintRW(P.counters).v[0], pb_traversals);
         // near llvmpipe's per-invocation loop cap (65535 iterations, triangle

@@ -132,14 +132,7 @@ bool finish_path(BakeParams P, uint i, inout PathState ps, inout uint state)
 {
     uint probe = probe_slot(P, i / P.rays_per_probe);
     vec3 origin = Vec4Buf(P.probes).v[probe].xyz;
-    vec3 d = probe_ray_direction(P, probe, i % P.rays_per_probe);
-    PathResult pr = ps.res;
-    if (bake_feature(PB_FEATURE_VOLUME) && !addr_null(P.volume.probes) && pr.shade) {
-        pb_volume = P.volume;
-        pr.L += pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.n, -d);
-    }
-    float first_distance = isinf(pr.first_t) ? P.max_distance : sign(pr.first_t) * min(abs(pr.first_t), P.max_distance);
-    Vec4RW(P.rays).v[i] = vec4(pr.L, first_distance);
+    store_probe_ray(P, i, probe_ray_direction(P, probe, i % P.rays_per_probe), ps.res);
     if (!bake_feature(PB_FEATURE_PROBE_NEE) || addr_null(P.nee))
         return false;
     vec4 nr[2] = vec4[2](vec4(0.0), vec4(0.0, 1.0, 0.0, 0.0));
@@ -158,23 +151,15 @@ bool finish_path(BakeParams P, uint i, inout PathState ps, inout uint state)
     return sampled;
 }
 
-// One layer of probe NEE's shadow ray (shadow_transmittance's loop body);
-// true while it goes on through thin glass.
+// One layer of probe NEE's shadow ray (shadow_layer, as probe_light_nee's
+// shadow_transmittance takes it); true while it goes on through thin glass.
 bool probe_ray_step(BakeParams P, uint i, inout PathState ps)
 {
-    bool glass = bake_glass(P);
-    TraceResult tr = trace_ray(P.scene, ps.layers != 0u ? ps.beyond : ps.x, ps.sr.w, 0.0, ps.sr.tmax, !glass);
-    if (tr.tri != PB_NO_HIT) {
-        GlassStep g = glass && ps.layers < PB_GLASS_LAYERS ? glass_step(P, tr, ps.sr.w)
-                                                           : GlassStep(false, vec3(1.0), vec3(0.0));
-        if (g.pass) {
-            ps.E *= g.w;
-            ps.beyond = g.origin;
-            ps.sr.tmax -= tr.t;
-            ++ps.layers;
-            return true;
-        }
-        ps.E = vec3(0.0);
+    vec3 x = ps.layers != 0u ? ps.beyond : ps.x;
+    if (shadow_layer(P, x, ps.sr.w, ps.sr.tmax, ps.E, ps.layers)) {
+        ps.beyond = x;
+        ++ps.layers;
+        return true;
     }
     if (ps.E != vec3(0.0))
         Vec4RW(P.nee).v[2u * i] = vec4(ps.sr.L * ps.E * ps.bsdf_pdf, 0.0);

@@ -289,23 +289,35 @@ GlassStep glass_step(BakeParams P, TraceResult tr, vec3 rd)
     return g;
 }
 
+// One layer of a shadow ray from x along w (to tmax), `layers` layers of
+// thin glass passed so far: true when it passed one more, with x, tmax and
+// the transmittance T moved past it; false when it is done (T = 0 where
+// anything else blocks it). bake_wave.comp steps probe NEE's rays with it.
+bool shadow_layer(BakeParams P, inout vec3 x, vec3 w, inout float tmax, inout vec3 T, uint layers)
+{
+    bool glass = bake_glass(P);
+    TraceResult tr = trace_ray(P.scene, x, w, 0.0, tmax, !glass);
+    if (tr.tri == PB_NO_HIT)
+        return false;
+    GlassStep g = glass && layers < PB_GLASS_LAYERS ? glass_step(P, tr, w) : GlassStep(false, vec3(1.0), vec3(0.0));
+    if (!g.pass) {
+        T = vec3(0.0);
+        return false;
+    }
+    T *= g.w;
+    x = g.origin;
+    tmax -= tr.t;
+    return true;
+}
+
 // The share of the light a shadow ray from x along w (to tmax) carries past
 // thin glass, per channel; 0 where anything else blocks it.
 vec3 shadow_transmittance(BakeParams P, vec3 x, vec3 w, float tmax)
 {
-    bool glass = bake_glass(P);
     vec3 T = vec3(1.0);
-    for (uint layers = 0u;; ++layers) {
-        TraceResult tr = trace_ray(P.scene, x, w, 0.0, tmax, !glass);
-        if (tr.tri == PB_NO_HIT)
-            return T;
-        GlassStep g = glass && layers < PB_GLASS_LAYERS ? glass_step(P, tr, w) : GlassStep(false, vec3(1.0), vec3(0.0));
-        if (!g.pass)
-            return vec3(0.0);
-        T *= g.w;
-        x = g.origin;
-        tmax -= tr.t;
+    for (uint layers = 0u; shadow_layer(P, x, w, tmax, T, layers); ++layers) {
     }
+    return T;
 }
 
 // A shadow ray from a surface point and the light it adds when nothing

@@ -536,4 +536,17 @@ PathResult path_radiance(BakeParams P, vec3 o, vec3 dir, uint bounces, bool see_
     return ps.res;
 }
 
+// A probe ray's result: its radiance (plus, under --indirect volume, the
+// last volume's light reflected at its first hit) and its first hit's signed
+// distance, clamped to max_distance, into rays[i]. d: the probe ray.
+void store_probe_ray(BakeParams P, uint i, vec3 d, PathResult pr)
+{
+    if (bake_feature(PB_FEATURE_VOLUME) && !addr_null(P.volume.probes) && pr.shade) {
+        pb_volume = P.volume;
+        pr.L += pr.albedo / PB_PI * pb_volume_irradiance(pb_volume, pr.x, pr.n, -d);
+    }
+    float first_distance = isinf(pr.first_t) ? P.max_distance : sign(pr.first_t) * min(abs(pr.first_t), P.max_distance);
+    Vec4RW(P.rays).v[i] = vec4(pr.L, first_distance);
+}
+
 #endif

@@ -190,14 +190,14 @@ void pb_pipeline_cache_release(pb_context *ctx);
 pb_result pb_cmd_begin(pb_context *ctx, pb_error *err);
 void pb_cmd_dispatch(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups);
 void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups_x, uint32_t groups_y);
-/* Binds descriptor set 0 (a scene's texel views) for p's next dispatches:
- * kernels that read the scene need it bound whichever loads they use. */
 /* The stride that spreads a dispatch of `groups` workgroups over lavapipe's
  * threads, for kernels that read it (dispatch_order.c); 1 keeps the order. */
 uint32_t pb_dispatch_spread(uint32_t groups);
 /* A dispatch whose group counts the device wrote (uvec3 at `offset` of `args`). */
 void pb_cmd_dispatch_indirect(pb_context *ctx, const pb_pipeline *p, const void *push, const pb_buffer *args,
                               VkDeviceSize offset);
+/* Binds descriptor set 0 (a scene's texel views) for p's next dispatches:
+ * kernels that read the scene need it bound whichever loads they use. */
 void pb_cmd_bind_set(pb_context *ctx, const pb_pipeline *p, VkDescriptorSet set);
 void pb_cmd_barrier(pb_context *ctx); /* all compute/transfer writes -> reads */
 void pb_cmd_barrier_indirect(pb_context *ctx); /* compute writes -> indirect dispatch arguments and reads */

@@ -19,20 +19,24 @@ pb_result pb_cmd_begin(pb_context *ctx, pb_error *err)
     return PB_OK;
 }
 
-void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups_x, uint32_t groups_y)
+/* The pipeline and its push constants, before either kind of dispatch. */
+static void bind_and_push(pb_context *ctx, const pb_pipeline *p, const void *push)
 {
     ctx->vk.vkCmdBindPipeline(ctx->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
     if (p->push_size)
         ctx->vk.vkCmdPushConstants(ctx->cmd, p->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, p->push_size, push);
+}
+
+void pb_cmd_dispatch2(pb_context *ctx, const pb_pipeline *p, const void *push, uint32_t groups_x, uint32_t groups_y)
+{
+    bind_and_push(ctx, p, push);
     ctx->vk.vkCmdDispatch(ctx->cmd, groups_x, groups_y, 1);
 }
 
 void pb_cmd_dispatch_indirect(pb_context *ctx, const pb_pipeline *p, const void *push, const pb_buffer *args,
                               VkDeviceSize offset)
 {
-    ctx->vk.vkCmdBindPipeline(ctx->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p->pipeline);
-    if (p->push_size)
-        ctx->vk.vkCmdPushConstants(ctx->cmd, p->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, p->push_size, push);
+    bind_and_push(ctx, p, push);
     ctx->vk.vkCmdDispatchIndirect(ctx->cmd, args->buffer, offset);
 }
 
