@@ -464,13 +464,7 @@ static void shading_normals_weigh_reflected_light(void)
         for (uint32_t v = 0; v < 6; ++v)
             memcpy(s->normals + 3 * v, ns, sizeof ns);
         CHECK(pb_scene_bent_triangles(s) == (cases[c].tilt != 0.f ? 2u : 0u));
-        s->lights = calloc(1, sizeof(pb_light));
-        s->light_count = 1;
-        s->lights[0].type = PB_LIGHT_DIRECTIONAL;
-        s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
-        s->lights[0].intensity = I;
-        for (int k = 0; k < 3; ++k)
-            s->lights[0].direction[k] = -l[k];
+        test_directional_light(s, I, -l[0], -l[1], -l[2]);
         float cosine = ns[0] * l[0] + ns[1] * l[1];
         double lit = cases[c].elevation > 0.f && cosine > 0.f ? 0.5 * I * cosine : 0.0;
         pb_bake_desc d = floor_probe(s, 0);
@@ -1737,12 +1731,7 @@ static void thin_glass_tints_light(void)
         }
         release(&b);
         if (i == 0) { /* the clear pane and a directional light above, no sky */
-            s->lights = calloc(1, sizeof(pb_light));
-            s->light_count = 1;
-            s->lights[0].type = PB_LIGHT_DIRECTIONAL;
-            s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
-            s->lights[0].intensity = 2.f;
-            s->lights[0].direction[1] = -1.f;
+            test_directional_light(s, 2.f, 0.f, -1.f, 0.f);
             d.environment = NULL;
             d.bounces = 0, d.rays_per_probe = 64, d.passes = 1;
             b = bake(s, &d);
@@ -1768,12 +1757,7 @@ static pb_scene *glass_soup(void)
     pb_scene *s = soup_of(12, mats, 2);
     if (!s)
         return NULL;
-    s->lights = calloc(1, sizeof(pb_light));
-    s->light_count = 1;
-    s->lights[0].type = PB_LIGHT_DIRECTIONAL;
-    s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
-    s->lights[0].intensity = 3.f;
-    s->lights[0].direction[0] = 0.3f, s->lights[0].direction[1] = -0.9f, s->lights[0].direction[2] = 0.3f;
+    test_directional_light(s, 3.f, 0.3f, -0.9f, 0.3f);
     return s;
 }
 

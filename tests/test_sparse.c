@@ -46,12 +46,7 @@ static pb_scene *floor_scene(int roof)
         return NULL;
     }
     if (roof) {
-        s->lights = calloc(1, sizeof(pb_light));
-        s->light_count = 1;
-        s->lights[0].type = PB_LIGHT_DIRECTIONAL;
-        s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
-        s->lights[0].intensity = 5.f;
-        s->lights[0].direction[1] = -1.f;
+        test_directional_light(s, 5.f, 0.f, -1.f, 0.f);
     }
     return s;
 }
@@ -338,12 +333,7 @@ static pb_scene *box_scene(void)
         t_failures++;
         return NULL;
     }
-    s->lights = calloc(1, sizeof(pb_light));
-    s->light_count = 1;
-    s->lights[0].type = PB_LIGHT_DIRECTIONAL;
-    s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
-    s->lights[0].intensity = 5.f;
-    s->lights[0].direction[0] = -0.6f, s->lights[0].direction[1] = -0.8f;
+    test_directional_light(s, 5.f, -0.6f, -0.8f, 0.f);
     return s;
 }
 

@@ -195,6 +195,23 @@ static inline void rng_direction(test_rng *r, float d[3])
 }
 
 /* Warnings and errors of the library on stderr, indented under the test. */
+/* A scene's only light: white, directional, of `intensity`, shining along
+ * (dx, dy, dz) (the scene owns it; a failed allocation fails the test). */
+static inline void test_directional_light(pb_scene *s, float intensity, float dx, float dy, float dz)
+{
+    s->lights = calloc(1, sizeof(pb_light));
+    s->light_count = s->lights != NULL;
+    if (!s->lights) {
+        fprintf(stderr, "  out of memory for a light\n");
+        t_failures++;
+        return;
+    }
+    s->lights[0].type = PB_LIGHT_DIRECTIONAL;
+    s->lights[0].color[0] = s->lights[0].color[1] = s->lights[0].color[2] = 1.f;
+    s->lights[0].intensity = intensity;
+    s->lights[0].direction[0] = dx, s->lights[0].direction[1] = dy, s->lights[0].direction[2] = dz;
+}
+
 static inline void test_log_line(pb_log_level level, const char *msg, void *user)
 {
     (void)user;
