@@ -22,6 +22,15 @@ static int grow(void **ptr, uint64_t *capacity, uint64_t need, size_t size)
     return 1;
 }
 
+/* Gives back what *ptr holds beyond `count` elements (at least one stays);
+ * where the system keeps the block, the block stays as it was. */
+static void shrink(void **ptr, uint64_t count, size_t size)
+{
+    void *p = realloc(*ptr, (size_t)((count ? count : 1) * size));
+    if (p)
+        *ptr = p;
+}
+
 static int grow32(void **ptr, uint32_t *capacity, uint64_t need, size_t size)
 {
     uint64_t cap = *capacity;
@@ -239,14 +248,19 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
     uint64_t n = b->count ? b->count : 1;
     s->positions = malloc((size_t)n * 9 * sizeof(float));
-    s->normals = malloc((size_t)n * 9 * sizeof(float));
-    s->texcoords = malloc((size_t)n * 6 * sizeof(float));
-    s->material = malloc((size_t)n * sizeof(uint32_t));
-    s->colors = b->rgba ? malloc((size_t)n * 12 * sizeof(float)) : NULL;
-    if (!s->positions || !s->normals || !s->texcoords || !s->material || (b->rgba && !s->colors)) {
+    if (!b->capacity) { /* no triangle was added: one element each, as for any scene */
+        b->nrm = malloc(9 * sizeof(float)), b->uv = malloc(6 * sizeof(float)), b->mat = malloc(sizeof(uint32_t));
+        b->capacity = 1;
+    }
+    if (!s->positions || !b->nrm || !b->uv || !b->mat) {
         pb_scene_destroy(s);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
     }
+    /* The other per-triangle arrays are the builder's, compacted in place
+     * (a kept triangle never moves up): a large scene's load then touches
+     * no new pages for them. */
+    s->normals = b->nrm, s->texcoords = b->uv, s->material = b->mat, s->colors = b->rgba;
+    b->nrm = NULL, b->uv = NULL, b->mat = NULL, b->rgba = NULL;
 
     /* rebase, round to float, then drop what became (or was) zero area */
     uint32_t kept = 0;
@@ -279,19 +293,24 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
             fhi[k % 3] = p[k] > fhi[k % 3] ? p[k] : fhi[k % 3];
         }
         float *dn = s->normals + 9 * (uint64_t)kept;
-        memcpy(dn, b->nrm + 9 * i, 9 * sizeof(float));
+        memmove(dn, s->normals + 9 * i, 9 * sizeof(float));
         double cl = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
         for (int v = 0; v < 3; ++v)
             if (isnan(dn[3 * v])) /* no normal of its own: the face's */
                 dn[3 * v] = (float)(c0 / cl), dn[3 * v + 1] = (float)(c1 / cl), dn[3 * v + 2] = (float)(c2 / cl);
-        memcpy(s->texcoords + 6 * (uint64_t)kept, b->uv + 6 * i, 6 * sizeof(float));
+        memmove(s->texcoords + 6 * (uint64_t)kept, s->texcoords + 6 * i, 6 * sizeof(float));
         if (s->colors)
-            memcpy(s->colors + 12 * (uint64_t)kept, b->rgba + 12 * i, 12 * sizeof(float));
-        uint32_t m = b->mat[i];
+            memmove(s->colors + 12 * (uint64_t)kept, s->colors + 12 * i, 12 * sizeof(float));
+        uint32_t m = s->material[i];
         s->material[kept] = m < b->material_count ? m : b->material_count - 1;
         ++kept;
     }
     s->triangle_count = kept;
+    shrink((void **)&s->normals, kept, 9 * sizeof(float)); /* the builder's spare capacity back */
+    shrink((void **)&s->texcoords, kept, 6 * sizeof(float));
+    shrink((void **)&s->material, kept, sizeof(uint32_t));
+    if (s->colors)
+        shrink((void **)&s->colors, kept, 12 * sizeof(float));
     for (int k = 0; k < 3; ++k) {
         s->origin[k] = origin[k];
         s->bounds_min[k] = kept ? flo[k] : 0.f;
