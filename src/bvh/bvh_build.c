@@ -1,15 +1,19 @@
 /* Binned SAH BVH build on all host cores, then a depth-first flatten into
  * child-pair nodes (see include/probebake/bvh.h and docs/bvh.md).
  *
- * Memory: triangles are 32-byte records (box + scene index) that binning
- * streams through and partitioning swaps in place; a partition also gathers
- * both children's bounds, so no level needs a separate bounds pass.
+ * Memory: triangles are 32-byte boxes (with their scene indices beside them)
+ * that binning streams through and partitioning swaps in place; a partition
+ * also gathers both children's bounds, so no level needs a separate bounds
+ * pass. Boxes have four lanes, the fourth unused, so that the compiler makes
+ * each min, max and centroid of a box one vector instruction.
  *
  * Parallelism: tasks (a node, its range and its bounds) go through a shared
  * stack. A worker splits its range, pushes one child and keeps the other, so
- * every core is busy once the top levels are split. Ranges of PAR_BIN_MIN
- * triangles or more are binned in parallel, so the first levels of a large
- * scene do not run on one core.
+ * every core is busy once the top levels are split; a child of fewer than
+ * SHARE_MIN triangles goes on the worker's own stack instead, as a lock and
+ * a wake-up per node cost more than such a subtree's work. Ranges of
+ * PAR_BIN_MIN triangles or more are binned in parallel, so the first levels
+ * of a large scene do not run on one core.
  *
  * Determinism: a node's split depends only on its primitive range, and the
  * flatten walks the tree in a fixed order, so the output is byte-identical
@@ -30,19 +34,40 @@
 #define MAX_BINS 64
 #define PAR_BIN_MIN (1u << 14) /* bin ranges this large on several threads */
 #define PAR_PARTS 16
+#define SHARE_MIN 1024u /* subtrees smaller than this are not shared between threads */
+#define LOCAL_TASKS PB_BVH_MAX_DEPTH
+
+/* Four float lanes, x, y, z and one unused, in GCC's and Clang's vector
+ * extension: a box's min, max and centroid are then one vector operation
+ * each where the target has SIMD (SSE2 on x86-64, NEON on arm64), from one
+ * source. */
+typedef float f4 __attribute__((vector_size(16)));
+typedef int32_t i4 __attribute__((vector_size(16)));
+
+/* a < b ? a : b and a > b ? a : b, lane by lane (NaN as those expressions
+ * take it: the second operand) */
+static inline f4 f4_min(f4 a, f4 b)
+{
+    i4 m = a < b;
+    return (f4)(((i4)a & m) | ((i4)b & ~m));
+}
+
+static inline f4 f4_max(f4 a, f4 b)
+{
+    i4 m = a > b;
+    return (f4)(((i4)a & m) | ((i4)b & ~m));
+}
 
 typedef struct aabb {
-    float lo[3], hi[3];
+    f4 lo, hi;
 } aabb;
 
-/* A triangle as the builder sees it: its box and scene index, 32 bytes,
- * stored contiguously and swapped in place by partitioning, so binning and
- * partitioning stream through memory. Centroids are used doubled (lo + hi):
- * the same ordering without a multiply. */
-typedef struct prim {
-    float lo[3], hi[3];
-    uint32_t index, pad;
-} prim;
+/* A triangle as the builder sees it is its box (lane 3 zero), stored
+ * contiguously and swapped in place by partitioning, so binning and
+ * partitioning stream through memory; its scene index moves with it in a
+ * parallel array. Centroids are used doubled (lo + hi): the same ordering
+ * without a multiply. */
+typedef aabb prim;
 
 /* Bounds of a range: of the boxes, and of the doubled centroids. */
 typedef struct range_info {
@@ -50,7 +75,7 @@ typedef struct range_info {
 } range_info;
 
 typedef struct build_node {
-    aabb box;
+    float lo[3], hi[3]; /* its box */
     uint32_t left, right; /* build-node indices, valid when count == 0 */
     uint32_t begin, count;
 } build_node;
@@ -62,6 +87,7 @@ typedef struct task {
 
 typedef struct builder {
     prim *prims;
+    uint32_t *index; /* scene index of each prim */
     build_node *nodes;
     atomic_uint node_count;
     uint32_t bins, max_leaf;
@@ -77,18 +103,14 @@ typedef struct builder {
 
 static void box_empty(aabb *b)
 {
-    for (int k = 0; k < 3; ++k) {
-        b->lo[k] = INFINITY;
-        b->hi[k] = -INFINITY;
-    }
+    b->lo = (f4){INFINITY, INFINITY, INFINITY, INFINITY};
+    b->hi = -b->lo;
 }
 
 static void box_grow(aabb *b, const aabb *o)
 {
-    for (int k = 0; k < 3; ++k) {
-        b->lo[k] = o->lo[k] < b->lo[k] ? o->lo[k] : b->lo[k];
-        b->hi[k] = o->hi[k] > b->hi[k] ? o->hi[k] : b->hi[k];
-    }
+    b->lo = f4_min(o->lo, b->lo);
+    b->hi = f4_max(o->hi, b->hi);
 }
 
 static void info_empty(range_info *ri)
@@ -99,18 +121,16 @@ static void info_empty(range_info *ri)
 
 static inline void info_add(range_info *ri, const prim *p)
 {
-    for (int k = 0; k < 3; ++k) {
-        float c = p->lo[k] + p->hi[k];
-        ri->box.lo[k] = p->lo[k] < ri->box.lo[k] ? p->lo[k] : ri->box.lo[k];
-        ri->box.hi[k] = p->hi[k] > ri->box.hi[k] ? p->hi[k] : ri->box.hi[k];
-        ri->cbox.lo[k] = c < ri->cbox.lo[k] ? c : ri->cbox.lo[k];
-        ri->cbox.hi[k] = c > ri->cbox.hi[k] ? c : ri->cbox.hi[k];
-    }
+    f4 c = p->lo + p->hi;
+    box_grow(&ri->box, p);
+    ri->cbox.lo = f4_min(c, ri->cbox.lo);
+    ri->cbox.hi = f4_max(c, ri->cbox.hi);
 }
 
-static float box_area(const aabb *b)
+static inline float box_area(const aabb *b)
 {
-    return pb_box_area(b->lo, b->hi);
+    float lo[3] = {b->lo[0], b->lo[1], b->lo[2]}, hi[3] = {b->hi[0], b->hi[1], b->hi[2]};
+    return pb_box_area(lo, hi);
 }
 
 typedef struct bin_set {
@@ -127,37 +147,45 @@ static void bin_set_clear(bin_set *s, uint32_t bins)
         }
 }
 
-static inline uint32_t bin_of(float c, float lo, float scale, uint32_t bins)
+/* The bin of a doubled centroid c. Clamped as a float: converting one out
+ * of int's range (an infinite scale on a huge, degenerate or overflowing
+ * box) is undefined; NaN goes to bin 0. */
+static inline uint32_t bin_of(float c, float lo, float scale, float last)
 {
     float f = (c - lo) * scale;
-    /* clamped as a float: converting one out of int's range (an infinite
-     * scale on a huge, degenerate or overflowing box) is undefined */
-    if (!(f > 0.f)) /* negative, zero or NaN */
-        return 0;
-    if (f >= (float)bins)
-        return bins - 1;
-    return (uint32_t)f;
+    f = f > 0.f ? f : 0.f;
+    f = f < last ? f : last;
+    return (uint32_t)(int32_t)f;
 }
 
-static void bin_scales(const builder *bd, const aabb *cbox, float scale[3])
+/* All three axes' bins of a box at once, each as bin_of gives it. */
+static inline i4 bins_of(const prim *p, const aabb *cbox, f4 scale, f4 last)
 {
+    f4 f = (p->lo + p->hi - cbox->lo) * scale;
+    f = f4_min(f4_max(f, (f4){0.f, 0.f, 0.f, 0.f}), last);
+    return __builtin_convertvector(f, i4);
+}
+
+static f4 bin_scales(const builder *bd, const aabb *cbox)
+{
+    f4 scale = {0.f, 0.f, 0.f, 0.f};
     for (int a = 0; a < 3; ++a) {
         float ext = cbox->hi[a] - cbox->lo[a];
         scale[a] = ext > 0.f ? (float)bd->bins / ext : 0.f;
     }
+    return scale;
 }
 
 static void bin_range(const builder *bd, uint32_t begin, uint32_t end, const aabb *cbox, bin_set *s)
 {
-    float scale[3];
-    bin_scales(bd, cbox, scale);
+    f4 scale = bin_scales(bd, cbox), last = {0.f, 0.f, 0.f, 0.f};
+    last += (float)(bd->bins - 1);
     for (uint32_t i = begin; i < end; ++i) {
         const prim *p = &bd->prims[i];
-        const aabb *pb = (const aabb *)p;
+        i4 b = bins_of(p, cbox, scale, last);
         for (int a = 0; a < 3; ++a) {
-            uint32_t b = bin_of(p->lo[a] + p->hi[a], cbox->lo[a], scale[a], bd->bins);
-            s->count[a][b]++;
-            box_grow(&s->box[a][b], pb);
+            s->count[a][b[a]]++;
+            box_grow(&s->box[a][b[a]], p);
         }
     }
 }
@@ -179,12 +207,12 @@ static void par_bin_fn(void *user, uint64_t b, uint64_t e)
     }
 }
 
-/* Bins [begin,end) by doubled centroid within cbox; on several threads for
- * large ranges. Parts are merged in a fixed order: thread-count independent. */
+/* Bins [begin,end) by doubled centroid within cbox into s, which arrives
+ * empty; on several threads for large ranges. Parts are merged in a fixed
+ * order: thread-count independent. */
 static void bin_all(const builder *bd, uint32_t begin, uint32_t end, const aabb *cbox, bin_set *s, par_bin *scratch)
 {
     uint32_t n = end - begin;
-    bin_set_clear(s, bd->bins);
     if (n < PAR_BIN_MIN || bd->threads <= 1) {
         bin_range(bd, begin, end, cbox, s);
         return;
@@ -240,12 +268,14 @@ static uint32_t median_split(builder *bd, uint32_t begin, uint32_t end, const aa
     if (keys && tmp) {
         for (uint32_t i = 0; i < n; ++i) {
             const prim *p = &bd->prims[begin + i];
-            keys[i] = (sort_key){p->lo[a] + p->hi[a], p->index, i};
+            keys[i] = (sort_key){p->lo[a] + p->hi[a], bd->index[begin + i], i};
             tmp[i] = *p;
         }
         qsort(keys, n, sizeof *keys, compare_keys);
-        for (uint32_t i = 0; i < n; ++i)
+        for (uint32_t i = 0; i < n; ++i) {
             bd->prims[begin + i] = tmp[keys[i].pos];
+            bd->index[begin + i] = keys[i].index;
+        }
     } /* without memory, the unsorted halves still terminate */
     free(keys);
     free(tmp);
@@ -258,6 +288,37 @@ static void info_range(const builder *bd, uint32_t begin, uint32_t end, range_in
         info_add(ri, &bd->prims[i]);
 }
 
+/* The best split of one axis' bins, if better than *best_cost: a sweep from
+ * the right, then from the left, over the bins that hold triangles. A split
+ * after an empty bin leaves the same triangles on each side as one after
+ * the last bin before it that holds any, so only those are candidates: the
+ * first of equal costs, as a sweep over every bin would choose. */
+static void sweep(const bin_set *bins, int a, const uint32_t *used, uint32_t u, float *best_cost, int *best_axis,
+                  uint32_t *best_bin)
+{
+    float right_cost[MAX_BINS];
+    aabb acc;
+    box_empty(&acc);
+    uint32_t cnt = 0;
+    for (uint32_t j = u; j-- > 1;) {
+        box_grow(&acc, &bins->box[a][used[j]]);
+        cnt += bins->count[a][used[j]];
+        right_cost[j] = box_area(&acc) * (float)cnt;
+    }
+    box_empty(&acc);
+    cnt = 0;
+    for (uint32_t j = 0; j + 1 < u; ++j) {
+        box_grow(&acc, &bins->box[a][used[j]]);
+        cnt += bins->count[a][used[j]];
+        float c = box_area(&acc) * (float)cnt + right_cost[j + 1];
+        if (c < *best_cost) {
+            *best_cost = c;
+            *best_axis = a;
+            *best_bin = used[j] + 1;
+        }
+    }
+}
+
 /* Splits task t or makes it a leaf. Returns the split position (begin < mid
  * < end) and both children's bounds, or 0 for a leaf. */
 static uint32_t split_node(builder *bd, build_node *node, const task *t, par_bin *scratch, bin_set *bins,
@@ -265,7 +326,8 @@ static uint32_t split_node(builder *bd, build_node *node, const task *t, par_bin
 {
     uint32_t begin = t->begin, end = t->end, n = end - begin;
     const range_info *ri = &t->info;
-    node->box = ri->box;
+    for (int k = 0; k < 3; ++k)
+        node->lo[k] = ri->box.lo[k], node->hi[k] = ri->box.hi[k];
     if (n <= 1)
         return 0;
 
@@ -279,31 +341,15 @@ static uint32_t split_node(builder *bd, build_node *node, const task *t, par_bin
     if (!force_median) {
         bin_all(bd, begin, end, &ri->cbox, bins, scratch);
         for (int a = 0; a < 3; ++a) {
-            if (!(ri->cbox.hi[a] > ri->cbox.lo[a]))
-                continue;
-            /* sweep from the right, then from the left */
-            float right_cost[MAX_BINS];
-            aabb acc;
-            box_empty(&acc);
-            uint32_t cnt = 0;
-            for (uint32_t i = bd->bins - 1; i > 0; --i) {
-                box_grow(&acc, &bins->box[a][i]);
-                cnt += bins->count[a][i];
-                right_cost[i] = cnt ? box_area(&acc) * (float)cnt : 0.f;
-            }
-            box_empty(&acc);
-            cnt = 0;
-            for (uint32_t i = 0; i + 1 < bd->bins; ++i) {
-                box_grow(&acc, &bins->box[a][i]);
-                cnt += bins->count[a][i];
-                if (cnt == 0 || cnt == n)
-                    continue;
-                float c = box_area(&acc) * (float)cnt + right_cost[i + 1];
-                if (c < best_cost) {
-                    best_cost = c;
-                    best_axis = a;
-                    best_bin = i + 1;
-                }
+            uint32_t used[MAX_BINS], u = 0; /* the axis' bins that hold triangles, in order */
+            for (uint32_t i = 0; i < bd->bins; ++i)
+                if (bins->count[a][i])
+                    used[u++] = i;
+            if (ri->cbox.hi[a] > ri->cbox.lo[a])
+                sweep(bins, a, used, u, &best_cost, &best_axis, &best_bin);
+            for (uint32_t j = 0; j < u; ++j) { /* leave the set empty for the next node */
+                box_empty(&bins->box[a][used[j]]);
+                bins->count[a][used[j]] = 0;
             }
         }
     }
@@ -317,14 +363,14 @@ static uint32_t split_node(builder *bd, build_node *node, const task *t, par_bin
     if (best_axis >= 0) {
         /* partition in place, gathering both children's bounds on the way */
         const int a = best_axis;
-        float scale[3];
-        bin_scales(bd, &ri->cbox, scale);
+        f4 scale = bin_scales(bd, &ri->cbox);
+        float last = (float)(bd->bins - 1);
         info_empty(left);
         info_empty(right);
         uint32_t i = begin, j = end;
         while (i < j) {
             prim *p = &bd->prims[i];
-            if (bin_of(p->lo[a] + p->hi[a], ri->cbox.lo[a], scale[a], bd->bins) < best_bin) {
+            if (bin_of(p->lo[a] + p->hi[a], ri->cbox.lo[a], scale[a], last) < best_bin) {
                 info_add(left, p);
                 ++i;
             } else {
@@ -332,6 +378,9 @@ static uint32_t split_node(builder *bd, build_node *node, const task *t, par_bin
                 prim tmp = *p;
                 *p = bd->prims[j];
                 bd->prims[j] = tmp;
+                uint32_t t = bd->index[i];
+                bd->index[i] = bd->index[j];
+                bd->index[j] = t;
                 info_add(right, &bd->prims[j]);
             }
         }
@@ -366,6 +415,7 @@ static void *worker(void *arg)
     builder *bd = ((worker_arg *)arg)->bd;
     par_bin *scratch = &((worker_arg *)arg)->scratch;
     bin_set *bins = &((worker_arg *)arg)->bins;
+    bin_set_clear(bins, bd->bins); /* and split_node leaves it empty */
     for (;;) {
         pthread_mutex_lock(&bd->lock);
         while (bd->stack_size == 0 && bd->busy > 0)
@@ -379,21 +429,32 @@ static void *worker(void *arg)
         bd->busy++;
         pthread_mutex_unlock(&bd->lock);
 
-        for (;;) { /* keep one child, share the other */
+        /* Keep one child and share the other, unless it is small: small
+         * subtrees stay on this thread's own stack, as sharing them (a lock
+         * and a wake-up per node) would cost more than their work. */
+        task local[LOCAL_TASKS];
+        uint32_t local_count = 0;
+        for (;;) {
             build_node *node = &bd->nodes[t.node];
             range_info li, ri;
             uint32_t mid = split_node(bd, node, &t, scratch, bins, &li, &ri);
             if (!mid) {
                 node->begin = t.begin;
                 node->count = t.end - t.begin;
-                break;
+                if (!local_count)
+                    break;
+                t = local[--local_count];
+                continue;
             }
             uint32_t l = atomic_fetch_add(&bd->node_count, 2);
             node->left = l;
             node->right = l + 1;
             node->count = 0;
             task right = {l + 1, mid, t.end, t.depth + 1, ri};
-            push_task(bd, &right);
+            if (t.end - mid < SHARE_MIN && local_count < LOCAL_TASKS)
+                local[local_count++] = right;
+            else
+                push_task(bd, &right);
             t = (task){l, t.begin, mid, t.depth + 1, li};
         }
 
@@ -423,7 +484,7 @@ static void emit_inner(flatten_state *fs, uint32_t out_index, uint32_t bnode, ui
     const build_node *b = &fs->bd->nodes[bnode];
     pb_bvh_node *out = &fs->bvh->nodes[out_index];
     if (fs->root_area > 0)
-        fs->sah += box_area(&b->box) / fs->root_area; /* traversal cost 1 per visited pair */
+        fs->sah += pb_box_area(b->lo, b->hi) / fs->root_area; /* traversal cost 1 per visited pair */
     set_child(fs, out, 0, b->left, depth);
     out = &fs->bvh->nodes[out_index];
     set_child(fs, out, 1, b->right, depth);
@@ -432,12 +493,12 @@ static void emit_inner(flatten_state *fs, uint32_t out_index, uint32_t bnode, ui
 static void set_child(flatten_state *fs, pb_bvh_node *out, int slot, uint32_t bnode, uint32_t depth)
 {
     const build_node *c = &fs->bd->nodes[bnode];
-    out->lo_hi_x[2 * slot] = c->box.lo[0];
-    out->lo_hi_x[2 * slot + 1] = c->box.hi[0];
-    out->lo_hi_y[2 * slot] = c->box.lo[1];
-    out->lo_hi_y[2 * slot + 1] = c->box.hi[1];
-    out->lo_hi_z[2 * slot] = c->box.lo[2];
-    out->lo_hi_z[2 * slot + 1] = c->box.hi[2];
+    out->lo_hi_x[2 * slot] = c->lo[0];
+    out->lo_hi_x[2 * slot + 1] = c->hi[0];
+    out->lo_hi_y[2 * slot] = c->lo[1];
+    out->lo_hi_y[2 * slot + 1] = c->hi[1];
+    out->lo_hi_z[2 * slot] = c->lo[2];
+    out->lo_hi_z[2 * slot + 1] = c->hi[2];
     if (depth + 1 > fs->depth)
         fs->depth = depth + 1;
     if (c->count) {
@@ -446,7 +507,7 @@ static void set_child(flatten_state *fs, pb_bvh_node *out, int slot, uint32_t bn
         fs->leaves++;
         fs->max_leaf = c->count > fs->max_leaf ? c->count : fs->max_leaf;
         if (fs->root_area > 0)
-            fs->sah += box_area(&c->box) / fs->root_area * c->count * fs->bd->ic;
+            fs->sah += pb_box_area(c->lo, c->hi) / fs->root_area * c->count * fs->bd->ic;
     } else {
         uint32_t idx = fs->next++;
         out->child[slot] = (int32_t)idx;
@@ -488,6 +549,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     memset(&bd, 0, sizeof bd);
     uint32_t max_nodes = n ? 2 * n : 1;
     bd.prims = malloc((size_t)(n ? n : 1) * sizeof(prim));
+    bd.index = malloc((size_t)(n ? n : 1) * sizeof(uint32_t));
     bd.nodes = calloc(max_nodes, sizeof(build_node));
     bd.stack = malloc((size_t)max_nodes * sizeof(task));
     uint32_t want = n >= 4096 ? d.threads : 1;
@@ -498,13 +560,13 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
         bvh->tri_positions = malloc((size_t)(n ? n : 1) * 9 * sizeof(float));
         bvh->tri_order = malloc((size_t)(n ? n : 1) * sizeof(uint32_t));
     }
-    if (!bvh || !bd.prims || !bd.nodes || !bd.stack || !args || !bvh->nodes || !bvh->tri_positions ||
+    if (!bvh || !bd.prims || !bd.index || !bd.nodes || !bd.stack || !args || !bvh->nodes || !bvh->tri_positions ||
         !bvh->tri_order) {
-        free(bd.prims), free(bd.nodes), free(bd.stack), free(args);
+        free(bd.prims), free(bd.index), free(bd.nodes), free(bd.stack), free(args);
         pb_bvh_destroy(bvh);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory building the BVH of %u triangles", n);
     }
-    task root_task = {0, 0, n, 0, {{{0}}}};
+    task root_task = {.node = 0, .begin = 0, .end = n, .depth = 0};
     info_empty(&root_task.info);
     for (uint32_t i = 0; i < n; ++i) {
         const float *p = scene->positions + 9 * (size_t)i;
@@ -514,8 +576,8 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
             pr->lo[k] = a < bb ? (a < c ? a : c) : (bb < c ? bb : c);
             pr->hi[k] = a > bb ? (a > c ? a : c) : (bb > c ? bb : c);
         }
-        pr->index = i;
-        pr->pad = 0;
+        pr->lo[3] = pr->hi[3] = 0.f;
+        bd.index[i] = i;
         info_add(&root_task.info, pr);
     }
     bd.bins = d.bins;
@@ -548,7 +610,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
      * empty scene) becomes one pair with an empty second slot. */
     flatten_state fs = {.bd = &bd, .bvh = bvh, .next = 1};
     const build_node *root = &bd.nodes[0];
-    fs.root_area = n ? box_area(&root->box) : 0;
+    fs.root_area = n ? pb_box_area(root->lo, root->hi) : 0;
     pb_bvh_node *r0 = &bvh->nodes[0];
     memset(r0, 0, sizeof *r0);
     r0->child[0] = r0->child[1] = -1;
@@ -561,7 +623,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     bvh->node_count = fs.next;
     bvh->triangle_count = n;
     for (uint32_t k = 0; k < n; ++k) {
-        uint32_t t = bd.prims[k].index;
+        uint32_t t = bd.index[k];
         bvh->tri_order[k] = t;
         memcpy(bvh->tri_positions + 9 * (size_t)k, scene->positions + 9 * (size_t)t, 9 * sizeof(float));
     }
@@ -576,6 +638,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     pthread_mutex_destroy(&bd.lock);
     pthread_cond_destroy(&bd.cond);
     free(bd.prims);
+    free(bd.index);
     free(bd.nodes);
     free(bd.stack);
     bvh->stats.build_ms = pb_now_ms() - t0;
