@@ -5,6 +5,7 @@
 #include "cli/cli.h"
 
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -285,9 +286,9 @@ static void print_report(FILE *report, const options *o, const pb_bake_desc *d, 
             vol->settings.passes);
     cli_print_error_summary(report, vol);
     const pb_volume_timings *t = &vol->timings;
-    fprintf(report, "time: bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, "
+    fprintf(report, "time: load %.0f ms, bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, "
                     "depth %.0f ms; total %.0f ms wall\n",
-            t->bvh, t->trace, t->trace > 0 ? rays / (t->trace * 1e3) : 0.0,
+            t->load, t->bvh, t->trace, t->trace > 0 ? rays / (t->trace * 1e3) : 0.0,
             t->trace > 0 ? (double)vol->traversals / (t->trace * 1e3) : 0.0, t->sh, t->octmap, t->total);
 }
 
@@ -321,6 +322,20 @@ static pb_result bake_on_device(const options *o, const pb_scene *s, const pb_bv
     return r;
 }
 
+/* A step before the bake's progress line: said (info) when it took a
+ * second or more, where a large scene's user waits for it; else a debug
+ * line. */
+static void log_slow_step(const options *o, double ms, const char *fmt, ...)
+{
+    char what[512], line[600];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    snprintf(line, sizeof line, "%s (%.0f ms)", what, ms);
+    cli_log_to_stderr(ms >= 1000.0 ? PB_LOG_INFO : PB_LOG_DEBUG, line, (void *)&o->log);
+}
+
 int cmd_bake(const options *o)
 {
     int usage = check_combinations(o);
@@ -348,9 +363,12 @@ int cmd_bake(const options *o)
         goto out;
     if (cli_environment(o, &env, &err) != PB_OK)
         goto out;
+    double load_ms = cli_now_ms();
     if (pb_scene_load(o->scene, &scd, &s, &err) != PB_OK ||
         pb_bake_check_light(s, o->sky, o->env ? &env : NULL, &err) != PB_OK)
         goto out;
+    load_ms = cli_now_ms() - load_ms;
+    log_slow_step(o, load_ms, "%s: %u triangles loaded", o->scene, s->triangle_count);
     if (s->triangle_count == 0 && !o->has_bounds && !o->points) {
         snprintf(err.message, sizeof err.message, "%s: no triangles and no --bounds: nowhere to put probes", o->scene);
         goto out;
@@ -371,6 +389,8 @@ int cmd_bake(const options *o)
         print_banner(o, q, &d, &env, &pts, probes);
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
+    log_slow_step(o, bvh->stats.build_ms, "BVH of %u triangles built on %u thread%s", s->triangle_count,
+                  bvh->stats.threads, bvh->stats.threads == 1 ? "" : "s");
     cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};
     d.progress = cli_progress;
     d.progress_user = &ps;
@@ -382,7 +402,7 @@ int cmd_bake(const options *o)
         goto out;
     if (o->sparse)
         probes = vol.probe_count;
-    vol.timings.load = 0;
+    vol.timings.load = load_ms;
     vol.timings.bvh = bvh->stats.build_ms;
     vol.timings.total = cli_now_ms() - t0;
     if (pb_volume_write_ex(o->output, &vol, cli_interrupted, NULL, &err) != PB_OK)
