@@ -1260,6 +1260,30 @@ static void pipelines_are_made_once_per_context(void)
     pb_scene_destroy(s);
 }
 
+/* The volume's scene hash is computed beside the bake (scene_hash_job.h) and
+ * kept by the GPU scene for its next bakes: both volumes carry the scene's
+ * pb_scene_hash, the second without hashing again. */
+static void volume_carries_the_scene_hash(void)
+{
+    pb_scene *s = load_demo();
+    if (!s)
+        return;
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
+    d.rays_per_probe = 32, d.passes = 1, d.octmap_res = 4;
+    baked a = bake(s, &d);
+    pb_volume second;
+    memset(&second, 0, sizeof second);
+    pb_error err;
+    int again = a.ok && pb_bake(ctx, s, a.gs, &d, &second, &err) == PB_OK;
+    uint64_t h = pb_scene_hash(s);
+    CHECK(a.ok && a.vol.settings.scene_hash == h);
+    CHECK(again && a.gs->hashed_scene == s && a.gs->scene_hash == h && second.settings.scene_hash == h);
+    pb_volume_free(&second);
+    release(&a);
+    pb_scene_destroy(s);
+}
+
 /* Light cells are learned once per GPU scene and seed: a second bake on the
  * same GPU scene reuses them and writes the same volume; another seed learns
  * its own. */
@@ -3308,6 +3332,7 @@ int main(void)
     RUN(vertex_colours_are_albedo);
     RUN(dilation_kernel_matches_cpu_reference);
     RUN(pipelines_are_made_once_per_context);
+    RUN(volume_carries_the_scene_hash);
     RUN(light_cells_are_learned_once_per_scene_and_seed);
     RUN(light_cells_code_without_tables_changes_nothing);
     RUN(guide_is_learned_once_per_key);

@@ -145,6 +145,8 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         r = pb_bake_stage_probe_set(&j, err);
     if (r != PB_OK)
         return r;
+    if (gs->hashed_scene != scene)
+        pb_scene_hash_start(&j.scene_hash, scene); /* beside the stages, until the volume stage needs it */
     if (!scene_emits_light(scene, &j.d))
         pb_logf(&ctx->desc.log, PB_LOG_WARN,
                 "%s: no lights, no emissive surfaces and a black sky: the volume will be black (give --sky or --env)",
@@ -193,6 +195,10 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
         out->timings.sh = j.run.t_sh;
         out->timings.octmap = j.run.t_depth;
         out->timings.total = pb_now_ms() - t_start;
+    }
+    if (j.scene_hash.scene) { /* joined whatever the outcome: the caller may free the scene next */
+        gs->scene_hash = pb_scene_hash_wait(&j.scene_hash);
+        gs->hashed_scene = scene;
     }
     bake_job_free(&j);
     if (r != PB_OK)

@@ -29,6 +29,9 @@ struct pb_gpu_scene {
     struct pb_light_cells_gpu *light_cells; /* the bakes' light cells, learned once per seed (light_cells_gpu.h) */
     struct pb_guide_cache *guide_cache;     /* path guiding's guide, learned once per key (guide_cache.h); owned,
                                                but pb_bake_devices points it at a shared one for a bake */
+    const pb_scene *hashed_scene;           /* scene_hash is its pb_scene_hash (a bake's, kept: a sparse bake's
+                                               levels hash once); NULL before the first bake */
+    uint64_t scene_hash;
 };
 
 /* Frees the scene's device objects on `ctx`. */

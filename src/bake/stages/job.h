@@ -20,6 +20,7 @@
 #include "bake/gpu_scene.h"
 #include "bake/guide.h"
 #include "bake/light_cells_gpu.h"
+#include "bake/scene_hash_job.h"
 #include "bake/shading.h"
 #include "sample/sample_gpu.h"
 #include "gpu/gpu.h"
@@ -73,6 +74,7 @@ typedef struct bake_job {
     pb_context *ctx;
     const pb_scene *scene;
     pb_gpu_scene *gs;
+    pb_scene_hash_job scene_hash;  /* the volume's scene hash, on its own thread (when gs has none for the scene) */
     pb_bake_desc d;                /* checked, defaults filled */
     uint32_t total, first, step, own, P; /* the bake's probes; this run's part (first, first + step, ...,
                                             own of them); traced here (own + samples) */

@@ -117,7 +117,8 @@ pb_result pb_bake_stage_volume(bake_job *j, pb_volume *out, pb_error *err)
     }
     out->settings = (pb_volume_settings){d->seed,         0, rpp, passes_max, d->bounces, 0, d->target_error,
                                         d->max_distance, d->sh_window, d->sh_window_width, d->indirect_clamp};
-    out->settings.scene_hash = pb_scene_hash(j->scene);
+    out->settings.scene_hash =
+        j->gs->hashed_scene == j->scene ? j->gs->scene_hash : pb_scene_hash_wait(&j->scene_hash);
     out->settings.relocation_rays = j->relocated_with;
     out->settings.techniques = (d->probe_nee ? PB_TECHNIQUE_PROBE_NEE : 0u) |
                                (j->B.guide_host.table ? PB_TECHNIQUE_GUIDING : 0u) |
