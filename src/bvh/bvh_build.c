@@ -516,6 +516,64 @@ static void set_child(flatten_state *fs, pb_bvh_node *out, int slot, uint32_t bn
     }
 }
 
+/* The triangles' boxes, scene indices and the root's bounds, in fixed parts
+ * on all threads (min and max merge exactly, in any order). */
+#define PRIM_PARTS 64
+typedef struct prims_job {
+    builder *bd;
+    const pb_scene *scene;
+    uint32_t chunk;
+    range_info part[PRIM_PARTS];
+} prims_job;
+
+static void make_prims_fn(void *user, uint64_t first, uint64_t last)
+{
+    prims_job *pj = user;
+    uint32_t n = pj->scene->triangle_count;
+    for (uint64_t part = first; part < last; ++part) {
+        range_info *ri = &pj->part[part];
+        info_empty(ri);
+        uint32_t begin = (uint32_t)part * pj->chunk, end = begin + pj->chunk < n ? begin + pj->chunk : n;
+        for (uint32_t i = begin; i < end; ++i) {
+            const float *p = pj->scene->positions + 9 * (size_t)i;
+            prim *pr = &pj->bd->prims[i];
+            for (int k = 0; k < 3; ++k) {
+                float a = p[k], bb = p[3 + k], c = p[6 + k];
+                pr->lo[k] = a < bb ? (a < c ? a : c) : (bb < c ? bb : c);
+                pr->hi[k] = a > bb ? (a > c ? a : c) : (bb > c ? bb : c);
+            }
+            pr->lo[3] = pr->hi[3] = 0.f;
+            pj->bd->index[i] = i;
+            info_add(ri, pr);
+        }
+    }
+}
+
+static void make_prims(builder *bd, const pb_scene *scene, uint32_t threads, range_info *root)
+{
+    uint32_t n = scene->triangle_count;
+    prims_job pj = {bd, scene, n >= PRIM_PARTS ? (n + PRIM_PARTS - 1) / PRIM_PARTS : 1, {{{{0}}}}};
+    pb_parallel_for(PRIM_PARTS, 1, n >= 4096 ? threads : 1, make_prims_fn, &pj);
+    info_empty(root);
+    for (int p = 0; p < PRIM_PARTS; ++p) {
+        box_grow(&root->box, &pj.part[p].box);
+        box_grow(&root->cbox, &pj.part[p].cbox);
+    }
+}
+
+typedef struct positions_job {
+    const pb_scene *scene;
+    pb_bvh *bvh;
+} positions_job;
+
+static void gather_positions(void *user, uint64_t begin, uint64_t end)
+{
+    const positions_job *pj = user;
+    for (uint64_t k = begin; k < end; ++k)
+        memcpy(pj->bvh->tri_positions + 9 * k, pj->scene->positions + 9 * (size_t)pj->bvh->tri_order[k],
+               9 * sizeof(float));
+}
+
 pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh **out, pb_error *err)
 {
     pb_error_clear(err);
@@ -555,31 +613,15 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     uint32_t want = n >= 4096 ? d.threads : 1;
     worker_arg *args = malloc(want * sizeof *args);
     uint32_t inner_cap = n > 1 ? n : 1;
-    if (bvh) {
+    if (bvh)
         bvh->nodes = calloc(inner_cap, sizeof(pb_bvh_node));
-        bvh->tri_positions = malloc((size_t)(n ? n : 1) * 9 * sizeof(float));
-        bvh->tri_order = malloc((size_t)(n ? n : 1) * sizeof(uint32_t));
-    }
-    if (!bvh || !bd.prims || !bd.index || !bd.nodes || !bd.stack || !args || !bvh->nodes || !bvh->tri_positions ||
-        !bvh->tri_order) {
+    if (!bvh || !bd.prims || !bd.index || !bd.nodes || !bd.stack || !args || !bvh->nodes) {
         free(bd.prims), free(bd.index), free(bd.nodes), free(bd.stack), free(args);
         pb_bvh_destroy(bvh);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory building the BVH of %u triangles", n);
     }
     task root_task = {.node = 0, .begin = 0, .end = n, .depth = 0};
-    info_empty(&root_task.info);
-    for (uint32_t i = 0; i < n; ++i) {
-        const float *p = scene->positions + 9 * (size_t)i;
-        prim *pr = &bd.prims[i];
-        for (int k = 0; k < 3; ++k) {
-            float a = p[k], bb = p[3 + k], c = p[6 + k];
-            pr->lo[k] = a < bb ? (a < c ? a : c) : (bb < c ? bb : c);
-            pr->hi[k] = a > bb ? (a > c ? a : c) : (bb > c ? bb : c);
-        }
-        pr->lo[3] = pr->hi[3] = 0.f;
-        bd.index[i] = i;
-        info_add(&root_task.info, pr);
-    }
+    make_prims(&bd, scene, d.threads, &root_task.info);
     bd.bins = d.bins;
     bd.max_leaf = d.max_leaf_size;
     bd.tc = d.traversal_cost;
@@ -622,11 +664,8 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     }
     bvh->node_count = fs.next;
     bvh->triangle_count = n;
-    for (uint32_t k = 0; k < n; ++k) {
-        uint32_t t = bd.index[k];
-        bvh->tri_order[k] = t;
-        memcpy(bvh->tri_positions + 9 * (size_t)k, scene->positions + 9 * (size_t)t, 9 * sizeof(float));
-    }
+    bvh->tri_order = bd.index; /* leaf order; the collapse renumbers it */
+    bd.index = NULL;
     bvh->stats.nodes = fs.next;
     bvh->stats.leaves = fs.leaves;
     bvh->stats.depth = fs.depth;
@@ -634,11 +673,18 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     bvh->stats.sah_cost = fs.sah;
     bvh->stats.threads = n ? want : 1;
     int wide_ok = pb_bvh_collapse_wide(bvh);
+    if (wide_ok) { /* the positions once, in the final leaf order */
+        bvh->tri_positions = malloc((size_t)(n ? n : 1) * 9 * sizeof(float));
+        wide_ok = bvh->tri_positions != NULL;
+        positions_job pj = {scene, bvh};
+        if (wide_ok)
+            pb_parallel_for(n, 1u << 16, d.threads, gather_positions, &pj);
+    }
 
     pthread_mutex_destroy(&bd.lock);
     pthread_cond_destroy(&bd.cond);
     free(bd.prims);
-    free(bd.index);
+    free(bd.index); /* NULL: it became tri_order */
     free(bd.nodes);
     free(bd.stack);
     bvh->stats.build_ms = pb_now_ms() - t0;

@@ -230,16 +230,15 @@ static void emit(wide_state *ws, uint32_t pair, uint32_t index, uint32_t depth)
 }
 
 /* Leaf order renumbered node by node (a node's leaves in slot order), the
- * slots encoded, and the pair nodes' leaves and the triangle arrays moved to
- * the new order. The visit order of any traversal is unchanged. */
+ * slots encoded, and the pair nodes' leaves and tri_order moved to the new
+ * order. The visit order of any traversal is unchanged. */
 static int encode(pb_bvh *bvh, const wide_state *ws)
 {
     uint32_t n = bvh->triangle_count;
     uint32_t *moved = malloc((size_t)(n ? n : 1) * sizeof *moved); /* old first triangle -> new */
     uint32_t *order = malloc((size_t)(n ? n : 1) * sizeof *order);
-    float *pos = malloc((size_t)(n ? n : 1) * 9 * sizeof *pos);
-    if (!moved || !order || !pos) {
-        free(moved), free(order), free(pos);
+    if (!moved || !order) {
+        free(moved), free(order);
         return 0;
     }
     uint32_t next = 0;
@@ -258,7 +257,6 @@ static int encode(pb_bvh *bvh, const wide_state *ws)
             codes |= k << (5 * i);
             moved[c] = next;
             memcpy(order + next, bvh->tri_order + c, k * sizeof *order);
-            memcpy(pos + 9 * (size_t)next, bvh->tri_positions + 9 * (size_t)c, 9 * k * sizeof *pos);
             next += k;
         }
         nd->codes_lo = (uint8_t)(codes & 0xffu);
@@ -271,9 +269,7 @@ static int encode(pb_bvh *bvh, const wide_state *ws)
                 bvh->nodes[p].child[s] = (int32_t)moved[bvh->nodes[p].child[s]];
     free(moved);
     free(bvh->tri_order);
-    free(bvh->tri_positions);
     bvh->tri_order = order;
-    bvh->tri_positions = pos;
     return 1;
 }
 

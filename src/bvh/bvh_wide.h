@@ -6,9 +6,10 @@
 #include "probebake/bvh.h"
 
 /* Fills bvh->wide_nodes, wide_node_count and the wide stats from
- * bvh->nodes, and renumbers leaf order (tri_order, tri_positions and the
- * pair nodes' leaves) so each wide node's leaves are consecutive. Returns 0
- * when out of host memory. */
+ * bvh->nodes, and renumbers leaf order (tri_order and the pair nodes'
+ * leaves) so each wide node's leaves are consecutive; tri_positions, which
+ * follow tri_order, are the caller's to fill after it. Returns 0 when out of
+ * host memory. */
 int pb_bvh_collapse_wide(pb_bvh *bvh);
 
 /* Surface area of the box [lo, hi] (0 for an empty axis): the probability
