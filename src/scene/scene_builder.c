@@ -246,29 +246,32 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
     pb_scene *s = calloc(1, sizeof *s);
     if (!s)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
-    uint64_t n = b->count ? b->count : 1;
-    s->positions = malloc((size_t)n * 9 * sizeof(float));
     if (!b->capacity) { /* no triangle was added: one element each, as for any scene */
-        b->nrm = malloc(9 * sizeof(float)), b->uv = malloc(6 * sizeof(float)), b->mat = malloc(sizeof(uint32_t));
+        b->pos = malloc(9 * sizeof(double)), b->nrm = malloc(9 * sizeof(float));
+        b->uv = malloc(6 * sizeof(float)), b->mat = malloc(sizeof(uint32_t));
         b->capacity = 1;
     }
-    if (!s->positions || !b->nrm || !b->uv || !b->mat) {
+    if (!b->pos || !b->nrm || !b->uv || !b->mat) {
         pb_scene_destroy(s);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
     }
-    /* The other per-triangle arrays are the builder's, compacted in place
-     * (a kept triangle never moves up): a large scene's load then touches
-     * no new pages for them. */
-    s->normals = b->nrm, s->texcoords = b->uv, s->material = b->mat, s->colors = b->rgba;
-    b->nrm = NULL, b->uv = NULL, b->mat = NULL, b->rgba = NULL;
+    /* The per-triangle arrays are the builder's, compacted in place (a kept
+     * triangle never moves up), so a large scene's load touches no new pages
+     * for them. The float positions go over the double ones: triangle i's 72
+     * bytes are read before any float lands on them (kept <= i, and a float
+     * triangle is 36 bytes). */
+    s->positions = (float *)(void *)b->pos, s->normals = b->nrm, s->texcoords = b->uv, s->material = b->mat;
+    s->colors = b->rgba;
+    const double *pos = b->pos;
+    b->pos = NULL, b->nrm = NULL, b->uv = NULL, b->mat = NULL, b->rgba = NULL;
 
     /* rebase, round to float, then drop what became (or was) zero area */
     uint32_t kept = 0;
     float flo[3] = {INFINITY, INFINITY, INFINITY}, fhi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint64_t i = 0; i < b->count; ++i) {
-        float *p = s->positions + 9 * (uint64_t)kept;
+        float p[9];
         for (int k = 0; k < 9; ++k)
-            p[k] = (float)(b->pos[9 * i + k] - origin[k % 3]);
+            p[k] = (float)(pos[9 * i + k] - origin[k % 3]);
         double e1[3], e2[3];
         for (int k = 0; k < 3; ++k) {
             e1[k] = (double)p[3 + k] - p[k];
@@ -292,6 +295,7 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
             flo[k % 3] = p[k] < flo[k % 3] ? p[k] : flo[k % 3];
             fhi[k % 3] = p[k] > fhi[k % 3] ? p[k] : fhi[k % 3];
         }
+        memcpy(s->positions + 9 * (uint64_t)kept, p, sizeof p);
         float *dn = s->normals + 9 * (uint64_t)kept;
         memmove(dn, s->normals + 9 * i, 9 * sizeof(float));
         double cl = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
@@ -306,7 +310,8 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
         ++kept;
     }
     s->triangle_count = kept;
-    shrink((void **)&s->normals, kept, 9 * sizeof(float)); /* the builder's spare capacity back */
+    shrink((void **)&s->positions, kept, 9 * sizeof(float)); /* the builder's spare capacity back */
+    shrink((void **)&s->normals, kept, 9 * sizeof(float));
     shrink((void **)&s->texcoords, kept, 6 * sizeof(float));
     shrink((void **)&s->material, kept, sizeof(uint32_t));
     if (s->colors)
