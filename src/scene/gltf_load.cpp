@@ -403,6 +403,59 @@ pb_result decode_draco(reader &r, const tinygltf::Primitive &prim, const tinyglt
     return PB_OK;
 }
 
+// Vertex indices of accessor `index` (unsigned integers: the caller checked),
+// each below `nv`. The plain case (a SCALAR in a bufferView, neither sparse
+// nor normalized nor from Draco) is read straight into `order`, so a large
+// scene's indices never pass through doubles (8 fresh bytes each); every
+// other case goes through read_accessor. Either way, the same errors.
+pb_result read_indices(reader &r, int index, size_t nv, std::vector<uint32_t> &order)
+{
+    const tinygltf::Model &m = r.m;
+    const tinygltf::Accessor *a = index >= 0 && index < (int)m.accessors.size() ? &m.accessors[index] : nullptr;
+    bool plain = a && a->type == TINYGLTF_TYPE_SCALAR && !a->normalized && !a->sparse.isSparse &&
+                 a->bufferView >= 0 && a->count > 0 && r.draco_accessors.find(index) == r.draco_accessors.end();
+    size_t elem = a ? (size_t)tinygltf::GetComponentSizeInBytes((uint32_t)a->componentType) : 0;
+    size_t stride = plain && a->bufferView < (int)m.bufferViews.size() && m.bufferViews[a->bufferView].byteStride
+                        ? m.bufferViews[a->bufferView].byteStride
+                        : elem;
+    std::string range_error = " in accessor " + std::to_string(index) + " is out of range (" + std::to_string(nv) +
+                              " vertices)";
+    if (plain && (elem == 1 || elem == 2 || elem == 4) && stride >= elem) {
+        const unsigned char *base;
+        pb_result res = view_span(r, a->bufferView, a->byteOffset, a->count, elem, stride,
+                                  "index accessor " + std::to_string(index), &base);
+        if (res != PB_OK)
+            return res;
+        order.resize(a->count);
+        for (size_t i = 0; i < a->count; ++i) {
+            const unsigned char *p = base + i * stride;
+            uint16_t s;
+            uint32_t v;
+            if (elem == 1)
+                v = p[0];
+            else if (elem == 2)
+                memcpy(&s, p, 2), v = s;
+            else
+                memcpy(&v, p, 4);
+            if (v >= nv)
+                return fail(r, PB_ERROR_PARSE, "index " + std::to_string(v) + range_error);
+            order[i] = v;
+        }
+        return PB_OK;
+    }
+    std::vector<double> idx;
+    pb_result res = read_accessor(r, index, 1, idx, "index");
+    if (res != PB_OK)
+        return res;
+    order.resize(idx.size());
+    for (size_t i = 0; i < idx.size(); ++i) {
+        if (idx[i] >= (double)nv)
+            return fail(r, PB_ERROR_PARSE, "index " + std::to_string((uint64_t)idx[i]) + range_error);
+        order[i] = (uint32_t)idx[i];
+    }
+    return PB_OK;
+}
+
 pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 world, const char *mesh_name)
 {
     r.b->stats.primitives++;
@@ -425,7 +478,7 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
         r.b->stats.primitives_skipped++;
         return PB_OK;
     }
-    std::vector<double> pos, nrm, uv, idx;
+    std::vector<double> pos, nrm, uv;
     pb_result res = read_accessor(r, pos_it->second, 3, pos, "POSITION");
     if (res != PB_OK)
         return res;
@@ -464,16 +517,8 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
             ia->componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
             ia->componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
             return fail(r, PB_ERROR_PARSE, "index accessor " + std::to_string(indices) + " is not unsigned integer");
-        if ((res = read_accessor(r, indices, 1, idx, "index")) != PB_OK)
+        if ((res = read_indices(r, indices, nv, order)) != PB_OK)
             return res;
-        order.resize(idx.size());
-        for (size_t i = 0; i < idx.size(); ++i) {
-            if (idx[i] >= (double)nv)
-                return fail(r, PB_ERROR_PARSE, "index " + std::to_string((uint64_t)idx[i]) + " in accessor " +
-                                                   std::to_string(indices) + " is out of range (" +
-                                                   std::to_string(nv) + " vertices)");
-            order[i] = (uint32_t)idx[i];
-        }
     } else {
         order.resize(nv);
         for (size_t i = 0; i < nv; ++i)
@@ -483,7 +528,8 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
     std::vector<uint32_t> tris;
     int mode = prim.mode == -1 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
     if (mode == TINYGLTF_MODE_TRIANGLES) {
-        tris.assign(order.begin(), order.begin() + (order.size() / 3) * 3);
+        order.resize((order.size() / 3) * 3);
+        tris.swap(order);
     } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
         for (size_t i = 0; i + 2 < order.size(); ++i) { // odd triangles swap to keep the winding
             bool odd = i & 1;
