@@ -6,7 +6,7 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bakeab blocks bench clocks lavapipe loads peer sweep test_bake test_trace traceab tests
+# STEPS: any of compile bake bakeab blocks bench clocks large lavapipe loads peer sweep test_bake test_trace traceab tests
 # vsbake wavefront (default: compile bake wavefront vsbake peer bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
@@ -81,6 +81,20 @@ for s in $steps; do
             run 90 build/bench/trace_bench --probes 16384 --rays 1024 --repeat 3 --leaf $1 --tc $2 \
                 --json /tmp/trace-leaf$1-tc$2.json $crypt
             keep /tmp/trace-leaf$1-tc$2.json
+        done ;;
+    large) # the host's share of a large scene's bake on a workstation's cores (bench/RESULTS.md,
+        # "The BVH build, and a large scene's load"): the 4.2M-triangle terrain (75 MB, made
+        # here: too big to carry), its BVH build against Embree's on all host cores, then the
+        # issue's bake size on it twice (load, BVH, stages and GPU times)
+        run 120 python3 scripts/make_large_scene.py /tmp/terrain.glb
+        [ -s /tmp/terrain.glb ] || continue
+        run 180 build/bench/trace_bench --probes 4096 --rays 256 --repeat 3 --json /tmp/trace-terrain.json \
+            /tmp/terrain.glb
+        keep /tmp/trace-terrain.json
+        for i in 1 2; do
+            say "terrain bake $i"
+            timeout 180 build/probebake bake /tmp/terrain.glb --counts 32,16,32 --rays 256 --passes 1 --bounces 3 \
+                --verbose -o /tmp/terrain.probes 2>&1 | grep -E "loaded|BVH|stages|^time" >>"$log"
         done ;;
     bake) # issue 11's GPU figure: 16k probes x 256 rays x 3 bounces on The Crypt
         for i in 1 2; do
