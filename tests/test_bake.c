@@ -65,6 +65,16 @@ static void release(baked *b)
     pb_bvh_destroy(b->bvh);
 }
 
+/* The smallest bake worth checking a mechanism on: 8 probes over the
+ * scene, 32 rays, one pass, 4 x 4 depth maps. */
+static pb_bake_desc tiny_bake(const pb_scene *s)
+{
+    pb_bake_desc d = {0};
+    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
+    d.rays_per_probe = 32, d.passes = 1, d.octmap_res = 4;
+    return d;
+}
+
 static pb_probe_grid small_grid(float lo, float hi, uint32_t n)
 {
     pb_probe_grid g;
@@ -1239,9 +1249,7 @@ static void pipelines_are_made_once_per_context(void)
     pb_scene *s = load_demo();
     if (!s)
         return;
-    pb_bake_desc d = {0};
-    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
-    d.rays_per_probe = 32, d.passes = 1, d.octmap_res = 4;
+    pb_bake_desc d = tiny_bake(s);
     baked a = bake(s, &d);
     uint32_t after_first = ctx->pipelines_created;
     baked b = bake(s, &d);
@@ -1268,9 +1276,7 @@ static void volume_carries_the_scene_hash(void)
     pb_scene *s = load_demo();
     if (!s)
         return;
-    pb_bake_desc d = {0};
-    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
-    d.rays_per_probe = 32, d.passes = 1, d.octmap_res = 4;
+    pb_bake_desc d = tiny_bake(s);
     baked a = bake(s, &d);
     pb_volume second;
     memset(&second, 0, sizeof second);
@@ -1328,9 +1334,8 @@ static void light_cells_are_learned_once_per_scene_and_seed(void)
     pb_scene *s = load_demo();
     if (!s)
         return;
-    pb_bake_desc d = {0};
-    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
-    d.rays_per_probe = 32, d.passes = 1, d.octmap_res = 4, d.light_cells = 1;
+    pb_bake_desc d = tiny_bake(s);
+    d.light_cells = 1;
     baked a = bake(s, &d); /* a GPU scene of its own: learns */
     pb_volume v1, v2, v3;
     pb_error err;
@@ -1369,9 +1374,8 @@ static void guide_is_learned_once_per_key(void)
     pb_scene *s = load_demo();
     if (!s)
         return;
-    pb_bake_desc d = {0};
-    pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
-    d.rays_per_probe = 32, d.passes = 1, d.octmap_res = 4, d.bounces = 2, d.guide_paths = 1u << 14;
+    pb_bake_desc d = tiny_bake(s);
+    d.bounces = 2, d.guide_paths = 1u << 14;
     baked a = bake(s, &d); /* a GPU scene of its own: learns */
     pb_environment env;
     memset(&env, 0, sizeof env);
