@@ -672,7 +672,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     bvh->stats.max_leaf_size = fs.max_leaf;
     bvh->stats.sah_cost = fs.sah;
     bvh->stats.threads = n ? want : 1;
-    int wide_ok = pb_bvh_collapse_wide(bvh);
+    int wide_ok = pb_bvh_collapse_wide(bvh, d.threads);
     if (wide_ok) { /* the positions once, in the final leaf order */
         bvh->tri_positions = malloc((size_t)(n ? n : 1) * 9 * sizeof(float));
         wide_ok = bvh->tri_positions != NULL;

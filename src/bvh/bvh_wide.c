@@ -20,6 +20,7 @@
  * the builder steps each q until its decoded value encloses the true bound
  * under that rounding. */
 #include "bvh/bvh_wide.h"
+#include "common/common.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -42,7 +43,12 @@ typedef struct wide_state {
     double area, root_area; /* summed surface area of the emitted wide nodes' boxes, the root's */
     double (*cost)[5];   /* per pair node: [j], j = 2..4: cheapest cover by j slots; [1]: as one slot */
     uint8_t (*split)[5]; /* [j]: slots of that cover under the first child; [1]: the cover's j */
+    uint32_t *pair;      /* per wide node: the pair node it covers (`plan` writes it, `quantize` reads it) */
+    uint32_t tasks[64];  /* pair nodes at COVER_DEPTH, whose subtrees `cover` on all threads */
+    uint32_t task_count;
 } wide_state;
+
+#define COVER_DEPTH 6 /* 2^6 subtrees: enough to share among threads, few enough to merge above */
 
 static uint32_t gather_slots(const pb_bvh_node *n, int s, wide_slot *slot)
 {
@@ -119,7 +125,8 @@ static double slot_cost(const wide_state *ws, const wide_slot *c, int j)
     return c->count ? INFINITY : ws->cost[c->child][j];
 }
 
-static void cover(wide_state *ws, uint32_t q)
+/* Pair node q's covers, from its children's (computed before). */
+static void cover_node(wide_state *ws, uint32_t q)
 {
     wide_slot c[2];
     int has[2];
@@ -128,8 +135,6 @@ static void cover(wide_state *ws, uint32_t q)
         has[s] = gather_slots(&ws->bvh->nodes[q], s, &c[s]);
         if (!has[s])
             continue;
-        if (!c[s].count)
-            cover(ws, c[s].child);
         for (int a = 0; a < 3; ++a) {
             lo[a] = c[s].lo[a] < lo[a] ? c[s].lo[a] : lo[a];
             hi[a] = c[s].hi[a] > hi[a] ? c[s].hi[a] : hi[a];
@@ -155,6 +160,52 @@ static void cover(wide_state *ws, uint32_t q)
     ws->cost[q][1] = slot_area(&box) + (best_any < INFINITY ? best_any : 0.0);
 }
 
+/* Covers of q's subtree, bottom-up. A node's covers depend on its
+ * children's alone, so subtrees can be covered in any order, on any thread. */
+static void cover(wide_state *ws, uint32_t q)
+{
+    for (int s = 0; s < 2; ++s) {
+        wide_slot c;
+        if (gather_slots(&ws->bvh->nodes[q], s, &c) && !c.count)
+            cover(ws, c.child);
+    }
+    cover_node(ws, q);
+}
+
+/* The inner pair nodes at COVER_DEPTH under q (at `depth`), as tasks. */
+static void collect_tasks(wide_state *ws, uint32_t q, uint32_t depth)
+{
+    if (depth == COVER_DEPTH) {
+        ws->tasks[ws->task_count++] = q;
+        return;
+    }
+    for (int s = 0; s < 2; ++s) {
+        wide_slot c;
+        if (gather_slots(&ws->bvh->nodes[q], s, &c) && !c.count)
+            collect_tasks(ws, c.child, depth + 1);
+    }
+}
+
+static void cover_tasks(void *user, uint64_t begin, uint64_t end)
+{
+    wide_state *ws = user;
+    for (uint64_t t = begin; t < end; ++t)
+        cover(ws, ws->tasks[t]);
+}
+
+/* The nodes above COVER_DEPTH, once the tasks' subtrees are covered. */
+static void cover_top(wide_state *ws, uint32_t q, uint32_t depth)
+{
+    if (depth == COVER_DEPTH)
+        return;
+    for (int s = 0; s < 2; ++s) {
+        wide_slot c;
+        if (gather_slots(&ws->bvh->nodes[q], s, &c) && !c.count)
+            cover_top(ws, c.child, depth + 1);
+    }
+    cover_node(ws, q);
+}
+
 /* The slots of pair node q's cheapest cover by j slots (j = 0: its
  * children), appended to out. */
 static uint32_t cover_slots(const wide_state *ws, uint32_t q, int j, wide_slot *out)
@@ -178,30 +229,62 @@ static uint32_t cover_slots(const wide_state *ws, uint32_t q, int j, wide_slot *
     return k;
 }
 
-/* Writes the wide node of pair node `pair` at `index`; its inner children get
- * consecutive indices, in slot order, so a traversal can name a node's
- * pending children by the first one's index and their ranks. */
-static void emit(wide_state *ws, uint32_t pair, uint32_t index, uint32_t depth)
+/* The box around a wide node's k slots. */
+static void slots_box(const wide_slot *slot, uint32_t k, float lo[3], float hi[3])
 {
-    wide_slot slot[4];
-    uint32_t k = cover_slots(ws, pair, ws->split[pair][1], slot);
-    if (depth + 1 > ws->depth)
-        ws->depth = depth + 1;
-    pb_bvh4_node *w = &ws->out[index];
-    memset(w, 0, sizeof *w);
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int a = 0; a < 3; ++a)
+        lo[a] = INFINITY, hi[a] = -INFINITY;
     for (uint32_t i = 0; i < k; ++i)
         for (int a = 0; a < 3; ++a) {
             lo[a] = slot[i].lo[a] < lo[a] ? slot[i].lo[a] : lo[a];
             hi[a] = slot[i].hi[a] > hi[a] ? slot[i].hi[a] : hi[a];
         }
+}
+
+/* Emission, first half, in tree order: the wide node of pair node `pair`
+ * gets `index`, its inner children consecutive indices in slot order (so a
+ * traversal can name a node's pending children by the first one's index and
+ * their ranks), then each child's subtree follows. Records the node's slots'
+ * children and counts, its pair node, the depth and the summed area. */
+static void plan(wide_state *ws, uint32_t pair, uint32_t index, uint32_t depth)
+{
+    wide_slot slot[4];
+    uint32_t k = cover_slots(ws, pair, ws->split[pair][1], slot);
+    if (depth + 1 > ws->depth)
+        ws->depth = depth + 1;
+    ws->pair[index] = pair;
     if (k) {
-        wide_slot box = {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, 0, 0};
+        wide_slot box = {{0}, {0}, 0, 0};
+        slots_box(slot, k, box.lo, box.hi);
         ws->area += slot_area(&box);
         if (index == 0)
             ws->root_area = slot_area(&box);
     }
-    float scale[3];
+    uint32_t *child = ws->child[index];
+    for (uint32_t i = 0; i < 4; ++i) {
+        child[i] = SLOT_UNUSED;
+        ws->count[index][i] = i < k ? (uint8_t)slot[i].count : 0;
+    }
+    /* siblings first, then each sibling's subtree */
+    for (uint32_t i = 0; i < k; ++i)
+        child[i] = slot[i].count ? slot[i].child : ws->next++;
+    for (uint32_t i = 0; i < k; ++i)
+        if (!slot[i].count)
+            plan(ws, slot[i].child, ws->child[index][i], depth + 1);
+}
+
+/* Emission, second half: wide node `index`'s frame and quantized boxes,
+ * which depend on its own slots alone (most of the emission's work), so
+ * nodes are written on all threads. */
+static void quantize_node(const wide_state *ws, uint32_t index)
+{
+    wide_slot slot[4];
+    uint32_t pair = ws->pair[index];
+    uint32_t k = cover_slots(ws, pair, ws->split[pair][1], slot);
+    pb_bvh4_node *w = &ws->out[index];
+    memset(w, 0, sizeof *w);
+    float lo[3], hi[3], scale[3];
+    slots_box(slot, k, lo, hi);
     for (int a = 0; a < 3; ++a) {
         if (k == 0)
             lo[a] = hi[a] = 0.f;
@@ -209,24 +292,17 @@ static void emit(wide_state *ws, uint32_t pair, uint32_t index, uint32_t depth)
         w->exponent[a] = (uint8_t)axis_exponent(lo[a], hi[a]);
         scale[a] = pb_bvh4_scale(w->exponent[a]);
     }
-    uint32_t *child = ws->child[index];
-    for (uint32_t i = 0; i < 4; ++i) {
-        child[i] = SLOT_UNUSED;
-        ws->count[index][i] = 0;
-        if (i >= k)
-            continue;
+    for (uint32_t i = 0; i < k; ++i)
         for (int a = 0; a < 3; ++a) {
             w->qbox[a][0][i] = quantize_lo(lo[a], scale[a], slot[i].lo[a]);
             w->qbox[a][1][i] = quantize_hi(lo[a], scale[a], slot[i].hi[a]);
         }
-        ws->count[index][i] = (uint8_t)slot[i].count;
-    }
-    /* siblings first, then each sibling's subtree */
-    for (uint32_t i = 0; i < k; ++i)
-        child[i] = slot[i].count ? slot[i].child : ws->next++;
-    for (uint32_t i = 0; i < k; ++i)
-        if (!slot[i].count)
-            emit(ws, slot[i].child, ws->child[index][i], depth + 1);
+}
+
+static void quantize_nodes(void *user, uint64_t begin, uint64_t end)
+{
+    for (uint64_t w = begin; w < end; ++w)
+        quantize_node(user, (uint32_t)w);
 }
 
 /* Leaf order renumbered node by node (a node's leaves in slot order), the
@@ -273,31 +349,34 @@ static int encode(pb_bvh *bvh, const wide_state *ws)
     return 1;
 }
 
-int pb_bvh_collapse_wide(pb_bvh *bvh)
+int pb_bvh_collapse_wide(pb_bvh *bvh, uint32_t threads)
 {
     /* every wide node consumes at least one pair node */
     size_t cap = bvh->node_count ? bvh->node_count : 1;
-    bvh->wide_nodes = calloc(cap, sizeof(pb_bvh4_node));
-    wide_state ws = {bvh,
-                     bvh->wide_nodes,
-                     malloc(cap * sizeof *ws.child),
-                     malloc(cap * sizeof *ws.count),
-                     1,
-                     0,
-                     0.0,
-                     0.0,
-                     malloc(cap * sizeof *ws.cost),
-                     malloc(cap * sizeof *ws.split)};
-    int ok = bvh->wide_nodes && ws.child && ws.count && ws.cost && ws.split;
+    wide_state ws;
+    memset(&ws, 0, sizeof ws);
+    ws.bvh = bvh;
+    ws.out = bvh->wide_nodes = calloc(cap, sizeof(pb_bvh4_node));
+    ws.child = malloc(cap * sizeof *ws.child);
+    ws.count = malloc(cap * sizeof *ws.count);
+    ws.cost = malloc(cap * sizeof *ws.cost);
+    ws.split = malloc(cap * sizeof *ws.split);
+    ws.pair = malloc(cap * sizeof *ws.pair);
+    ws.next = 1;
+    int ok = bvh->wide_nodes && ws.child && ws.count && ws.cost && ws.split && ws.pair;
     if (ok) {
-        cover(&ws, 0);
-        emit(&ws, 0, 0, 0);
+        collect_tasks(&ws, 0, 0);
+        pb_parallel_for(ws.task_count, 1, threads, cover_tasks, &ws);
+        cover_top(&ws, 0, 0);
+        plan(&ws, 0, 0, 0);
+        pb_parallel_for(ws.next, 4096, threads, quantize_nodes, &ws);
         ok = encode(bvh, &ws);
     }
     free(ws.child);
     free(ws.count);
     free(ws.cost);
     free(ws.split);
+    free(ws.pair);
     bvh->wide_node_count = ok ? ws.next : 0;
     bvh->stats.wide_nodes = bvh->wide_node_count;
     bvh->stats.wide_depth = ws.depth;

@@ -9,8 +9,9 @@
  * bvh->nodes, and renumbers leaf order (tri_order and the pair nodes'
  * leaves) so each wide node's leaves are consecutive; tri_positions, which
  * follow tri_order, are the caller's to fill after it. Returns 0 when out of
- * host memory. */
-int pb_bvh_collapse_wide(pb_bvh *bvh);
+ * host memory. Covers and quantizes on up to `threads` threads; the result
+ * is the same for any count. */
+int pb_bvh_collapse_wide(pb_bvh *bvh, uint32_t threads);
 
 /* Surface area of the box [lo, hi] (0 for an empty axis): the probability
  * weight of both the build's SAH and the collapse's expected steps. */
