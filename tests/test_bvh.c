@@ -276,8 +276,9 @@ static void empty_scene_builds_and_misses(void)
 
 static void build_is_deterministic_across_threads(void)
 {
-    /* large enough for parallel binning (>= 65536) and many tasks */
-    pb_scene *s = random_soup(scaled(100000) < 70000 ? 70000 : 100000, 0.05f, 42, NULL); /* >= 65536: parallel binning */
+    /* large enough for parallel binning (ranges of 16,384 or more), shared and kept tasks, and a
+     * collapse covered and quantized in parallel */
+    pb_scene *s = random_soup(scaled(100000) < 70000 ? 70000 : 100000, 0.05f, 42, NULL);
     pb_bvh *b[3] = {NULL, NULL, NULL};
     uint32_t threads[3] = {1, 2, 5};
     pb_error err;

@@ -519,6 +519,62 @@ static void bad_triangles_dropped_and_counted(void)
     pb_scene_destroy(s);
 }
 
+/* A triangle kept after a dropped one moves down with all it carries: the
+ * loader compacts positions, normals, texture coordinates and materials in
+ * place (scene_builder.c), so each must land beside its own triangle. */
+static void kept_triangles_keep_their_attributes(void)
+{
+    float bin[9 * 3 + 9 * 3 + 9 * 2] = {
+        0, 0, 0,  1, 0, 0,  0, 1, 0,           /* A: kept */
+        0, 0, 0,  1, 1, 1,  2, 2, 2,           /* D: collinear, dropped */
+        0, 0, 2,  1, 0, 2,  0, 1, 2,           /* B: kept, second primitive, material 1 */
+        0, 0, 1,  0, 0, 1,  0, 0, 1,           /* normals */
+        0, 0, 1,  0, 0, 1,  0, 0, 1,
+        0, 0.6f, 0.8f,  0, 0.8f, 0.6f,  0.6f, 0, 0.8f,
+        0, 0,  1, 0,  0, 1,                    /* texture coordinates */
+        0.9f, 0.9f,  0.8f, 0.8f,  0.7f, 0.7f,
+        0.5f, 0.5f,  0.25f, 0.75f,  0.125f, 0.875f};
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"materials\":[{\"name\":\"a\"},{\"name\":\"b\"}],"
+        "\"meshes\":[{\"primitives\":["
+        "{\"attributes\":{\"POSITION\":0,\"NORMAL\":2,\"TEXCOORD_0\":4},\"material\":0},"
+        "{\"attributes\":{\"POSITION\":1,\"NORMAL\":3,\"TEXCOORD_0\":5},\"material\":1}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":6,\"type\":\"VEC3\"},"
+        "{\"bufferView\":0,\"byteOffset\":72,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":6,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"byteOffset\":72,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":2,\"componentType\":5126,\"count\":6,\"type\":\"VEC2\"},"
+        "{\"bufferView\":2,\"byteOffset\":48,\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":108},{\"buffer\":0,\"byteOffset\":108,\"byteLength\":108},"
+        "{\"buffer\":0,\"byteOffset\":216,\"byteLength\":72}],"
+        "\"buffers\":[{\"byteLength\":288,\"uri\":\"@BUF@\"}]}";
+    pb_scene *s = load_ok(write_gltf("kept-attributes.gltf", json, bin, sizeof bin));
+    if (!s)
+        return;
+    CHECKF(s->triangle_count == 2 && s->stats.dropped_degenerate == 1, "%u triangles, %llu dropped",
+           s->triangle_count, (unsigned long long)s->stats.dropped_degenerate);
+    if (s->triangle_count != 2) {
+        pb_scene_destroy(s);
+        return;
+    }
+    float worst = 0.f;
+    for (int k = 0; k < 9; ++k) {
+        worst = fmaxf(worst, fabsf(s->positions[k] + (float)s->origin[k % 3] - bin[k]));
+        worst = fmaxf(worst, fabsf(s->positions[9 + k] + (float)s->origin[k % 3] - bin[18 + k]));
+        worst = fmaxf(worst, fabsf(s->normals[k] - bin[27 + k]));
+        worst = fmaxf(worst, fabsf(s->normals[9 + k] - bin[27 + 18 + k]));
+    }
+    for (int k = 0; k < 6; ++k) {
+        worst = fmaxf(worst, fabsf(s->texcoords[k] - bin[54 + k]));
+        worst = fmaxf(worst, fabsf(s->texcoords[6 + k] - bin[54 + 12 + k]));
+    }
+    fprintf(stderr, "  worst attribute difference %.1e, materials %u %u\n", worst, s->material[0], s->material[1]);
+    CHECK(worst < 1e-6f);
+    CHECK(s->material[0] == 0 && s->material[1] == 1);
+    pb_scene_destroy(s);
+}
+
 /* Vertex normals are read for shading: normalized, a zero one replaced by
  * the face normal (it used to become +Y), a bent one kept; packed for the
  * kernels within 1e-4 radians; interpolated, turned to the side a ray
@@ -1665,6 +1721,7 @@ int main(void)
     RUN(spec_gloss_and_unlit_materials);
     RUN(texture_transform_applied);
     RUN(bad_triangles_dropped_and_counted);
+    RUN(kept_triangles_keep_their_attributes);
     RUN(vertex_normals_read_for_shading);
     RUN(far_from_origin_is_rebased);
     RUN(malformed_files_get_clear_errors);

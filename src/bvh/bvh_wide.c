@@ -34,6 +34,8 @@ typedef struct wide_slot {
     uint32_t count;
 } wide_slot;
 
+#define COVER_DEPTH 6 /* 2^6 subtrees: enough to share among threads, few enough to merge above */
+
 typedef struct wide_state {
     const pb_bvh *bvh;
     pb_bvh4_node *out;
@@ -44,11 +46,9 @@ typedef struct wide_state {
     double (*cost)[5];   /* per pair node: [j], j = 2..4: cheapest cover by j slots; [1]: as one slot */
     uint8_t (*split)[5]; /* [j]: slots of that cover under the first child; [1]: the cover's j */
     uint32_t *pair;      /* per wide node: the pair node it covers (`plan` writes it, `quantize` reads it) */
-    uint32_t tasks[64];  /* pair nodes at COVER_DEPTH, whose subtrees `cover` on all threads */
+    uint32_t tasks[1u << COVER_DEPTH]; /* pair nodes at COVER_DEPTH, whose subtrees `cover` on all threads */
     uint32_t task_count;
 } wide_state;
-
-#define COVER_DEPTH 6 /* 2^6 subtrees: enough to share among threads, few enough to merge above */
 
 static uint32_t gather_slots(const pb_bvh_node *n, int s, wide_slot *slot)
 {
@@ -275,7 +275,9 @@ static void plan(wide_state *ws, uint32_t pair, uint32_t index, uint32_t depth)
 
 /* Emission, second half: wide node `index`'s frame and quantized boxes,
  * which depend on its own slots alone (most of the emission's work), so
- * nodes are written on all threads. */
+ * nodes are written on all threads. The slots are gathered again from the
+ * pair node rather than kept from `plan` (128 bytes per node; gathering is
+ * cheap beside the quantization). */
 static void quantize_node(const wide_state *ws, uint32_t index)
 {
     wide_slot slot[4];
