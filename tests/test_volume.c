@@ -3,10 +3,13 @@
  * error. CPU only. */
 #define _DEFAULT_SOURCE /* mknod, makedev, symlink */
 #include "test_util.h"
+#include "io/half_pairs.h"
 
 #include <dirent.h>
 #include <fcntl.h>
 #include <pthread.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/sysmacros.h>
 #include <sys/un.h>
@@ -74,6 +77,63 @@ static void half_rounding_matches_reference(void)
     CHECKF(bad == 0, "%u of %u conversions differ", bad, n);
     CHECK(pb_half_from_float(1e6f) == 0x7c00u && pb_half_from_float(-1e6f) == 0xfc00u);
     CHECK(pb_half_from_float(NAN) != 0x7c00u && (pb_half_from_float(NAN) & 0x7c00u) == 0x7c00u);
+}
+
+/* The volume stage's bulk conversion (F16C on x86-64) gives the halves that
+ * one conversion at a time gives, bit for bit: every sign and exponent,
+ * every 10-bit half mantissa, the dropped bits at and around each rounding
+ * midpoint (a subnormal half's midpoint moves with the exponent), NaN
+ * payloads; divisors that keep those midpoints (powers of two) and ones that
+ * do not (a pass count times the depth unit); run lengths that leave a tail. */
+static void half_pairs_match_one_at_a_time(void)
+{
+    uint32_t count = 512u * 1024u * 8u;
+    float *in = malloc(count * sizeof *in);
+    uint16_t *fast = malloc(count * sizeof *fast), *slow = malloc(count * sizeof *slow);
+    CHECK(in && fast && slow);
+    test_rng r = {29};
+    uint32_t k = 0;
+    for (uint32_t se = 0; se < 512; ++se) /* sign and exponent */
+        for (uint32_t top = 0; top < 1024; ++top) {
+            int e = (int)(se & 255u) - 127 + 15; /* the half's biased exponent */
+            uint32_t cut = e >= 1 ? 13u : e >= -10 ? (uint32_t)(14 - e) : 24u; /* bits a half drops */
+            uint32_t mid = 1u << (cut - 1u);
+            uint32_t low[8] = {0, 1, mid - 1u, mid, mid + 1u, (1u << cut) - 1u, 0, 0};
+            low[6] = (uint32_t)(rng_uniform(&r) * 8388608.0);
+            low[7] = mid | (1u << cut); /* a tie whose kept part is odd */
+            for (int i = 0; i < 8; ++i) {
+                uint32_t bits = (se << 23) | (((top << 13) | low[i]) & 0x7fffffu);
+                memcpy(&in[k++], &bits, 4);
+            }
+        }
+    pb_half_path best = pb_half_best_path();
+    const double divs[5][2] = {{1, 1}, {0.125, 0.015625}, {3 * 0.125, 3 * 0.015625}, {7 * 16.0, 7 * 256.0},
+                               {1023 * ldexp(1, -9), 1023 * ldexp(1, -18)}};
+    uint32_t bad = 0;
+    for (int d = 0; d < 5; ++d) {
+        memset(fast, 0, count * sizeof *fast);
+        uint32_t pairs = count / 2, at = 0;
+        for (uint32_t run = 1; at < pairs; run = run % 37 + 1) { /* runs of 1 to 37 pairs */
+            uint32_t m = pairs - at < run ? pairs - at : run;
+            pb_half_pairs(best, in + 2 * at, fast + 2 * at, m, divs[d][0], divs[d][1]);
+            at += m;
+        }
+        pb_half_pairs(PB_HALF_SCALAR, in, slow, pairs, divs[d][0], divs[d][1]);
+        for (uint32_t i = 0; i < count; ++i) {
+            uint16_t want = pb_half_from_float((float)((double)in[i] / divs[d][i & 1]));
+            if (fast[i] != want || slow[i] != want) {
+                if (bad < 5)
+                    fprintf(stderr, "  %a / %g: fast %04x scalar %04x want %04x\n", in[i], divs[d][i & 1], fast[i],
+                            slow[i], want);
+                ++bad;
+            }
+        }
+    }
+    CHECKF(bad == 0, "%u of %u conversions differ", bad, 5 * count);
+    fprintf(stderr, "  bulk conversion: %s\n", best == PB_HALF_F16C ? "F16C" : "scalar only (no F16C on this CPU)");
+    free(in);
+    free(fast);
+    free(slow);
 }
 
 static void fill(pb_volume *v, uint32_t nx, uint32_t ny, uint32_t nz, uint32_t n)
@@ -631,6 +691,39 @@ static int cancel_on_call(void *user)
 
 /* A write cancelled at any point (first chunk, before the rename) leaves
  * the previous file as it was and no temporary beside it. */
+/* A write the file system stops halfway (here the file size limit, EFBIG;
+ * a full disk is ENOSPC) is an I/O error naming the path, and what it was
+ * replacing is untouched with no temporary file beside it: the file is
+ * written in pieces as it is encoded, never whole from memory. */
+static void write_failing_midway_replaces_nothing(void)
+{
+    pb_volume v, big, w;
+    fill(&v, 2, 2, 1, 4);
+    fill(&big, 16, 16, 8, 16); /* 2048 probes, ~2.9 MB */
+    char dir[512], p[700];
+    snprintf(dir, sizeof dir, "%s/midway", temp_dir());
+    mkdir(dir, 0755);
+    snprintf(p, sizeof p, "%s/keep.probes", dir);
+    pb_error err;
+    CHECK(pb_volume_write(p, &v, &err) == PB_OK);
+    struct rlimit old, small;
+    CHECK(getrlimit(RLIMIT_FSIZE, &old) == 0);
+    small = old;
+    small.rlim_cur = 1u << 20;
+    void (*was)(int) = signal(SIGXFSZ, SIG_IGN); /* else the kernel ends the process */
+    CHECK(setrlimit(RLIMIT_FSIZE, &small) == 0);
+    pb_result r = pb_volume_write(p, &big, &err);
+    setrlimit(RLIMIT_FSIZE, &old);
+    signal(SIGXFSZ, was);
+    CHECKF(r == PB_ERROR_IO && strstr(err.message, p) && strstr(err.message, "write failed"), "%s: %s",
+           pb_result_name(r), err.message);
+    CHECK(count_files(dir) == 1);
+    CHECK(pb_volume_read(p, &w, &err) == PB_OK && w.probe_count == 4);
+    pb_volume_free(&w);
+    pb_volume_free(&big);
+    pb_volume_free(&v);
+}
+
 static void cancelled_write_replaces_nothing(void)
 {
     pb_volume v, big, w;
@@ -708,6 +801,7 @@ int main(void)
 {
     RUN(half_round_trip_exhaustive);
     RUN(half_rounding_matches_reference);
+    RUN(half_pairs_match_one_at_a_time);
     RUN(file_round_trip);
     RUN(failed_write_leaves_nothing);
     RUN(malformed_files_get_clear_errors);
@@ -717,6 +811,7 @@ int main(void)
     RUN(version2_files_read);
     RUN(outputs_never_replace_what_they_are_not);
     RUN(cancelled_write_replaces_nothing);
+    RUN(write_failing_midway_replaces_nothing);
     RUN(sparse_lookup_finds_the_finest_brick);
     RUN(sparse_files_round_trip_and_refuse_damage);
     RUN(sparse_atlas_marks_levels);

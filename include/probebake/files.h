@@ -58,6 +58,17 @@ pb_result pb_output_check(const char *path, const char *const *inputs, int input
 pb_result pb_output_write(const char *path, const void *bytes, uint64_t size, pb_cancel_fn cancel, void *user,
                           pb_error *err);
 
+/* The same write in pieces, for outputs too large to hold twice: begin
+ * (the checks and the temporary file), put each piece in order, then commit
+ * (fsync, cancellation check, rename; frees the handle either way) or abort
+ * (removes the temporary file; NULL is fine). On an error from begin *out is
+ * NULL; after an error from put the caller aborts. */
+typedef struct pb_output pb_output;
+pb_result pb_output_begin(const char *path, pb_cancel_fn cancel, void *user, pb_output **out, pb_error *err);
+pb_result pb_output_put(pb_output *o, const void *bytes, uint64_t size, pb_error *err);
+pb_result pb_output_commit(pb_output *o, pb_error *err);
+void pb_output_abort(pb_output *o);
+
 #ifdef __cplusplus
 }
 #endif

@@ -405,8 +405,11 @@ int cmd_bake(const options *o)
     vol.timings.load = load_ms;
     vol.timings.bvh = bvh->stats.build_ms;
     vol.timings.total = cli_now_ms() - t0;
+    double write_t0 = cli_now_ms();
     if (pb_volume_write_ex(o->output, &vol, cli_interrupted, NULL, &err) != PB_OK)
         goto out;
+    log_slow_step(o, cli_now_ms() - write_t0, "%s: %.1f MiB written", o->output,
+                  pb_volume_file_bytes(&vol) / 1048576.0);
     print_report(strcmp(o->output, "-") ? stdout : stderr, /* stdout carries the volume for -o - */
                  o, &d, &vol, &stats, probes);
     rc = 0;

@@ -242,54 +242,120 @@ static pb_result write_all(int fd, const char *path, const unsigned char *b, uin
     return PB_OK;
 }
 
+/* A write in progress (files.h). `tmp` is NULL when the output is written
+ * in place: standard output, a character device or a FIFO. */
+struct pb_output {
+    int fd;
+    int owns_fd;       /* not standard output: closed at the end */
+    char *path;        /* as the caller named it, for messages */
+    char *target;      /* what the temporary file is renamed to */
+    char *tmp;
+    pb_cancel_fn cancel;
+    void *user;
+};
+
+static void output_free(pb_output *o)
+{
+    free(o->path);
+    free(o->target);
+    free(o->tmp);
+    free(o);
+}
+
+pb_result pb_output_begin(const char *path, pb_cancel_fn cancel, void *user, pb_output **out, pb_error *err)
+{
+    *out = NULL;
+    pb_output *o = calloc(1, sizeof *o);
+    if (o)
+        o->path = strdup(path);
+    if (!o || !o->path) {
+        free(o);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
+    }
+    o->fd = -1, o->cancel = cancel, o->user = user;
+    if (!strcmp(path, "-")) {
+        o->fd = STDOUT_FILENO;
+        *out = o;
+        return PB_OK;
+    }
+    struct stat st;
+    int exists = stat(path, &st) == 0;
+    pb_result r = PB_OK;
+    if (exists && (S_ISDIR(st.st_mode) || S_ISSOCK(st.st_mode) || S_ISBLK(st.st_mode))) {
+        r = pb_fail(err, PB_ERROR_IO, "%s: %s: not an output", path, kind_of(st.st_mode));
+    } else if (exists && (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode))) {
+        /* a device or pipe: write into it; renaming over it would replace it */
+        o->fd = open(path, O_WRONLY | O_CLOEXEC);
+        if (o->fd < 0)
+            r = pb_fail(err, PB_ERROR_IO, "%s: cannot open for writing: %s", path, strerror(errno));
+    } else if (!(o->target = resolve_target(path, err))) {
+        r = err ? err->code : PB_ERROR_IO;
+    } else if ((o->fd = create_temp(o->target, &o->tmp)) < 0) {
+        r = pb_fail(err, PB_ERROR_IO, "%s: cannot create a file there: %s", path, strerror(errno));
+    } else if (exists) { /* keep what the replaced file had */
+        if (fchown(o->fd, st.st_uid, st.st_gid) != 0) {
+            /* not ours to give away: keep our ownership, the mode still */
+        }
+        fchmod(o->fd, st.st_mode & 07777);
+    }
+    if (r != PB_OK) {
+        output_free(o);
+        return r;
+    }
+    o->owns_fd = 1;
+    *out = o;
+    return PB_OK;
+}
+
+pb_result pb_output_put(pb_output *o, const void *bytes, uint64_t size, pb_error *err)
+{
+    return write_all(o->fd, o->path, bytes, size, o->cancel, o->user, err);
+}
+
+void pb_output_abort(pb_output *o)
+{
+    if (!o)
+        return;
+    if (o->owns_fd)
+        close(o->fd);
+    if (o->tmp)
+        unlink(o->tmp); /* never leave a partial file behind */
+    output_free(o);
+}
+
+pb_result pb_output_commit(pb_output *o, pb_error *err)
+{
+    const char *path = o->path;
+    pb_result r = PB_OK;
+    if (o->tmp && fsync(o->fd) != 0)
+        r = pb_fail(err, PB_ERROR_IO, "%s: fsync failed: %s", path, strerror(errno));
+    if (o->owns_fd && close(o->fd) != 0 && r == PB_OK)
+        r = pb_fail(err, PB_ERROR_IO, "%s: close failed: %s", path, strerror(errno));
+    o->owns_fd = 0;
+    if (o->tmp) {
+        if (r == PB_OK && o->cancel && o->cancel(o->user))
+            r = pb_fail(err, PB_ERROR_CANCELLED, "%s: cancelled; nothing written", path);
+        if (r == PB_OK && rename(o->tmp, o->target) != 0)
+            r = pb_fail(err, PB_ERROR_IO, "%s: cannot replace the file: %s", path, strerror(errno));
+        if (r == PB_OK) {
+            free(o->tmp);
+            o->tmp = NULL; /* renamed: nothing to remove */
+        }
+    }
+    pb_output_abort(o);
+    return r;
+}
+
 pb_result pb_output_write(const char *path, const void *bytes, uint64_t size, pb_cancel_fn cancel, void *user,
                           pb_error *err)
 {
-    const unsigned char *b = bytes;
-    if (!strcmp(path, "-"))
-        return write_all(STDOUT_FILENO, "standard output", b, size, cancel, user, err);
-    struct stat st;
-    int exists = stat(path, &st) == 0;
-    if (exists && (S_ISDIR(st.st_mode) || S_ISSOCK(st.st_mode) || S_ISBLK(st.st_mode)))
-        return pb_fail(err, PB_ERROR_IO, "%s: %s: not an output", path, kind_of(st.st_mode));
-    if (exists && (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode))) {
-        /* a device or pipe: write into it; renaming over it would replace it */
-        int fd = open(path, O_WRONLY | O_CLOEXEC);
-        if (fd < 0)
-            return pb_fail(err, PB_ERROR_IO, "%s: cannot open for writing: %s", path, strerror(errno));
-        pb_result r = write_all(fd, path, b, size, cancel, user, err);
-        if (close(fd) != 0 && r == PB_OK)
-            r = pb_fail(err, PB_ERROR_IO, "%s: close failed: %s", path, strerror(errno));
+    pb_output *o;
+    pb_result r = pb_output_begin(path, cancel, user, &o, err);
+    if (r == PB_OK)
+        r = pb_output_put(o, bytes, size, err);
+    if (r != PB_OK) {
+        pb_output_abort(o);
         return r;
     }
-    char *target = resolve_target(path, err);
-    if (!target)
-        return err ? err->code : PB_ERROR_IO;
-    char *tmp = NULL;
-    int fd = create_temp(target, &tmp);
-    if (fd < 0) {
-        pb_result r = pb_fail(err, PB_ERROR_IO, "%s: cannot create a file there: %s", path, strerror(errno));
-        free(target);
-        return r;
-    }
-    if (exists) { /* keep what the replaced file had */
-        if (fchown(fd, st.st_uid, st.st_gid) != 0) {
-            /* not ours to give away: keep our ownership, the mode still */
-        }
-        fchmod(fd, st.st_mode & 07777);
-    }
-    pb_result r = write_all(fd, path, b, size, cancel, user, err);
-    if (r == PB_OK && fsync(fd) != 0)
-        r = pb_fail(err, PB_ERROR_IO, "%s: fsync failed: %s", path, strerror(errno));
-    if (close(fd) != 0 && r == PB_OK)
-        r = pb_fail(err, PB_ERROR_IO, "%s: close failed: %s", path, strerror(errno));
-    if (r == PB_OK && cancel && cancel(user))
-        r = pb_fail(err, PB_ERROR_CANCELLED, "%s: cancelled; nothing written", path);
-    if (r == PB_OK && rename(tmp, target) != 0)
-        r = pb_fail(err, PB_ERROR_IO, "%s: cannot replace the file: %s", path, strerror(errno));
-    if (r != PB_OK)
-        unlink(tmp); /* never leave a partial file behind */
-    free(tmp);
-    free(target);
-    return r;
+    return pb_output_commit(o, err);
 }

@@ -1,6 +1,7 @@
 /* IEEE 754 binary16 <-> binary32, round to nearest even (volume.h). The depth
  * moments in the file are halves: 11 significant bits are plenty for mean
  * distances at room-scale probe spacing (docs/format.md says when not). */
+#include "io/half_pairs.h"
 #include "probebake/volume.h"
 
 #include <string.h>
@@ -55,3 +56,65 @@ float pb_half_to_float(uint16_t h)
     memcpy(&f, &x, 4);
     return f;
 }
+
+/* ------------------------------------------------------------ in bulk */
+
+static void pairs_scalar(const float *in, uint16_t *out, uint32_t pairs, double div0, double div1)
+{
+    for (uint32_t i = 0; i < pairs; ++i) {
+        out[2 * i] = pb_half_from_float((float)((double)in[2 * i] / div0));
+        out[2 * i + 1] = pb_half_from_float((float)((double)in[2 * i + 1] / div1));
+    }
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <cpuid.h>
+#include <immintrin.h>
+
+pb_half_path pb_half_best_path(void)
+{
+    unsigned a, b, c, d;
+    if (!__get_cpuid(1, &a, &b, &c, &d) || !(c & bit_OSXSAVE) || !(c & bit_AVX) || !(c & bit_F16C))
+        return PB_HALF_SCALAR;
+    unsigned lo, hi;
+    __asm__("xgetbv" : "=a"(lo), "=d"(hi) : "c"(0));
+    return (lo & 6u) == 6u ? PB_HALF_F16C : PB_HALF_SCALAR; /* the OS saves XMM and YMM registers */
+}
+
+/* Four pairs at a time: the division in double and the rounding to float
+ * as the scalar path does them (the same IEEE operations, in lanes), then
+ * vcvtps2ph with round-to-nearest-even, which keeps a NaN's payload quiet
+ * as pb_half_from_float does. */
+__attribute__((target("avx,f16c"))) static void pairs_f16c(const float *in, uint16_t *out, uint32_t pairs,
+                                                            double div0, double div1)
+{
+    const __m256d div = _mm256_setr_pd(div0, div1, div0, div1);
+    uint32_t i = 0;
+    for (; i + 4 <= pairs; i += 4) {
+        __m256d lo = _mm256_div_pd(_mm256_cvtps_pd(_mm_loadu_ps(in + 2 * i)), div);
+        __m256d hi = _mm256_div_pd(_mm256_cvtps_pd(_mm_loadu_ps(in + 2 * i + 4)), div);
+        __m256 f = _mm256_set_m128(_mm256_cvtpd_ps(hi), _mm256_cvtpd_ps(lo));
+        _mm_storeu_si128((__m128i *)(out + 2 * i), _mm256_cvtps_ph(f, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
+    }
+    pairs_scalar(in + 2 * i, out + 2 * i, pairs - i, div0, div1);
+}
+
+void pb_half_pairs(pb_half_path path, const float *in, uint16_t *out, uint32_t pairs, double div0, double div1)
+{
+    if (path == PB_HALF_F16C)
+        pairs_f16c(in, out, pairs, div0, div1);
+    else
+        pairs_scalar(in, out, pairs, div0, div1);
+}
+#else
+pb_half_path pb_half_best_path(void)
+{
+    return PB_HALF_SCALAR;
+}
+
+void pb_half_pairs(pb_half_path path, const float *in, uint16_t *out, uint32_t pairs, double div0, double div1)
+{
+    (void)path;
+    pairs_scalar(in, out, pairs, div0, div1);
+}
+#endif

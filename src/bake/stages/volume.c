@@ -1,6 +1,7 @@
 /* Stage 7: SH, depth and validity into the volume (stages/job.h). */
 #include "bake/stages/job.h"
 #include "common/common.h"
+#include "io/half_pairs.h"
 #include "probebake/octahedral.h"
 #include "probebake/sh.h"
 
@@ -17,7 +18,27 @@ typedef struct volume_fill {
     pb_volume *out;
     const float *sums;             /* the device's depth sums of probes first.. (a run of them) */
     uint32_t first;
+    pb_half_path half_path;        /* the CPU's fastest conversion to halves */
 } volume_fill;
+
+/* A probe's depth tile from its texels' summed distance and square (m, n x
+ * n pairs): their means over the passes in depth units, as halves, with a
+ * one-texel border that repeats the texel across the octahedron's edge
+ * (octahedral.h). Dividing by passes x unit (an exact power-of-two multiple)
+ * rounds as dividing by each in turn did. */
+static void depth_tile(pb_half_path path, const float *m, uint16_t *tile, uint32_t n, uint32_t passes, double unit)
+{
+    double div_mean = (double)passes * unit, div_square = div_mean * unit;
+    uint32_t w = n + 2;
+    for (uint32_t y = 0; y < n; ++y)
+        pb_half_pairs(path, m + 2 * (size_t)y * n, tile + 2 * ((y + 1) * w + 1), n, div_mean, div_square);
+    for (uint32_t by = 0; by < w; ++by)
+        for (uint32_t bx = 0; bx < w; bx += (by == 0 || by == w - 1) ? 1 : w - 1) { /* the border only */
+            uint32_t x, y;
+            pb_oct_border_source(bx, by, n, &x, &y);
+            memcpy(tile + 2 * (by * w + bx), tile + 2 * ((y + 1) * w + x + 1), 2 * sizeof *tile);
+        }
+}
 
 static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
 {
@@ -67,16 +88,7 @@ static void volume_fill_range(void *user, uint64_t begin, uint64_t end)
         float rse = pb_convergence_relative_error(&j->conv, p);
         if (rse >= 0.f)
             out->probe_std_error[p] = rse;
-        double unit = out->depth_unit; /* a power of two: the division is exact */
-        for (uint32_t by = 0; by < n + 2; ++by)
-            for (uint32_t bx = 0; bx < n + 2; ++bx) {
-                uint32_t x, y;
-                pb_oct_border_source(bx, by, n, &x, &y);
-                const float *m = vf->sums + 2 * ((size_t)texels * (p - vf->first) + (size_t)y * n + x);
-                tile[2 * (by * (n + 2) + bx)] = pb_half_from_float((float)((double)m[0] / done_p / unit));
-                tile[2 * (by * (n + 2) + bx) + 1] =
-                    pb_half_from_float((float)((double)m[1] / done_p / (unit * unit)));
-            }
+        depth_tile(vf->half_path, vf->sums + 2 * (size_t)texels * (p - vf->first), tile, n, done_p, out->depth_unit);
     }
 }
 
@@ -132,6 +144,6 @@ pb_result pb_bake_stage_volume(bake_job *j, pb_volume *out, pb_error *err)
      * (lavapipe, UMA), else at most a submission's probes through one
      * download buffer, each run filled as it lands (no host copy of all
      * sums: its first touch would cost what summing them on the host did) */
-    volume_fill vf = {j, out, NULL, 0};
+    volume_fill vf = {j, out, NULL, 0, pb_half_best_path()};
     return pb_depth_sums_read(j->ctx, &j->B.sums, own, j->chunk, volume_fill_run, &vf, err);
 }
