@@ -691,6 +691,20 @@ static int cancel_on_call(void *user)
 
 /* A write cancelled at any point (first chunk, before the rename) leaves
  * the previous file as it was and no temporary beside it. */
+/* For the writes that must replace nothing: a scratch folder `name` (dir)
+ * holding p = keep.probes, a 4-probe volume v, and `big`, 2048 probes
+ * (~2.9 MB: several pieces of the writer) to fail writing over it. */
+static void replace_setup(const char *name, char dir[512], char p[700], pb_volume *v, pb_volume *big)
+{
+    fill(v, 2, 2, 1, 4);
+    fill(big, 16, 16, 8, 16);
+    snprintf(dir, 512, "%s/%s", temp_dir(), name);
+    mkdir(dir, 0755);
+    snprintf(p, 700, "%s/keep.probes", dir);
+    pb_error err;
+    CHECK(pb_volume_write(p, v, &err) == PB_OK);
+}
+
 /* A write the file system stops halfway (here the file size limit, EFBIG;
  * a full disk is ENOSPC) is an I/O error naming the path, and what it was
  * replacing is untouched with no temporary file beside it: the file is
@@ -698,14 +712,9 @@ static int cancel_on_call(void *user)
 static void write_failing_midway_replaces_nothing(void)
 {
     pb_volume v, big, w;
-    fill(&v, 2, 2, 1, 4);
-    fill(&big, 16, 16, 8, 16); /* 2048 probes, ~2.9 MB */
     char dir[512], p[700];
-    snprintf(dir, sizeof dir, "%s/midway", temp_dir());
-    mkdir(dir, 0755);
-    snprintf(p, sizeof p, "%s/keep.probes", dir);
+    replace_setup("midway", dir, p, &v, &big);
     pb_error err;
-    CHECK(pb_volume_write(p, &v, &err) == PB_OK);
     struct rlimit old, small;
     CHECK(getrlimit(RLIMIT_FSIZE, &old) == 0);
     small = old;
@@ -727,14 +736,9 @@ static void write_failing_midway_replaces_nothing(void)
 static void cancelled_write_replaces_nothing(void)
 {
     pb_volume v, big, w;
-    fill(&v, 2, 2, 1, 4);
-    fill(&big, 16, 16, 8, 16); /* 2048 probes, ~2.9 MB: several chunks */
     char dir[512], p[700];
-    snprintf(dir, sizeof dir, "%s/cancel", temp_dir());
-    mkdir(dir, 0755);
-    snprintf(p, sizeof p, "%s/keep.probes", dir);
+    replace_setup("cancel", dir, p, &v, &big);
     pb_error err;
-    CHECK(pb_volume_write(p, &v, &err) == PB_OK);
     for (int when = 1; when <= 4; ++when) {
         int calls = when;
         pb_result r = pb_volume_write_ex(p, &big, cancel_on_call, &calls, &err);
