@@ -246,6 +246,69 @@ static void merge_refuses_foreign_missing_duplicated_parts(void)
     teardown(&su);
 }
 
+/* probebake merge's way: the parts' headers read alone and checked, then
+ * each part read whole and added in turn, the whole and one part in memory.
+ * The same volume as pb_volume_merge of all of them, bit for bit; a part
+ * that is not the one its header said is an error naming it, and a sparse
+ * bake's parts are refused (they are stitched together). */
+static void parts_merge_one_at_a_time_from_headers(void)
+{
+    setup su;
+    if (!setup_demo(&su))
+        return;
+    pb_bake_desc d = demo_desc(su.scene);
+    d.target_error = 0.f, d.passes = 2;
+    pb_volume parts[3], heads[3], all, stepped;
+    char paths[3][512];
+    const char *names[3] = {paths[0], paths[1], paths[2]};
+    int made = 0;
+    for (uint32_t i = 0; i < 3; ++i) {
+        made += bake_part(&su, &d, i, 3, &parts[made]);
+        snprintf(paths[i], sizeof paths[i], "%s/part%u.probes", temp_dir(), i); /* where bake_part wrote it */
+    }
+    pb_error err;
+    if (made == 3 && pb_volume_merge(parts, names, 3, &all, &err) == PB_OK) {
+        const uint32_t order[3] = {2, 0, 1}; /* given in any order */
+        int heads_ok = 1;
+        for (uint32_t i = 0; i < 3; ++i) {
+            heads_ok &= pb_volume_read_header(paths[order[i]], &heads[i], &err) == PB_OK;
+            CHECK(heads[i].probe_count == parts[order[i]].probe_count && !heads[i].sh && !heads[i].depth &&
+                  !memcmp(&heads[i].shard, &parts[order[i]].shard, sizeof heads[i].shard) &&
+                  heads[i].depth_unit == parts[order[i]].depth_unit);
+        }
+        const char *head_names[3] = {paths[order[0]], paths[order[1]], paths[order[2]]};
+        pb_result r = heads_ok ? pb_volume_merge_begin(heads, head_names, 3, &stepped, &err) : PB_ERROR_IO;
+        for (uint32_t k = 0; k < 3 && r == PB_OK; ++k) /* index order: head i holds part order[i] */
+            for (uint32_t i = 0; i < 3 && r == PB_OK; ++i)
+                if (order[i] == k) {
+                    pb_volume whole;
+                    r = pb_volume_read(head_names[i], &whole, &err);
+                    if (r == PB_OK)
+                        r = pb_volume_merge_add(&stepped, &whole, &heads[i], head_names[i], &err);
+                    pb_volume_free(&whole);
+                }
+        CHECKF(r == PB_OK, "%s", err.message);
+        if (r == PB_OK) {
+            pb_volume_merge_end(&stepped);
+            CHECK(same_but_timings(&all, &stepped) &&
+                  !memcmp(&all.timings, &stepped.timings, sizeof all.timings)); /* summed in the same order */
+            /* part 0 offered where part 1's header was checked */
+            pb_volume probe_sink;
+            CHECK(pb_volume_merge_add(&stepped, &parts[0], &heads[2], "p1.probes", &err) == PB_ERROR_INVALID_ARGUMENT &&
+                  strstr(err.message, "p1.probes: changed while it was merged"));
+            pb_volume sparse_head = heads[0];
+            sparse_head.flags |= PB_VOLUME_SPARSE;
+            CHECK(pb_volume_merge_begin(&sparse_head, names, 1, &probe_sink, &err) == PB_ERROR_INVALID_ARGUMENT &&
+                  strstr(err.message, "sparse") && probe_sink.sh == NULL);
+        }
+        pb_volume_free(&stepped);
+        pb_volume_free(&all);
+    }
+    for (int i = 0; i < made; ++i)
+        pb_volume_free(&parts[i]);
+    teardown(&su);
+}
+
 /* A copy of part v's header (and shard) for n probes, arrays allocated. */
 static int part_like(const pb_volume *v, uint32_t n, pb_volume_shard shard, pb_volume *out)
 {
@@ -619,6 +682,7 @@ int main(void)
         return 1;
     RUN(parts_merge_to_the_whole_bake);
     RUN(merge_refuses_foreign_missing_duplicated_parts);
+    RUN(parts_merge_one_at_a_time_from_headers);
     RUN(parts_are_dealt_and_older_ranges_still_merge);
     RUN(shard_parameters_refused);
     RUN(sparse_parts_merge_to_the_whole_bake);

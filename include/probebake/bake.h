@@ -185,6 +185,21 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
 pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint32_t count, pb_volume *out,
                           pb_error *err);
 
+/* The same merge of a grid's (or points') parts in steps, so that only one
+ * part need be in memory beside the whole (`probebake merge`): begin makes
+ * every check pb_volume_merge makes from the parts' headers
+ * (pb_volume_read_header) and allocates *out; then each part, read whole,
+ * is added (in part index order, as pb_volume_merge adds them; `header` is
+ * what begin saw of it, and a part that no longer matches it is an error
+ * naming the file); end dilates across the parts. A sparse bake's parts
+ * are stitched together: pb_volume_merge only (begin refuses them). On an
+ * error after begin the caller frees *out. */
+pb_result pb_volume_merge_begin(const pb_volume *headers, const char *const *names, uint32_t count, pb_volume *out,
+                                pb_error *err);
+pb_result pb_volume_merge_add(pb_volume *out, const pb_volume *part, const pb_volume *header, const char *name,
+                              pb_error *err);
+void pb_volume_merge_end(pb_volume *out);
+
 typedef struct pb_sparse_desc pb_sparse_desc;
 
 /* A bake on `count` devices at once (src/bake/multi_device.c): part i of

@@ -173,6 +173,14 @@ pb_result pb_volume_write_ex(const char *path, const pb_volume *v, pb_cancel_fn 
  * inconsistent sizes), PB_ERROR_UNSUPPORTED (newer version). */
 pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err);
 
+/* The header alone: every field pb_volume_read would set but the arrays
+ * (NULL; nothing to free), after the same checks of the header, the section
+ * offsets and the file's size, with the same errors. Values are not checked
+ * (a NaN origin, a probe's) nor the sparse layout read: pb_volume_read may
+ * still refuse the file for them. For a merge that checks its parts before
+ * it holds any (pb_volume_merge_begin). */
+pb_result pb_volume_read_header(const char *path, pb_volume *v, pb_error *err);
+
 /* Original-coordinate position of probe i: origin + base + offset (double). */
 void pb_volume_probe_position(const pb_volume *v, uint32_t i, double out[3]);
 

@@ -47,11 +47,13 @@ static const char *differs(const pb_volume *a, const pb_volume *b)
     return "";
 }
 
-pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint32_t count, pb_volume *out,
-                          pb_error *err)
+/* The checks every merge makes before it allocates (header fields only),
+ * and the parts in index order (by_index, name_of: N entries each, the
+ * caller frees them). */
+static pb_result check_parts(const pb_volume *parts, const char *const *names, uint32_t count,
+                             const pb_volume ***by_index_out, const char ***name_of_out, pb_error *err)
 {
-    pb_error_clear(err);
-    memset(out, 0, sizeof *out);
+    *by_index_out = NULL, *name_of_out = NULL;
     if (count == 0)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "no parts to merge");
     for (uint32_t i = 0; i < count; ++i)
@@ -106,16 +108,27 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
         free(by_index), free(name_of);
         return r;
     }
+    *by_index_out = by_index, *name_of_out = name_of;
+    return PB_OK;
+}
 
-    if (parts[0].flags & PB_VOLUME_SPARSE) {
-        r = pb_sparse_merge(by_index, name_of, N, out, err);
-        free(by_index), free(name_of);
+pb_result pb_volume_merge_begin(const pb_volume *headers, const char *const *names, uint32_t count, pb_volume *out,
+                                pb_error *err)
+{
+    pb_error_clear(err);
+    memset(out, 0, sizeof *out);
+    if (count && (headers[0].flags & PB_VOLUME_SPARSE))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: a sparse bake's parts are merged together "
+                       "(pb_volume_merge): their bricks are stitched across parts", names[0]);
+    const pb_volume **by_index;
+    const char **name_of;
+    pb_result r = check_parts(headers, names, count, &by_index, &name_of, err);
+    if (r != PB_OK)
         return r;
-    }
-    /* the whole volume: the header of part 0, the probes of every part in order */
+    /* the whole volume: the header of part 0; its probes come with each part */
     const pb_volume *p0 = by_index[0];
     out->flags = p0->flags & ~PB_VOLUME_SHARD;
-    out->probe_count = total;
+    out->probe_count = p0->shard.total;
     memcpy(out->counts, p0->counts, sizeof out->counts);
     out->octmap_res = p0->octmap_res;
     memcpy(out->origin, p0->origin, sizeof out->origin);
@@ -123,29 +136,64 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
     out->settings = p0->settings;
     out->depth_unit = p0->depth_unit;
     snprintf(out->device, sizeof out->device, "%s", p0->device);
-    if ((r = pb_volume_alloc(out, err)) != PB_OK) {
-        free(by_index), free(name_of);
-        return r;
-    }
-    uint64_t halves = pb_volume_tile_halves(out->octmap_res);
-    for (uint32_t k = 0; k < N; ++k) {
-        const pb_volume *v = by_index[k];
-        size_t step = v->shard.step > 1 ? v->shard.step : 1; /* dealt, or contiguous (older parts) */
-        for (size_t i = 0; i < v->probe_count; ++i) {
-            size_t g = v->shard.first + i * step;
-            memcpy(out->base + 3 * g, v->base + 3 * i, 12);
-            memcpy(out->offset + 3 * g, v->offset + 3 * i, 12);
-            out->probe_flags[g] = v->probe_flags[i];
-            memcpy(out->sh + 27 * g, v->sh + 27 * i, 108);
-            memcpy(out->depth + halves * g, v->depth + halves * i, 2 * halves);
-            out->probe_paths[g] = v->probe_paths[i];
-            out->probe_std_error[g] = v->probe_std_error[i];
-        }
-        pb_shard_account(out, v);
-    }
     free(by_index), free(name_of);
+    return pb_volume_alloc(out, err);
+}
+
+pb_result pb_volume_merge_add(pb_volume *out, const pb_volume *part, const pb_volume *header, const char *name,
+                              pb_error *err)
+{
+    const char *d = differs(header, part);
+    if (d[0] || part->probe_count != header->probe_count || memcmp(&part->shard, &header->shard, sizeof part->shard))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: changed while it was merged (its %s)", name,
+                       d[0] ? d : "part or probe count");
+    uint64_t halves = pb_volume_tile_halves(out->octmap_res);
+    size_t step = part->shard.step > 1 ? part->shard.step : 1; /* dealt, or contiguous (older parts) */
+    for (size_t i = 0; i < part->probe_count; ++i) {
+        size_t g = part->shard.first + i * step;
+        memcpy(out->base + 3 * g, part->base + 3 * i, 12);
+        memcpy(out->offset + 3 * g, part->offset + 3 * i, 12);
+        out->probe_flags[g] = part->probe_flags[i];
+        memcpy(out->sh + 27 * g, part->sh + 27 * i, 108);
+        memcpy(out->depth + halves * g, part->depth + halves * i, 2 * halves);
+        out->probe_paths[g] = part->probe_paths[i];
+        out->probe_std_error[g] = part->probe_std_error[i];
+    }
+    pb_shard_account(out, part);
+    return PB_OK;
+}
+
+void pb_volume_merge_end(pb_volume *out)
+{
     /* the stages that need neighbours across parts */
     if (out->flags & PB_VOLUME_GRID)
         pb_volume_dilate(out, PB_DILATION_ROUNDS);
+}
+
+pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint32_t count, pb_volume *out,
+                          pb_error *err)
+{
+    pb_error_clear(err);
+    memset(out, 0, sizeof *out);
+    if (count && (parts[0].flags & PB_VOLUME_SPARSE)) {
+        const pb_volume **by_index;
+        const char **name_of;
+        pb_result r = check_parts(parts, names, count, &by_index, &name_of, err);
+        if (r == PB_OK)
+            r = pb_sparse_merge(by_index, name_of, parts[0].shard.count, out, err);
+        free(by_index), free(name_of);
+        return r;
+    }
+    pb_result r = pb_volume_merge_begin(parts, names, count, out, err);
+    /* in index order, as the parts' devices are named and their timings summed */
+    for (uint32_t k = 0; k < count && r == PB_OK; ++k)
+        for (uint32_t i = 0; i < count && r == PB_OK; ++i)
+            if (parts[i].shard.index == k)
+                r = pb_volume_merge_add(out, &parts[i], &parts[i], names[i], err);
+    if (r != PB_OK) {
+        pb_volume_free(out);
+        return r;
+    }
+    pb_volume_merge_end(out);
     return PB_OK;
 }

@@ -500,10 +500,14 @@ pb_result pb_volume_write(const char *path, const pb_volume *v, pb_error *err)
  * squares first). Rays never see farther than max_distance, so an
  * overflowed or larger texel is max_distance (squared), and the rest is
  * re-expressed in the depth unit a version-2 writer would choose. */
+static float v1_reach(const pb_volume *v)
+{
+    return v->settings.max_distance > 0.f && isfinite(v->settings.max_distance) ? v->settings.max_distance : 65504.f;
+}
+
 static void convert_v1_depth(pb_volume *v)
 {
-    float maxd = v->settings.max_distance > 0.f && isfinite(v->settings.max_distance) ? v->settings.max_distance
-                                                                                      : 65504.f;
+    float maxd = v1_reach(v);
     v->depth_unit = pb_volume_depth_unit(maxd);
     float u = v->depth_unit;
     uint64_t texels = (uint64_t)v->probe_count * pb_volume_tile_halves(v->octmap_res) / 2u;
@@ -727,45 +731,79 @@ static int read_sections(FILE *f, const layout *l, uint32_t version, pb_volume *
     return ok;
 }
 
-pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
+/* Opens path and checks everything its header claims, down to the file's
+ * exact size, before anything is allocated: *v gets the header's fields (no
+ * arrays), *f the open file (the caller closes it), *l its sections, h the
+ * header's bytes. */
+static pb_result open_checked(const char *path, pb_volume *v, FILE **f, layout *l, uint32_t *version,
+                              unsigned char h[HEADER_BYTES], pb_error *err)
 {
     pb_error_clear(err);
     memset(v, 0, sizeof *v);
-    FILE *f;
     uint64_t file_bytes;
-    pb_result opened = pb_input_open(path, UINT64_MAX, &f, &file_bytes, err); /* regular files only */
+    pb_result opened = pb_input_open(path, UINT64_MAX, f, &file_bytes, err); /* regular files only */
     if (opened != PB_OK)
         return opened;
-    unsigned char h[HEADER_BYTES];
-    size_t got = fread(h, 1, HEADER_BYTES, f);
+    size_t got = fread(h, 1, HEADER_BYTES, *f);
+    const char *bad = NULL;
+    pb_result r = PB_OK;
     if (got < 8 || memcmp(h, MAGIC, 8) != 0) {
-        fclose(f);
-        return pb_fail(err, PB_ERROR_PARSE, "%s: not a probebake volume (bad magic)", path);
+        r = pb_fail(err, PB_ERROR_PARSE, "%s: not a probebake volume (bad magic)", path);
+    } else if (got < HEADER_BYTES) {
+        r = pb_fail(err, PB_ERROR_PARSE, "%s: truncated header (%zu of %u bytes)", path, got, HEADER_BYTES);
+    } else if ((*version = get_u32(h + 8)) > PB_VOLUME_VERSION || *version == 0) {
+        r = pb_fail(err, PB_ERROR_UNSUPPORTED, "%s: volume format version %u; this build reads versions 1 to %u", path,
+                    *version, PB_VOLUME_VERSION);
+    } else {
+        decode_header(h, v);
+        bad = header_problem(h, v, *version);
+        if (!bad)
+            *l = sections_of(h, v, *version, *f, file_bytes, &bad);
+        if (bad)
+            r = pb_fail(err, PB_ERROR_PARSE, "%s: %s", path, bad);
+        else if (file_bytes != l->end)
+            r = pb_fail(err, PB_ERROR_PARSE, "%s: file is %llu bytes, the header describes %llu (truncated?)", path,
+                        (unsigned long long)file_bytes, (unsigned long long)l->end);
     }
-    if (got < HEADER_BYTES) {
-        fclose(f);
-        return pb_fail(err, PB_ERROR_PARSE, "%s: truncated header (%zu of %u bytes)", path, got, HEADER_BYTES);
+    if (r != PB_OK) {
+        fclose(*f);
+        *f = NULL;
+        memset(v, 0, sizeof *v);
     }
-    uint32_t version = get_u32(h + 8);
-    if (version > PB_VOLUME_VERSION || version == 0) {
-        fclose(f);
-        return pb_fail(err, PB_ERROR_UNSUPPORTED, "%s: volume format version %u; this build reads versions 1 to %u", path,
-                       version, PB_VOLUME_VERSION);
-    }
-    decode_header(h, v);
-    const char *bad = header_problem(h, v, version);
+    return r;
+}
+
+/* The depth unit a file's texels are in once read: its own, or for version
+ * 1 (metres) the one convert_v1_depth converts them to. */
+static float depth_unit_read(const unsigned char *h, const pb_volume *v, uint32_t version)
+{
+    return version != 1 ? get_f32(h + 180) : pb_volume_depth_unit(v1_reach(v));
+}
+
+pb_result pb_volume_read_header(const char *path, pb_volume *v, pb_error *err)
+{
+    FILE *f;
     layout l = {0};
-    if (!bad)
-        l = sections_of(h, v, version, f, file_bytes, &bad);
-    if (bad) {
-        fclose(f);
-        return pb_fail(err, PB_ERROR_PARSE, "%s: %s", path, bad);
-    }
-    if (file_bytes != l.end) { /* sizes agree before anything is allocated */
-        fclose(f);
-        return pb_fail(err, PB_ERROR_PARSE, "%s: file is %llu bytes, the header describes %llu (truncated?)", path,
-                       (unsigned long long)file_bytes, (unsigned long long)l.end);
-    }
+    uint32_t version = 0;
+    unsigned char h[HEADER_BYTES];
+    pb_result r = open_checked(path, v, &f, &l, &version, h, err);
+    if (r != PB_OK)
+        return r;
+    fclose(f);
+    v->file_version = version;
+    v->depth_unit = depth_unit_read(h, v, version);
+    return PB_OK;
+}
+
+pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
+{
+    FILE *f;
+    layout l = {0};
+    uint32_t version = 0;
+    unsigned char h[HEADER_BYTES];
+    pb_result opened = open_checked(path, v, &f, &l, &version, h, err);
+    if (opened != PB_OK)
+        return opened;
     pb_result r = pb_volume_alloc(v, err);
     uint32_t bad_probe = UINT32_MAX;
     if (r == PB_OK && !read_sections(f, &l, version, v, &bad_probe))
@@ -798,7 +836,7 @@ pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
     if (version == 1)
         convert_v1_depth(v);
     else
-        v->depth_unit = get_f32(h + 180);
+        v->depth_unit = depth_unit_read(h, v, version);
     /* what the writer refuses the reader refuses too (version 1's infinite
      * texels are converted above) */
     uint32_t nf_probe;
