@@ -705,6 +705,88 @@ static void replace_setup(const char *name, char dir[512], char p[700], pb_volum
     CHECK(pb_volume_write(p, v, &err) == PB_OK);
 }
 
+static uint32_t le32(const unsigned char *b)
+{
+    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+/* One exported KTX2 file: its texels (a pointer into *bytes, which the
+ * caller frees) after checking the identifier, format, size and level
+ * index against the file's length. NULL if any disagree. */
+static const unsigned char *ktx2_texels(const char *dir, const char *name, uint32_t format, uint32_t texel_bytes,
+                                        uint32_t *w, uint32_t *h, unsigned char **bytes)
+{
+    char path[700];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    uint64_t size = 0;
+    pb_error err;
+    *bytes = NULL;
+    if (pb_input_read(path, 1u << 30, bytes, &size, &err) != PB_OK || size < 104)
+        return NULL;
+    const unsigned char *b = *bytes;
+    *w = le32(b + 20), *h = le32(b + 24);
+    uint64_t at = le32(b + 80), length = le32(b + 88);
+    int ok = b[0] == 0xAB && !memcmp(b + 1, "KTX 20", 6) && le32(b + 12) == format &&
+             length == (uint64_t)*w * *h * texel_bytes && at % texel_bytes == 0 && at + length == size;
+    return ok ? b + at : NULL;
+}
+
+/* The texture export's files hold the volume's values where docs/format.md
+ * ("Texture contract") puts them: texel p of pb_probes is probe p's
+ * position and flags, texels 7p..7p+6 of pb_sh its 27 coefficients and a
+ * zero, probe p's depth tile (border included) at tile (p % T, p / T) of
+ * pb_depth, zeros past the last probe. The files are made a 1 MiB band of
+ * rows at a time: 10,000 probes make pb_sh two bands and pb_depth 13. */
+static void exported_textures_hold_the_volume(void)
+{
+    pb_volume v;
+    fill(&v, 100, 10, 10, 16);
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/textures", temp_dir());
+    pb_error err;
+    CHECKF(pb_volume_export_textures(&v, dir, &err) == PB_OK, "%s", err.message);
+    unsigned char *pb = NULL, *sb = NULL, *db = NULL;
+    uint32_t pw, ph, sw, shh, dw, dh, tile = v.octmap_res + 2, bad = 0;
+    const unsigned char *pt = ktx2_texels(dir, "probes.ktx2", 109, 16, &pw, &ph, &pb);
+    const unsigned char *st = ktx2_texels(dir, "sh.ktx2", 109, 16, &sw, &shh, &sb);
+    const unsigned char *dt = ktx2_texels(dir, "depth.ktx2", 83, 4, &dw, &dh, &db);
+    CHECK(pt && st && dt && pw == sw && ph > 1 && shh > 1);
+    if (pt && st && dt) {
+        uint32_t T = dw / tile;
+        for (uint32_t p = 0; p < pw * ph; ++p)
+            for (int k = 0; k < 4; ++k) {
+                float want = p >= v.probe_count ? 0.f
+                             : k < 3        ? v.base[3 * p + k] + v.offset[3 * p + k]
+                                            : (float)v.probe_flags[p];
+                uint32_t got = le32(pt + 16 * p + 4 * k), w;
+                memcpy(&w, &want, 4);
+                bad += got != w;
+            }
+        for (uint32_t c = 0; c < 4 * sw * shh; ++c) {
+            uint32_t p = c / 28, k = c % 28, w;
+            float want = p < v.probe_count && k < 27 ? v.sh[27 * p + k] : 0.f;
+            memcpy(&w, &want, 4);
+            bad += le32(st + 4 * c) != w;
+        }
+        for (uint32_t y = 0; y < dh; ++y)
+            for (uint32_t x = 0; x < dw; ++x) {
+                uint32_t p = y / tile * T + x / tile;
+                for (int k = 0; k < 2; ++k) {
+                    uint16_t want = p < v.probe_count
+                                        ? v.depth[pb_volume_tile_halves(v.octmap_res) * p +
+                                                  2 * ((y % tile) * tile + x % tile) + k]
+                                        : 0u;
+                    const unsigned char *q = dt + 4 * ((size_t)y * dw + x) + 2 * k;
+                    bad += (uint16_t)(q[0] | q[1] << 8) != want;
+                }
+            }
+        CHECK(T * tile == dw && (dh / tile) * T >= v.probe_count);
+    }
+    CHECKF(bad == 0, "%u texel components differ from the volume", bad);
+    free(pb), free(sb), free(db);
+    pb_volume_free(&v);
+}
+
 /* A write the file system stops halfway (here the file size limit, EFBIG;
  * a full disk is ENOSPC) is an I/O error naming the path, and what it was
  * replacing is untouched with no temporary file beside it: the file is
@@ -814,6 +896,7 @@ int main(void)
     RUN(version1_files_convert);
     RUN(version2_files_read);
     RUN(outputs_never_replace_what_they_are_not);
+    RUN(exported_textures_hold_the_volume);
     RUN(cancelled_write_replaces_nothing);
     RUN(write_failing_midway_replaces_nothing);
     RUN(sparse_lookup_finds_the_finest_brick);

@@ -1,5 +1,7 @@
-/* KTX 2.0 encoder (ktx2.h). */
+/* KTX 2.0 writer (ktx2.h). */
 #include "io/ktx2.h"
+#include "common/common.h"
+#include "probebake/files.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -16,28 +18,33 @@ static void put_u64(unsigned char *b, uint64_t v)
         b[k] = (unsigned char)(v >> (8 * k));
 }
 
-unsigned char *pb_ktx2_encode(const pb_ktx2_image *img, uint64_t *size)
+#define BAND_BYTES (1u << 20) /* texels asked for and written at a time */
+
+pb_result pb_ktx2_write(const char *path, uint32_t vk_format, uint32_t width, uint32_t height, pb_ktx2_rows_fn rows,
+                        void *user, pb_error *err)
 {
     static const unsigned char id[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
     uint32_t channels, bits;
-    if (img->vk_format == PB_VK_FORMAT_R32G32B32A32_SFLOAT)
+    if (vk_format == PB_VK_FORMAT_R32G32B32A32_SFLOAT)
         channels = 4, bits = 32;
-    else if (img->vk_format == PB_VK_FORMAT_R16G16_SFLOAT)
+    else if (vk_format == PB_VK_FORMAT_R16G16_SFLOAT)
         channels = 2, bits = 16;
-    else if (img->vk_format == PB_VK_FORMAT_R32_UINT)
+    else if (vk_format == PB_VK_FORMAT_R32_UINT)
         channels = 1, bits = 32;
     else
-        return NULL;
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: VkFormat %u is not one the texture export writes", path,
+                       vk_format);
     uint32_t texel = channels * bits / 8, dfd_bytes = 4 + 24 + 16 * channels;
     uint32_t dfd_at = 12 + 36 + 32 + 24; /* identifier, header, index, one level */
     /* level data aligned to lcm(texel size, 4): 16 or 4 here */
-    uint64_t data_at = (dfd_at + dfd_bytes + texel - 1) / texel * texel;
-    uint64_t data_bytes = (uint64_t)img->width * img->height * texel;
-    unsigned char *b = calloc(1, (size_t)(data_at + data_bytes));
-    if (!b)
-        return NULL;
+    uint32_t data_at = (dfd_at + dfd_bytes + texel - 1) / texel * texel;
+    uint64_t row_bytes = (uint64_t)width * texel, data_bytes = row_bytes * height;
+    uint32_t band = row_bytes && row_bytes < BAND_BYTES ? (uint32_t)(BAND_BYTES / row_bytes) : 1u;
+    unsigned char head[256];
+    memset(head, 0, sizeof head);
+    unsigned char *b = head;
     memcpy(b, id, 12);
-    uint32_t header[9] = {img->vk_format, bits / 8, img->width, img->height, 0 /* 2D */, 0 /* not an array */,
+    uint32_t header[9] = {vk_format, bits / 8, width, height, 0 /* 2D */, 0 /* not an array */,
                           1 /* faces */, 1 /* levels */, 0 /* no supercompression */};
     for (int k = 0; k < 9; ++k)
         put_u32(b + 12 + 4 * k, header[k]);
@@ -53,7 +60,7 @@ unsigned char *pb_ktx2_encode(const pb_ktx2_image *img, uint64_t *size)
     put_u32(d + 20, texel);                              /* bytes in plane 0 */
     put_u32(d + 24, 0);
     static const uint32_t channel_id[4] = {0, 1, 2, 15}; /* R, G, B, A */
-    int integer = img->vk_format == PB_VK_FORMAT_R32_UINT;
+    int integer = vk_format == PB_VK_FORMAT_R32_UINT;
     for (uint32_t c = 0; c < channels; ++c) {
         unsigned char *s = d + 28 + 16 * c;
         /* bit offset, bit length - 1, channel with the FLOAT and SIGNED qualifiers (none for unsigned integers) */
@@ -62,18 +69,35 @@ unsigned char *pb_ktx2_encode(const pb_ktx2_image *img, uint64_t *size)
         put_u32(s + 8, integer ? 0u : 0xBF800000u);      /* lower: 0, or -1.0f */
         put_u32(s + 12, integer ? 0xFFFFFFFFu : 0x3F800000u); /* upper: the largest value, or 1.0f */
     }
-    /* components little-endian whatever the host: floats or uint32 (32 bits) or halves (R16G16) */
-    uint64_t components = (uint64_t)img->width * img->height * channels;
-    for (uint64_t i = 0; i < components; ++i) {
-        if (bits == 32) {
-            uint32_t v;
-            memcpy(&v, (const float *)img->texels + i, 4);
-            put_u32(b + data_at + 4 * i, v);
-        } else {
-            uint16_t v = ((const uint16_t *)img->texels)[i];
-            b[data_at + 2 * i] = (unsigned char)v, b[data_at + 2 * i + 1] = (unsigned char)(v >> 8);
+    uint64_t band_bytes = band * row_bytes;
+    band_bytes = band_bytes ? band_bytes : 1u;
+    void *texels = malloc((size_t)band_bytes);
+    unsigned char *bytes = malloc((size_t)band_bytes);
+    pb_output *out = NULL;
+    pb_result r = texels && bytes ? pb_output_begin(path, NULL, NULL, &out, err)
+                                  : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
+    if (r == PB_OK)
+        r = pb_output_put(out, head, data_at, err);
+    for (uint32_t y = 0; y < height && r == PB_OK; y += band) {
+        uint32_t count = height - y < band ? height - y : band;
+        rows(user, y, count, texels);
+        /* components little-endian whatever the host: floats or uint32 (32 bits) or halves (R16G16) */
+        uint64_t components = (uint64_t)width * count * channels;
+        for (uint64_t i = 0; i < components; ++i) {
+            if (bits == 32) {
+                uint32_t v;
+                memcpy(&v, (const uint32_t *)texels + i, 4);
+                put_u32(bytes + 4 * i, v);
+            } else {
+                uint16_t v = ((const uint16_t *)texels)[i];
+                bytes[2 * i] = (unsigned char)v, bytes[2 * i + 1] = (unsigned char)(v >> 8);
+            }
         }
+        r = pb_output_put(out, bytes, (uint64_t)count * row_bytes, err);
     }
-    *size = data_at + data_bytes;
-    return b;
+    if (out)
+        r = r == PB_OK ? pb_output_commit(out, err) : (pb_output_abort(out), r);
+    free(texels);
+    free(bytes);
+    return r;
 }

@@ -1,9 +1,12 @@
 /* KTX 2.0 files (Khronos, "KTX File Format Specification" 2.0): one
  * uncompressed 2D image, one mip level, no supercompression, with the Data
  * Format Descriptor a reader needs for the formats the texture export writes
- * (float, and 32-bit unsigned integer for a sparse volume's layout). Three.js's KTX2Loader, libktx and Vulkan loaders read it. */
+ * (float, and 32-bit unsigned integer for a sparse volume's layout).
+ * Three.js's KTX2Loader, libktx and Vulkan loaders read it. */
 #ifndef PB_IO_KTX2_H
 #define PB_IO_KTX2_H
+
+#include "probebake/base.h"
 
 #include <stddef.h>
 
@@ -13,16 +16,17 @@
 #define PB_VK_FORMAT_R32_UINT 98u
 #define PB_VK_FORMAT_R32G32B32A32_SFLOAT 109u
 
-typedef struct pb_ktx2_image {
-    uint32_t vk_format;           /* one of the three above */
-    uint32_t width, height;
-    const void *texels;           /* float (R32G32B32A32), uint16_t halves (R16G16) or uint32_t (R32_UINT)
-                                     per component; row y
-                                     at y * width texels (KTX2's first row is texture row 0) */
-} pb_ktx2_image;
+/* Rows [y0, y0 + count) of an image, row y at (y - y0) * width texels of
+ * out: floats (R32G32B32A32), uint16_t halves (R16G16) or uint32_t
+ * (R32_UINT) per component, in the host's order. KTX2's first row is
+ * texture row 0. */
+typedef void (*pb_ktx2_rows_fn)(void *user, uint32_t y0, uint32_t count, void *out);
 
-/* The file's bytes (malloc'd) for img; NULL when out of memory or the format
- * is not one of the above. */
-unsigned char *pb_ktx2_encode(const pb_ktx2_image *img, uint64_t *size);
+/* Writes path (files.h's atomic write) as a KTX2 file of one width x height
+ * image in vk_format (one of the three above), its texels asked of `rows` a
+ * band of rows at a time and written as they come: the image is never
+ * whole in memory. PB_ERROR_INVALID_ARGUMENT for another format. */
+pb_result pb_ktx2_write(const char *path, uint32_t vk_format, uint32_t width, uint32_t height, pb_ktx2_rows_fn rows,
+                        void *user, pb_error *err);
 
 #endif

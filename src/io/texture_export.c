@@ -18,19 +18,78 @@
 #define MANIFEST_VERSION 1
 #define TEXELS_PER_ROW 2048u /* WebGL2 guarantees 2048 per side */
 
+/* The textures' rows, made from the volume as the KTX2 writer asks for
+ * them (no texture is ever whole in memory: a million probes' depth atlas
+ * alone is 1.3 GB). Texels past the last probe are zero. */
+typedef struct atlas {
+    const pb_volume *v;
+    uint32_t W;                /* texels per row of pb_probes, pb_sh and pb_sparse */
+    uint32_t T, tile;          /* pb_depth: tiles per row, texels per tile side */
+    const uint32_t *words;     /* the sparse layout's words */
+    uint32_t word_count;
+} atlas;
+
+/* pb_probes: texel p = probe p's position (base + offset) and its flags. */
+static void fill_probes(void *user, uint32_t y0, uint32_t count, void *out)
+{
+    const atlas *a = user;
+    float *o = out;
+    for (uint64_t i = 0; i < (uint64_t)count * a->W; ++i) {
+        uint64_t p = (uint64_t)y0 * a->W + i;
+        for (int k = 0; k < 3; ++k)
+            o[4 * i + k] = p < a->v->probe_count ? a->v->base[3 * p + k] + a->v->offset[3 * p + k] : 0.f;
+        o[4 * i + 3] = p < a->v->probe_count ? (float)a->v->probe_flags[p] : 0.f;
+    }
+}
+
+/* pb_sh: seven texels a probe, its 27 coefficients and a zero. */
+static void fill_sh(void *user, uint32_t y0, uint32_t count, void *out)
+{
+    const atlas *a = user;
+    float *o = out;
+    for (uint64_t i = 0; i < (uint64_t)count * a->W * 4; ++i) {
+        uint64_t c = (uint64_t)y0 * a->W * 4 + i, p = c / 28, k = c % 28;
+        o[i] = p < a->v->probe_count && k < 27 ? a->v->sh[27 * p + k] : 0.f;
+    }
+}
+
+/* pb_depth: probe p's tile at tile column p % T, tile row p / T. */
+static void fill_depth(void *user, uint32_t y0, uint32_t count, void *out)
+{
+    const atlas *a = user;
+    uint32_t tile = a->tile, w = a->T * tile;
+    uint64_t halves = pb_volume_tile_halves(a->v->octmap_res);
+    uint16_t *o = out;
+    for (uint32_t r = 0; r < count; ++r) {
+        uint32_t y = y0 + r, ty = y / tile, in = y % tile;
+        for (uint32_t tx = 0; tx < a->T; ++tx) {
+            uint64_t p = (uint64_t)ty * a->T + tx;
+            uint16_t *dst = o + 2 * ((size_t)r * w + (size_t)tx * tile);
+            if (p < a->v->probe_count)
+                memcpy(dst, a->v->depth + halves * p + 2 * (size_t)in * tile, 2 * tile * sizeof *dst);
+            else
+                memset(dst, 0, 2 * tile * sizeof *dst);
+        }
+    }
+}
+
+/* pb_sparse: the layout's words in order. */
+static void fill_sparse(void *user, uint32_t y0, uint32_t count, void *out)
+{
+    const atlas *a = user;
+    uint32_t *o = out;
+    for (uint64_t i = 0; i < (uint64_t)count * a->W; ++i) {
+        uint64_t k = (uint64_t)y0 * a->W + i;
+        o[i] = k < a->word_count ? a->words[k] : 0u;
+    }
+}
+
 static pb_result write_ktx2(const char *dir, const char *name, uint32_t format, uint32_t w, uint32_t h,
-                            const void *texels, pb_error *err)
+                            pb_ktx2_rows_fn rows, atlas *a, pb_error *err)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, name);
-    pb_ktx2_image img = {format, w, h, texels};
-    uint64_t size = 0;
-    unsigned char *bytes = pb_ktx2_encode(&img, &size);
-    if (!bytes)
-        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
-    pb_result r = pb_output_write(path, bytes, size, NULL, NULL, err);
-    free(bytes);
-    return r;
+    return pb_ktx2_write(path, format, w, h, rows, a, err);
 }
 
 pb_result pb_volume_export_textures(const pb_volume *v, const char *dir, pb_error *err)
@@ -65,36 +124,17 @@ pb_result pb_volume_export_textures(const pb_volume *v, const char *dir, pb_erro
         return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: the sparse layout's %u words need %u rows of %u texels", dir,
                        word_count, sparse_rows, W);
     }
-    uint32_t *sparse_tex = sp ? calloc((size_t)W * sparse_rows, sizeof(uint32_t)) : NULL;
     uint32_t T = (uint32_t)ceil(sqrt((double)P)), depth_rows = (P + T - 1) / T;
-    float *probes = calloc((size_t)W * probe_rows * 4, sizeof(float));
-    float *sh = calloc((size_t)W * sh_rows * 4, sizeof(float));
-    uint16_t *depth = calloc((size_t)T * tile * depth_rows * tile * 2, sizeof(uint16_t));
-    pb_result r = PB_OK;
-    if (!probes || !sh || !depth || (sp && !sparse_tex)) {
-        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory for %u probes' textures", dir, P);
-        goto done;
-    }
-    for (uint32_t p = 0; p < P; ++p) {
-        for (int k = 0; k < 3; ++k)
-            probes[4 * p + k] = v->base[3 * p + k] + v->offset[3 * p + k];
-        probes[4 * p + 3] = (float)v->probe_flags[p];
-        memcpy(sh + 28 * (size_t)p, v->sh + 27 * (size_t)p, 27 * sizeof(float));
-        const uint16_t *src = v->depth + pb_volume_tile_halves(n) * p;
-        uint32_t tx = p % T * tile, ty = p / T * tile;
-        for (uint32_t y = 0; y < tile; ++y)
-            memcpy(depth + 2 * ((size_t)(ty + y) * T * tile + tx), src + 2 * (size_t)y * tile,
-                   2 * tile * sizeof(uint16_t));
-    }
-    r = write_ktx2(dir, "probes.ktx2", PB_VK_FORMAT_R32G32B32A32_SFLOAT, W, probe_rows, probes, err);
+    atlas at = {v, W, T, tile, words, word_count};
+    pb_result r = write_ktx2(dir, "probes.ktx2", PB_VK_FORMAT_R32G32B32A32_SFLOAT, W, probe_rows, fill_probes, &at,
+                             err);
     if (r == PB_OK)
-        r = write_ktx2(dir, "sh.ktx2", PB_VK_FORMAT_R32G32B32A32_SFLOAT, W, sh_rows, sh, err);
+        r = write_ktx2(dir, "sh.ktx2", PB_VK_FORMAT_R32G32B32A32_SFLOAT, W, sh_rows, fill_sh, &at, err);
     if (r == PB_OK)
-        r = write_ktx2(dir, "depth.ktx2", PB_VK_FORMAT_R16G16_SFLOAT, T * tile, depth_rows * tile, depth, err);
-    if (r == PB_OK && sp) {
-        memcpy(sparse_tex, words, (size_t)word_count * sizeof(uint32_t));
-        r = write_ktx2(dir, "sparse.ktx2", PB_VK_FORMAT_R32_UINT, W, sparse_rows, sparse_tex, err);
-    }
+        r = write_ktx2(dir, "depth.ktx2", PB_VK_FORMAT_R16G16_SFLOAT, T * tile, depth_rows * tile, fill_depth, &at,
+                       err);
+    if (r == PB_OK && sp)
+        r = write_ktx2(dir, "sparse.ktx2", PB_VK_FORMAT_R32_UINT, W, sparse_rows, fill_sparse, &at, err);
     if (r != PB_OK)
         goto done;
     uint32_t largest = W > T * tile ? W : T * tile;
@@ -136,6 +176,6 @@ pb_result pb_volume_export_textures(const pb_volume *v, const char *dir, pb_erro
     snprintf(path, sizeof path, "%s/manifest.json", dir);
     r = pb_output_write(path, text, (uint64_t)len, NULL, NULL, err);
 done:
-    free(probes), free(sh), free(depth), free(sparse_tex), free(words);
+    free(words);
     return r;
 }
