@@ -151,8 +151,15 @@ uint64_t pb_volume_file_bytes(const pb_volume *v);
  * PB_ERROR_INVALID_ARGUMENT (no probes, octmap_res outside 1..256). */
 pb_result pb_volume_alloc(pb_volume *v, pb_error *err);
 
-/* Frees the per-probe arrays (the struct itself is the caller's). */
+/* Frees the per-probe arrays and a sparse layout (the struct itself is the
+ * caller's). */
 void pb_volume_free(pb_volume *v);
+
+/* Frees the per-probe arrays only (positions, flags, SH, depth, accounting),
+ * keeping the header fields and a sparse layout: for a caller done with the
+ * probes' values (a sampler built from them) that still needs the rest.
+ * pb_volume_free frees what is left. */
+void pb_volume_free_probes(pb_volume *v);
 
 /* Writes v to `path` by the output rules of files.h (atomic for regular
  * files, directly into devices and FIFOs, through symlinks, "-" for

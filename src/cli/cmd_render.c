@@ -316,6 +316,10 @@ int cmd_render(const options *o)
     if ((o->volume && sampler_of(o, o->volume, &vol, s, &sv, &err) != PB_OK) ||
         (o->seams_of && sampler_of(o, o->seams_of, &seams_vol, s, &seams_sv, &err) != PB_OK))
         goto out;
+    /* the samplers hold the probes now; their headers and sparse layouts stay
+     * (a million probes: 1.4 GB less beside the samplers and the device's copy) */
+    pb_volume_free_probes(&vol);
+    pb_volume_free_probes(&seams_vol);
     pb_render_desc d = {0};
     d.width = width;
     d.height = height;

@@ -125,7 +125,7 @@ pb_result pb_volume_alloc(pb_volume *v, pb_error *err)
     return PB_OK;
 }
 
-void pb_volume_free(pb_volume *v)
+void pb_volume_free_probes(pb_volume *v)
 {
     free(v->base);
     free(v->offset);
@@ -134,15 +134,20 @@ void pb_volume_free(pb_volume *v)
     free(v->depth);
     free(v->probe_paths);
     free(v->probe_std_error);
-    if (v->sparse)
-        pb_sparse_layout_free(v->sparse);
-    free(v->sparse);
-    v->sparse = NULL;
     v->probe_paths = NULL;
     v->probe_std_error = NULL;
     v->base = v->offset = v->sh = NULL;
     v->probe_flags = NULL;
     v->depth = NULL;
+}
+
+void pb_volume_free(pb_volume *v)
+{
+    pb_volume_free_probes(v);
+    if (v->sparse)
+        pb_sparse_layout_free(v->sparse);
+    free(v->sparse);
+    v->sparse = NULL;
 }
 
 void pb_volume_probe_position(const pb_volume *v, uint32_t i, double out[3])
