@@ -420,6 +420,8 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     fi
     expect bake-to-stdout 0 '^PBVOLUME$' -- \
         bash -c "'$pb' bake '$demo' --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --quiet -o - 2>/dev/null | head -c 8"
+    expect bake-to-full-stdout 1 'error: standard output: write failed: No space left on device' -- \
+        bash -c "'$pb' bake '$demo' --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --quiet -o - >/dev/full"
     ln -s later/through.probes "$tmp/through-link.probes"
     mkdir "$tmp/later"
     expect bake-through-symlink 0 '^symbolic link regular file 6[0-9][0-9]$' -- \

@@ -266,14 +266,15 @@ pb_result pb_output_begin(const char *path, pb_cancel_fn cancel, void *user, pb_
 {
     *out = NULL;
     pb_output *o = calloc(1, sizeof *o);
+    int to_stdout = !strcmp(path, "-");
     if (o)
-        o->path = strdup(path);
+        o->path = strdup(to_stdout ? "standard output" : path); /* what messages call it */
     if (!o || !o->path) {
         free(o);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
     }
     o->fd = -1, o->cancel = cancel, o->user = user;
-    if (!strcmp(path, "-")) {
+    if (to_stdout) {
         o->fd = STDOUT_FILENO;
         *out = o;
         return PB_OK;

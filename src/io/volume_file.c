@@ -736,13 +736,25 @@ static int read_sections(FILE *f, const layout *l, uint32_t version, pb_volume *
     return ok;
 }
 
+/* A volume file open for reading, its header checked. */
+typedef struct checked_file {
+    FILE *f;                       /* the caller closes it */
+    layout l;                      /* its sections */
+    uint32_t version;
+    unsigned char h[HEADER_BYTES]; /* the header's bytes */
+} checked_file;
+
 /* Opens path and checks everything its header claims, down to the file's
  * exact size, before anything is allocated: *v gets the header's fields (no
- * arrays), *f the open file (the caller closes it), *l its sections, h the
- * header's bytes. */
-static pb_result open_checked(const char *path, pb_volume *v, FILE **f, layout *l, uint32_t *version,
-                              unsigned char h[HEADER_BYTES], pb_error *err)
+ * arrays), *c the open file. */
+static pb_result open_checked(const char *path, pb_volume *v, checked_file *c, pb_error *err)
 {
+    FILE **f = &c->f;
+    layout *l = &c->l;
+    uint32_t *version = &c->version;
+    unsigned char *h = c->h;
+    *l = (layout){0};
+    *version = 0;
     pb_error_clear(err);
     memset(v, 0, sizeof *v);
     uint64_t file_bytes;
@@ -787,28 +799,26 @@ static float depth_unit_read(const unsigned char *h, const pb_volume *v, uint32_
 
 pb_result pb_volume_read_header(const char *path, pb_volume *v, pb_error *err)
 {
-    FILE *f;
-    layout l = {0};
-    uint32_t version = 0;
-    unsigned char h[HEADER_BYTES];
-    pb_result r = open_checked(path, v, &f, &l, &version, h, err);
+    checked_file c;
+    pb_result r = open_checked(path, v, &c, err);
     if (r != PB_OK)
         return r;
-    fclose(f);
-    v->file_version = version;
-    v->depth_unit = depth_unit_read(h, v, version);
+    fclose(c.f);
+    v->file_version = c.version;
+    v->depth_unit = depth_unit_read(c.h, v, c.version);
     return PB_OK;
 }
 
 pb_result pb_volume_read(const char *path, pb_volume *v, pb_error *err)
 {
-    FILE *f;
-    layout l = {0};
-    uint32_t version = 0;
-    unsigned char h[HEADER_BYTES];
-    pb_result opened = open_checked(path, v, &f, &l, &version, h, err);
+    checked_file c;
+    pb_result opened = open_checked(path, v, &c, err);
     if (opened != PB_OK)
         return opened;
+    FILE *f = c.f;
+    const layout l = c.l;
+    uint32_t version = c.version;
+    const unsigned char *h = c.h;
     pb_result r = pb_volume_alloc(v, err);
     uint32_t bad_probe = UINT32_MAX;
     if (r == PB_OK && !read_sections(f, &l, version, v, &bad_probe))
