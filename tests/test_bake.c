@@ -2,6 +2,7 @@
  * device with validation: uniform sky, a point light, a closed emissive box,
  * and the kernels vs bake_cpu.c on the demo scene. */
 #include "scenes_gen.h"
+#include "bake/depth_sums.h"
 #include "bake/dilate.h"
 #include "bake/guide.h"
 #include "bake/guide_cache.h"
@@ -951,6 +952,89 @@ static void staged_depth_sums_match_mapped(void)
     pb_context_destroy(staged);
     release(&a);
     pb_scene_destroy(s);
+}
+
+/* The depth sums' blocks, planned and drained (bake/depth_sums.h):
+ * - a million probes of 16x16 texels (2 GiB) plan 16 blocks of 128 MiB
+ *   that the volume stage frees one by one, 2^24 probes (32 GiB) half the
+ *   table in blocks of 1 GiB, a small bake one block;
+ * - 200 probes in blocks of 80, each probe's texels set to distinct values,
+ *   drained in place (mapped) and in windows of 30 (staged): every value
+ *   handed over once, in order, and each block freed just after its last
+ *   run, never before. */
+typedef struct drain_check {
+    pb_depth_sums *s;
+    uint32_t texels, next, bad_values, bad_frees;
+} drain_check;
+
+static void drain_run(void *user, const float *sums, uint32_t first, uint32_t n)
+{
+    drain_check *c = user;
+    if (first != c->next)
+        c->bad_values++;
+    for (uint32_t p = 0; p < n; ++p)
+        for (uint32_t t = 0; t < 2 * c->texels; ++t)
+            c->bad_values += sums[2 * (size_t)c->texels * p + t] != (float)((first + p) * 1000 + t);
+    uint32_t b = first / c->s->block_probes, last = (first + n - 1) / c->s->block_probes;
+    for (uint32_t k = 0; k < c->s->block_count; ++k)
+        c->bad_frees += (c->s->block[k].buffer == VK_NULL_HANDLE) != (k < b); /* freed: exactly those before */
+    c->bad_frees += last != b; /* a run within one block */
+    c->next = first + n;
+}
+
+static void depth_sums_drain_block_by_block(void)
+{
+    pb_error err;
+    pb_depth_sums s;
+    uint64_t max_allocation = ctx->max_allocation;
+    ctx->max_allocation = (uint64_t)4 << 30;
+    CHECK(pb_depth_sums_plan(ctx, 1000000, 256, &s, &err) == PB_OK && s.block_count == 16 &&
+          (uint64_t)s.block_probes * s.probe_bytes <= PB_DEPTH_SUM_RELEASE_BYTES);
+    CHECK(pb_depth_sums_plan(ctx, 1u << 24, 256, &s, &err) == PB_OK && s.block_count == PB_DEPTH_SUM_BLOCKS_MAX / 2 &&
+          (uint64_t)s.block_probes * s.probe_bytes == (uint64_t)1 << 30);
+    CHECK(pb_depth_sums_plan(ctx, 4096, 256, &s, &err) == PB_OK && s.block_count == 1 && s.block_probes == 4096);
+    ctx->max_allocation = max_allocation;
+
+    pb_context_desc cd = {getenv("PB_TEST_DEVICE"), 1, 1u << 20, 1, {test_log_line, NULL}};
+    pb_context *staged = NULL;
+    int made = pb_context_create(&cd, &staged, &err) == PB_OK;
+    CHECKF(made, "%s", err.message);
+    const uint32_t probes = 200, texels = 16;
+    float *values = malloc((size_t)probes * 2 * texels * sizeof *values);
+    for (uint32_t p = 0; values && p < probes; ++p)
+        for (uint32_t t = 0; t < 2 * texels; ++t)
+            values[2 * (size_t)texels * p + t] = (float)(p * 1000 + t);
+    pb_context *cs[2] = {ctx, staged};
+    for (int i = 0; values && made && i < 2; ++i) {
+        pb_context *c = cs[i];
+        uint64_t limit = c->max_allocation;
+        c->max_allocation = 80 * 2 * texels * sizeof(float);
+        pb_result r = pb_depth_sums_plan(c, probes, texels, &s, &err);
+        c->max_allocation = limit;
+        if (r == PB_OK)
+            r = pb_depth_sums_create(c, &s, &err);
+        for (uint32_t b = 0; r == PB_OK && b < s.block_count; ++b)
+            r = pb_buffer_upload(c, &s.block[b], 0, values + 2 * (size_t)texels * b * s.block_probes,
+                                 s.block[b].size < s.probe_bytes * s.block_probes ? s.block[b].size
+                                                                                  : s.probe_bytes * s.block_probes,
+                                 &err);
+        drain_check check = {&s, texels, 0, 0, 0};
+        if (r == PB_OK)
+            r = pb_depth_sums_drain(c, &s, probes, 30, drain_run, &check, &err);
+        uint32_t left = 0;
+        for (uint32_t b = 0; b < PB_DEPTH_SUM_BLOCKS_MAX; ++b)
+            left += s.block[b].buffer != VK_NULL_HANDLE;
+        fprintf(stderr, "  %s: %u blocks of %u probes, %u probes handed over, %u wrong values, %u wrong frees, %u "
+                        "blocks left\n",
+                i ? "staged" : "mapped", s.block_count, s.block_probes, check.next, check.bad_values,
+                check.bad_frees, left);
+        CHECKF(r == PB_OK, "%s", err.message);
+        CHECK(s.block_count == 3 && check.next == probes && check.bad_values == 0 && check.bad_frees == 0 &&
+              left == 0 && pb_context_validation_messages(c) == 0);
+        pb_depth_sums_destroy(c, &s);
+    }
+    free(values);
+    pb_context_destroy(staged);
 }
 
 /* The CPU reference's shading inputs for a bake b of s with emitters em:
@@ -3330,6 +3414,7 @@ int main(void)
     RUN(closed_emissive_box);
     RUN(kernels_match_cpu_reference);
     RUN(staged_depth_sums_match_mapped);
+    RUN(depth_sums_drain_block_by_block);
     RUN(multi_bounce_matches_cpu_reference);
     RUN(cpu_reference_casts_through_the_given_tracer);
     RUN(light_cells_match_cpu_reference);

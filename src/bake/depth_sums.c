@@ -15,12 +15,18 @@ pb_result pb_depth_sums_plan(const pb_context *ctx, uint32_t probes, uint32_t te
     if (ctx->max_allocation && ctx->max_allocation < limit)
         limit = ctx->max_allocation;
     out->probes = probes, out->probe_bytes = (uint64_t)texels * 8;
-    uint64_t per_block = limit / out->probe_bytes;
-    if (per_block == 0)
+    if (limit < out->probe_bytes)
         return pb_fail(err, PB_ERROR_TOO_LARGE,
                        "one probe's depth sums (%u octahedral texels) need %.1f KiB, over the %.1f KiB %s allows in "
                        "one allocation (maxMemoryAllocationSize): use a smaller octahedral map",
                        texels, out->probe_bytes / 1024.0, limit / 1024.0, ctx->info.name);
+    /* blocks the volume stage can free one by one (depth_sums.h), unless
+     * that would take more than half the table */
+    uint64_t total = (uint64_t)probes * out->probe_bytes, release = PB_DEPTH_SUM_RELEASE_BYTES;
+    uint64_t half_table = (total + PB_DEPTH_SUM_BLOCKS_MAX / 2 - 1) / (PB_DEPTH_SUM_BLOCKS_MAX / 2);
+    release = release > half_table ? release : half_table;
+    uint64_t per_block = (limit < release ? limit : release) / out->probe_bytes;
+    per_block = per_block ? per_block : 1;
     out->block_probes = per_block < probes ? (uint32_t)per_block : (probes ? probes : 1);
     uint64_t blocks = probes ? ((uint64_t)probes + out->block_probes - 1) / out->block_probes : 1;
     if (blocks > PB_DEPTH_SUM_BLOCKS_MAX)
@@ -58,14 +64,16 @@ void pb_depth_sums_destroy(pb_context *ctx, pb_depth_sums *s)
     pb_buffer_destroy(ctx, &s->table);
 }
 
-pb_result pb_depth_sums_read(pb_context *ctx, const pb_depth_sums *s, uint32_t count, uint32_t window,
-                             pb_depth_sums_fn fn, void *user, pb_error *err)
+pb_result pb_depth_sums_drain(pb_context *ctx, pb_depth_sums *s, uint32_t count, uint32_t window,
+                              pb_depth_sums_fn fn, void *user, pb_error *err)
 {
     if (count == 0)
         return PB_OK;
     if (s->block[0].mapped) {
-        for (uint32_t first = 0, b = 0; first < count; first += s->block_probes, ++b)
+        for (uint32_t first = 0, b = 0; first < count; first += s->block_probes, ++b) {
             fn(user, s->block[b].mapped, first, count - first < s->block_probes ? count - first : s->block_probes);
+            pb_buffer_destroy(ctx, &s->block[b]);
+        }
         return PB_OK;
     }
     /* a discrete GPU: the copy of a window, then the host's work on it */
@@ -82,8 +90,11 @@ pb_result pb_depth_sums_read(pb_context *ctx, const pb_depth_sums *s, uint32_t c
             break;
         pb_cmd_copy(ctx, &s->block[b], (uint64_t)in_block * s->probe_bytes, &staging, 0, (uint64_t)n * s->probe_bytes);
         pb_cmd_barrier_to_host(ctx);
-        if ((r = pb_cmd_submit_wait(ctx, NULL, err)) == PB_OK)
-            fn(user, staging.mapped, first, n);
+        if ((r = pb_cmd_submit_wait(ctx, NULL, err)) != PB_OK)
+            break;
+        fn(user, staging.mapped, first, n);
+        if (in_block + n == s->block_probes || first + n == count) /* the block's last run */
+            pb_buffer_destroy(ctx, &s->block[b]);
     }
     pb_buffer_destroy(ctx, &staging);
     return r;

@@ -143,7 +143,9 @@ pb_result pb_bake_stage_volume(bake_job *j, pb_volume *out, pb_error *err)
     /* The device's depth sums, a run at a time: in place where mapped
      * (lavapipe, UMA), else at most a submission's probes through one
      * download buffer, each run filled as it lands (no host copy of all
-     * sums: its first touch would cost what summing them on the host did) */
+     * sums: its first touch would cost what summing them on the host did),
+     * and each block freed once filled (on UMA, the sums give back what the
+     * tiles take) */
     volume_fill vf = {j, out, NULL, 0, pb_half_best_path()};
-    return pb_depth_sums_read(j->ctx, &j->B.sums, own, j->chunk, volume_fill_run, &vf, err);
+    return pb_depth_sums_drain(j->ctx, &j->B.sums, own, j->chunk, volume_fill_run, &vf, err);
 }
