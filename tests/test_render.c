@@ -2,6 +2,7 @@
  * sky volume lighting a floor evenly, the reference converging like
  * 1/sqrt(spp), and the display pipeline (tone curve, exposure, heat map). */
 #include "scenes_gen.h"
+#include "sample/sample_gpu.h"
 
 static pb_context *ctx;
 
@@ -131,6 +132,24 @@ static void render_matches_cpu(const pb_sparse_desc *sd, int bent)
     }
     if (sd) /* refined: chunks and bricks of both levels were looked up */
         CHECK(p.sv.levels == sd->levels && p.vol.sparse && p.vol.sparse->brick_count > 1);
+    /* the volume put on the device by the caller (as `render` does, once,
+     * before it frees the host's SH and depth): the same probe image, bit
+     * for bit, from a sampler without those arrays */
+    pb_sample_buffers vb;
+    pb_sample_volume layout_only = p.sv;
+    layout_only.sh = NULL, layout_only.depth = NULL;
+    CHECKF(pb_sample_upload(ctx, &p.sv, &vb, &err) == PB_OK, "%s", err.message);
+    pb_render_desc d;
+    memset(&d, 0, sizeof d);
+    pb_camera_from_scene(&s->cameras[0], &d.camera);
+    d.width = W, d.height = H, d.mode = PB_RENDER_PROBES, d.spp = 1, d.bounces = 3;
+    d.volume = &layout_only, d.volume_buffers = &vb;
+    d.volume_direct = (p.vol.flags & PB_VOLUME_DIRECT) != 0;
+    CHECKF(pb_render(ctx, s, p.gs, &d, g, NULL, NULL, &err) == PB_OK, "%s", err.message);
+    int same = !memcmp(g, plain, n * 16);
+    fprintf(stderr, "  probes, the volume uploaded by the caller: %s image\n", same ? "the same" : "ANOTHER");
+    CHECK(same);
+    pb_sample_release(ctx, &vb);
     free(g), free(c), free(gd), free(cd), free(plain), free(direct);
     release(&p);
 }

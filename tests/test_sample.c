@@ -369,6 +369,66 @@ static void ringing_never_negative(void)
     pb_volume_free(&v);
 }
 
+/* pb_sample_volume_adopt takes the volume's SH and depth arrays instead of
+ * copying them: the same sampler as pb_sample_volume_build, word for word
+ * (each texel's mean in the low half of its word), the volume's two arrays
+ * gone; refused, it leaves the volume whole. */
+static void adopted_sampler_is_the_copied_one(void)
+{
+    pb_volume v;
+    memset(&v, 0, sizeof v);
+    v.flags = PB_VOLUME_IRRADIANCE | PB_VOLUME_GRID;
+    v.probe_count = 12;
+    v.counts[0] = 3, v.counts[1] = 2, v.counts[2] = 2;
+    v.spacing[0] = v.spacing[1] = v.spacing[2] = 0.5;
+    v.origin[0] = 1.0;
+    v.octmap_res = 6;
+    v.settings.max_distance = 10.f;
+    pb_error err;
+    CHECK(pb_volume_alloc(&v, &err) == PB_OK);
+    uint64_t halves = pb_volume_tile_halves(v.octmap_res) * (uint64_t)v.probe_count;
+    for (uint32_t p = 0; p < v.probe_count; ++p) {
+        v.offset[3 * p + 1] = 0.01f * (float)p;
+        v.probe_flags[p] = p % 5 ? PB_PROBE_VALID : PB_PROBE_RELOCATED;
+    }
+    for (uint32_t i = 0; i < 27 * v.probe_count; ++i)
+        v.sh[i] = 0.25f * (float)i - 3.f;
+    for (uint64_t h = 0; h < halves; ++h)
+        v.depth[h] = (uint16_t)(h * 7919u + 13u);
+    double o[3] = {0.5, -1.0, 2.0};
+    pb_sample_volume copied, adopted;
+    CHECK(pb_sample_volume_build(&v, o, 0.f, 0.f, &copied, &err) == PB_OK);
+    uint16_t first_mean = v.depth[0], first_square = v.depth[1];
+    const float *sh = v.sh;
+    CHECK(pb_sample_volume_adopt(&v, o, 0.f, 0.f, &adopted, &err) == PB_OK);
+    uint32_t P = v.probe_count;
+    int same = !memcmp(copied.probes, adopted.probes, (size_t)P * 16) &&
+               !memcmp(copied.sh, adopted.sh, (size_t)P * 27 * sizeof(float)) &&
+               !memcmp(copied.depth, adopted.depth, halves / 2 * sizeof(uint32_t)) &&
+               !memcmp(copied.origin, adopted.origin, sizeof copied.origin) &&
+               copied.probe_count == adopted.probe_count && copied.octmap_res == adopted.octmap_res &&
+               copied.depth_unit == adopted.depth_unit;
+    fprintf(stderr, "  adopted sampler %s the copied one; the volume's arrays %s\n", same ? "is" : "DIFFERS FROM",
+            !v.sh && !v.depth ? "taken" : "LEFT");
+    CHECK(same && adopted.sh == sh && !v.sh && !v.depth);
+    CHECK(adopted.depth[0] == ((uint32_t)first_mean | (uint32_t)first_square << 16));
+    float pt[3] = {0.9f, -0.7f, -1.8f}, n[3] = {0.f, 1.f, 0.f}, a[3], b[3];
+    pb_sample_cpu(&copied, pt, n, n, a);
+    pb_sample_cpu(&adopted, pt, n, n, b);
+    CHECK(!memcmp(a, b, sizeof a));
+    pb_sample_volume_free(&copied);
+    pb_sample_volume_free(&adopted);
+    /* a point set: refused, its arrays its own */
+    v.flags = PB_VOLUME_IRRADIANCE;
+    pb_volume_free_probes(&v);
+    CHECK(pb_volume_alloc(&v, &err) == PB_OK);
+    const float *kept_sh = v.sh;
+    const uint16_t *kept_depth = v.depth;
+    CHECK(pb_sample_volume_adopt(&v, o, 0.f, 0.f, &adopted, &err) == PB_ERROR_INVALID_ARGUMENT &&
+          strstr(err.message, "point set") && v.sh == kept_sh && v.depth == kept_depth);
+    pb_volume_free(&v);
+}
+
 static void point_sets_refused(void)
 {
     pb_volume v;
@@ -393,5 +453,6 @@ int main(void)
     RUN(thin_wall_between_rooms);
     RUN(ringing_never_negative);
     RUN(point_sets_refused);
+    RUN(adopted_sampler_is_the_copied_one);
     return test_gpu_finish(ctx);
 }

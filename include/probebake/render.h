@@ -36,6 +36,11 @@ typedef struct pb_render_desc {
     uint32_t bounces;         /* reference: default 8 (Russian roulette beyond the second) */
     uint32_t seed;
     const pb_sample_volume *volume; /* probes / indirect modes */
+    /* NULL, or `volume` already on ctx's device (pb_sample_upload,
+     * src/sample/sample_gpu.h), used instead of uploading its arrays for the
+     * call: the caller may then free the host's SH and depth (a million
+     * probes: 1.4 GB) */
+    const struct pb_sample_buffers *volume_buffers;
     uint32_t volume_direct;   /* the volume's irradiance includes direct light (PB_VOLUME_DIRECT) */
     float sky[3];             /* as pb_bake_desc */
     const pb_environment *environment;

@@ -47,6 +47,12 @@ typedef struct pb_sample_volume {
  * grid to interpolate in) and PB_ERROR_OUT_OF_HOST_MEMORY. */
 pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3], float normal_bias,
                                  float view_bias, pb_sample_volume *out, pb_error *err);
+/* pb_sample_volume_build that takes v's SH and depth arrays instead of
+ * copying them (v->sh and v->depth are NULL after it succeeds; on failure v
+ * is as it was): the same sampler, without a second copy of a large volume
+ * (a million probes at 16x16: 1.4 GB). */
+pb_result pb_sample_volume_adopt(pb_volume *v, const double frame_origin[3], float normal_bias, float view_bias,
+                                 pb_sample_volume *out, pb_error *err);
 void pb_sample_volume_free(pb_sample_volume *s);
 
 /* Irradiance at p (frame coordinates) with unit normal n, seen from unit

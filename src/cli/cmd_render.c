@@ -49,7 +49,7 @@ static pb_result sampler_of(const options *o, const char *path, pb_volume *v, co
 {
     if (pb_scene_hash(s) != v->settings.scene_hash && !o->log.quiet)
         fprintf(stderr, "probebake: warning: %s was baked from a different scene than %s\n", path, o->scene);
-    pb_result r = pb_sample_volume_build(v, s->origin, 0.f, 0.f, sv, err);
+    pb_result r = pb_sample_volume_adopt(v, s->origin, 0.f, 0.f, sv, err);
     if (r != PB_OK) {
         char m[sizeof err->message];
         memcpy(m, err->message, sizeof m);
@@ -278,6 +278,7 @@ int cmd_render(const options *o)
     /* the volume lit by, and --seams-of's, whose seams and levels the diff measures */
     pb_volume vol = {0}, seams_vol = {0};
     pb_sample_volume sv = {0}, seams_sv = {0};
+    pb_sample_buffers volume_buffers = {0};
     pb_environment env = {0};
     pb_error err = {0};
     float *img = NULL, *img_direct = NULL, *ref = NULL, *ref_direct = NULL;
@@ -316,8 +317,9 @@ int cmd_render(const options *o)
     if ((o->volume && sampler_of(o, o->volume, &vol, s, &sv, &err) != PB_OK) ||
         (o->seams_of && sampler_of(o, o->seams_of, &seams_vol, s, &seams_sv, &err) != PB_OK))
         goto out;
-    /* the samplers hold the probes now; their headers and sparse layouts stay
-     * (a million probes: 1.4 GB less beside the samplers and the device's copy) */
+    /* the samplers hold the probes now (their SH and depth taken over, not
+     * copied); the volumes' headers and sparse layouts stay (a million probes:
+     * 1.4 GB less beside the samplers and the device's copy) */
     pb_volume_free_probes(&vol);
     pb_volume_free_probes(&seams_vol);
     pb_render_desc d = {0};
@@ -346,6 +348,15 @@ int cmd_render(const options *o)
     pb_context_desc cd = cli_context_desc(o, o->device, log);
     if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
+    /* the volume on the device once for every render below; the host keeps
+     * only what the seam metric reads (the layout), not its SH and depth */
+    if (d.volume && (mode == PB_RENDER_PROBES || mode == PB_RENDER_INDIRECT || d.show_probes)) {
+        if (pb_sample_upload(ctx, &sv, &volume_buffers, &err) != PB_OK)
+            goto out;
+        d.volume_buffers = &volume_buffers;
+        free(sv.sh), free(sv.depth);
+        sv.sh = NULL, sv.depth = NULL;
+    }
     uint64_t pixels = (uint64_t)d.width * d.height;
     img = malloc(pixels * 16), img_direct = malloc(pixels * 16), rgb8 = malloc(pixels * 3);
     if (diff && !ref)
@@ -402,6 +413,8 @@ out:
     pb_sample_volume_free(&seams_sv);
     pb_volume_free(&seams_vol);
     pb_environment_free(&env);
+    if (ctx)
+        pb_sample_release(ctx, &volume_buffers);
     pb_gpu_scene_destroy(gs);
     pb_context_destroy(ctx);
     pb_bvh_destroy(bvh);

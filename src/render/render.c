@@ -97,8 +97,13 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     pb_buffer params = {0}, rparams = {0}, img = {0}, imgd = {0};
     pb_pipeline pipe = {0};
     r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, 0, &sh, err);
-    if (r == PB_OK && d.volume && (d.mode == PB_RENDER_PROBES || d.mode == PB_RENDER_INDIRECT || d.show_probes))
-        r = pb_sample_upload(ctx, d.volume, &vb, err);
+    const pb_sample_buffers *volume = &vb; /* the caller's, or uploaded here for the call */
+    if (r == PB_OK && d.volume && (d.mode == PB_RENDER_PROBES || d.mode == PB_RENDER_INDIRECT || d.show_probes)) {
+        if (d.volume_buffers)
+            volume = d.volume_buffers;
+        else
+            r = pb_sample_upload(ctx, d.volume, &vb, err);
+    }
     if (r == PB_OK)
         r = pb_buffer_create(ctx, sizeof(gpu_bake_params), PB_MEMORY_UPLOAD, "render scene parameters", &params, err);
     if (r == PB_OK)
@@ -125,7 +130,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     float fwd[3], right[3], up[3];
     pb_render_camera_basis(&d.camera, d.width, d.height, fwd, right, up);
     memcpy(rp.eye, d.camera.eye, 12), memcpy(rp.forward, fwd, 12), memcpy(rp.right, right, 12), memcpy(rp.up, up, 12);
-    rp.volume = vb.refs;
+    rp.volume = volume->refs;
     rp.image = img.address, rp.image_direct = imgd.address;
     rp.width = d.width, rp.height = d.height, rp.spp = d.spp, rp.mode = (uint32_t)d.mode;
     rp.seed = d.seed, rp.bounces = d.bounces, rp.volume_direct = d.volume_direct;

@@ -9,8 +9,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3], float normal_bias,
-                                 float view_bias, pb_sample_volume *out, pb_error *err)
+/* Everything but the SH and depth arrays: the checks, the frame, the
+ * relocated positions with their flags and the sparse layout. */
+static pb_result sample_volume_frame(const pb_volume *v, const double frame_origin[3], float normal_bias,
+                                     float view_bias, pb_sample_volume *out, pb_error *err)
 {
     memset(out, 0, sizeof *out);
     if (v->flags & PB_VOLUME_SHARD)
@@ -21,14 +23,10 @@ pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3
     if (!(v->flags & PB_VOLUME_GRID) && !sparse)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "the volume is a point set: run-time sampling interpolates in a grid");
-    uint32_t P = v->probe_count, side = v->octmap_res + 2;
+    uint32_t P = v->probe_count;
     out->probes = malloc((size_t)P * 4 * sizeof(float));
-    out->sh = malloc((size_t)P * 27 * sizeof(float));
-    out->depth = malloc((size_t)P * side * side * sizeof(uint32_t));
-    if (!out->probes || !out->sh || !out->depth) {
-        pb_sample_volume_free(out);
+    if (!out->probes)
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
-    }
     for (int k = 0; k < 3; ++k) {
         out->origin[k] = (float)(v->origin[k] - frame_origin[k]);
         out->spacing[k] = (float)v->spacing[k];
@@ -51,9 +49,50 @@ pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3
             out->probes[4 * (size_t)p + k] = (float)(pos[k] - frame_origin[k]);
         memcpy(&out->probes[4 * (size_t)p + 3], &v->probe_flags[p], 4);
     }
+    return PB_OK;
+}
+
+pb_result pb_sample_volume_build(const pb_volume *v, const double frame_origin[3], float normal_bias,
+                                 float view_bias, pb_sample_volume *out, pb_error *err)
+{
+    pb_result r = sample_volume_frame(v, frame_origin, normal_bias, view_bias, out, err);
+    if (r != PB_OK)
+        return r;
+    uint32_t P = v->probe_count, side = v->octmap_res + 2;
+    out->sh = malloc((size_t)P * 27 * sizeof(float));
+    out->depth = malloc((size_t)P * side * side * sizeof(uint32_t));
+    if (!out->sh || !out->depth) {
+        pb_sample_volume_free(out);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", P);
+    }
     memcpy(out->sh, v->sh, (size_t)P * 27 * sizeof(float));
     for (uint64_t t = 0; t < (uint64_t)P * side * side; ++t)
         out->depth[t] = (uint32_t)v->depth[2 * t] | (uint32_t)v->depth[2 * t + 1] << 16;
+    return PB_OK;
+}
+
+pb_result pb_sample_volume_adopt(pb_volume *v, const double frame_origin[3], float normal_bias, float view_bias,
+                                 pb_sample_volume *out, pb_error *err)
+{
+    pb_result r = sample_volume_frame(v, frame_origin, normal_bias, view_bias, out, err);
+    if (r != PB_OK)
+        return r;
+    /* a texel's two halves, mean first, are the sampler's word with the mean
+     * in its low half: the same bytes where the low half comes first */
+    uint64_t texels = (uint64_t)v->probe_count * (v->octmap_res + 2) * (v->octmap_res + 2);
+    unsigned char *bytes = (unsigned char *)v->depth;
+#if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+    for (uint64_t t = 0; t < texels; ++t) {
+        uint16_t h[2];
+        memcpy(h, bytes + 4 * t, 4);
+        uint32_t w = (uint32_t)h[0] | (uint32_t)h[1] << 16;
+        memcpy(bytes + 4 * t, &w, 4);
+    }
+#else
+    (void)texels;
+#endif
+    out->sh = v->sh, out->depth = (uint32_t *)(void *)bytes;
+    v->sh = NULL, v->depth = NULL;
     return PB_OK;
 }
 
