@@ -883,6 +883,43 @@ static void sparse_atlas_marks_levels(void)
     pb_volume_free(&v);
 }
 
+/* The volume's large arrays come zeroed and, on Linux, advised for huge
+ * pages (pb_calloc_large): the kernel's map of this process shows the
+ * advice ("hg") on the mapping that holds the depth tiles' interior. */
+static void large_arrays_ask_for_huge_pages(void)
+{
+    pb_volume v;
+    memset(&v, 0, sizeof v);
+    v.probe_count = 20000, v.octmap_res = 16; /* 25 MiB of depth tiles */
+    v.settings.max_distance = 10.f;
+    pb_error err;
+    CHECK(pb_volume_alloc(&v, &err) == PB_OK);
+    size_t halves = (size_t)v.probe_count * pb_volume_tile_halves(16), nonzero = 0;
+    for (size_t i = 0; v.depth && i < halves; i += 997)
+        nonzero += v.depth[i] != 0;
+    CHECK(v.depth && nonzero == 0);
+    uintptr_t at = (((uintptr_t)v.depth + ((uintptr_t)2 << 20) - 1) & ~(((uintptr_t)2 << 20) - 1)) + 4096;
+    FILE *f = fopen("/proc/self/smaps", "r");
+    if (!f) {
+        fprintf(stderr, "  skipped the advice: no /proc/self/smaps\n");
+    } else {
+        char line[512];
+        int inside = 0, advised = -1;
+        while (fgets(line, sizeof line, f)) {
+            unsigned long lo, hi;
+            if (sscanf(line, "%lx-%lx ", &lo, &hi) == 2 && strchr(line, '-') < strchr(line, ' '))
+                inside = at >= lo && at < hi;
+            else if (inside && !strncmp(line, "VmFlags:", 8))
+                advised = strstr(line, " hg") != NULL;
+        }
+        fclose(f);
+        fprintf(stderr, "  the depth tiles' mapping %s\n",
+                advised < 0 ? "NOT FOUND" : advised ? "is advised for huge pages" : "is NOT advised");
+        CHECK(advised == 1);
+    }
+    pb_volume_free(&v);
+}
+
 int main(void)
 {
     RUN(half_round_trip_exhaustive);
@@ -902,5 +939,6 @@ int main(void)
     RUN(sparse_lookup_finds_the_finest_brick);
     RUN(sparse_files_round_trip_and_refuse_damage);
     RUN(sparse_atlas_marks_levels);
+    RUN(large_arrays_ask_for_huge_pages);
     return test_summary();
 }

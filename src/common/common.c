@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -148,6 +149,23 @@ uint64_t pb_hash64(const void *data, size_t size, uint64_t seed)
         h *= 1099511628211ull;
     }
     return h;
+}
+
+void *pb_calloc_large(size_t count, size_t size)
+{
+    void *p = calloc(count, size);
+#if defined(MADV_HUGEPAGE)
+    /* glibc maps an array this large afresh and does not touch it: the 2 MiB
+     * pages wholly inside it are advised before anything faults them in */
+    const uintptr_t huge = (uintptr_t)2 << 20;
+    size_t bytes = count * size; /* calloc has checked the product */
+    if (p && bytes >= 4 * huge) {
+        uintptr_t first = ((uintptr_t)p + huge - 1) & ~(huge - 1), end = ((uintptr_t)p + bytes) & ~(huge - 1);
+        if (end > first)
+            (void)madvise((void *)first, end - first, MADV_HUGEPAGE);
+    }
+#endif
+    return p;
 }
 
 uint64_t pb_host_memory_bytes(void)

@@ -112,8 +112,8 @@ pb_result pb_volume_alloc(pb_volume *v, pb_error *err)
     v->base = calloc(n * 3, sizeof(float));
     v->offset = calloc(n * 3, sizeof(float));
     v->probe_flags = calloc(n, sizeof(uint32_t));
-    v->sh = calloc(n * 27, sizeof(float));
-    v->depth = calloc(n * (size_t)pb_volume_tile_halves(v->octmap_res), sizeof(uint16_t));
+    v->sh = pb_calloc_large(n * 27, sizeof(float));
+    v->depth = pb_calloc_large(n * (size_t)pb_volume_tile_halves(v->octmap_res), sizeof(uint16_t));
     v->probe_paths = calloc(n, sizeof(uint32_t));
     v->probe_std_error = malloc(n * sizeof(float));
     if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth || !v->probe_paths || !v->probe_std_error) {

@@ -70,7 +70,7 @@ pb_result pb_bake_stage_place(bake_job *j, pb_error *err)
     j->probes = calloc((size_t)P * 4, sizeof(float));
     j->rotations = malloc((size_t)P * 12 * sizeof(float));
     j->directions = malloc((size_t)rpp * 4 * sizeof(float));
-    j->sh_sum = calloc((size_t)P * 27, sizeof(double));
+    j->sh_sum = pb_calloc_large((size_t)P * 27, sizeof(double));
     j->backfaces = calloc(P, sizeof(double)), j->hits = calloc(P, sizeof(double));
     j->reduced = malloc((size_t)j->reduced_floats * sizeof(float));
     j->converged_at = calloc(P, sizeof(uint32_t));
