@@ -3,6 +3,7 @@
  * error. CPU only. */
 #define _DEFAULT_SOURCE /* mknod, makedev, symlink */
 #include "test_util.h"
+#include "common/common.h"
 #include "io/half_pairs.h"
 
 #include <dirent.h>
@@ -883,9 +884,33 @@ static void sparse_atlas_marks_levels(void)
     pb_volume_free(&v);
 }
 
-/* The volume's large arrays come zeroed and, on Linux, advised for huge
- * pages (pb_calloc_large): the kernel's map of this process shows the
- * advice ("hg") on the mapping that holds the depth tiles' interior. */
+/* The mapping of /proc/self/smaps that holds address `at`: 1 if advised
+ * for huge pages ("hg"), 0 if not, -1 if not found; *lo, *hi its bounds. */
+static int huge_advice_at(FILE *f, uintptr_t at, uintptr_t *lo, uintptr_t *hi)
+{
+    char line[512];
+    int inside = 0, advised = -1;
+    rewind(f);
+    while (fgets(line, sizeof line, f)) {
+        unsigned long a, b;
+        char *dash = strchr(line, '-'), *space = strchr(line, ' ');
+        if (dash && space && dash < space && sscanf(line, "%lx-%lx ", &a, &b) == 2) {
+            inside = at >= a && at < b;
+            if (inside)
+                *lo = a, *hi = b;
+        } else if (inside && !strncmp(line, "VmFlags:", 8)) {
+            advised = strstr(line, " hg") != NULL;
+        }
+    }
+    return advised;
+}
+
+/* Large arrays come zeroed (a volume's) and, on Linux, advised for huge
+ * pages in one piece (pb_calloc_large, pb_realloc_large): the kernel's map
+ * of this process shows the advice ("hg") on the mapping of the volume's
+ * depth tiles, and on an array grown by realloc from 16 to 64 MiB, whose
+ * mapping still holds the whole array (advice on part of a mapping splits
+ * it, and glibc's realloc then copies instead of moving it). */
 static void large_arrays_ask_for_huge_pages(void)
 {
     pb_volume v;
@@ -898,25 +923,36 @@ static void large_arrays_ask_for_huge_pages(void)
     for (size_t i = 0; v.depth && i < halves; i += 997)
         nonzero += v.depth[i] != 0;
     CHECK(v.depth && nonzero == 0);
-    uintptr_t at = (((uintptr_t)v.depth + ((uintptr_t)2 << 20) - 1) & ~(((uintptr_t)2 << 20) - 1)) + 4096;
+    size_t bytes = (size_t)16 << 20;
+    uint32_t *grown = pb_malloc_large(bytes), kept = 1;
+    for (int step = 0; grown && step < 2; ++step) {
+        for (size_t i = 0; i < bytes / 4; i += 1024)
+            grown[i] = (uint32_t)i;
+        uint32_t *g = pb_realloc_large(grown, 2 * bytes);
+        if (!g)
+            break;
+        grown = g;
+        for (size_t i = 0; i < bytes / 4; i += 1024)
+            kept &= grown[i] == (uint32_t)i;
+        bytes *= 2;
+    }
     FILE *f = fopen("/proc/self/smaps", "r");
     if (!f) {
         fprintf(stderr, "  skipped the advice: no /proc/self/smaps\n");
     } else {
-        char line[512];
-        int inside = 0, advised = -1;
-        while (fgets(line, sizeof line, f)) {
-            unsigned long lo, hi;
-            if (sscanf(line, "%lx-%lx ", &lo, &hi) == 2 && strchr(line, '-') < strchr(line, ' '))
-                inside = at >= lo && at < hi;
-            else if (inside && !strncmp(line, "VmFlags:", 8))
-                advised = strstr(line, " hg") != NULL;
-        }
+        uintptr_t lo = 0, hi = 0, glo = 0, ghi = 0;
+        int depth = huge_advice_at(f, (uintptr_t)v.depth + ((uintptr_t)4 << 20), &lo, &hi);
+        int mapped = huge_advice_at(f, (uintptr_t)grown, &glo, &ghi);
+        int whole = glo <= (uintptr_t)grown && ghi >= (uintptr_t)grown + bytes;
         fclose(f);
-        fprintf(stderr, "  the depth tiles' mapping %s\n",
-                advised < 0 ? "NOT FOUND" : advised ? "is advised for huge pages" : "is NOT advised");
-        CHECK(advised == 1);
+        fprintf(stderr, "  the depth tiles' mapping %s; the grown array's %s, %s\n",
+                depth < 0 ? "NOT FOUND" : depth ? "is advised for huge pages" : "is NOT advised",
+                mapped < 0 ? "NOT FOUND" : mapped ? "advised" : "NOT advised",
+                whole ? "in one piece" : "SPLIT");
+        CHECK(depth == 1 && mapped == 1 && whole);
     }
+    CHECK(grown && kept && bytes == (size_t)64 << 20);
+    free(grown);
     pb_volume_free(&v);
 }
 

@@ -116,12 +116,12 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: more than 2^32 texels", scene->path);
 
     pb_gpu_scene *gs = calloc(1, sizeof *gs);
-    gpu_tri *tris = calloc((size_t)n + 1, sizeof *tris);
+    gpu_tri *tris = pb_calloc_large((size_t)n + 1, sizeof *tris);
     float *uvs = malloc(sizes[2] ? (size_t)sizes[2] : 24);
     gpu_material *mats = malloc((size_t)(scene->material_count ? scene->material_count : 1) * sizeof *mats);
     gpu_texture *texs = malloc((size_t)(scene->texture_count ? scene->texture_count : 1) * sizeof *texs);
     if (gs)
-        gs->tri_order = malloc((size_t)(n ? n : 1) * 4);
+        gs->tri_order = pb_malloc_large((size_t)(n ? n : 1) * 4);
     if (!gs || !tris || !uvs || !mats || !texs || !gs->tri_order) {
         free(tris), free(uvs), free(mats), free(texs);
         if (gs)

@@ -96,8 +96,8 @@ pb_result pb_shading_create(pb_context *ctx, const pb_scene *scene, const pb_gpu
     uint32_t T = scene->triangle_count ? scene->triangle_count : 1;
     gpu_light *lights = calloc(L, sizeof *lights);
     gpu_shade_material *mats = calloc(M, sizeof *mats);
-    uint32_t *leaf_of = malloc(T * sizeof *leaf_of);
-    float *pdf_leaf = calloc(T, sizeof *pdf_leaf);
+    uint32_t *leaf_of = pb_malloc_large(T * sizeof *leaf_of);
+    float *pdf_leaf = pb_calloc_large(T, sizeof *pdf_leaf);
     gpu_emitter *ge = NULL;
     pb_result r = PB_OK;
     if (!lights || !mats || !leaf_of || !pdf_leaf)

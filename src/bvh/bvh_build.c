@@ -263,8 +263,8 @@ static uint32_t median_split(builder *bd, uint32_t begin, uint32_t end, const aa
     for (int k = 1; k < 3; ++k)
         if (cbox->hi[k] - cbox->lo[k] > cbox->hi[a] - cbox->lo[a])
             a = k;
-    sort_key *keys = malloc((size_t)n * sizeof *keys);
-    prim *tmp = malloc((size_t)n * sizeof *tmp);
+    sort_key *keys = pb_malloc_large((size_t)n * sizeof *keys);
+    prim *tmp = pb_malloc_large((size_t)n * sizeof *tmp);
     if (keys && tmp) {
         for (uint32_t i = 0; i < n; ++i) {
             const prim *p = &bd->prims[begin + i];
@@ -606,15 +606,15 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     builder bd;
     memset(&bd, 0, sizeof bd);
     uint32_t max_nodes = n ? 2 * n : 1;
-    bd.prims = malloc((size_t)(n ? n : 1) * sizeof(prim));
-    bd.index = malloc((size_t)(n ? n : 1) * sizeof(uint32_t));
-    bd.nodes = calloc(max_nodes, sizeof(build_node));
-    bd.stack = malloc((size_t)max_nodes * sizeof(task));
+    bd.prims = pb_malloc_large((size_t)(n ? n : 1) * sizeof(prim));
+    bd.index = pb_malloc_large((size_t)(n ? n : 1) * sizeof(uint32_t));
+    bd.nodes = pb_calloc_large(max_nodes, sizeof(build_node));
+    bd.stack = pb_malloc_large((size_t)max_nodes * sizeof(task));
     uint32_t want = n >= 4096 ? d.threads : 1;
     worker_arg *args = malloc(want * sizeof *args);
     uint32_t inner_cap = n > 1 ? n : 1;
     if (bvh)
-        bvh->nodes = calloc(inner_cap, sizeof(pb_bvh_node));
+        bvh->nodes = pb_calloc_large(inner_cap, sizeof(pb_bvh_node));
     if (!bvh || !bd.prims || !bd.index || !bd.nodes || !bd.stack || !args || !bvh->nodes) {
         free(bd.prims), free(bd.index), free(bd.nodes), free(bd.stack), free(args);
         pb_bvh_destroy(bvh);
@@ -674,7 +674,7 @@ pb_result pb_bvh_build(const pb_scene *scene, const pb_bvh_desc *desc_in, pb_bvh
     bvh->stats.threads = n ? want : 1;
     int wide_ok = pb_bvh_collapse_wide(bvh, d.threads);
     if (wide_ok) { /* the positions once, in the final leaf order */
-        bvh->tri_positions = malloc((size_t)(n ? n : 1) * 9 * sizeof(float));
+        bvh->tri_positions = pb_malloc_large((size_t)(n ? n : 1) * 9 * sizeof(float));
         wide_ok = bvh->tri_positions != NULL;
         positions_job pj = {scene, bvh};
         if (wide_ok)

@@ -313,8 +313,8 @@ static void quantize_nodes(void *user, uint64_t begin, uint64_t end)
 static int encode(pb_bvh *bvh, const wide_state *ws)
 {
     uint32_t n = bvh->triangle_count;
-    uint32_t *moved = malloc((size_t)(n ? n : 1) * sizeof *moved); /* old first triangle -> new */
-    uint32_t *order = malloc((size_t)(n ? n : 1) * sizeof *order);
+    uint32_t *moved = pb_malloc_large((size_t)(n ? n : 1) * sizeof *moved); /* old first triangle -> new */
+    uint32_t *order = pb_malloc_large((size_t)(n ? n : 1) * sizeof *order);
     if (!moved || !order) {
         free(moved), free(order);
         return 0;
@@ -358,12 +358,12 @@ int pb_bvh_collapse_wide(pb_bvh *bvh, uint32_t threads)
     wide_state ws;
     memset(&ws, 0, sizeof ws);
     ws.bvh = bvh;
-    ws.out = bvh->wide_nodes = calloc(cap, sizeof(pb_bvh4_node));
-    ws.child = malloc(cap * sizeof *ws.child);
-    ws.count = malloc(cap * sizeof *ws.count);
-    ws.cost = malloc(cap * sizeof *ws.cost);
-    ws.split = malloc(cap * sizeof *ws.split);
-    ws.pair = malloc(cap * sizeof *ws.pair);
+    ws.out = bvh->wide_nodes = pb_calloc_large(cap, sizeof(pb_bvh4_node));
+    ws.child = pb_malloc_large(cap * sizeof *ws.child);
+    ws.count = pb_malloc_large(cap * sizeof *ws.count);
+    ws.cost = pb_malloc_large(cap * sizeof *ws.cost);
+    ws.split = pb_malloc_large(cap * sizeof *ws.split);
+    ws.pair = pb_malloc_large(cap * sizeof *ws.pair);
     ws.next = 1;
     int ok = bvh->wide_nodes && ws.child && ws.count && ws.cost && ws.split && ws.pair;
     if (ok) {

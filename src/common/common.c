@@ -151,21 +151,44 @@ uint64_t pb_hash64(const void *data, size_t size, uint64_t seed)
     return h;
 }
 
-void *pb_calloc_large(size_t count, size_t size)
+/* The advice on every page of [p, p + bytes). glibc maps an array this
+ * large afresh and does not touch it, so nothing has faulted its pages in
+ * yet; the whole mapping is advised, not only its 2 MiB pages, because
+ * advice on part of a mapping splits it, and glibc's realloc can then no
+ * longer move it with mremap (which keeps the advice) and copies it. */
+static void *advise_huge(void *p, size_t bytes)
 {
-    void *p = calloc(count, size);
 #if defined(MADV_HUGEPAGE)
-    /* glibc maps an array this large afresh and does not touch it: the 2 MiB
-     * pages wholly inside it are advised before anything faults them in */
     const uintptr_t huge = (uintptr_t)2 << 20;
-    size_t bytes = count * size; /* calloc has checked the product */
     if (p && bytes >= 4 * huge) {
-        uintptr_t first = ((uintptr_t)p + huge - 1) & ~(huge - 1), end = ((uintptr_t)p + bytes) & ~(huge - 1);
-        if (end > first)
-            (void)madvise((void *)first, end - first, MADV_HUGEPAGE);
+        uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE);
+        uintptr_t first = (uintptr_t)p & ~(page - 1), end = ((uintptr_t)p + bytes + page - 1) & ~(page - 1);
+        (void)madvise((void *)first, end - first, MADV_HUGEPAGE);
     }
+#else
+    (void)bytes;
 #endif
     return p;
+}
+
+void pb_advise_huge(void *p, size_t bytes)
+{
+    (void)advise_huge(p, bytes);
+}
+
+void *pb_malloc_large(size_t size)
+{
+    return advise_huge(malloc(size), size);
+}
+
+void *pb_calloc_large(size_t count, size_t size)
+{
+    return advise_huge(calloc(count, size), count * size); /* calloc has checked the product */
+}
+
+void *pb_realloc_large(void *p, size_t size)
+{
+    return advise_huge(realloc(p, size), size);
 }
 
 uint64_t pb_host_memory_bytes(void)

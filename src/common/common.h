@@ -42,12 +42,19 @@ void pb_parallel_for(uint64_t count, uint64_t grain, uint32_t threads, pb_range_
 /* FNV-1a over bytes; used for scene hashes and deterministic seeds. */
 uint64_t pb_hash64(const void *data, size_t size, uint64_t seed);
 
-/* calloc for large arrays that are filled right after: asks the kernel
- * (Linux, where transparent huge pages are "madvise") to back the untouched
- * array with 2 MiB pages, so its first touch takes one fault per 2 MiB, not
- * per 4 KiB (bench/RESULTS.md, "Huge pages for the volume"). Freed with
- * free(); zeroed as calloc's; a hint only, ignored where unsupported. */
+/* malloc, calloc and realloc for large arrays that are filled right after
+ * (per triangle, per BVH node, per probe): they ask the kernel (Linux, where
+ * transparent huge pages are "madvise") to back the array's untouched 2 MiB
+ * pages with huge pages, so its first touch takes one fault per 2 MiB, not
+ * per 4 KiB (bench/RESULTS.md, "Huge pages for large arrays"). Arrays under
+ * 8 MiB are left alone. Freed with free(); a hint only, ignored where
+ * unsupported. */
+void *pb_malloc_large(size_t size);
+/* The same advice for an array made elsewhere (a std::vector's reserved
+ * storage) before anything touches it. */
+void pb_advise_huge(void *p, size_t bytes);
 void *pb_calloc_large(size_t count, size_t size);
+void *pb_realloc_large(void *p, size_t size);
 
 /* Physical memory of this machine in bytes (0 if unknown). */
 uint64_t pb_host_memory_bytes(void);

@@ -75,7 +75,7 @@ pb_result pb_input_read(const char *path, uint64_t max_bytes, unsigned char **by
     *bytes = NULL;
     *size = 0;
     FILE *f;
-    uint64_t n;
+    uint64_t n = 0;
     pb_result r = pb_input_open(path, max_bytes, &f, &n, err);
     if (r != PB_OK)
         return r;
@@ -83,7 +83,7 @@ pb_result pb_input_read(const char *path, uint64_t max_bytes, unsigned char **by
         fclose(f);
         return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: too large for this machine's address space", path);
     }
-    unsigned char *b = malloc((size_t)n + 1);
+    unsigned char *b = pb_malloc_large((size_t)n + 1); /* a large scene's file: huge pages */
     if (!b) {
         fclose(f);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory for %llu bytes", path,

@@ -42,6 +42,30 @@ pb_result fail(reader &r, pb_result code, const std::string &what)
 
 namespace {
 
+// The allocator of the loader's per-vertex and per-index arrays: a large
+// scene's are hundreds of MB, filled right after they are made, so they ask
+// for huge pages (pb_malloc_large; bench/RESULTS.md, "Huge pages for large
+// arrays").
+template <class T> struct large_allocator {
+    using value_type = T;
+    large_allocator() = default;
+    template <class U> large_allocator(const large_allocator<U> &) {}
+    T *allocate(size_t n)
+    {
+        if (n > SIZE_MAX / sizeof(T))
+            throw std::bad_alloc();
+        void *p = pb_malloc_large(n * sizeof(T));
+        if (!p)
+            throw std::bad_alloc();
+        return static_cast<T *>(p);
+    }
+    void deallocate(T *p, size_t) { free(p); }
+    template <class U> bool operator==(const large_allocator<U> &) const { return true; }
+    template <class U> bool operator!=(const large_allocator<U> &) const { return false; }
+};
+using double_array = std::vector<double, large_allocator<double>>;
+using index_array = std::vector<uint32_t, large_allocator<uint32_t>>;
+
 using pb_gltf::mat4;
 using pb_gltf::reader;
 using pb_gltf::fail;
@@ -202,7 +226,7 @@ pb_result view_span(reader &r, int view, size_t offset, size_t count, size_t ele
 // checking every byte it touches lies inside its buffer view and buffer;
 // a sparse accessor's substitutions (core glTF 2.0) are applied over its
 // base (its bufferView, or zeros).
-pb_result read_accessor(reader &r, int index, int ncomp, std::vector<double> &out, const char *what)
+pb_result read_accessor(reader &r, int index, int ncomp, double_array &out, const char *what)
 {
     const tinygltf::Model &m = r.m;
     if (index < 0 || index >= (int)m.accessors.size())
@@ -408,7 +432,7 @@ pb_result decode_draco(reader &r, const tinygltf::Primitive &prim, const tinyglt
 // nor normalized nor from Draco) is read straight into `order`, so a large
 // scene's indices never pass through doubles (8 fresh bytes each); every
 // other case goes through read_accessor. Either way, the same errors.
-pb_result read_indices(reader &r, int index, size_t nv, std::vector<uint32_t> &order)
+pb_result read_indices(reader &r, int index, size_t nv, index_array &order)
 {
     const tinygltf::Model &m = r.m;
     const tinygltf::Accessor *a = index >= 0 && index < (int)m.accessors.size() ? &m.accessors[index] : nullptr;
@@ -443,7 +467,7 @@ pb_result read_indices(reader &r, int index, size_t nv, std::vector<uint32_t> &o
         }
         return PB_OK;
     }
-    std::vector<double> idx;
+    double_array idx;
     pb_result res = read_accessor(r, index, 1, idx, "index");
     if (res != PB_OK)
         return res;
@@ -478,7 +502,7 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
         r.b->stats.primitives_skipped++;
         return PB_OK;
     }
-    std::vector<double> pos, nrm, uv;
+    double_array pos, nrm, uv;
     pb_result res = read_accessor(r, pos_it->second, 3, pos, "POSITION");
     if (res != PB_OK)
         return res;
@@ -498,7 +522,7 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
     if (have_uv && uv.size() / 2 != nv)
         return fail(r, PB_ERROR_PARSE, "TEXCOORD_0 and POSITION accessors of mesh '" + std::string(mesh_name) + "' differ in count");
     // COLOR_0 (linear RGB or RGBA) multiplies the base colour, glTF's rule
-    std::vector<double> col;
+    double_array col;
     int col_n = 0;
     auto cit = prim.attributes.find("COLOR_0");
     if (cit != prim.attributes.end()) {
@@ -510,7 +534,7 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
             return fail(r, PB_ERROR_PARSE, "COLOR_0 and POSITION accessors of mesh '" + std::string(mesh_name) +
                                                "' differ in count");
     }
-    std::vector<uint32_t> order; // vertex indices, before triangle assembly
+    index_array order; // vertex indices, before triangle assembly
     if (indices >= 0) {
         const tinygltf::Accessor *ia = indices < (int)r.m.accessors.size() ? &r.m.accessors[indices] : nullptr;
         if (ia && ia->componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
@@ -525,7 +549,7 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
             order[i] = (uint32_t)i;
     }
     // assemble triangles as vertex-index triples
-    std::vector<uint32_t> tris;
+    index_array tris;
     int mode = prim.mode == -1 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
     if (mode == TINYGLTF_MODE_TRIANGLES) {
         order.resize((order.size() / 3) * 3);
@@ -646,7 +670,7 @@ pb_result read_instances(reader &r, int node_index, const tinygltf::Value &ext, 
         return fail(r, PB_ERROR_PARSE, where + ": " + std::to_string(count) + " instances of " + std::to_string(per) +
                                            " triangles: more than " + std::to_string(PB_GLTF_MAX_TRIANGLES) +
                                            " triangles in all, refused");
-    std::vector<double> v[3];
+    double_array v[3];
     for (int k = 0; k < 3; ++k)
         if (acc[k] >= 0) {
             pb_result res = read_accessor(r, acc[k], comps[k], v[k], names[k]);
@@ -894,6 +918,9 @@ bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::strin
             *err += std::string(e.message) + "\n";
         return false;
     }
+    out->clear();
+    out->reserve((size_t)size); /* fresh storage, advised before the copy touches it */
+    pb_advise_huge(out->data(), out->capacity());
     out->assign(bytes, bytes + size);
     free(bytes);
     return true;

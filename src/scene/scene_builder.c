@@ -14,7 +14,7 @@ static int grow(void **ptr, uint64_t *capacity, uint64_t need, size_t size)
     uint64_t cap = *capacity ? *capacity : 64;
     while (cap < need)
         cap *= 2;
-    void *p = realloc(*ptr, (size_t)(cap * size));
+    void *p = pb_realloc_large(*ptr, (size_t)(cap * size));
     if (!p)
         return 0;
     *ptr = p;
@@ -95,16 +95,16 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
             b->out_of_memory = 1;
             return 0;
         }
-        float *nrm = realloc(b->nrm, (size_t)(cap * 9 * sizeof(float)));
+        float *nrm = pb_realloc_large(b->nrm, (size_t)(cap * 9 * sizeof(float)));
         if (nrm)
             b->nrm = nrm;
-        float *uvs = nrm ? realloc(b->uv, (size_t)(cap * 6 * sizeof(float))) : NULL;
+        float *uvs = nrm ? pb_realloc_large(b->uv, (size_t)(cap * 6 * sizeof(float))) : NULL;
         if (uvs)
             b->uv = uvs;
-        uint32_t *mat = uvs ? realloc(b->mat, (size_t)(cap * sizeof(uint32_t))) : NULL;
+        uint32_t *mat = uvs ? pb_realloc_large(b->mat, (size_t)(cap * sizeof(uint32_t))) : NULL;
         if (mat)
             b->mat = mat;
-        float *cols = b->rgba && mat ? realloc(b->rgba, (size_t)(cap * 12 * sizeof(float))) : NULL;
+        float *cols = b->rgba && mat ? pb_realloc_large(b->rgba, (size_t)(cap * 12 * sizeof(float))) : NULL;
         if (cols)
             b->rgba = cols;
         if (!mat || (b->rgba && !cols)) {
@@ -114,7 +114,7 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
         b->capacity = cap;
     }
     if (rgba && !b->rgba) { /* the first coloured triangle: the ones before are white */
-        b->rgba = malloc((size_t)(b->capacity * 12 * sizeof(float)));
+        b->rgba = pb_malloc_large((size_t)(b->capacity * 12 * sizeof(float)));
         if (!b->rgba) {
             b->out_of_memory = 1;
             return 0;
