@@ -16,6 +16,7 @@
  *          from one ready buffer, then fsync: what any writer of the file pays
  *   read   pb_volume_read: sections straight into the arrays, every value
  *          checked; against read(2) of the whole file into one buffer
+ *          (advised for huge pages, as the reader's arrays are)
  * Each write and read runs in a child process (fork), --repeat times
  * (default 3), ours first in even rounds and the peer's first in odd ones;
  * the table gives medians of the time and of the memory the operation added
@@ -26,6 +27,7 @@
  * bench/RESULTS.md, "The host's tail of a large bake", has its numbers. */
 #define _GNU_SOURCE /* wait4 */
 #include "bench_util.h"
+#include "common/common.h"
 #include "io/half_pairs.h"
 
 #include <fcntl.h>
@@ -151,7 +153,9 @@ static unsigned char *raw_read(const char *path, uint64_t *size)
             close(fd);
         return NULL;
     }
-    unsigned char *b = malloc((size_t)st.st_size ? (size_t)st.st_size : 1);
+    /* advised for huge pages, as the reader's arrays are: the floor is the
+     * read, not the page faults */
+    unsigned char *b = pb_malloc_large((size_t)st.st_size ? (size_t)st.st_size : 1);
     uint64_t done = 0;
     while (b && done < (uint64_t)st.st_size) {
         ssize_t r = read(fd, b + done, (size_t)st.st_size - done);

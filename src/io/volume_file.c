@@ -109,13 +109,13 @@ pb_result pb_volume_alloc(pb_volume *v, pb_error *err)
     if (v->depth_unit == 0.f) /* derived from the rays' reach unless the caller chose one */
         v->depth_unit = pb_volume_depth_unit(v->settings.max_distance);
     size_t n = v->probe_count;
-    v->base = calloc(n * 3, sizeof(float));
-    v->offset = calloc(n * 3, sizeof(float));
-    v->probe_flags = calloc(n, sizeof(uint32_t));
+    v->base = pb_calloc_large(n * 3, sizeof(float));
+    v->offset = pb_calloc_large(n * 3, sizeof(float));
+    v->probe_flags = pb_calloc_large(n, sizeof(uint32_t));
     v->sh = pb_calloc_large(n * 27, sizeof(float));
     v->depth = pb_calloc_large(n * (size_t)pb_volume_tile_halves(v->octmap_res), sizeof(uint16_t));
-    v->probe_paths = calloc(n, sizeof(uint32_t));
-    v->probe_std_error = malloc(n * sizeof(float));
+    v->probe_paths = pb_calloc_large(n, sizeof(uint32_t));
+    v->probe_std_error = pb_malloc_large(n * sizeof(float));
     if (!v->base || !v->offset || !v->probe_flags || !v->sh || !v->depth || !v->probe_paths || !v->probe_std_error) {
         pb_volume_free(v);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u probes", v->probe_count);
@@ -671,36 +671,41 @@ static layout sections_of(const unsigned char *h, const pb_volume *v, uint32_t v
     return l;
 }
 
-/* count values of `width` bytes (2 or 4) from file offset `at` into the
- * host array `values`, a buffer at a time (on a little-endian host the
- * loops are copies). 0 on a short read. */
-static int read_array(FILE *f, uint64_t at, void *values, uint64_t count, uint32_t width, unsigned char *buf,
-                      size_t buf_bytes)
+/* count values of `width` bytes (2 or 4), little-endian, from file offset
+ * `at` into the host array `values`: read straight into it, a piece at a
+ * time, each value's bytes then put in host order in place (nothing to do
+ * on a little-endian host, the pass skipped where the compiler says so).
+ * 0 on a short read. */
+#define READER_PIECE_BYTES ((size_t)1 << 24)
+static int read_array(FILE *f, uint64_t at, void *values, uint64_t count, uint32_t width)
 {
     if (fseeko(f, (off_t)at, SEEK_SET) != 0)
         return 0;
     unsigned char *out = values;
     while (count) {
-        size_t k = (size_t)(count < buf_bytes / width ? count : buf_bytes / width);
-        if (fread(buf, width, k, f) != k)
+        size_t k = (size_t)(count < READER_PIECE_BYTES / width ? count : READER_PIECE_BYTES / width);
+        if (fread(out, width, k, f) != k)
             return 0;
+#if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
         for (size_t i = 0; i < k; ++i) {
             if (width == 2) {
-                uint16_t h = (uint16_t)(buf[2 * i] | buf[2 * i + 1] << 8);
+                uint16_t h = (uint16_t)(out[2 * i] | out[2 * i + 1] << 8);
                 memcpy(out + 2 * i, &h, 2);
             } else {
-                uint32_t x = get_u32(buf + 4 * i);
+                uint32_t x = get_u32(out + 4 * i);
                 memcpy(out + 4 * i, &x, 4);
             }
         }
+#endif
         out += k * width;
         count -= k;
     }
     return 1;
 }
 
-/* The grid sections of f into v (allocated), each read into its array
- * through one small buffer: no copy of the whole file. Before version 3 a probe's paths are what the
+/* The grid sections of f into v (allocated), each read straight into its
+ * array (the probes' accounting through one small buffer): no copy of the
+ * whole file. Before version 3 a probe's paths are what the
  * header says every probe got (an upper bound under --target-error) and its
  * error is unknown. *bad_probe: the first probe whose standard error is
  * negative or not finite, or UINT32_MAX. 0 on a short read. */
@@ -709,11 +714,9 @@ static int read_sections(FILE *f, const layout *l, uint32_t version, pb_volume *
 {
     size_t n = v->probe_count;
     unsigned char *buf = malloc(READER_BYTES);
-    int ok = buf && read_array(f, l->base, v->base, 3 * n, 4, buf, READER_BYTES) &&
-             read_array(f, l->offset, v->offset, 3 * n, 4, buf, READER_BYTES) &&
-             read_array(f, l->flags, v->probe_flags, n, 4, buf, READER_BYTES) &&
-             read_array(f, l->sh, v->sh, 27 * n, 4, buf, READER_BYTES) &&
-             read_array(f, l->depth, v->depth, n * pb_volume_tile_halves(v->octmap_res), 2, buf, READER_BYTES);
+    int ok = buf && read_array(f, l->base, v->base, 3 * n, 4) && read_array(f, l->offset, v->offset, 3 * n, 4) &&
+             read_array(f, l->flags, v->probe_flags, n, 4) && read_array(f, l->sh, v->sh, 27 * n, 4) &&
+             read_array(f, l->depth, v->depth, n * pb_volume_tile_halves(v->octmap_res), 2);
     *bad_probe = UINT32_MAX;
     if (ok && version < 3) {
         uint64_t paths = (uint64_t)v->settings.passes * v->settings.rays_per_probe;
