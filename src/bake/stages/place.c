@@ -67,19 +67,20 @@ pb_result pb_bake_stage_probe_set(bake_job *j, pb_error *err)
 pb_result pb_bake_stage_place(bake_job *j, pb_error *err)
 {
     uint32_t P = j->P, rpp = j->rpp;
-    j->probes = calloc((size_t)P * 4, sizeof(float));
-    j->rotations = malloc((size_t)P * 12 * sizeof(float));
+    /* per probe: a million probes' arrays are hundreds of MB (common.h) */
+    j->probes = pb_calloc_large((size_t)P * 4, sizeof(float));
+    j->rotations = pb_malloc_large((size_t)P * 12 * sizeof(float));
     j->directions = malloc((size_t)rpp * 4 * sizeof(float));
     j->sh_sum = pb_calloc_large((size_t)P * 27, sizeof(double));
-    j->backfaces = calloc(P, sizeof(double)), j->hits = calloc(P, sizeof(double));
-    j->reduced = malloc((size_t)j->reduced_floats * sizeof(float));
-    j->converged_at = calloc(P, sizeof(uint32_t));
-    j->active = malloc(P * sizeof *j->active);
-    j->offsets = calloc((size_t)P * 3, sizeof(float));
-    j->near = malloc((size_t)P * 8 * sizeof(float));
-    j->inside = malloc((size_t)P * sizeof(float));
-    j->skip = calloc(P, 1);
-    j->global = malloc((size_t)P * sizeof *j->global);
+    j->backfaces = pb_calloc_large(P, sizeof(double)), j->hits = pb_calloc_large(P, sizeof(double));
+    j->reduced = pb_malloc_large((size_t)j->reduced_floats * sizeof(float));
+    j->converged_at = pb_calloc_large(P, sizeof(uint32_t));
+    j->active = pb_malloc_large(P * sizeof *j->active);
+    j->offsets = pb_calloc_large((size_t)P * 3, sizeof(float));
+    j->near = pb_malloc_large((size_t)P * 8 * sizeof(float));
+    j->inside = pb_malloc_large((size_t)P * sizeof(float));
+    j->skip = pb_calloc_large(P, 1);
+    j->global = pb_malloc_large((size_t)P * sizeof *j->global);
     j->floor_list = malloc(PB_FLOOR_SAMPLE * sizeof *j->floor_list);
     if (!j->probes || !j->rotations || !j->directions || !j->sh_sum || !j->backfaces || !j->hits ||
         !j->reduced || !j->converged_at || !j->active || !j->offsets || !j->near || !j->global || !j->floor_list ||
