@@ -5,25 +5,30 @@
 // weighted mean SH (weights 1/d), in the order and float arithmetic of the
 // CPU reference (src/bake/dilate.c); the weight sum's reciprocal comes from
 // the host's table (src/bake/dilate.h), so no division rounds differently.
-// States: 0 empty, 1 valid, 2 filled by dilation. Jacobi: reads *_in,
-// writes *_out; the host swaps them between rounds.
+// States: 0 empty, 1 valid, 2 filled by dilation. Jacobi: each round reads
+// the states of state_in and writes state_out (the host swaps them between
+// rounds); the SH stay in one buffer, written only where a probe is filled:
+// a probe reads the SH of neighbours that were valid or filled before the
+// round, and the round writes only probes that were empty, so no probe reads
+// what the round writes (the rounds used to copy every probe's 27 floats
+// from one buffer to another).
 #extension GL_GOOGLE_include_directive : require
 #include "address.glsl"
 
 layout(local_size_x = 64) in;
 
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer FloatIn { float v[]; };
-layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer FloatOut { float v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer FloatRW { float v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer UintIn { uint v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer UintOut { uint v[]; };
 
 layout(push_constant) uniform Push {
-    pb_addr sh_in;     // 27 floats per probe
+    pb_addr sh;        // 27 floats per probe, read and written in place
     pb_addr state_in;  // 1 uint per probe
-    pb_addr sh_out;
     pb_addr state_out;
     pb_addr table;     // PB_DILATE_TABLE reciprocals
     pb_addr neighbours; // sparse: 26 probe indices per probe (~0: none), slot order of the loop below; 0: a grid
+    pb_addr unused;
     uvec4 counts;      // grid counts x, y, z; w: probes
 } pc;
 
@@ -34,9 +39,8 @@ void main()
     uint p = gl_GlobalInvocationID.x;
     if (p >= pc.counts.w)
         return;
-    FloatIn sh = FloatIn(pc.sh_in);
+    FloatRW sh = FloatRW(pc.sh);
     UintIn state = UintIn(pc.state_in);
-    FloatOut out_sh = FloatOut(pc.sh_out);
     uint s = state.v[p];
     uint nx = pc.counts.x, ny = pc.counts.y, nz = pc.counts.z;
     precise float sum[27];
@@ -73,10 +77,12 @@ void main()
                 }
     }
     bool fill = s == 0u && n[1] + n[2] + n[3] > 0;
-    precise float r = fill ? FloatIn(pc.table).v[(n[1] * 13 + n[2]) * 9 + n[3]] : 0.0;
-    for (int c = 0; c < 27; ++c) {
-        precise float v = fill ? sum[c] * r : sh.v[27u * p + uint(c)];
-        out_sh.v[27u * p + uint(c)] = v;
+    if (fill) {
+        precise float r = FloatIn(pc.table).v[(n[1] * 13 + n[2]) * 9 + n[3]];
+        for (int c = 0; c < 27; ++c) {
+            precise float v = sum[c] * r;
+            sh.v[27u * p + uint(c)] = v;
+        }
     }
     UintOut(pc.state_out).v[p] = fill ? 2u : s;
 }

@@ -1,6 +1,6 @@
 /* Dilation on the device: dilate.comp, `rounds` rounds in one submission
- * (state and SH ping-pong between two buffer pairs), then the volume's SH
- * and flags back. The bake's last stage on a grid; pb_volume_dilate (the CPU
+ * (the states ping-pong between two buffers, the SH are filled in place),
+ * then the volume's SH and flags back. The bake's last stage on a grid; pb_volume_dilate (the CPU
  * reference, dilate.c) writes the same bytes. */
 #include "bake/dilate.h"
 #include "bake/gpu_types.h"
@@ -29,7 +29,7 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "dilation needs a grid or sparse volume");
     uint32_t P = v->probe_count;
     uint64_t sh_bytes = (uint64_t)P * 27 * 4, state_bytes = (uint64_t)P * 4;
-    pb_buffer sh[2] = {{0}}, state[2] = {{0}}, table = {0}, down = {0}, nbrs = {0};
+    pb_buffer sh = {0}, state[2] = {{0}}, table = {0}, down = {0}, nbrs = {0};
     pb_pipeline pipe = {0};
     uint32_t *st = malloc((size_t)state_bytes);
     uint32_t *neighbours = sp ? pb_dilate_sparse_neighbours(sp, P) : NULL;
@@ -41,16 +41,13 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
     pb_dilate_reciprocals(recip);
     for (uint32_t p = 0; p < P; ++p)
         st[p] = (v->probe_flags[p] & PB_PROBE_VALID) ? PB_DILATE_VALID : PB_DILATE_EMPTY;
-    pb_result r = PB_OK;
-    for (int i = 0; i < 2 && r == PB_OK; ++i) {
-        r = pb_buffer_create(ctx, sh_bytes, PB_MEMORY_DEVICE, "dilation SH", &sh[i], err);
-        if (r == PB_OK)
-            r = pb_buffer_create(ctx, state_bytes, PB_MEMORY_DEVICE, "dilation state", &state[i], err);
-    }
+    pb_result r = pb_buffer_create(ctx, sh_bytes, PB_MEMORY_DEVICE, "dilation SH", &sh, err);
+    for (int i = 0; i < 2 && r == PB_OK; ++i)
+        r = pb_buffer_create(ctx, state_bytes, PB_MEMORY_DEVICE, "dilation state", &state[i], err);
     if (r == PB_OK)
         r = pb_buffer_create(ctx, sizeof recip, PB_MEMORY_DEVICE, "dilation weights", &table, err);
     if (r == PB_OK)
-        r = pb_buffer_upload(ctx, &sh[0], 0, v->sh, sh_bytes, err);
+        r = pb_buffer_upload(ctx, &sh, 0, v->sh, sh_bytes, err);
     if (r == PB_OK)
         r = pb_buffer_upload(ctx, &state[0], 0, st, state_bytes, err);
     if (r == PB_OK)
@@ -60,28 +57,28 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
     if (r == PB_OK)
         r = pb_pipeline_create(ctx, pb_spv_dilate, sizeof pb_spv_dilate, sizeof(dilate_push), NULL, 0, 64, "dilate",
                                &pipe, err);
-    uint32_t last = rounds % 2; /* the pair the last round writes */
-    if (r == PB_OK && (!sh[last].mapped || !state[last].mapped))
+    uint32_t last = rounds % 2; /* the states the last round writes */
+    if (r == PB_OK && (!sh.mapped || !state[last].mapped))
         r = pb_buffer_create(ctx, sh_bytes + state_bytes, PB_MEMORY_DOWNLOAD, "dilation download", &down, err);
     if (r == PB_OK)
         r = pb_cmd_begin(ctx, err);
     if (r == PB_OK) {
         for (uint32_t k = 0; k < rounds; ++k) {
             uint32_t a = k % 2, b = 1 - a;
-            dilate_push push = {sh[a].address, state[a].address, sh[b].address, state[b].address, table.address,
-                                nbrs.address, {v->counts[0], v->counts[1], v->counts[2], P}};
+            dilate_push push = {sh.address,    state[a].address, state[b].address, table.address,
+                                nbrs.address, 0,                {v->counts[0], v->counts[1], v->counts[2], P}};
             pb_cmd_dispatch(ctx, &pipe, &push, (P + 63) / 64);
             pb_cmd_barrier(ctx);
         }
         if (down.size) {
-            pb_cmd_copy(ctx, &sh[last], 0, &down, 0, sh_bytes);
+            pb_cmd_copy(ctx, &sh, 0, &down, 0, sh_bytes);
             pb_cmd_copy(ctx, &state[last], 0, &down, sh_bytes, state_bytes);
         }
         pb_cmd_barrier_to_host(ctx);
         r = pb_cmd_submit_wait(ctx, NULL, err);
     }
     if (r == PB_OK) {
-        const float *res_sh = down.size ? (const float *)down.mapped : (const float *)sh[last].mapped;
+        const float *res_sh = down.size ? (const float *)down.mapped : (const float *)sh.mapped;
         const uint32_t *res_st = down.size ? (const uint32_t *)((const char *)down.mapped + sh_bytes)
                                            : (const uint32_t *)state[last].mapped;
         memcpy(v->sh, res_sh, (size_t)sh_bytes);
@@ -90,10 +87,9 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
                 v->probe_flags[p] |= PB_PROBE_DILATED;
     }
     pb_pipeline_destroy(ctx, &pipe);
-    for (int i = 0; i < 2; ++i) {
-        pb_buffer_destroy(ctx, &sh[i]);
+    pb_buffer_destroy(ctx, &sh);
+    for (int i = 0; i < 2; ++i)
         pb_buffer_destroy(ctx, &state[i]);
-    }
     pb_buffer_destroy(ctx, &table);
     pb_buffer_destroy(ctx, &down);
     pb_buffer_destroy(ctx, &nbrs);

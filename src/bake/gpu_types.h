@@ -73,8 +73,9 @@ typedef struct ray_offset_push {
 _Static_assert(sizeof(ray_offset_push) == 32, "ray_offset.comp push constants");
 
 typedef struct dilate_push {
-    uint64_t sh_in, state_in, sh_out, state_out, table;
+    uint64_t sh, state_in, state_out, table; /* SH in place, states ping-pong (dilate.comp) */
     uint64_t neighbours; /* sparse: 26 probe indices per probe (dilate.h); 0: a grid */
+    uint64_t unused;
     uint32_t counts[4];                                     /* grid x, y, z; probes */
 } dilate_push;
 _Static_assert(sizeof(dilate_push) == 64 && offsetof(dilate_push, counts) == 48, "dilate.comp push constants");
