@@ -51,6 +51,13 @@ typedef struct pb_render_desc {
     void *progress_user;
 } pb_render_desc;
 
+/* Whether a render reads the volume: the probes and indirect modes, and the
+ * probe spheres of any mode. */
+static inline int pb_render_reads_volume(const pb_render_desc *d)
+{
+    return d->mode == PB_RENDER_PROBES || d->mode == PB_RENDER_INDIRECT || d->show_probes;
+}
+
 /* Linear radiance image, 4 floats per pixel, row 0 at the top: rgb and the
  * fraction of samples whose first hit reflects (a surface mask); `direct`
  * (may be NULL) the part of each pixel that reflected at most once. */

@@ -350,7 +350,7 @@ int cmd_render(const options *o)
         goto out;
     /* the volume on the device once for every render below; the host keeps
      * only what the seam metric reads (the layout), not its SH and depth */
-    if (d.volume && (mode == PB_RENDER_PROBES || mode == PB_RENDER_INDIRECT || d.show_probes)) {
+    if (d.volume && pb_render_reads_volume(&d)) {
         if (pb_sample_upload(ctx, &sv, &volume_buffers, &err) != PB_OK)
             goto out;
         d.volume_buffers = &volume_buffers;

@@ -67,7 +67,7 @@ pb_result pb_render_check(const pb_render_desc *d, pb_error *err)
             return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "camera position and directions must be finite");
     if (!(c[0] * c[0] + c[1] * c[1] + c[2] * c[2] > 1e-12f))
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "camera: the up vector is parallel to the view direction (or zero)");
-    if ((d->mode == PB_RENDER_PROBES || d->mode == PB_RENDER_INDIRECT || d->show_probes) && !d->volume)
+    if (pb_render_reads_volume(d) && !d->volume)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probes and indirect modes, and showing probes, need a volume");
     if (d->mode > PB_RENDER_INDIRECT)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "unknown render mode %u", (unsigned)d->mode);
@@ -98,7 +98,7 @@ pb_result pb_render(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, co
     pb_pipeline pipe = {0};
     r = pb_shading_create(ctx, scene, gs, d.sky, d.environment, 0, &sh, err);
     const pb_sample_buffers *volume = &vb; /* the caller's, or uploaded here for the call */
-    if (r == PB_OK && d.volume && (d.mode == PB_RENDER_PROBES || d.mode == PB_RENDER_INDIRECT || d.show_probes)) {
+    if (r == PB_OK && d.volume && pb_render_reads_volume(&d)) {
         if (d.volume_buffers)
             volume = d.volume_buffers;
         else
