@@ -827,6 +827,35 @@ static void portable_kernels_need_no_64bit_types(void)
     CHECKF(portable >= 8 && native >= 3, "only %d portable and %d native64 kernels found", portable, native);
 }
 
+/* Every kernel the build embedded went through spirv-opt (CMakeLists.txt):
+ * one function, the entry point, and no call left in it. lavapipe lowers
+ * and optimizes a module on every pipeline creation, and glslang's calls
+ * and locals made that most of a small bake's wall time (bench/RESULTS.md,
+ * "SPIR-V optimized before it is embedded"). */
+static void embedded_kernels_are_inlined(void)
+{
+    DIR *dir = opendir(PB_SHADER_DIR);
+    CHECKF(dir != NULL, "cannot list %s", PB_SHADER_DIR);
+    if (!dir)
+        return;
+    int kernels = 0;
+    struct dirent *e;
+    while ((e = readdir(dir)) != NULL) {
+        size_t len = strlen(e->d_name);
+        if (len < 5 || strcmp(e->d_name + len - 4, ".spv") != 0)
+            continue;
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", PB_SHADER_DIR, e->d_name);
+        int functions = spirv_op_count(path, 54 /* OpFunction */), calls = spirv_op_count(path, 57 /* OpFunctionCall */);
+        CHECKF(functions == 1 && calls == 0, "%s: %d functions and %d calls, want the entry point alone", path,
+               functions, calls);
+        ++kernels;
+    }
+    closedir(dir);
+    printf("  %d kernels, each one function with no call\n", kernels);
+    CHECKF(kernels >= 11, "only %d kernels found", kernels);
+}
+
 /* Which memory a buffer takes, on tables like real devices': a discrete GPU
  * with resizable BAR (an H100's kinds: device-local; host; host cached;
  * device-local and host-visible but uncached) must keep device buffers
@@ -990,6 +1019,7 @@ int main(void)
     RUN(ray_offset_gpu_matches_cpu);
     RUN(exact_diff_gpu_matches_cpu);
     RUN(portable_kernels_need_no_64bit_types);
+    RUN(embedded_kernels_are_inlined);
     RUN(texel_and_address_loads_same_hits);
     RUN(trace_kernels_divide_only_for_boxes);
     RUN(memory_choice_on_discrete_and_uma);
