@@ -29,7 +29,7 @@ PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 # stack; leaks in our code are the CPU run's to find.
 echo "== test_bake and test_cli under AddressSanitizer + UndefinedBehaviorSanitizer on the device ($(date +%T))"
 PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
-    ctest --test-dir build-asan -R '^(test_bake|test_cli)$' --output-on-failure
+    ctest --test-dir build-asan -j"$jobs" -R '^(test_bake|test_cli|test_cli_interrupt)$' --output-on-failure
 
 # A short libFuzzer run of the glTF loader (scripts/fuzz.sh is the long one):
 # from the committed corpus into a scratch folder, so the repository does not
@@ -60,6 +60,6 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$jobs"
 echo "== full suite (validation layer on) ($(date +%T))"
 # two at a time: one test's host phases (CPU references, loading, BVH
-# builds) overlap another's device work; test_cli, which times Ctrl-C, runs
-# alone (RUN_SERIAL)
+# builds) overlap another's device work; test_cli_interrupt, which times
+# Ctrl-C, runs alone (RUN_SERIAL)
 ctest --test-dir build -j"$jobs" --output-on-failure
