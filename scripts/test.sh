@@ -20,7 +20,7 @@ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPB_SANITIZE=ON -DPB
 cmake --build build-asan -j"$jobs"
 echo "== CPU-side tests under AddressSanitizer + UndefinedBehaviorSanitizer (PB_TEST_QUICK: a tenth of the rays) ($(date +%T))"
 PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    ctest --test-dir build-asan -L cpu --output-on-failure
+    ctest --test-dir build-asan -j"$jobs" -L cpu --output-on-failure
 # The bake's stages and the command line's error paths (fault injection,
 # Ctrl-C) under the same sanitizers, on the Vulkan device: host code that only
 # runs beside a device (pipelines, staging, the stages) is not in the CPU

@@ -2,6 +2,7 @@
 // Debian packages (no glTF-level encoder is packaged: draco_encoder reads
 // OBJ/PLY, gltfpack is not in Debian). Usage:
 //   gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken|avif|avif-broken IN OUT.gltf|OUT.glb
+//   gltf_compress webp|avif IN OUT BROKEN_OUT   (both variants, each image encoded once)
 // draco        every triangle primitive as KHR_draco_mesh_compression
 //              (positions 14 bits, normals 10, texcoords 12, colours 10)
 // meshopt      vertex and index views as EXT_meshopt_compression, no filter
@@ -405,7 +406,26 @@ std::vector<uint8_t> encode_avif(const std::vector<uint8_t> &rgba, int w, int h)
     return bytes;
 }
 
-void to_images(const tinygltf::Model &m, out_file &o, const std::string &codec, bool broken, const std::string &in_dir)
+// Every image of m as lossless `codec` ("webp" or "avif"), in order.
+std::vector<std::vector<uint8_t>> encode_images(const tinygltf::Model &m, const std::string &codec)
+{
+    std::vector<std::vector<uint8_t>> coded;
+    for (size_t i = 0; i < m.images.size(); ++i) {
+        const tinygltf::Image &img = m.images[i];
+        int w = img.width, h = img.height, c = img.component;
+        if (w <= 0 || h <= 0 || img.bits != 8 || (c != 3 && c != 4) || img.image.size() != (size_t)w * h * c)
+            die("image " + std::to_string(i) + " is not 8-bit RGB or RGBA");
+        std::vector<uint8_t> rgba((size_t)w * h * 4, 255);
+        for (size_t p = 0; p < (size_t)w * h; ++p)
+            memcpy(&rgba[4 * p], &img.image[c * p], (size_t)c);
+        coded.push_back(codec == "avif" ? encode_avif(rgba, w, h) : encode_webp(rgba, w, h));
+    }
+    return coded;
+}
+
+// m with its images `coded` (encode_images) through EXT_texture_<codec>
+void to_images(const tinygltf::Model &m, out_file &o, const std::string &codec,
+               const std::vector<std::vector<uint8_t>> &coded, bool broken, const std::string &in_dir)
 {
     const std::string ext = "EXT_texture_" + codec;
     copy_views(m, o);
@@ -427,14 +447,7 @@ void to_images(const tinygltf::Model &m, out_file &o, const std::string &codec, 
     }
     std::vector<int> coded_of(m.images.size(), -1);
     for (size_t i = 0; i < m.images.size(); ++i) {
-        const tinygltf::Image &img = m.images[i];
-        int w = img.width, h = img.height, c = img.component;
-        if (w <= 0 || h <= 0 || img.bits != 8 || (c != 3 && c != 4) || img.image.size() != (size_t)w * h * c)
-            die("image " + std::to_string(i) + " is not 8-bit RGB or RGBA");
-        std::vector<uint8_t> rgba((size_t)w * h * 4, 255);
-        for (size_t p = 0; p < (size_t)w * h; ++p)
-            memcpy(&rgba[4 * p], &img.image[c * p], (size_t)c);
-        std::vector<uint8_t> bytes = codec == "avif" ? encode_avif(rgba, w, h) : encode_webp(rgba, w, h);
+        const std::vector<uint8_t> &bytes = coded[i];
         int view = o.add_view(bytes.data(), broken ? bytes.size() / 2 : bytes.size());
         o.j["images"].push_back({{"bufferView", view}, {"mimeType", "image/" + codec}});
         coded_of[i] = (int)o.j["images"].size() - 1;
@@ -486,8 +499,9 @@ void write(out_file &o, const std::string &path)
 
 int main(int argc, char **argv)
 {
-    if (argc != 4)
-        die("usage: gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken|avif|avif-broken IN OUT.gltf|OUT.glb");
+    if (argc != 4 && argc != 5)
+        die("usage: gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken|avif|avif-broken IN OUT.gltf|OUT.glb "
+            "[BROKEN_OUT: webp and avif also write their -broken variant from the same encoding]");
     std::string mode = argv[1], in = argv[2], out = argv[3];
     tinygltf::TinyGLTF loader;
     tinygltf::Model m;
@@ -504,9 +518,16 @@ int main(int argc, char **argv)
         memcpy(&len, bytes.data() + 12, 4);
         bytes = bytes.substr(20, len);
     }
-    out_file o;
-    o.j = json::parse(bytes);
-    o.j["buffers"] = json::array({json::object()});
+    auto fresh = [&]() {
+        out_file o;
+        o.j = json::parse(bytes);
+        o.j["buffers"] = json::array({json::object()});
+        return o;
+    };
+    bool image_mode = mode == "webp" || mode == "webp-broken" || mode == "avif" || mode == "avif-broken";
+    if (argc == 5 && (mode != "webp" && mode != "avif"))
+        die("BROKEN_OUT is for webp and avif only");
+    out_file o = fresh();
     if (mode == "draco") {
         copy_views(m, o);
         to_draco(m, o);
@@ -514,9 +535,17 @@ int main(int argc, char **argv)
         to_meshopt(m, o, mode == "meshopt-exp");
     } else if (mode == "quantize") {
         to_quantized(m, o);
-    } else if (mode == "webp" || mode == "webp-broken" || mode == "avif" || mode == "avif-broken") {
-        to_images(m, o, mode.substr(0, 4), mode.size() > 4,
-                  in.find('/') == std::string::npos ? "." : in.substr(0, in.rfind('/')));
+    } else if (image_mode) {
+        // encoding is most of the time (libaom, libwebp's best compression),
+        // so a second variant reuses it
+        std::string codec = mode.substr(0, 4), dir = in.find('/') == std::string::npos ? "." : in.substr(0, in.rfind('/'));
+        std::vector<std::vector<uint8_t>> coded = encode_images(m, codec);
+        to_images(m, o, codec, coded, mode.size() > 4, dir);
+        if (argc == 5) {
+            out_file b = fresh();
+            to_images(m, b, codec, coded, true, dir);
+            write(b, argv[4]);
+        }
     } else {
         die("unknown mode " + mode);
     }
