@@ -44,38 +44,39 @@ one_error_line() {
     fi
 }
 
+# interrupt LOG COMMAND...: runs COMMAND in the background (output to LOG),
+# sends Ctrl-C (SIGINT) 2 s after it has chosen its device, and sets int_rc
+# (its exit code) and int_ms (how long it took to exit after the signal)
+interrupt() {
+    local log=$1
+    shift
+    "$@" >"$log" 2>&1 &
+    local pid=$! t0
+    for _ in $(seq 1 100); do grep -q 'using device' "$log" && break; sleep 0.1; done
+    sleep 2
+    t0=$(date +%s%N)
+    kill -INT "$pid"
+    wait "$pid"
+    int_rc=$?
+    int_ms=$(( ($(date +%s%N) - t0) / 1000000 ))
+}
+
 # Ctrl-C stops a bake and a render within a second. Timed, so it runs alone
 # (PB_CLI_PART=timed: ctest's RUN_SERIAL test_cli_interrupt); the rest of
 # this script (PB_CLI_PART=untimed) may run beside other tests.
 interrupt_checks() {
     # Ctrl-C during a long bake: exit 130 after 'bake cancelled', and no file
-    "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/int.probes" >"$tmp/int.log" 2>&1 &
-    bake_pid=$!
-    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/int.log" && break; sleep 0.1; done
-    sleep 2
-    t_int=$(date +%s%N)
-    kill -INT "$bake_pid"
-    wait "$bake_pid"
-    int_rc=$?
-    int_ms=$(( ($(date +%s%N) - t_int) / 1000000 ))
+    interrupt "$tmp/int.log" "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/int.probes"
     expect bake-interrupted 0 "^130 absent .*bake cancelled" -- \
         bash -c "echo $int_rc \$([ -e '$tmp/int.probes' ] && echo present || echo absent) \$(tr '\n' ' ' <'$tmp/int.log')"
     # submissions are kept near 0.25 s, so the cancel lands within a second
     expect bake-interrupt-within-1s 0 "^stopped in [0-9]+ ms: yes" -- \
         bash -c "echo stopped in $int_ms ms: \$([ $int_ms -lt 1000 ] && echo yes || echo no)"
     # Ctrl-C during a long render: same promise
-    "$pb" render "$demo" --size 320x240 --spp 4096 -o "$tmp/int.png" >"$tmp/rint.log" 2>&1 &
-    render_pid=$!
-    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/rint.log" && break; sleep 0.1; done
-    sleep 2
-    t_int=$(date +%s%N)
-    kill -INT "$render_pid"
-    wait "$render_pid"
-    rint_rc=$?
-    rint_ms=$(( ($(date +%s%N) - t_int) / 1000000 ))
+    interrupt "$tmp/rint.log" "$pb" render "$demo" --size 320x240 --spp 4096 -o "$tmp/int.png"
     expect render-interrupted 0 "^130 absent [0-9]+ .*render cancelled" -- \
-        bash -c "echo $rint_rc \$([ -e '$tmp/int.png' ] && echo present || echo absent) $rint_ms \$(tr '\n' ' ' <'$tmp/rint.log')"
-    expect render-interrupt-within-1s 0 "^yes" -- bash -c "[ $rint_ms -lt 1000 ] && echo yes || echo no $rint_ms"
+        bash -c "echo $int_rc \$([ -e '$tmp/int.png' ] && echo present || echo absent) $int_ms \$(tr '\n' ' ' <'$tmp/rint.log')"
+    expect render-interrupt-within-1s 0 "^yes" -- bash -c "[ $int_ms -lt 1000 ] && echo yes || echo no $int_ms"
 }
 
 part=${PB_CLI_PART:-all}

@@ -791,38 +791,51 @@ static int has_64bit_capability(const char *path)
     return 0;
 }
 
-/* Every kernel the build embedded (each .spv in build/shaders, whatever
- * CMakeLists.txt lists): the portable ones declare no 64-bit capability,
- * each <name>_native64 does, and each has its portable twin. */
-static void portable_kernels_need_no_64bit_types(void)
+/* The file names of every kernel the build embedded (each .spv in
+ * build/shaders, whatever CMakeLists.txt lists), up to `cap`; -1 when the
+ * folder cannot be listed. */
+#define KERNEL_NAME_MAX 64
+static int embedded_kernels(char names[][KERNEL_NAME_MAX], int cap)
 {
     DIR *dir = opendir(PB_SHADER_DIR);
     CHECKF(dir != NULL, "cannot list %s", PB_SHADER_DIR);
     if (!dir)
-        return;
-    int portable = 0, native = 0;
+        return -1;
+    int n = 0;
     struct dirent *e;
     while ((e = readdir(dir)) != NULL) {
         size_t len = strlen(e->d_name);
-        if (len < 5 || strcmp(e->d_name + len - 4, ".spv") != 0)
-            continue;
+        if (len >= 5 && len < KERNEL_NAME_MAX && strcmp(e->d_name + len - 4, ".spv") == 0 && n < cap)
+            memcpy(names[n++], e->d_name, len + 1);
+    }
+    closedir(dir);
+    return n;
+}
+
+/* Every kernel the build embedded: the portable ones declare no 64-bit
+ * capability, each <name>_native64 does, and each has its portable twin. */
+static void portable_kernels_need_no_64bit_types(void)
+{
+    char names[64][KERNEL_NAME_MAX];
+    int count = embedded_kernels(names, 64), portable = 0, native = 0;
+    for (int i = 0; i < count; ++i) {
+        size_t len = strlen(names[i]);
         char path[1024];
-        snprintf(path, sizeof path, "%s/%s", PB_SHADER_DIR, e->d_name);
-        int is_native = len > 13 && strcmp(e->d_name + len - 13, "_native64.spv") == 0;
+        snprintf(path, sizeof path, "%s/%.*s", PB_SHADER_DIR, KERNEL_NAME_MAX, names[i]);
+        int is_native = len > 13 && strcmp(names[i] + len - 13, "_native64.spv") == 0;
         int has64 = has_64bit_capability(path);
         CHECKF(has64 >= 0, "cannot read %s", path);
         CHECKF(has64 == is_native, "%s: %s", path,
                is_native ? "declares no 64-bit capability" : "declares Float64 or Int64");
         if (is_native) {
             char twin[1024];
-            snprintf(twin, sizeof twin, "%s/%.*s.spv", PB_SHADER_DIR, (int)(len - 13), e->d_name);
+            snprintf(twin, sizeof twin, "%s/%.*s.spv", PB_SHADER_DIR, (int)(len - 13), names[i]);
             CHECKF(has_64bit_capability(twin) == 0, "%s has no portable twin %s", path, twin);
             ++native;
         } else {
             ++portable;
         }
     }
-    closedir(dir);
     printf("  %d portable kernels, %d native64 variants\n", portable, native);
     CHECKF(portable >= 8 && native >= 3, "only %d portable and %d native64 kernels found", portable, native);
 }
@@ -834,26 +847,17 @@ static void portable_kernels_need_no_64bit_types(void)
  * "SPIR-V optimized before it is embedded"). */
 static void embedded_kernels_are_inlined(void)
 {
-    DIR *dir = opendir(PB_SHADER_DIR);
-    CHECKF(dir != NULL, "cannot list %s", PB_SHADER_DIR);
-    if (!dir)
-        return;
-    int kernels = 0;
-    struct dirent *e;
-    while ((e = readdir(dir)) != NULL) {
-        size_t len = strlen(e->d_name);
-        if (len < 5 || strcmp(e->d_name + len - 4, ".spv") != 0)
-            continue;
+    char names[64][KERNEL_NAME_MAX];
+    int count = embedded_kernels(names, 64);
+    for (int i = 0; i < count; ++i) {
         char path[1024];
-        snprintf(path, sizeof path, "%s/%s", PB_SHADER_DIR, e->d_name);
+        snprintf(path, sizeof path, "%s/%.*s", PB_SHADER_DIR, KERNEL_NAME_MAX, names[i]);
         int functions = spirv_op_count(path, 54 /* OpFunction */), calls = spirv_op_count(path, 57 /* OpFunctionCall */);
         CHECKF(functions == 1 && calls == 0, "%s: %d functions and %d calls, want the entry point alone", path,
                functions, calls);
-        ++kernels;
     }
-    closedir(dir);
-    printf("  %d kernels, each one function with no call\n", kernels);
-    CHECKF(kernels >= 11, "only %d kernels found", kernels);
+    printf("  %d kernels, each one function with no call\n", count);
+    CHECKF(count >= 11, "only %d kernels found", count);
 }
 
 /* Which memory a buffer takes, on tables like real devices': a discrete GPU
