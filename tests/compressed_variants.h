@@ -32,6 +32,26 @@ static inline const char *compressed_variant(const char *src, const char *tag, c
     return rc == 0 ? out : NULL;
 }
 
+/* Writes `src` with its images as lossless `codec` ("webp" or "avif") as
+ * <tag>_<codec>.glb, and the same with each coded image cut in half and the
+ * core images kept as fallbacks as <tag>_<codec>-broken.glb (*broken), both
+ * from one encoding of the images (most of the helper's time); NULL (after a
+ * CHECK failure) when the helper fails. */
+static inline const char *compressed_image_variants(const char *src, const char *tag, const char *codec,
+                                                    const char **broken)
+{
+    static char path[4][512];
+    static int slot;
+    char *out = path[slot++ & 3], *cut = path[slot++ & 3], cmd[2048];
+    snprintf(out, 512, "%s/%s_%s.glb", temp_dir(), tag, codec);
+    snprintf(cut, 512, "%s/%s_%s-broken.glb", temp_dir(), tag, codec);
+    snprintf(cmd, sizeof cmd, "'%s' %s '%s' '%s' '%s'", PB_GLTF_COMPRESS, codec, src, out, cut);
+    int rc = system(cmd);
+    CHECKF(rc == 0, "%s failed (%d)", cmd, rc);
+    *broken = rc == 0 ? cut : NULL;
+    return rc == 0 ? out : NULL;
+}
+
 /* Largest world-space position error (metres, any axis) an encoding keeps
  * in a scene of bounding-box diagonal `diag` whose vertices lie within
  * `rmax` of the origin. Each encoder quantizes a mesh in its own frame, and

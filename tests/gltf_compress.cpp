@@ -1,8 +1,7 @@
 // Test helper: writes compressed variants of a glTF file with the libraries
 // Debian packages (no glTF-level encoder is packaged: draco_encoder reads
 // OBJ/PLY, gltfpack is not in Debian). Usage:
-//   gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken|avif|avif-broken IN OUT.gltf|OUT.glb
-//   gltf_compress webp|avif IN OUT BROKEN_OUT   (both variants, each image encoded once)
+//   gltf_compress draco|meshopt|meshopt-exp|quantize|webp|avif IN OUT.gltf|OUT.glb [BROKEN_OUT]
 // draco        every triangle primitive as KHR_draco_mesh_compression
 //              (positions 14 bits, normals 10, texcoords 12, colours 10)
 // meshopt      vertex and index views as EXT_meshopt_compression, no filter
@@ -13,11 +12,12 @@
 //              dequantizing node, normals as normalized BYTE, texcoords in
 //              [0,1] as normalized USHORT
 // webp         every image as lossless WebP (libwebp) read through
-//              EXT_texture_webp, required: no texture keeps a core source
-// webp-broken  as webp, but each WebP image cut to half its bytes, and every
-//              texture keeps its core source as the fallback (not required)
-// avif, avif-broken  the same with lossless AVIF (libavif, libaom; 4:4:4,
-//              identity matrix) through EXT_texture_avif
+//              EXT_texture_webp, required: no texture keeps a core source;
+//              with BROKEN_OUT, also that file from the same encoding, each
+//              WebP image cut to half its bytes and every texture keeping its
+//              core source as the fallback (not required)
+// avif         the same with lossless AVIF (libavif, libaom; 4:4:4, identity
+//              matrix) through EXT_texture_avif
 // Every bufferView of IN is copied into one new buffer (external .bin for
 // .gltf, the BIN chunk for .glb); the JSON is IN's, edited.
 #include <tiny_gltf.h>
@@ -500,8 +500,8 @@ void write(out_file &o, const std::string &path)
 int main(int argc, char **argv)
 {
     if (argc != 4 && argc != 5)
-        die("usage: gltf_compress draco|meshopt|meshopt-exp|quantize|webp|webp-broken|avif|avif-broken IN OUT.gltf|OUT.glb "
-            "[BROKEN_OUT: webp and avif also write their -broken variant from the same encoding]");
+        die("usage: gltf_compress draco|meshopt|meshopt-exp|quantize|webp|avif IN OUT.gltf|OUT.glb "
+            "[BROKEN_OUT: webp and avif only]");
     std::string mode = argv[1], in = argv[2], out = argv[3];
     tinygltf::TinyGLTF loader;
     tinygltf::Model m;
@@ -524,8 +524,8 @@ int main(int argc, char **argv)
         o.j["buffers"] = json::array({json::object()});
         return o;
     };
-    bool image_mode = mode == "webp" || mode == "webp-broken" || mode == "avif" || mode == "avif-broken";
-    if (argc == 5 && (mode != "webp" && mode != "avif"))
+    bool image_mode = mode == "webp" || mode == "avif";
+    if (argc == 5 && !image_mode)
         die("BROKEN_OUT is for webp and avif only");
     out_file o = fresh();
     if (mode == "draco") {
@@ -538,12 +538,12 @@ int main(int argc, char **argv)
     } else if (image_mode) {
         // encoding is most of the time (libaom, libwebp's best compression),
         // so a second variant reuses it
-        std::string codec = mode.substr(0, 4), dir = in.find('/') == std::string::npos ? "." : in.substr(0, in.rfind('/'));
-        std::vector<std::vector<uint8_t>> coded = encode_images(m, codec);
-        to_images(m, o, codec, coded, mode.size() > 4, dir);
+        std::string dir = in.find('/') == std::string::npos ? "." : in.substr(0, in.rfind('/'));
+        std::vector<std::vector<uint8_t>> coded = encode_images(m, mode);
+        to_images(m, o, mode, coded, false, dir);
         if (argc == 5) {
             out_file b = fresh();
-            to_images(m, b, codec, coded, true, dir);
+            to_images(m, b, mode, coded, true, dir);
             write(b, argv[4]);
         }
     } else {

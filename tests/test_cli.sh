@@ -44,21 +44,22 @@ one_error_line() {
     fi
 }
 
-# interrupt LOG COMMAND...: runs COMMAND in the background (output to LOG),
-# sends Ctrl-C (SIGINT) 2 s after it has chosen its device, and sets int_rc
-# (its exit code) and int_ms (how long it took to exit after the signal)
-interrupt() {
-    local log=$1
-    shift
+# signal_after SIGNAL SECONDS LOG COMMAND...: runs COMMAND in the background
+# (output to LOG), sends SIGNAL SECONDS after it has chosen its device, and
+# sets sig_rc (its exit code) and sig_ms (how long it took to exit after the
+# signal)
+signal_after() {
+    local sig=$1 delay=$2 log=$3
+    shift 3
     "$@" >"$log" 2>&1 &
     local pid=$! t0
     for _ in $(seq 1 100); do grep -q 'using device' "$log" && break; sleep 0.1; done
-    sleep 2
+    sleep "$delay"
     t0=$(date +%s%N)
-    kill -INT "$pid"
+    kill -"$sig" "$pid"
     wait "$pid"
-    int_rc=$?
-    int_ms=$(( ($(date +%s%N) - t0) / 1000000 ))
+    sig_rc=$?
+    sig_ms=$(( ($(date +%s%N) - t0) / 1000000 ))
 }
 
 # Ctrl-C stops a bake and a render within a second. Timed, so it runs alone
@@ -66,17 +67,17 @@ interrupt() {
 # this script (PB_CLI_PART=untimed) may run beside other tests.
 interrupt_checks() {
     # Ctrl-C during a long bake: exit 130 after 'bake cancelled', and no file
-    interrupt "$tmp/int.log" "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/int.probes"
+    signal_after INT 2 "$tmp/int.log" "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/int.probes"
     expect bake-interrupted 0 "^130 absent .*bake cancelled" -- \
-        bash -c "echo $int_rc \$([ -e '$tmp/int.probes' ] && echo present || echo absent) \$(tr '\n' ' ' <'$tmp/int.log')"
+        bash -c "echo $sig_rc \$([ -e '$tmp/int.probes' ] && echo present || echo absent) \$(tr '\n' ' ' <'$tmp/int.log')"
     # submissions are kept near 0.25 s, so the cancel lands within a second
     expect bake-interrupt-within-1s 0 "^stopped in [0-9]+ ms: yes" -- \
-        bash -c "echo stopped in $int_ms ms: \$([ $int_ms -lt 1000 ] && echo yes || echo no)"
+        bash -c "echo stopped in $sig_ms ms: \$([ $sig_ms -lt 1000 ] && echo yes || echo no)"
     # Ctrl-C during a long render: same promise
-    interrupt "$tmp/rint.log" "$pb" render "$demo" --size 320x240 --spp 4096 -o "$tmp/int.png"
+    signal_after INT 2 "$tmp/rint.log" "$pb" render "$demo" --size 320x240 --spp 4096 -o "$tmp/int.png"
     expect render-interrupted 0 "^130 absent [0-9]+ .*render cancelled" -- \
-        bash -c "echo $int_rc \$([ -e '$tmp/int.png' ] && echo present || echo absent) $int_ms \$(tr '\n' ' ' <'$tmp/rint.log')"
-    expect render-interrupt-within-1s 0 "^yes" -- bash -c "[ $int_ms -lt 1000 ] && echo yes || echo no $int_ms"
+        bash -c "echo $sig_rc \$([ -e '$tmp/int.png' ] && echo present || echo absent) $sig_ms \$(tr '\n' ' ' <'$tmp/rint.log')"
+    expect render-interrupt-within-1s 0 "^yes" -- bash -c "[ $sig_ms -lt 1000 ] && echo yes || echo no $sig_ms"
 }
 
 part=${PB_CLI_PART:-all}
@@ -477,15 +478,9 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
                  echo \$(stat -c %F '$tmp/through-link.probes') \$(stat -c '%F %a' '$tmp/later/through.probes')"
     # SIGTERM during a bake: exit 143, the previous output untouched, no temporary left
     printf 'previous' >"$tmp/term.probes"
-    "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/term.probes" >"$tmp/term.log" 2>&1 &
-    term_pid=$!
-    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/term.log" && break; sleep 0.1; done
-    sleep 1
-    kill -TERM "$term_pid"
-    wait "$term_pid"
-    term_rc=$?
+    signal_after TERM 1 "$tmp/term.log" "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 -o "$tmp/term.probes"
     expect bake-sigterm 0 '^143 previous none$' -- \
-        bash -c "echo $term_rc \$(cat '$tmp/term.probes') \$(ls '$tmp' | grep -c 'term.probes.tmp' | sed 's/^0\$/none/')"
+        bash -c "echo $sig_rc \$(cat '$tmp/term.probes') \$(ls '$tmp' | grep -c 'term.probes.tmp' | sed 's/^0\$/none/')"
     [ "$part" = untimed ] || interrupt_checks
     expect bake-sh-window-clamp 0 "biased on request: reflected light clamped per path to radiance 5 SH Lanczos window" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --sh-window lanczos:3 --clamp-indirect 5 \
@@ -645,14 +640,9 @@ print(\"red %.2f x green\" % (r / g) if r > 3 * g else \"red %g green %g\" % (r,
     expect merge-output-is-a-part 1 "$tmp/part0.probes" -- \
         "$pb" merge "$tmp/part0.probes" "$tmp/part0.probes" "$tmp/part1.probes" "$tmp/part2.probes"
     # Ctrl-C (SIGINT) in a shard: exit 130, no part file, no temporary
-    "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 --shard 1/4 -o "$tmp/intshard.probes" >"$tmp/is.log" 2>&1 &
-    is_pid=$!
-    for _ in $(seq 1 100); do grep -q 'using device' "$tmp/is.log" && break; sleep 0.1; done
-    sleep 1
-    kill -INT "$is_pid"
-    wait "$is_pid"
-    is_rc=$?
-    expect shard-interrupted 0 '^130 0$' -- bash -c "echo $is_rc \$(ls '$tmp' | grep -c intshard)"
+    signal_after INT 1 "$tmp/is.log" "$pb" bake "$demo" --spacing 0.25 --rays 1024 --passes 1000 --shard 1/4 \
+        -o "$tmp/intshard.probes"
+    expect shard-interrupted 0 '^130 0$' -- bash -c "echo $sig_rc \$(ls '$tmp' | grep -c intshard)"
 fi
 
 echo "$passed passed, $failed failed"
