@@ -35,8 +35,8 @@ PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 # instead of 256: Mesa's compiler frees a few hundred MB through ASan for each
 # pipeline it makes, so the default quarantine holds mostly Mesa's memory and
 # each bake process faults in fresh pages for it (a tiny bake 1.44-1.53 ->
-# 1.06-1.09 s, 360 -> 203 MB; this stage 221 -> 194 s); a use after free in our code is still caught
-# until 16 MB more have been freed.
+# 1.06-1.09 s, 360 -> 203 MB; this stage 221 -> 194 s); a use after free in
+# our code is still caught until 16 MB more have been freed.
 echo "== test_bake and test_cli under AddressSanitizer + UndefinedBehaviorSanitizer on the device ($(date +%T))"
 PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=0:quarantine_size_mb=16 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-san -j"$jobs" -R '^(test_bake|test_cli|test_cli_interrupt)$' --output-on-failure
