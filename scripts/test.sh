@@ -41,27 +41,36 @@ echo "== test_bake and test_cli under AddressSanitizer + UndefinedBehaviorSaniti
 PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=0:quarantine_size_mb=16 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-san -j"$jobs" -R '^(test_bake|test_cli|test_cli_interrupt)$' --output-on-failure
 
-# A short libFuzzer run of the glTF loader (scripts/fuzz.sh is the long one):
-# from the committed corpus into a scratch folder, so the repository does not
-# change; a crash, leak or sanitizer report fails the suite and leaves the
-# input in tests/fuzz/crashers.
-echo "== glTF loader fuzzing, ${PB_FUZZ_SECONDS:-30} s from tests/fuzz/corpus ($(date +%T))"
-scratch=$(mktemp -d)
+# Short libFuzzer runs of the glTF loader (scripts/fuzz.sh is the long one)
+# and of the volume reader (the sparse layout's tables index each other),
+# side by side: each is one process on one core. From the committed corpus
+# into a scratch folder, so the repository does not change; a crash, leak or
+# sanitizer report fails the suite and leaves the input in
+# tests/fuzz/crashers or tests/fuzz/volume_corpus/crash-* (which
+# test_fuzz_corpus reads).
+echo "== fuzzing, side by side: the glTF loader ${PB_FUZZ_SECONDS:-30} s from tests/fuzz/corpus, the volume reader" \
+    "${PB_FUZZ_VOLUME_SECONDS:-15} s from tests/fuzz/volume_corpus ($(date +%T))"
+scene_dir=$(mktemp -d) volume_dir=$(mktemp -d)
 ASAN_OPTIONS=detect_leaks=1 build-san/tests/fuzz_scene_load -max_total_time="${PB_FUZZ_SECONDS:-30}" \
-    -max_len=65536 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=tests/fuzz/crashers/ "$scratch" tests/fuzz/corpus \
-    >"$scratch.log" 2>&1 || { tail -n 40 "$scratch.log"; echo "fuzzing found a crash: tests/fuzz/crashers"; exit 1; }
-grep -E "^(Done|#[0-9]+ +DONE)" "$scratch.log" | tail -n 1
-rm -rf "$scratch" "$scratch.log"
-# and of the volume reader (the sparse layout's tables index each other); a
-# crash leaves its input in tests/fuzz/volume_corpus, which test_fuzz_corpus reads
-echo "== volume reader fuzzing, ${PB_FUZZ_VOLUME_SECONDS:-15} s from tests/fuzz/volume_corpus ($(date +%T))"
-scratch=$(mktemp -d)
+    -max_len=65536 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=tests/fuzz/crashers/ "$scene_dir" tests/fuzz/corpus \
+    >"$scene_dir.log" 2>&1 &
+scene_pid=$!
 ASAN_OPTIONS=detect_leaks=1 build-san/tests/fuzz_volume_read -max_total_time="${PB_FUZZ_VOLUME_SECONDS:-15}" \
-    -max_len=131072 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=tests/fuzz/volume_corpus/crash- "$scratch" \
-    tests/fuzz/volume_corpus >"$scratch.log" 2>&1 ||
-    { tail -n 40 "$scratch.log"; echo "fuzzing found a crash: tests/fuzz/volume_corpus/crash-*"; exit 1; }
-grep -E "^(Done|#[0-9]+ +DONE)" "$scratch.log" | tail -n 1
-rm -rf "$scratch" "$scratch.log"
+    -max_len=131072 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=tests/fuzz/volume_corpus/crash- "$volume_dir" \
+    tests/fuzz/volume_corpus >"$volume_dir.log" 2>&1 &
+volume_pid=$!
+scene_rc=0 volume_rc=0
+wait "$scene_pid" || scene_rc=$?
+wait "$volume_pid" || volume_rc=$?
+echo "glTF loader: $(grep -E "^(Done|#[0-9]+ +DONE)" "$scene_dir.log" | tail -n 1)"
+echo "volume reader: $(grep -E "^(Done|#[0-9]+ +DONE)" "$volume_dir.log" | tail -n 1)"
+if [ "$scene_rc" != 0 ]; then
+    tail -n 40 "$scene_dir.log"; echo "fuzzing found a crash: tests/fuzz/crashers"; exit 1
+fi
+if [ "$volume_rc" != 0 ]; then
+    tail -n 40 "$volume_dir.log"; echo "fuzzing found a crash: tests/fuzz/volume_corpus/crash-*"; exit 1
+fi
+rm -rf "$scene_dir" "$scene_dir.log" "$volume_dir" "$volume_dir.log"
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$jobs"
