@@ -161,19 +161,10 @@ bool load_avif(tinygltf::Image *image, int index, const unsigned char *bytes, in
     return true;
 }
 
-} // namespace
-
-bool load_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
-                const unsigned char *bytes, int size, void *user)
+// A file's image bytes to RGBA8 pixels in image->image (left empty, with a
+// warning, where they do not decode or exceed the limits).
+bool decode(tinygltf::Image *image, int index, const unsigned char *bytes, int size, image_ctx *ctx)
 {
-    image_ctx *ctx = static_cast<image_ctx *>(user);
-    image->width = image->height = 0;
-    image->component = 4;
-    image->bits = 8;
-    image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
-    image->image.clear();
-    if (ctx->skip || !image_bytes_inside(ctx, image, index, bytes, size))
-        return true;
     if (is_webp(bytes, size))
         return load_webp(image, index, bytes, size, ctx);
     if (is_avif(bytes, size))
@@ -207,6 +198,49 @@ bool load_image(tinygltf::Image *image, const int index, std::string *, std::str
     keep_rgba(ctx, image, px, w, h);
     stbi_image_free(px);
     return true;
+}
+
+} // namespace
+
+bool load_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
+                const unsigned char *bytes, int size, void *user)
+{
+    image_ctx *ctx = static_cast<image_ctx *>(user);
+    image->width = image->height = 0;
+    image->component = 4;
+    image->bits = 8;
+    image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+    image->image.clear();
+    if (ctx->skip || index < 0 || size <= 0 || !image_bytes_inside(ctx, image, index, bytes, size))
+        return true;
+    image->image.assign(bytes, bytes + size);
+    if ((size_t)index >= ctx->encoded.size())
+        ctx->encoded.resize((size_t)index + 1, 0);
+    ctx->encoded[(size_t)index] = 1;
+    return true;
+}
+
+bool decode_image(image_ctx *ctx, int index)
+{
+    if (!ctx->model || index < 0 || (size_t)index >= ctx->model->images.size())
+        return false;
+    tinygltf::Image &image = ctx->model->images[(size_t)index];
+    if ((size_t)index < ctx->encoded.size() && ctx->encoded[(size_t)index]) {
+        ctx->encoded[(size_t)index] = 0;
+        std::vector<unsigned char> bytes;
+        bytes.swap(image.image);
+        decode(&image, index, bytes.data(), (int)bytes.size(), ctx);
+    }
+    return image.width > 0 && image.height > 0 && image.image.size() == (size_t)image.width * image.height * 4;
+}
+
+void release_images(image_ctx *ctx)
+{
+    if (!ctx->model)
+        return;
+    for (tinygltf::Image &image : ctx->model->images)
+        std::vector<unsigned char>().swap(image.image);
+    ctx->encoded.assign(ctx->encoded.size(), 0);
 }
 
 } // namespace pb_gltf

@@ -1,9 +1,11 @@
-// Images of a glTF file decoded to RGBA8 for tinygltf's image callback:
-// stb_image (PNG, JPEG, ...), libwebp (WebP, for EXT_texture_webp) or libavif
-// (AVIF, for EXT_texture_avif). An
-// image that fails to decode, reaches past its buffer, or whose header claims
-// more pixels than the limits allow is a warning (the material falls back to
-// its factor), never a failed load.
+// Images of a glTF file decoded to RGBA8: stb_image (PNG, JPEG, ...), libwebp
+// (WebP, for EXT_texture_webp) or libavif (AVIF, for EXT_texture_avif).
+// tinygltf's image callback only keeps each image's file bytes; an image is
+// decoded when a texture the bake reads needs it (decode_image), so normal,
+// occlusion and other maps the bake never samples cost neither decoding nor
+// the pixel budget. An image that fails to decode, reaches past its buffer,
+// or whose header claims more pixels than the limits allow is a warning (the
+// material falls back to its factor), never a failed load.
 #pragma once
 
 #include "probebake/base.h"
@@ -12,6 +14,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace pb_gltf {
 
@@ -21,11 +24,18 @@ struct image_ctx {
     int skip;
     uint64_t max_pixels;  // per image
     uint64_t left_pixels; // what the file's images may still decode to
-    const tinygltf::Model *model; // being filled: its buffers and views are read before images in views
+    tinygltf::Model *model; // being filled: its buffers and views are read before images in views
+    std::vector<char> encoded;  // per image: image.image holds its file bytes, not decoded yet
 };
 
-// tinygltf::LoadImageDataFunction; `user` is an image_ctx.
+// tinygltf::LoadImageDataFunction; `user` is an image_ctx. Keeps the image's
+// file bytes in image->image, undecoded (width 0).
 bool load_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
                 const unsigned char *bytes, int size, void *user);
+// Decodes image `index` of ctx->model in place, once (later calls only
+// answer); whether it now holds width x height RGBA8 pixels.
+bool decode_image(image_ctx *ctx, int index);
+// Frees every image's bytes and pixels once the scene holds its textures.
+void release_images(image_ctx *ctx);
 
 } // namespace pb_gltf

@@ -1016,7 +1016,7 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     snprintf(b->stats.extensions_used, sizeof b->stats.extensions_used, "%s", used.c_str());
     snprintf(b->stats.extensions_applied, sizeof b->stats.extensions_applied, "%s", applied.c_str());
 
-    reader r{model, path, b, err, {}, 0, {}, {}, {}, {}, {}, desc->face_normals != 0};
+    reader r{model, path, b, err, {}, 0, {}, {}, {}, {}, {}, desc->face_normals != 0, &ictx};
     res = decode_meshopt_views(r);
     if (res != PB_OK)
         return res;
@@ -1024,6 +1024,7 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     if (res != PB_OK)
         return res;
     read_materials(r);
+    pb_gltf::release_images(&ictx); // the scene holds what the bake reads: free the rest before the meshes
     if (model.scenes.empty()) {
         if (!model.nodes.empty())
             pb_logf(&b->log, PB_LOG_WARN, "%s: no scene defined; nothing to load", path);

@@ -1,5 +1,6 @@
 // glTF materials and textures to the scene's (gltf_materials.h).
 #include "scene/gltf_materials.h"
+#include "scene/gltf_images.h"
 #include "scene/texture_fold.h"
 
 extern "C" {
@@ -75,7 +76,7 @@ int base_texture_index(const tinygltf::Material &mt)
 // The image a texture reads: the source of EXT_texture_avif or
 // EXT_texture_webp where it names an image that decoded, else the core source
 // (the extensions' fallback, or -1).
-int texture_source(const reader &r, size_t i)
+int texture_source(reader &r, size_t i)
 {
     const tinygltf::Texture &t = r.m.textures[i];
     int unusable = -1;
@@ -85,7 +86,7 @@ int texture_source(const reader &r, size_t i)
             !ext->second.Get("source").IsInt())
             continue;
         int s = ext->second.Get("source").GetNumberAsInt();
-        if (s >= 0 && s < (int)r.m.images.size() && r.m.images[s].width > 0)
+        if (decode_image(r.images, s))
             return s;
         if (t.source >= 0)
             pb_logf(&r.b->log, PB_LOG_INFO, "%s: texture %zu: its %s image %d is unusable; the fallback image %d is read",
@@ -222,24 +223,37 @@ pb_result read_textures(reader &r, int skip)
     r.texture_map.assign(m.textures.size(), -1);
     if (skip)
         return PB_OK;
-    // colour textures are sRGB: note which ones the materials use that way
-    std::vector<int> srgb(m.textures.size(), 0);
+    // the textures the bake reads (the others, normal and occlusion maps
+    // say, are never decoded), and which of them are colour, so sRGB
+    std::vector<int> needed(m.textures.size(), 0), srgb(m.textures.size(), 0);
+    auto need = [&](int t, int colour) {
+        if (t >= 0 && t < (int)needed.size())
+            needed[t] = 1, srgb[t] |= colour;
+    };
     for (const tinygltf::Material &mt : m.materials) {
-        int t0 = base_texture_index(mt), t1 = mt.emissiveTexture.index;
-        if (t0 >= 0 && t0 < (int)srgb.size()) srgb[t0] = 1;
-        if (t1 >= 0 && t1 < (int)srgb.size()) srgb[t1] = 1;
+        need(base_texture_index(mt), 1);
+        need(mt.emissiveTexture.index, 1);
+        if (mt.pbrMetallicRoughness.metallicFactor > 0.0) // fold_metallic reads it
+            need(mt.pbrMetallicRoughness.metallicRoughnessTexture.index, 0);
+        auto ext = mt.extensions.find("KHR_materials_transmission"); // apply_transmission reads it
+        if (ext != mt.extensions.end() && ext->second.IsObject() && ext->second.Has("transmissionTexture")) {
+            const tinygltf::Value &tx = ext->second.Get("transmissionTexture");
+            if (tx.IsObject() && tx.Has("index") && tx.Get("index").IsInt())
+                need(tx.Get("index").GetNumberAsInt(), 0);
+        }
     }
     for (size_t i = 0; i < m.textures.size(); ++i) {
+        if (!needed[i])
+            continue;
         const tinygltf::Texture &t = m.textures[i];
         int source = texture_source(r, i);
         if (source < 0 || source >= (int)m.images.size()) {
             pb_logf(&r.b->log, PB_LOG_WARN, "%s: texture %zu refers to missing image %d; ignored", r.path, i, source);
             continue;
         }
+        if (!decode_image(r.images, source))
+            continue; // warned by decode_image
         const tinygltf::Image &img = m.images[source];
-        if (img.width <= 0 || img.height <= 0 || img.component != 4 || img.bits != 8 ||
-            img.image.size() != (size_t)img.width * img.height * 4)
-            continue; // warned by load_image
         uint32_t wrap[2] = {PB_WRAP_REPEAT, PB_WRAP_REPEAT};
         if (t.sampler >= 0 && t.sampler < (int)m.samplers.size()) {
             int w[2] = {m.samplers[t.sampler].wrapS, m.samplers[t.sampler].wrapT};
@@ -248,9 +262,7 @@ pb_result read_textures(reader &r, int skip)
                           : w[k] == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? PB_WRAP_MIRROR
                                                                           : PB_WRAP_REPEAT;
         }
-        std::vector<uint32_t> texels((size_t)img.width * img.height);
-        memcpy(texels.data(), img.image.data(), texels.size() * 4);
-        r.texture_map[i] = pb_sb_add_texture(r.b, texels.data(), (uint32_t)img.width, (uint32_t)img.height, wrap[0],
+        r.texture_map[i] = pb_sb_add_texture(r.b, img.image.data(), (uint32_t)img.width, (uint32_t)img.height, wrap[0],
                                              wrap[1], (uint32_t)srgb[i]);
     }
     return PB_OK;

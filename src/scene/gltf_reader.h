@@ -17,6 +17,8 @@ namespace pb_gltf {
 
 typedef double mat4[16]; // column-major, as glTF
 
+struct image_ctx; // gltf_images.h
+
 struct reader {
     const tinygltf::Model &m;
     const char *path;
@@ -39,6 +41,8 @@ struct reader {
     std::map<std::array<int64_t, 3>, int32_t> folded;
     // pb_scene_desc.face_normals: NORMAL is read (and checked) but the face normals are kept
     bool face_normals = false;
+    // the file's images, decoded when a texture the bake reads needs one
+    image_ctx *images = nullptr;
 };
 
 // A one-line error naming the file; returns `code`.

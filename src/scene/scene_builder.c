@@ -151,7 +151,7 @@ int32_t pb_sb_add_material(pb_scene_builder *b, const pb_material *m)
     return (int32_t)b->material_count++;
 }
 
-int32_t pb_sb_add_texture(pb_scene_builder *b, const uint32_t *texels, uint32_t width, uint32_t height,
+int32_t pb_sb_add_texture(pb_scene_builder *b, const void *texels, uint32_t width, uint32_t height,
                           uint32_t wrap_s, uint32_t wrap_t, uint32_t srgb)
 {
     uint64_t n = (uint64_t)width * height;

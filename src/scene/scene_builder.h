@@ -49,8 +49,8 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
 
 /* Appends and returns the index, or -1 when out of memory. */
 int32_t pb_sb_add_material(pb_scene_builder *b, const pb_material *m);
-/* Copies width*height RGBA8 texels. */
-int32_t pb_sb_add_texture(pb_scene_builder *b, const uint32_t *texels, uint32_t width, uint32_t height,
+/* Copies width*height RGBA8 texels (4 bytes each, R first; any alignment). */
+int32_t pb_sb_add_texture(pb_scene_builder *b, const void *texels, uint32_t width, uint32_t height,
                           uint32_t wrap_s, uint32_t wrap_t, uint32_t srgb);
 /* pos/dir: world space. */
 int32_t pb_sb_add_light(pb_scene_builder *b, const pb_light *l, const double pos[3], const double dir[3]);
