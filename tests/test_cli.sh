@@ -109,6 +109,13 @@ expect info-glass 0 '^materials   3 \(0 emissive, 0 alpha-masked, 1 blended, 1 o
     "$pb" info "$src/tests/scenes/skylight.gltf"
 expect info-glass-json 0 '"glass_materials": 1,' -- "$pb" info "$src/tests/scenes/skylight.gltf" --json
 expect shading-normals-bad 2 "error: --shading-normals takes vertex or face" -- "$pb" info "$demo" --shading-normals x
+helmet=$src/../shared/scenes/samples/DamagedHelmet/DamagedHelmet.gltf
+if [ -f "$helmet" ]; then # its normal and occlusion maps are counted, not decoded
+    expect info-textures-unread 0 '^textures    4 \(of the file.s 5, 2 the bake never reads, not decoded' -- \
+        "$pb" info "$helmet"
+    expect info-json-textures-in 0 '"textures_in": 5,' -- "$pb" info "$helmet" --json
+    expect info-json-textures-unread 0 '"textures_unread": 2,' -- "$pb" info "$helmet" --json
+fi
 duck=$src/../shared/scenes/samples/Duck/Duck.gltf
 if [ -f "$duck" ]; then # vertex normals shade smooth, unless --shading-normals face
     expect info-shading-duck 0 '^shading     4183 of 4212 triangles smooth' -- "$pb" info "$duck"

@@ -986,6 +986,9 @@ static void unread_maps_not_decoded(void)
         CHECKF(s->texture_count == 1 && s->materials[0].base_color_texture == 0 && s->textures[0].width == 16,
                "metallic %d: %u textures, colour texture %d", metal, s->texture_count, s->materials[0].base_color_texture);
         CHECKF(any.count == metal, "metallic %d: %d warnings, want %d", metal, any.count, metal);
+        /* 5 textures: 1, 2 and 4 (normal, occlusion, no material's) never read, 3 (metallic) without a factor */
+        CHECKF(s->stats.textures_in == 5 && s->stats.textures_unread == (metal ? 3u : 4u),
+               "metallic %d: %u textures in the file, %u unread", metal, s->stats.textures_in, s->stats.textures_unread);
         pb_scene_destroy(s);
         if (metal) { /* the one warning is the metallic texture's */
             d.log.user_data = &corrupt;
@@ -1037,6 +1040,8 @@ static void shared_scenes_load(void)
                        s->materials[0].base_color_texture == 3,
                    "DamagedHelmet: %u textures, colour %d, emissive %d, metallic %g", s->texture_count,
                    s->materials[0].base_color_texture, s->materials[0].emissive_texture, s->materials[0].metallic);
+        if (s && !strcmp(cases[i].path, "samples/DamagedHelmet/DamagedHelmet.gltf"))
+            CHECK(s->stats.textures_in == 5 && s->stats.textures_unread == 2);
         pb_scene_destroy(s);
     }
     char bad[1024];

@@ -102,6 +102,9 @@ typedef struct pb_scene_stats {
     uint32_t primitives_skipped;  /* points and lines: not surfaces */
     uint32_t normals_generated;   /* primitives without NORMAL (flat normals made) */
     uint32_t nodes;               /* nodes visited in the default scene */
+    uint32_t textures_in;         /* the file's glTF textures */
+    uint32_t textures_unread;     /* of them, read by no material slot the bake samples (normal, occlusion and
+                                     unused maps, metallic ones under a metallicFactor of 0): never decoded */
     char extensions_used[512];    /* the file's extensionsUsed, comma-separated ("" for none) */
     char extensions_applied[512]; /* those of them the loader applies; the rest are ignored (logged) */
 } pb_scene_stats;

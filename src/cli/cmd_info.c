@@ -61,8 +61,10 @@ int cmd_info(const options *o)
                (unsigned long long)st->dropped_nonfinite, st->primitives, st->primitives_skipped,
                st->normals_generated, (unsigned long long)smooth, st->nodes);
         printf("  \"materials\": %u,\n  \"emissive_materials\": %u,\n  \"masked_materials\": %u,\n"
-               "  \"blended_materials\": %u,\n  \"glass_materials\": %u,\n  \"textures\": %u,\n",
-               s->material_count, emissive, masked, blended, glass, s->texture_count);
+               "  \"blended_materials\": %u,\n  \"glass_materials\": %u,\n  \"textures\": %u,\n"
+               "  \"textures_in\": %u,\n  \"textures_unread\": %u,\n",
+               s->material_count, emissive, masked, blended, glass, s->texture_count, st->textures_in,
+               st->textures_unread);
         printf("  \"lights\": [");
         for (uint32_t i = 0; i < s->light_count; ++i) {
             const pb_light *l = &s->lights[i];
@@ -101,7 +103,11 @@ int cmd_info(const options *o)
                (unsigned long long)smooth, s->triangle_count);
         printf("materials   %u (%u emissive, %u alpha-masked, %u blended, %u of them thin glass)\n", s->material_count,
                emissive, masked, blended, glass);
-        printf("textures    %u\n", s->texture_count);
+        printf("textures    %u", s->texture_count);
+        if (st->textures_unread)
+            printf(" (of the file's %u, %u the bake never reads, not decoded: normal, occlusion or unused maps)",
+                   st->textures_in, st->textures_unread);
+        printf("\n");
         printf("lights      %u", s->light_count);
         for (uint32_t i = 0; i < s->light_count; ++i)
             printf("%s%s '%s' %g", i ? ", " : ": ", light_type(s->lights[i].type), s->lights[i].name,

@@ -242,9 +242,12 @@ pb_result read_textures(reader &r, int skip)
                 need(tx.Get("index").GetNumberAsInt(), 0);
         }
     }
+    r.b->stats.textures_in = (uint32_t)m.textures.size();
     for (size_t i = 0; i < m.textures.size(); ++i) {
-        if (!needed[i])
+        if (!needed[i]) {
+            r.b->stats.textures_unread++;
             continue;
+        }
         const tinygltf::Texture &t = m.textures[i];
         int source = texture_source(r, i);
         if (source < 0 || source >= (int)m.images.size()) {
