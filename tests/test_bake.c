@@ -1788,6 +1788,28 @@ static pb_material glass_material(float a, float t)
     return m;
 }
 
+/* Gives material `mat` of s (glass, coverage 1) a transmission texture kept
+ * in its colour texture's alpha (pb_material.transmission_in_alpha, what the
+ * loader makes of an opaque material's transmissionTexture): 2 x 1 white
+ * texels of alpha a0 and a1; the material's triangles read texel
+ * (i / stride) % 2, triangle i's whole face at that texel's centre. */
+static void give_tau_texture(pb_scene *s, uint32_t mat, uint8_t a0, uint8_t a1, uint32_t stride)
+{
+    s->textures = calloc(1, sizeof *s->textures);
+    s->texels = malloc(2 * sizeof *s->texels);
+    if (!s->textures || !s->texels)
+        return;
+    s->texels[0] = 0x00ffffffu | (uint32_t)a0 << 24, s->texels[1] = 0x00ffffffu | (uint32_t)a1 << 24;
+    s->textures[0] = (pb_texture){2, 1, 0, PB_WRAP_CLAMP, PB_WRAP_CLAMP, 1};
+    s->texture_count = 1, s->texel_count = 2;
+    pb_material *m = &s->materials[mat];
+    m->base_color_texture = 0, m->base_color[3] = 1.f, m->transmission_in_alpha = 1;
+    for (uint32_t i = 0; i < s->triangle_count; ++i)
+        for (int v = 0; v < 3; ++v)
+            s->texcoords[6 * (size_t)i + 2 * v] = (i / stride) % 2 ? 0.75f : 0.25f,
+                                 s->texcoords[6 * (size_t)i + 2 * v + 1] = 0.5f;
+}
+
 /* Thin glass tints what it lets through: a 20 km pane 1 m above a probe,
  * under a sky of radiance U (the map's upper half, per channel) and black
  * below. The pane lets through T = (1 - a) + a t c of the light on average
@@ -1802,10 +1824,14 @@ static void thin_glass_tints_light(void)
     /* 20 km wide: rays under its edge (untinted sky, 6.7x the tinted blue) leave below 0.006 degrees */
     double pane[18] = {-1e4, 1, -1e4, -1e4, 1, 1e4, 1e4, 1, 1e4, -1e4, 1, -1e4, 1e4, 1, 1e4, 1e4, 1, -1e4};
     const float c[3] = {1.f, 0.5f, 0.25f}, U[3] = {1.f, 0.8f, 0.6f}; /* make_env's channels */
-    struct { float a, t; } cases[3] = {{1.f, 1.f}, {1.f, 0.5f}, {0.5f, 0.5f}};
+    /* texture: 0 none, else the alpha of a transmission texture kept in the
+     * colour texture (give_tau_texture), which scales t: 255 is t itself, 102
+     * is 0.4 t, and what passes is tinted as without a texture */
+    struct { float a, t; uint8_t texture; } cases[5] = {
+        {1.f, 1.f, 0}, {1.f, 0.5f, 0}, {0.5f, 0.5f, 0}, {1.f, 0.5f, 255}, {1.f, 0.5f, 102}};
     pb_environment env;
     CHECK(make_env(&env, 128, 64, 1.f, 0.f, 0, 0, 0, 1.f, 0.f));
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < 5; ++i) {
         pb_material m = glass_material(cases[i].a, cases[i].t);
         uint32_t ids[2] = {0, 0};
         pb_scene *s = NULL;
@@ -1813,6 +1839,9 @@ static void thin_glass_tints_light(void)
         CHECKF(pb_scene_from_triangles(pane, 2, ids, &m, 1, &s, &err) == PB_OK, "%s", err.message);
         if (!s)
             break;
+        if (cases[i].texture)
+            give_tau_texture(s, 0, cases[i].texture, cases[i].texture, 1);
+        float t = cases[i].texture ? cases[i].t * (float)cases[i].texture / 255.f : cases[i].t;
         pb_bake_desc d = {0};
         d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 1;
         for (int k = 0; k < 3; ++k)
@@ -1825,7 +1854,7 @@ static void thin_glass_tints_light(void)
             float worst = 0, up[3], dirs[3][3] = {{0, 1, 0}, {1, 0, 0}, {0, -1, 0}};
             double want[3];
             for (int k = 0; k < 3; ++k)
-                want[k] = 3.14159265 * U[k] * ((1 - cases[i].a) + cases[i].a * cases[i].t * c[k]);
+                want[k] = 3.14159265 * U[k] * ((1 - cases[i].a) + cases[i].a * t * c[k]);
             pb_sh_eval(b.vol.sh, dirs[0], up);
             for (int j = 0; j < 3; ++j) {
                 float e[3];
@@ -1835,10 +1864,11 @@ static void thin_glass_tints_light(void)
             }
             /* a pane that lets rays through by chance adds that chance's noise:
              * there the bound is 4 of the bake's own standard errors */
-            float se = b.vol.probe_std_error[0], bound = cases[i].a * (1 - cases[i].t) > 0.f ? 4.f * se : 0.01f;
-            fprintf(stderr, "  a %.1f, t %.1f: irradiance from above %.4f %.4f %.4f (want %.4f %.4f %.4f), worst of 3 "
-                    "normals %.2f%% (bound %.2f%%; standard error %.2f%%)\n", cases[i].a, cases[i].t, up[0], up[1],
-                    up[2], want[0], want[1], want[2], 100 * worst, 100 * bound, 100 * se);
+            float se = b.vol.probe_std_error[0], bound = cases[i].a * (1 - t) > 0.f ? 4.f * se : 0.01f;
+            fprintf(stderr, "  a %.1f, t %.1f%s: irradiance from above %.4f %.4f %.4f (want %.4f %.4f %.4f), worst of "
+                    "3 normals %.2f%% (bound %.2f%%; standard error %.2f%%)\n", cases[i].a, t,
+                    cases[i].texture ? " (texture)" : "", up[0], up[1], up[2], want[0], want[1], want[2], 100 * worst,
+                    100 * bound, 100 * se);
             CHECK(se > 0.f && worst < bound);
         }
         release(&b);
@@ -1862,19 +1892,23 @@ static void thin_glass_tints_light(void)
     pb_environment_free(&env);
 }
 
-/* A soup of grey and thin-glass triangles under one directional light. */
+/* A soup of grey and thin-glass triangles under one directional light: the
+ * glass of coverage 0.8 and transmission 0.6, or of coverage 1 and 0.7 x a
+ * transmission texture of 200 / 255 or 60 / 255 (give_tau_texture). */
 static pb_scene *glass_soup(void)
 {
-    pb_material mats[2] = {grey_material(), glass_material(0.8f, 0.6f)};
-    pb_scene *s = soup_of(12, mats, 2);
+    pb_material mats[3] = {grey_material(), glass_material(0.8f, 0.6f), glass_material(1.f, 0.7f)};
+    pb_scene *s = soup_of(12, mats, 3);
     if (!s)
         return NULL;
+    give_tau_texture(s, 2, 200, 60, 3);
     test_directional_light(s, 3.f, 0.3f, -0.9f, 0.3f);
     return s;
 }
 
 /* Thin glass through the kernels against bake_cpu.c: a soup of triangles,
- * every other one tinted glass (a 0.8, t 0.6), under an environment map with
+ * two in three tinted glass (a 0.8, t 0.6; or t from a texture, glass_soup),
+ * under an environment map with
  * a sun and a directional light, 2 bounces, probe NEE, shadow rays through
  * layer after layer nearest first. Whether a ray passes is a hash of the
  * point it meets, and host and device round sin/cos/sqrt differently after

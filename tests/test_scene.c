@@ -1350,16 +1350,18 @@ static void gpu_instancing_draws_each_instance(void)
  * material lets nothing through and stays opaque; an alpha mask is left as
  * it is (a warning); an opaque material's texture alpha stops counting (its
  * copy is opaque). A transmissionTexture (red 200 and 100) under factor 0.5
- * folds into the colour texture's alpha as untinted coverage, 255 x (1 - 0.5
- * x red / 255) = 155 and 205; read through another transform it is a
- * warning and the factor stands. */
+ * on an opaque material goes into the colour texture's alpha as it stands
+ * (200, 100), the scale of transmission 0.5 (transmission_in_alpha, tinted
+ * as without a texture); on a blended one, whose alpha is coverage, it folds
+ * into that as untinted coverage, 255 x (1 - 0.5 x red / 255) = 155 and 205;
+ * read through another transform it is a warning and the factor stands. */
 static void transmission_is_coverage(void)
 {
     unsigned char px[2 * 4] = {200, 200, 200, 0, 100, 100, 100, 0}; /* alpha 0: ignored while opaque */
     char png[600];
     snprintf(png, sizeof png, "%s/transmission-base.png", temp_dir());
     CHECK(stbi_write_png(png, 2, 1, 4, px, 8) != 0);
-    const char *mats[7] = {
+    const char *mats[8] = {
         "{\"pbrMetallicRoughness\":{\"metallicFactor\":0},"
         "\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":0.75}}}",
         "{\"alphaMode\":\"BLEND\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[1,1,1,0.5],\"metallicFactor\":0},"
@@ -1373,16 +1375,18 @@ static void transmission_is_coverage(void)
         "{\"transmissionFactor\":0.5,\"transmissionTexture\":{\"index\":0}}}}",
         "{\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"extensions\":{\"KHR_materials_transmission\":"
         "{\"transmissionFactor\":0.5,\"transmissionTexture\":{\"index\":0,\"extensions\":{"
-        "\"KHR_texture_transform\":{\"offset\":[0.5,0]}}}}}}"};
+        "\"KHR_texture_transform\":{\"offset\":[0.5,0]}}}}}}",
+        "{\"alphaMode\":\"BLEND\",\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"extensions\":{"
+        "\"KHR_materials_transmission\":{\"transmissionFactor\":0.5,\"transmissionTexture\":{\"index\":0}}}}"};
     char json[4096];
     int n = snprintf(json, sizeof json,
                      "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_materials_transmission\"],"
                      "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[");
-    for (int i = 0; i < 7; ++i)
+    for (int i = 0; i < 8; ++i)
         n += snprintf(json + n, sizeof json - (size_t)n, "%s{\"attributes\":{\"POSITION\":0},\"material\":%d}",
                       i ? "," : "", i);
-    n += snprintf(json + n, sizeof json - (size_t)n, "]}],\"materials\":[%s,%s,%s,%s,%s,%s,%s],", mats[0], mats[1],
-                  mats[2], mats[3], mats[4], mats[5], mats[6]);
+    n += snprintf(json + n, sizeof json - (size_t)n, "]}],\"materials\":[%s,%s,%s,%s,%s,%s,%s,%s],", mats[0],
+                  mats[1], mats[2], mats[3], mats[4], mats[5], mats[6], mats[7]);
     snprintf(json + n, sizeof json - (size_t)n,
              "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"transmission-base.png\"}],"
              "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
@@ -1395,7 +1399,7 @@ static void transmission_is_coverage(void)
     pb_error err;
     const char *path = write_gltf("transmission.gltf", json, tri_pos, 36);
     CHECKF(pb_scene_load(path, &d, &s, &err) == PB_OK, "%s", err.message);
-    if (!s || s->material_count < 7)
+    if (!s || s->material_count < 8)
         return;
     const pb_material *m = s->materials;
     CHECK(m[0].alpha_mode == PB_ALPHA_BLEND && m[0].base_color[3] == 1.f && m[0].transmission == 0.75f);
@@ -1410,9 +1414,17 @@ static void transmission_is_coverage(void)
               (s->texels[tx->offset] & 0xffffffu) == 0xc8c8c8u);
     }
     CHECK(m[5].alpha_mode == PB_ALPHA_BLEND && m[5].base_color[3] == 1.f && m[5].base_color_texture >= 1 &&
-          m[5].transmission == 0.f);
+          m[5].transmission == 0.5f && m[5].transmission_in_alpha == 1);
     if (m[5].base_color_texture >= 1) {
         const pb_texture *tx = &s->textures[m[5].base_color_texture];
+        CHECKF(tx->width == 2 && (s->texels[tx->offset] >> 24) == 200 && (s->texels[tx->offset + 1] >> 24) == 100 &&
+                   (s->texels[tx->offset] & 0xffffffu) == 0xffffffu,
+               "transmission texture as alpha %u %u", s->texels[tx->offset] >> 24, s->texels[tx->offset + 1] >> 24);
+    }
+    CHECK(m[7].alpha_mode == PB_ALPHA_BLEND && m[7].base_color[3] == 1.f && m[7].base_color_texture >= 1 &&
+          m[7].transmission == 0.f && m[7].transmission_in_alpha == 0);
+    if (m[7].base_color_texture >= 1) {
+        const pb_texture *tx = &s->textures[m[7].base_color_texture];
         CHECKF(tx->width == 2 && (s->texels[tx->offset] >> 24) == 155 && (s->texels[tx->offset + 1] >> 24) == 205 &&
                    (s->texels[tx->offset] & 0xffffffu) == 0xffffffu,
                "transmission texture folded to alpha %u %u", s->texels[tx->offset] >> 24,

@@ -50,6 +50,11 @@ typedef struct pb_material {
      * alpha-blended, base_color[3] its coverage (docs/scene.md). Last, so
      * pb_scene_hash of a scene without transmission is what it was before. */
     float transmission;
+    /* With transmission, from a transmissionTexture on a material that was
+     * opaque: the colour texture's alpha is not coverage but that texture's
+     * red channel, which scales transmission per texel (coverage 1, the
+     * light through tinted as without a texture). 0 otherwise. */
+    uint32_t transmission_in_alpha;
 } pb_material;
 
 /* Decoded texture: RGBA8 texels at pb_scene.texels[offset ...], row-major,

@@ -28,8 +28,11 @@
 struct ShadeMaterial {
     vec4 base_color;
     vec4 emissive_metallic; // rgb emission (strength applied), w metallic
-    ivec4 tex;              // base colour texture, emissive texture, double sided, transmission (float bits)
+    ivec4 tex;              // base colour texture, emissive texture, PB_MATERIAL_* bits, transmission (float bits)
 };
+// ShadeMaterial.tex.z bits (src/bake/bake_types.h)
+#define PB_MATERIAL_DOUBLE_SIDED 1
+#define PB_MATERIAL_TAU_IN_ALPHA 2 // the colour texture's alpha scales transmission (not coverage)
 
 struct Light {
     vec4 position_type;     // xyz local position, w type (as float)
@@ -243,13 +246,21 @@ bool bake_glass(BakeParams P)
 // Layers of glass a ray goes through at most; the next one stops it.
 #define PB_GLASS_LAYERS 64u
 
+// A glass material's tau at a colour texel of alpha `a`: scaled by it
+// where the material keeps its transmission texture there.
+float glass_tau(ShadeMaterial m, float a)
+{
+    float tau = intBitsToFloat(m.tex.w);
+    return (m.tex.z & PB_MATERIAL_TAU_IN_ALPHA) != 0 ? tau * a : tau;
+}
+
 // The share of the light meeting a surface that it reflects diffusely, of
 // its base colour: 1 - metallic; for thin glass the dielectric part's
 // 1 - transmissionFactor over the share that does not pass,
-// ((1 - metallic) - tau) / (1 - tau).
-float diffuse_share(ShadeMaterial m)
+// ((1 - metallic) - tau) / (1 - tau). `a`: the colour texel's alpha.
+float diffuse_share(ShadeMaterial m, float a)
 {
-    float keep = 1.0 - m.emissive_metallic.w, tau = intBitsToFloat(m.tex.w);
+    float keep = 1.0 - m.emissive_metallic.w, tau = glass_tau(m, a);
     return tau > 0.0 ? (tau < 1.0 ? max(0.0, keep - tau) / (1.0 - tau) : 0.0) : keep;
 }
 
@@ -271,12 +282,13 @@ GlassStep glass_step(BakeParams P, TraceResult tr, vec3 rd)
     Tri t = load_tri(s.tris, tr.tri);
     uint mat = t.flags & ~PB_FLAG_ALPHA_MASK;
     ShadeMaterial m = load_shade_material(P.materials, mat);
-    float tau = intBitsToFloat(m.tex.w);
-    if (!(tau > 0.0))
+    if (!(intBitsToFloat(m.tex.w) > 0.0))
         return g;
-    vec4 c = m.base_color;
-    if (m.tex.x >= 0)
-        c *= texture_rgba(s, m.tex.x, surface_uv(s, tr.tri, tr.u, tr.v));
+    vec4 tx = m.tex.x >= 0 ? texture_rgba(s, m.tex.x, surface_uv(s, tr.tri, tr.u, tr.v)) : vec4(1.0);
+    float tau = glass_tau(m, tx.a);
+    if ((m.tex.z & PB_MATERIAL_TAU_IN_ALPHA) != 0)
+        tx.a = 1.0; // transmission, not coverage
+    vec4 c = m.base_color * tx;
     if ((s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
         c *= vertex_color(s, tr.tri, tr.u, tr.v);
     float opaque = c.a * (1.0 - tau);

@@ -112,7 +112,7 @@ EmitterSample sample_emitter(BakeParams P, vec3 x, inout uint state)
     }
     ShadeMaterial em = load_shade_material(P.materials, et.flags & ~PB_FLAG_ALPHA_MASK);
     float cos_e = -dot(normalize(ne), es.w);
-    if (em.tex.z != 0)
+    if ((em.tex.z & PB_MATERIAL_DOUBLE_SIDED) != 0)
         cos_e = abs(cos_e);
     float pa = FloatBuf(P.emit_pdf).v[etri] * ratio;
     es.pdf = cos_e > 0.0 && es.dist > 0.0 ? emitter_density(pa, 0.5 * length(ne), sa, es.dist, cos_e) : 0.0;
@@ -391,7 +391,7 @@ bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, 
             return false;
         ShadeMaterial m = load_shade_material(P.materials, t.flags & ~PB_FLAG_ALPHA_MASK);
         if (back) {
-            if (m.tex.z == 0)
+            if ((m.tex.z & PB_MATERIAL_DOUBLE_SIDED) == 0)
                 return false; // inside a single-sided surface: no light
             ps.ng = -ps.ng;
         }
@@ -413,7 +413,8 @@ bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, 
         }
         if (ps.bounce > bounces)
             return false; // the terminal ray: it only gathers emission (see below)
-        ps.albedo = m.base_color.rgb * texture_rgb(s, m.tex.x, uv) * diffuse_share(m);
+        vec4 base = texture_rgba(s, m.tex.x, uv);
+        ps.albedo = m.base_color.rgb * base.rgb * diffuse_share(m, base.a);
         if (bake_feature(PB_FEATURE_VERTEX_COLORS) && (s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
             ps.albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
         ps.x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ps.ng);

@@ -138,6 +138,8 @@ static int glass_step(const pb_scene *s, hit h, const float rd[3], float w[3], f
         float w0 = 1.f - h.u - h.v, tx[4];
         texture_rgba(s, m->base_color_texture, w0 * uv[0] + h.u * uv[2] + h.v * uv[4],
                      w0 * uv[1] + h.u * uv[3] + h.v * uv[5], tx);
+        if (m->transmission_in_alpha) /* transmission, not coverage (glass_tau) */
+            tau *= tx[3], tx[3] = 1.f;
         for (int k = 0; k < 4; ++k)
             c[k] *= tx[k];
     }
@@ -333,7 +335,7 @@ static emitter_sample sample_emitter(const pb_path_ctx *c, const pb_bake_emitter
     float nl = pb_length3(ne);
     const gpu_shade_material *m = &c->materials[s->material[etri]];
     float cos_e = -pb_dot3(ne, es.w) / nl;
-    if (m->tex[2] != 0)
+    if (m->tex[2] & PB_MATERIAL_DOUBLE_SIDED)
         cos_e = fabsf(cos_e);
     float pa = em->pdf_area[etri] * ratio;
     es.pdf = cos_e > 0.f && es.dist > 0.f ? emitter_density(pa, 0.5f * nl, sa, es.dist, cos_e) : 0.f;
@@ -426,11 +428,13 @@ static void env_nee(const pb_path_ctx *c, const float x[3], const float ng[3], c
         L[k] += thr[k] * albedo[k] * ((Le[k] * T[k]) * (cos_x / (PI_F * pe) * wl));
 }
 
-/* diffuse_share of bake.glsl */
-static float diffuse_share(const gpu_shade_material *m)
+/* diffuse_share of bake.glsl; a: the colour texel's alpha (glass_tau) */
+static float diffuse_share(const gpu_shade_material *m, float a)
 {
     float keep = 1.f - m->emissive_metallic[3], tau;
     memcpy(&tau, &m->tex[3], 4);
+    if (m->tex[2] & PB_MATERIAL_TAU_IN_ALPHA)
+        tau *= a;
     return tau > 0.f ? (tau < 1.f ? fmaxf(0.f, keep - tau) / (1.f - tau) : 0.f) : keep;
 }
 
@@ -509,7 +513,7 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
             res.first_t = back ? -h.t : h.t;
         const gpu_shade_material *m = &c->materials[s->material[h.tri]];
         if (back) {
-            if (m->tex[2] == 0)
+            if (!(m->tex[2] & PB_MATERIAL_DOUBLE_SIDED))
                 break;
             for (int k = 0; k < 3; ++k)
                 ng[k] = -ng[k];
@@ -517,7 +521,7 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         const float *uv = s->texcoords + 6 * (size_t)h.tri;
         float w0 = 1.f - h.u - h.v;
         float tu = w0 * uv[0] + h.u * uv[2] + h.v * uv[4], tv = w0 * uv[1] + h.u * uv[3] + h.v * uv[5];
-        float base[3];
+        float base[4];
         if ((bounce > 0 || see_direct) &&
             (m->emissive_metallic[0] != 0.f || m->emissive_metallic[1] != 0.f || m->emissive_metallic[2] != 0.f)) {
             float w = 1.f, pa = em ? em->pdf_area[h.tri] * pb_light_cells_ratio(p->light_cells,
@@ -543,10 +547,10 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         }
         if (bounce > bounces)
             break; /* the terminal ray only gathers emission */
-        texture_rgb(s, m->tex[0], tu, tv, base);
+        texture_rgba(s, m->tex[0], tu, tv, base);
         float albedo[3], xp[3], x[3], E[3] = {0, 0, 0};
         for (int k = 0; k < 3; ++k) {
-            albedo[k] = m->base_color[k] * base[k] * diffuse_share(m);
+            albedo[k] = m->base_color[k] * base[k] * diffuse_share(m, base[3]);
             xp[k] = v0[k] + h.u * e1[k] + h.v * e2[k];
         }
         if (s->colors) {

@@ -37,7 +37,8 @@ void pb_bake_materials(const pb_scene *scene, gpu_shade_material *out)
         g->emissive_metallic[3] = m->metallic;
         g->tex[0] = m->base_color_texture;
         g->tex[1] = m->emissive_texture;
-        g->tex[2] = (int32_t)m->double_sided;
+        g->tex[2] = (m->double_sided ? PB_MATERIAL_DOUBLE_SIDED : 0) |
+                    (m->transmission_in_alpha ? PB_MATERIAL_TAU_IN_ALPHA : 0);
         memcpy(&g->tex[3], &m->transmission, 4); /* float bits */
     }
 }

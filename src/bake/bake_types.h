@@ -6,10 +6,14 @@
 #include "probebake/environment.h"
 #include "sample/sample_gpu.h"
 
+/* gpu_shade_material.tex[2] bits (ShadeMaterial.tex.z in bake.glsl) */
+#define PB_MATERIAL_DOUBLE_SIDED 1
+#define PB_MATERIAL_TAU_IN_ALPHA 2 /* pb_material.transmission_in_alpha */
+
 typedef struct gpu_shade_material {
     float base_color[4];
     float emissive_metallic[4];
-    int32_t tex[4]; /* base colour texture, emissive texture, double sided, transmission (float bits) */
+    int32_t tex[4]; /* base colour texture, emissive texture, PB_MATERIAL_* bits, transmission (float bits) */
 } gpu_shade_material;
 _Static_assert(sizeof(gpu_shade_material) == 48, "ShadeMaterial layout");
 

@@ -193,9 +193,23 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
             tt = -1;
         }
     }
+    if (tt >= 0 && pm.alpha_mode == PB_ALPHA_OPAQUE) {
+        // coverage 1, so the colour texture's alpha is free to carry the
+        // texture's scale of tau: the light through is tinted per texel
+        int32_t id = pb_sb_fold_transmission_scale(r.b, pm.base_color_texture, tt);
+        if (id < 0)
+            return; // out of host memory: the builder reports it
+        pm.base_color_texture = id;
+        pm.base_color[3] = 1.f;
+        pm.alpha_mode = PB_ALPHA_BLEND;
+        pm.transmission = (float)pass;
+        pm.transmission_in_alpha = 1;
+        return;
+    }
     if (tt >= 0) {
-        int32_t id = pb_sb_fold_transmission(r.b, pm.base_color_texture, pm.alpha_mode == PB_ALPHA_OPAQUE, tt,
-                                             (float)pass);
+        // alpha is coverage already: the texture's share folds into it,
+        // and what passes there passes untinted
+        int32_t id = pb_sb_fold_transmission(r.b, pm.base_color_texture, 0, tt, (float)pass);
         if (id < 0)
             return; // out of host memory: the builder reports it
         pm.base_color_texture = id;

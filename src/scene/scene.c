@@ -133,8 +133,11 @@ static uint64_t materials_hash(const pb_scene *scene)
     uint64_t h = pb_hash64(bytes, scene->material_count * head, 0);
     free(bytes);
     int transmissive = pb_scene_glass_materials(scene) != 0;
-    for (uint32_t i = 0; transmissive && i < scene->material_count; ++i)
+    for (uint32_t i = 0; transmissive && i < scene->material_count; ++i) {
         h = pb_hash64(&scene->materials[i].transmission, sizeof(float), h);
+        if (scene->materials[i].transmission_in_alpha) /* else the hash it had before the flag */
+            h = pb_hash64(&scene->materials[i].transmission_in_alpha, sizeof(uint32_t), h);
+    }
     return h;
 }
 

@@ -11,8 +11,9 @@
  * and of `scale` (at the texel's centre, as the kernels sample), where
  * keep = 1 - factor x channel `shift` of scale / 255, clamped to [0, 1],
  * multiplies the base's linear colour (into_alpha 0) or its alpha
- * (into_alpha 1; 255 first when base_opaque). Wrap modes and colour space
- * the base's (scale's wraps and sRGB when base < 0). */
+ * (into_alpha 1; 255 first when base_opaque); into_alpha 2: the alpha is
+ * the channel itself. Wrap modes and colour space the base's (scale's wraps
+ * and sRGB when base < 0). */
 static int32_t fold(pb_scene_builder *b, int32_t base, int base_opaque, int32_t scale, int shift, float factor,
                     int into_alpha)
 {
@@ -65,7 +66,9 @@ static int32_t fold(pb_scene_builder *b, int32_t base, int base_opaque, int32_t 
             uint32_t mb = (m >> shift) & 0xffu;
             uint32_t c = base >= 0 ? b->texels[bt.offset + brow[y] + bcol[x]] : 0xffffffffu;
             uint32_t texel;
-            if (into_alpha) {
+            if (into_alpha == 2) {
+                texel = (c & 0x00ffffffu) | mb << 24;
+            } else if (into_alpha) {
                 float keep = 1.f - factor * (float)mb / 255.f;
                 keep = keep < 0.f ? 0.f : (keep > 1.f ? 1.f : keep);
                 float a = base_opaque ? 1.f : (float)(c >> 24) / 255.f;
@@ -93,6 +96,11 @@ int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int base_opaq
                                 float pass)
 {
     return fold(b, base, base_opaque, transmission, 0, pass, 1); /* red: transmission */
+}
+
+int32_t pb_sb_fold_transmission_scale(pb_scene_builder *b, int32_t base, int32_t transmission)
+{
+    return fold(b, base, 1, transmission, 0, 1.f, 2); /* red: transmission */
 }
 
 int32_t pb_sb_opaque_texture(pb_scene_builder *b, int32_t tex)

@@ -4,7 +4,8 @@
  * glTF's metallic (metallicFactor x the metallicRoughness texture's blue
  * channel, linear; a Lambertian bake reflects base colour x (1 - metallic))
  * into the colour, KHR_materials_transmission's texture (red) into the
- * alpha. One walk does both (texture_fold.c). */
+ * alpha (as coverage, or for a material that was opaque as the scale of its
+ * transmission). One walk does all (texture_fold.c). */
 #ifndef PB_SCENE_TEXTURE_FOLD_H
 #define PB_SCENE_TEXTURE_FOLD_H
 
@@ -30,6 +31,13 @@ int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_
  * with the transmission texture's wraps, when base < 0). -1 out of memory. */
 int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int base_opaque, int32_t transmission,
                                 float pass);
+
+/* Adds a texture whose alpha is the transmission texture's red channel as it
+ * stands, for a material that was opaque (pb_material.transmission_in_alpha:
+ * the kernels scale its transmission by it per texel and take coverage 1);
+ * colour, wraps and colour space as pb_sb_fold_transmission's. -1 out of
+ * host memory. */
+int32_t pb_sb_fold_transmission_scale(pb_scene_builder *b, int32_t base, int32_t transmission);
 
 /* Texture `tex` as it reads under alpha mode OPAQUE, for a material that
  * becomes alpha-blended (KHR_materials_transmission): itself when every texel
