@@ -13,18 +13,6 @@ extern "C" {
 namespace pb_gltf {
 namespace {
 
-int32_t texture_of(reader &r, int gltf_texture, const char *material)
-{
-    if (gltf_texture < 0)
-        return -1;
-    if (gltf_texture >= (int)r.texture_map.size()) {
-        pb_logf(&r.b->log, PB_LOG_WARN, "%s: material '%s' refers to missing texture %d; ignored", r.path, material,
-                gltf_texture);
-        return -1;
-    }
-    return r.texture_map[gltf_texture];
-}
-
 // KHR_materials_pbrSpecularGlossiness (archived, still in many exported
 // assets): the bake needs only the diffuse albedo, diffuseFactor x
 // diffuseTexture; specular and glossiness do not enter a Lambertian bake.
@@ -94,6 +82,52 @@ int texture_source(reader &r, size_t i)
         unusable = s;
     }
     return t.source >= 0 || unusable < 0 ? t.source : unusable; // a missing or undecoded image is warned about
+}
+
+// glTF texture i as a scene texture, its image decoded now; -1 (warned)
+// where it names no image or its image does not decode.
+int32_t make_texture(reader &r, size_t i)
+{
+    const tinygltf::Model &m = r.m;
+    const tinygltf::Texture &t = m.textures[i];
+    int source = texture_source(r, i);
+    if (source < 0 || source >= (int)m.images.size()) {
+        pb_logf(&r.b->log, PB_LOG_WARN, "%s: texture %zu refers to missing image %d; ignored", r.path, i, source);
+        return -1;
+    }
+    if (!decode_image(r.images, source))
+        return -1; // warned by decode_image
+    const tinygltf::Image &img = m.images[source];
+    uint32_t wrap[2] = {PB_WRAP_REPEAT, PB_WRAP_REPEAT};
+    if (t.sampler >= 0 && t.sampler < (int)m.samplers.size()) {
+        int w[2] = {m.samplers[t.sampler].wrapS, m.samplers[t.sampler].wrapT};
+        for (int k = 0; k < 2; ++k)
+            wrap[k] = w[k] == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE     ? PB_WRAP_CLAMP
+                      : w[k] == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? PB_WRAP_MIRROR
+                                                                      : PB_WRAP_REPEAT;
+    }
+    return pb_sb_add_texture(r.b, img.image.data(), (uint32_t)img.width, (uint32_t)img.height, wrap[0], wrap[1],
+                             (uint32_t)r.texture_srgb[i]);
+}
+
+// The scene texture a material reads as glTF texture `gltf_texture`, made
+// the first time any material asks for it: so a texture no material reads
+// where the bake samples (a normal or occlusion map, a metallic texture
+// under a factor of 0) is never decoded. -1: none, skipped, or failed.
+int32_t texture_of(reader &r, int gltf_texture, const char *material)
+{
+    if (gltf_texture < 0)
+        return -1;
+    if (gltf_texture >= (int)r.texture_map.size()) {
+        pb_logf(&r.b->log, PB_LOG_WARN, "%s: material '%s' refers to missing texture %d; ignored", r.path, material,
+                gltf_texture);
+        return -1;
+    }
+    if (!r.texture_read[(size_t)gltf_texture] && !r.skip_textures) {
+        r.texture_read[(size_t)gltf_texture] = 1;
+        r.texture_map[(size_t)gltf_texture] = make_texture(r, (size_t)gltf_texture);
+    }
+    return r.texture_map[(size_t)gltf_texture];
 }
 
 
@@ -235,53 +269,18 @@ pb_result read_textures(reader &r, int skip)
 {
     const tinygltf::Model &m = r.m;
     r.texture_map.assign(m.textures.size(), -1);
+    r.texture_read.assign(m.textures.size(), 0);
+    r.skip_textures = skip != 0;
     if (skip)
         return PB_OK;
-    // the textures the bake reads (the others, normal and occlusion maps
-    // say, are never decoded), and which of them are colour, so sRGB
-    std::vector<int> needed(m.textures.size(), 0), srgb(m.textures.size(), 0);
-    auto need = [&](int t, int colour) {
-        if (t >= 0 && t < (int)needed.size())
-            needed[t] = 1, srgb[t] |= colour;
-    };
+    // colour textures are sRGB: note which ones the materials use that way
+    r.texture_srgb.assign(m.textures.size(), 0);
     for (const tinygltf::Material &mt : m.materials) {
-        need(base_texture_index(mt), 1);
-        need(mt.emissiveTexture.index, 1);
-        if (mt.pbrMetallicRoughness.metallicFactor > 0.0) // fold_metallic reads it
-            need(mt.pbrMetallicRoughness.metallicRoughnessTexture.index, 0);
-        auto ext = mt.extensions.find("KHR_materials_transmission"); // apply_transmission reads it
-        if (ext != mt.extensions.end() && ext->second.IsObject() && ext->second.Has("transmissionTexture")) {
-            const tinygltf::Value &tx = ext->second.Get("transmissionTexture");
-            if (tx.IsObject() && tx.Has("index") && tx.Get("index").IsInt())
-                need(tx.Get("index").GetNumberAsInt(), 0);
-        }
+        int t0 = base_texture_index(mt), t1 = mt.emissiveTexture.index;
+        if (t0 >= 0 && t0 < (int)m.textures.size()) r.texture_srgb[t0] = 1;
+        if (t1 >= 0 && t1 < (int)m.textures.size()) r.texture_srgb[t1] = 1;
     }
     r.b->stats.textures_in = (uint32_t)m.textures.size();
-    for (size_t i = 0; i < m.textures.size(); ++i) {
-        if (!needed[i]) {
-            r.b->stats.textures_unread++;
-            continue;
-        }
-        const tinygltf::Texture &t = m.textures[i];
-        int source = texture_source(r, i);
-        if (source < 0 || source >= (int)m.images.size()) {
-            pb_logf(&r.b->log, PB_LOG_WARN, "%s: texture %zu refers to missing image %d; ignored", r.path, i, source);
-            continue;
-        }
-        if (!decode_image(r.images, source))
-            continue; // warned by decode_image
-        const tinygltf::Image &img = m.images[source];
-        uint32_t wrap[2] = {PB_WRAP_REPEAT, PB_WRAP_REPEAT};
-        if (t.sampler >= 0 && t.sampler < (int)m.samplers.size()) {
-            int w[2] = {m.samplers[t.sampler].wrapS, m.samplers[t.sampler].wrapT};
-            for (int k = 0; k < 2; ++k)
-                wrap[k] = w[k] == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE     ? PB_WRAP_CLAMP
-                          : w[k] == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? PB_WRAP_MIRROR
-                                                                          : PB_WRAP_REPEAT;
-        }
-        r.texture_map[i] = pb_sb_add_texture(r.b, img.image.data(), (uint32_t)img.width, (uint32_t)img.height, wrap[0],
-                                             wrap[1], (uint32_t)srgb[i]);
-    }
     return PB_OK;
 }
 
@@ -360,6 +359,8 @@ void read_materials(reader &r)
     pb_material def = pb_material_default();
     snprintf(def.name, sizeof def.name, "default");
     r.default_material = (uint32_t)pb_sb_add_material(r.b, &def);
+    for (size_t i = 0; !r.skip_textures && i < r.texture_read.size(); ++i)
+        r.b->stats.textures_unread += r.texture_read[i] == 0;
 }
 
 } // namespace pb_gltf

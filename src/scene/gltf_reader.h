@@ -24,7 +24,7 @@ struct reader {
     const char *path;
     pb_scene_builder *b;
     pb_error *err;
-    std::vector<int32_t> texture_map; // glTF texture -> pb texture (-1: none / failed)
+    std::vector<int32_t> texture_map; // glTF texture -> pb texture (-1: none / failed / not read yet)
     uint32_t default_material = 0;
     std::vector<std::array<double, 6>> uv_transform; // per material: KHR_texture_transform of its UVs
     // EXT_meshopt_compression: the decoded bytes of each compressed bufferView
@@ -43,6 +43,11 @@ struct reader {
     bool face_normals = false;
     // the file's images, decoded when a texture the bake reads needs one
     image_ctx *images = nullptr;
+    // per glTF texture: made yet (texture_of makes it when a material first
+    // reads it), and whether some material reads it as colour (sRGB)
+    std::vector<char> texture_read;
+    std::vector<int> texture_srgb;
+    bool skip_textures = false; // pb_scene_desc.skip_textures: none is made
 };
 
 // A one-line error naming the file; returns `code`.
