@@ -108,8 +108,8 @@ typedef struct pb_scene_stats {
     uint32_t normals_generated;   /* primitives without NORMAL (flat normals made) */
     uint32_t nodes;               /* nodes visited in the default scene */
     uint32_t textures_in;         /* the file's glTF textures */
-    uint32_t textures_unread;     /* of them, read by no material slot the bake samples (normal, occlusion and
-                                     unused maps, metallic ones under a metallicFactor of 0): never decoded */
+    uint32_t textures_unread;     /* of them, read by no material where the bake samples (normal, occlusion and
+                                     unused maps, metallic ones no fold reads): never decoded */
     char extensions_used[512];    /* the file's extensionsUsed, comma-separated ("" for none) */
     char extensions_applied[512]; /* those of them the loader applies; the rest are ignored (logged) */
 } pb_scene_stats;
