@@ -3367,6 +3367,64 @@ static void bad_parameters_refused_before_gpu_work(void)
     pb_scene_destroy(s);
 }
 
+/* pb_bake_check_settings, which a front end calls before it loads a scene,
+ * refuses what pb_bake and pb_bake_sparse refuse, with the same message, for
+ * every setting that needs no scene; and passes what they bake. */
+static void settings_checked_before_the_scene_as_in_the_bake(void)
+{
+    pb_scene *s = random_soup(10, 0.1f, 1, NULL);
+    pb_bvh *bvh = NULL;
+    pb_gpu_scene *gs = NULL;
+    pb_error err, pre;
+    CHECK(pb_bvh_build(s, NULL, &bvh, &err) == PB_OK && pb_gpu_scene_create(ctx, s, bvh, &gs, &err) == PB_OK);
+    pb_points pts = {0};
+    double origin[3] = {0, 0, 0};
+    pts.count = 1, pts.positions = origin;
+    enum { N = 13 };
+    for (int i = 0; i < N && gs; ++i) {
+        pb_bake_desc d = {0};
+        d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 2;
+        d.grid.spacing[0] = d.grid.spacing[1] = d.grid.spacing[2] = 0.2f;
+        d.rays_per_probe = 16, d.passes = 1, d.octmap_res = 4, d.bounces = 1;
+        d.sky[0] = d.sky[1] = d.sky[2] = 0.5f;
+        pb_sparse_desc sd = {0}, *sparse = NULL;
+        const char *want = NULL; /* NULL: a bake these settings allow */
+        switch (i) {
+        case 0: break;
+        case 1: d.relocation_rays = 17, want = "relocation rays"; break;
+        case 2: d.target_error = 1.5f, want = "target error"; break;
+        case 3: d.rays_per_probe = 70000, want = "rays per probe"; break;
+        case 4: d.octmap_res = 65, want = "octahedral map"; break;
+        case 5: d.bounces = 65, want = "bounces"; break;
+        case 6: d.indirect_clamp = -1.f, want = "indirect clamp"; break;
+        case 7: d.indirect_volume = 1, d.shard_count = 2, want = "a part cannot bake it alone"; break;
+        case 8: d.indirect_volume = 1, d.points = &pts, memset(&d.grid, 0, sizeof d.grid), want = "not points"; break;
+        case 9: sparse = &sd; break;
+        case 10: sparse = &sd, sd.refine_error = 5.f, want = "--refine-error 5"; break;
+        case 11: sparse = &sd, d.target_error = 0.1f, d.passes = 0, d.shard_count = 2, d.shard_index = 1,
+                 want = "--target-error in a sparse bake"; break;
+        case 12: sparse = &sd, sd.seam_rounds = 9, want = "--refine-seams 9"; break;
+        }
+        pb_result rp = pb_bake_check_settings(&d, sparse, &pre);
+        pb_volume v;
+        pb_result rb = sparse ? pb_bake_sparse(ctx, s, gs, &d, sparse, &v, NULL, &err) : pb_bake(ctx, s, gs, &d, &v, &err);
+        if (rb == PB_OK)
+            pb_volume_free(&v);
+        if (!want) {
+            CHECKF(rp == PB_OK && rb == PB_OK, "case %d: check %s (%s), bake %s (%s)", i, pb_result_name(rp),
+                   pre.message, pb_result_name(rb), err.message);
+            continue;
+        }
+        CHECKF(rp == PB_ERROR_INVALID_ARGUMENT && strstr(pre.message, want), "case %d: check %s: %s", i,
+               pb_result_name(rp), pre.message);
+        CHECKF(rb == rp && !strcmp(err.message, pre.message), "case %d: bake %s '%s', check '%s'", i,
+               pb_result_name(rb), err.message, pre.message);
+    }
+    pb_gpu_scene_destroy(gs);
+    pb_bvh_destroy(bvh);
+    pb_scene_destroy(s);
+}
+
 
 /* Draco, meshopt and quantized variants (tests/gltf_compress) bake like the
  * original: the lossless meshopt ones to the same irradiance bit for bit
@@ -3480,6 +3538,7 @@ int main(void)
     RUN(target_error_stops_converged_probes);
     RUN(points_subset_bakes_like_the_grid);
     RUN(bad_parameters_refused_before_gpu_work);
+    RUN(settings_checked_before_the_scene_as_in_the_bake);
     RUN(relocation_traces_first_hits_only);
     RUN(compressed_scenes_bake_like_originals);
     return test_gpu_finish(ctx);

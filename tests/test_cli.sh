@@ -234,6 +234,25 @@ expect indirect-bad 2 '--indirect takes path or volume' -- "$pb" bake "$demo" --
 expect skip-inside-bad 2 '--skip-inside takes on or off' -- "$pb" bake "$demo" --skip-inside maybe -o "$tmp/x.probes"
 expect scene-loads-bad 2 '--scene-loads takes auto, address or texel' -- "$pb" trace "$demo" --scene-loads words
 
+# settings that need no scene are refused before the scene is read (a large
+# scene's load can take minutes) and before any device is made: here the
+# scene would not load at all, and test_cli_nogpu has no device
+printf '{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 1e30}' >"$tmp/unloadable.gltf"
+expect settings-before-load-relocation 1 "^probebake: error: 16 relocation rays per probe: at most the 8 rays per probe of a pass$" -- \
+    "$pb" bake "$tmp/unloadable.gltf" --rays 8 --relocation-rays 16 -o "$tmp/x.probes"
+expect settings-before-load-volume-shard 1 "^probebake: error: --indirect volume samples the whole previous bounce's volume: a part cannot" -- \
+    "$pb" bake "$tmp/unloadable.gltf" --indirect volume --shard 0/2 -o "$tmp/x.probes"
+expect settings-before-load-surface-error 1 "^probebake: error: --refine-error 5: the surface test's error is relative" -- \
+    "$pb" bake "$tmp/unloadable.gltf" --layout sparse --refine-error 5 -o "$tmp/x.probes"
+expect settings-before-load-sparse-target 1 "^probebake: error: --target-error in a sparse bake depends on every probe" -- \
+    "$pb" bake "$tmp/unloadable.gltf" --layout sparse --target-error 0.1 --shard 1/2 -o "$tmp/x.probes"
+printf '{"points": [[0, 0, 0]]}' >"$tmp/one-point.json"
+expect settings-before-load-volume-points 1 "^probebake: error: --indirect volume samples the previous bounce's grid: it needs a grid" -- \
+    "$pb" bake "$tmp/unloadable.gltf" --indirect volume --points "$tmp/one-point.json" -o "$tmp/x.probes"
+# the same scene with good settings: its own error, naming it
+expect settings-then-load 1 "^probebake: error: $tmp/unloadable.gltf: " -- \
+    "$pb" bake "$tmp/unloadable.gltf" --rays 8 --relocation-rays 8 -o "$tmp/x.probes"
+
 # non-finite or overflowing light and positions: refused before any device work (issue 9)
 sed 's/"intensity": 15.0/"intensity": 1e38/' "$demo" >"$tmp/hot-light.gltf"
 expect light-overflow 1 "error: $tmp/hot-light.gltf: light 0 'lamp' has intensity 1e\+38 .*at most 1e\+20" -- \

@@ -300,6 +300,15 @@ typedef struct pb_sparse_stats {
 pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, const pb_bake_desc *desc,
                          const pb_sparse_desc *sd, pb_volume *out, pb_sparse_stats *stats, pb_error *err);
 
+/* The checks pb_bake and pb_bake_sparse (sparse: non-NULL) make on desc
+ * that need neither the scene nor a device: ray, pass, bounce and map
+ * limits, the SH window, the clamp, estimator and split combinations, the
+ * sparse layout's settings. Everything but the grid's counts, the points'
+ * coordinates and the light, which need the scene. A front end calls it
+ * before it loads a scene, so a bad command line fails at once. Returns
+ * PB_ERROR_INVALID_ARGUMENT with the bake's own message. */
+pb_result pb_bake_check_settings(const pb_bake_desc *desc, const pb_sparse_desc *sparse, pb_error *err);
+
 /* The passes a bake of desc takes (at most, under target_error): desc->passes,
  * or its default when 0. */
 uint32_t pb_bake_passes(const pb_bake_desc *desc);

@@ -12,6 +12,7 @@
  * adding passes never loses precision however many there are. */
 #include "bake/stages/job.h"
 #include "bake/indirect_volume.h"
+#include "bake/settings.h"
 #include "common/common.h"
 
 #include <math.h>
@@ -24,27 +25,23 @@ uint32_t pb_bake_passes(const pb_bake_desc *d)
     return d->passes ? d->passes : d->target_error > 0.f ? 64 : 4;
 }
 
+/* The settings (settings.c), then what needs the scene: the grid, the
+ * points' coordinates, the maximum distance, the light. */
 static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
 {
-    if (!d->rays_per_probe) d->rays_per_probe = 256;
-    d->passes = pb_bake_passes(d);
-    if (!(d->target_error >= 0.f) || !(d->target_error < 1.f))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "target error %g: must be in [0, 1) (a relative error)",
-                       d->target_error);
-    if (!d->octmap_res) d->octmap_res = 16;
-    if (d->lobe_power == 0.f) d->lobe_power = 50.f;
-    if (d->invalid_backface_fraction == 0.f) d->invalid_backface_fraction = 0.25f;
-    if (d->inside_fraction == 0.f) d->inside_fraction = d->invalid_backface_fraction + PB_INSIDE_MARGIN;
+    pb_bake_settings_default(d);
+    pb_result r = pb_bake_settings_check(d, err);
+    if (r != PB_OK)
+        return r;
     if (d->max_distance == 0.f) {
         float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
               dz = s->bounds_max[2] - s->bounds_min[2];
         d->max_distance = fmaxf(1e-3f, sqrtf(dx * dx + dy * dy + dz * dz));
     }
+    if (!(d->max_distance > 0.f) || !isfinite(d->max_distance))
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "max distance %g: must be positive and finite",
+                       d->max_distance);
     if (d->points) {
-        if (d->points->count == 0 || d->points->count > (1u << 24))
-            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u probe points: need 1 to 2^24", d->points->count);
-        if (!(d->points->spacing >= 0) || !isfinite(d->points->spacing))
-            return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "points spacing must be finite and >= 0");
         for (uint64_t i = 0; i < 3ull * d->points->count; ++i) {
             double x = d->points->positions[i];
             if (!(fabs(x) <= PB_MAX_COORDINATE) || !(fabs(x - s->origin[i % 3]) <= PB_MAX_COORDINATE))
@@ -62,43 +59,7 @@ static pb_result check_desc(const pb_scene *s, pb_bake_desc *d, pb_error *err)
             if (!isfinite(d->grid.origin[k]) || !(d->grid.spacing[k] >= 0.f) || !isfinite(d->grid.spacing[k]))
                 return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "probe grid origin and spacing must be finite, spacing >= 0");
     }
-    if (d->rays_per_probe > 65536)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u rays per probe: at most 65536", d->rays_per_probe);
-    if (!d->relocation_rays)
-        d->relocation_rays = d->rays_per_probe < PB_RELOCATION_RAYS_DEFAULT ? d->rays_per_probe : PB_RELOCATION_RAYS_DEFAULT;
-    if (d->relocation_rays > d->rays_per_probe)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u relocation rays per probe: at most the %u rays per probe "
-                       "of a pass", d->relocation_rays, d->rays_per_probe);
-    if (d->passes > 1000000)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u passes: at most 1e6", d->passes);
-    if (d->sh_window > PB_SH_WINDOW_LANCZOS || !(d->sh_window_width >= 0.f) || d->sh_window_width > 1e3f)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "SH window %u (width %g): none, hanning or lanczos, width in "
-                       "(0, 1000]", d->sh_window, d->sh_window_width);
-    if (!(d->indirect_clamp >= 0.f) || !isfinite(d->indirect_clamp))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "indirect clamp %g: must be finite and >= 0 (0: off)",
-                       d->indirect_clamp);
-    if (d->bounces > 64)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u bounces: at most 64", d->bounces);
-    if (d->octmap_res > 64)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "octahedral map %u: at most 64 texels per side", d->octmap_res);
-    if (d->schedule > PB_SCHEDULE_WAVEFRONT)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "schedule %u: 0 (one kernel per path) or 1 (a wavefront)",
-                       d->schedule);
-    pb_result r = pb_bake_check_light(s, d->sky, d->environment, err);
-    if (r != PB_OK)
-        return r;
-    if (d->environment && (!d->environment->rgb || !d->environment->width || !d->environment->height ||
-                           (uint64_t)d->environment->width * d->environment->height > (1u << 24) ||
-                           !isfinite(d->environment->rotation_deg)))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "environment map: empty, over 2^24 texels, or a non-finite rotation");
-    if (!(d->max_distance > 0.f) || !isfinite(d->max_distance) || !(d->lobe_power > 0.f) ||
-        !(d->invalid_backface_fraction > 0.f && d->invalid_backface_fraction <= 1.f))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "max distance and lobe power must be positive, the "
-                                                       "invalid back-face fraction in (0, 1]");
-    if (!(d->inside_fraction > 0.f) || !isfinite(d->inside_fraction))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "inside fraction %g: must be in (0, 1), or >= 1 to trace every "
-                       "probe", d->inside_fraction);
-    return PB_OK;
+    return pb_bake_check_light(s, d->sky, d->environment, err);
 }
 
 /* Whether anything in the scene or its environment emits light. */
@@ -237,15 +198,10 @@ pb_result pb_bake(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *gs, cons
 {
     if (!desc->indirect_volume || desc->bounces == 0)
         return bake_once(ctx, scene, gs, desc, NULL, out, err);
-    pb_error_clear(err);
     memset(out, 0, sizeof *out);
-    if (desc->shard_count)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "--indirect volume samples the whole previous bounce's volume: a part cannot bake it alone "
-                       "(shard the path-traced bake instead)");
-    if (desc->points)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "--indirect volume samples the previous bounce's grid: it needs a grid, not points");
+    pb_result checked = pb_bake_check_settings(desc, NULL, err); /* a part or points refused before bounce 1 */
+    if (checked != PB_OK)
+        return checked;
     /* each bounce samples the previous volume on the device, its depth tiles
      * one buffer: refused before the first bounce, not after it (counts past
      * 2^24 probes are bake_once's to refuse) */

@@ -19,6 +19,7 @@
  * pb_bake_bounce), and the last bounce's layout is the volume's. */
 #include "bake/gpu_scene.h"
 #include "bake/indirect_volume.h"
+#include "bake/settings.h"
 #include "bake/shard.h"
 #include "bake/sparse_miss.h"
 #include "bake/sparse_compact.h"
@@ -828,48 +829,13 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
 {
     pb_error_clear(err);
     memset(out, 0, sizeof *out);
-    pb_sparse_desc sd = *sd_in;
-    if (sd.levels == 0)
-        sd.levels = 3;
-    if (sd.refine_error == 0.f)
-        sd.refine_error = 0.1f;
-    if (sd.test_pass_scale == 0)
-        sd.test_pass_scale = 4;
-    if (sd.seam_error == 0.f)
-        sd.seam_error = sd.refine_error;
-    if (!(sd.seam_error > 0.f) || !isfinite(sd.seam_error))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--seam-error %g: must be a positive number",
-                       (double)sd.seam_error);
-    if (sd.seam_rounds > 8)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--refine-seams %u: at most 8 rounds", sd.seam_rounds);
-    if (sd.test_pass_scale > 64)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "sparse bake: the surface test's probes at %u times the bake's passes: at most 64",
-                       sd.test_pass_scale);
-    if (sd.levels > PB_SPARSE_MAX_LEVELS)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--max-level %u: the sparse layout has at most %u levels (0-%u)",
-                       sd.levels - 1, PB_SPARSE_MAX_LEVELS, PB_SPARSE_MAX_LEVELS - 1);
-    if (!(sd.refine_error > 0.f) || !isfinite(sd.refine_error))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--refine-error %g: must be a positive number",
-                       (double)sd.refine_error);
-    if (sd.test == PB_REFINE_TEST_SURFACE && !(sd.refine_error < 1.f))
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "--refine-error %g: the surface test's error is relative to the larger of prediction and "
-                       "bake, so at most 1: give less than 1 (or --refine-test probe)", (double)sd.refine_error);
-    if (sd.test > PB_REFINE_TEST_PROBE)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "sparse bake: unknown refinement test %u", sd.test);
-    if (desc->points)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "--layout sparse places its own probes: not with --points");
-    if (desc->shard_count && desc->indirect_volume && desc->bounces)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "--indirect volume samples the whole previous bounce's volume: a part cannot bake it alone "
-                       "(shard the path-traced bake instead)");
-    /* each of a sparse bake's bakes takes --target-error's floor from its own
-     * probes, which a part does not have all of */
-    if (desc->shard_count && desc->target_error > 0.f)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "--target-error in a sparse bake depends on every probe of each level: its parts could not "
-                       "merge into the whole bake; give fixed --passes (or no --shard)");
+    /* every setting checked before any work (settings.c: the command line
+     * runs the same checks before it loads the scene) */
+    pb_result checked = pb_bake_check_settings(desc, sd_in, err);
+    if (checked != PB_OK)
+        return checked;
+    pb_sparse_desc sd;
+    pb_sparse_settings(desc, sd_in, &sd, err);
     if (!desc->indirect_volume || desc->bounces == 0) {
         pb_bake_desc d = *desc;
         d.indirect_volume = 0;

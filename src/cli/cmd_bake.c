@@ -11,6 +11,15 @@
 #include <string.h>
 #include <unistd.h>
 
+/* The sparse layout's settings from --max-level, --refine-error,
+ * --refine-test, --refine-seams and --seam-error (0: the library's default). */
+static pb_sparse_desc sparse_desc_from_options(const options *o)
+{
+    pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test, 0,
+                         o->refine_seams, o->seam_error};
+    return sd;
+}
+
 /* --devices all|LIST: the devices to bake on, as pb_context_desc.device
  * strings ("N" indices or name parts; one may repeat, which on lavapipe
  * runs two logical devices of one driver). Returns how many, 0 on error. */
@@ -69,8 +78,7 @@ static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_b
         fprintf(stderr, "\n");
     if (r == PB_OK) {
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
-        pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test, 0,
-                                 o->refine_seams, o->seam_error};
+        pb_sparse_desc sd = sparse_desc_from_options(o);
         r = pb_bake_devices(ctxs, scenes, n, s, d, o->sparse ? &sd : NULL, vol, err);
     }
     for (uint32_t i = 0; r == PB_OK && o->validation && i < n; ++i)
@@ -305,8 +313,7 @@ static pb_result bake_on_device(const options *o, const pb_scene *s, const pb_bv
     if (r == PB_OK) {
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
         if (o->sparse) {
-            pb_sparse_desc sd = {o->has_max_level ? o->max_level + 1 : 0, o->refine_error, o->refine_test, 0,
-                                 o->refine_seams, o->seam_error};
+            pb_sparse_desc sd = sparse_desc_from_options(o);
             r = pb_bake_sparse(ctx, s, gs, d, &sd, vol, stats, err);
         } else {
             r = pb_bake(ctx, s, gs, d, vol, err);
@@ -363,6 +370,14 @@ int cmd_bake(const options *o)
         goto out;
     if (cli_environment(o, &env, &err) != PB_OK)
         goto out;
+    /* every setting that needs no scene, before a large scene's load */
+    const pb_bake_quality *q = pb_bake_quality_find(o->quality);
+    if (o->points)
+        d.points = &pts;
+    desc_from_options(o, q, &env, &d);
+    pb_sparse_desc sd = sparse_desc_from_options(o);
+    if (pb_bake_check_settings(&d, o->sparse ? &sd : NULL, &err) != PB_OK)
+        goto out;
     double load_ms = cli_now_ms();
     if (pb_scene_load(o->scene, &scd, &s, &err) != PB_OK ||
         pb_bake_check_light(s, o->sky, o->env ? &env : NULL, &err) != PB_OK)
@@ -373,12 +388,8 @@ int cmd_bake(const options *o)
         snprintf(err.message, sizeof err.message, "%s: no triangles and no --bounds: nowhere to put probes", o->scene);
         goto out;
     }
-    if (o->points)
-        d.points = &pts;
-    else if (grid_from_options(o, s, &d.grid, &err) != PB_OK)
+    if (!o->points && grid_from_options(o, s, &d.grid, &err) != PB_OK)
         goto out;
-    const pb_bake_quality *q = pb_bake_quality_find(o->quality);
-    desc_from_options(o, q, &env, &d);
     uint64_t probes = o->points ? pts.count : (uint64_t)d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
     if (o->shard_count > probes) {
         snprintf(err.message, sizeof err.message, "--shard %u/%u: only %llu probes to share", o->shard_index,
