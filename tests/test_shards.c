@@ -456,7 +456,7 @@ static pb_bake_desc sparse_demo_desc(const pb_scene *s, float spacing)
 /* A sparse bake splits by coarsest brick: each part places and refines its
  * own, and the merge (bricks level by level in part order, shared face
  * probes checked equal, then dilation and stitching) is the whole bake's
- * file. Refused: a part of another refine error or refinement test, a part whose shared probe
+ * file, at once or a part at a time. Refused: a part of another refine error or refinement test, a part whose shared probe
  * was changed, a target error, --indirect volume. */
 static void sparse_parts_merge_to_the_whole_bake(void)
 {
@@ -487,6 +487,57 @@ static void sparse_parts_merge_to_the_whole_bake(void)
                 whole.sparse->brick_count, whole.probe_count, part_bricks, part_probes,
                 same ? "the same as the whole bake's" : "DIFFERENT");
         CHECK(same && part_bricks == whole.sparse->brick_count && part_probes > whole.probe_count);
+        /* probebake merge's way: the parts' layouts first (probes freed),
+         * then each part's probes in turn, given in any order: the same
+         * volume, timings summed in the same order */
+        const uint32_t order[3] = {1, 2, 0};
+        pb_volume layouts[3], stepped;
+        char paths[3][512];
+        const char *lnames[3] = {paths[0], paths[1], paths[2]};
+        int read = 0;
+        for (uint32_t i = 0; i < 3; ++i) {
+            snprintf(paths[i], sizeof paths[i], "%s/sparse%u.probes", temp_dir(), order[i]); /* bake_layout_part's */
+            read += pb_volume_read(paths[i], &layouts[read], &err) == PB_OK;
+            if (read == (int)i + 1)
+                pb_volume_free_probes(&layouts[i]);
+        }
+        pb_sparse_merging *m = NULL;
+        pb_result r = read == 3 ? pb_volume_merge_sparse_begin(layouts, lnames, 3, &stepped, &m, &err) : PB_ERROR_IO;
+        for (uint32_t k = 0; k < 3 && r == PB_OK; ++k) {
+            pb_volume part;
+            char path[512];
+            snprintf(path, sizeof path, "%s/sparse%u.probes", temp_dir(), k);
+            r = pb_volume_read(path, &part, &err);
+            if (r == PB_OK && k == 1) { /* part 0 again where part 1 is due: named, nothing added */
+                CHECK(pb_sparse_merge_add(m, &stepped, &parts[0], &err) == PB_ERROR_INVALID_ARGUMENT &&
+                      strstr(err.message, "sparse1.probes: changed while it was merged"));
+                /* part 1 with a brick's probe indices shifted: its layout is not the one begin read */
+                uint32_t keep = part.sparse->brick_probes[0];
+                part.sparse->brick_probes[0] = part.sparse->brick_probes[1];
+                CHECK(pb_sparse_merge_add(m, &stepped, &part, &err) == PB_ERROR_INVALID_ARGUMENT &&
+                      strstr(err.message, "changed while it was merged"));
+                part.sparse->brick_probes[0] = keep;
+            }
+            if (r == PB_OK)
+                r = pb_sparse_merge_add(m, &stepped, &part, &err);
+            pb_volume_free(&part);
+        }
+        if (r == PB_OK) {
+            r = pb_sparse_merge_end(m, &stepped, &err);
+            m = NULL;
+        }
+        pb_sparse_merging_free(m);
+        CHECKF(r == PB_OK, "%s", err.message);
+        CHECK(r == PB_OK && same_but_timings(&merged, &stepped) && same_but_timings(&whole, &stepped) &&
+              !memcmp(&merged.timings, &stepped.timings, sizeof merged.timings));
+        pb_volume_free(&stepped);
+        /* ended with a part missing: refused */
+        r = pb_volume_merge_sparse_begin(layouts, lnames, 3, &stepped, &m, &err);
+        CHECK(r == PB_OK && pb_sparse_merge_add(m, &stepped, &parts[0], &err) == PB_OK &&
+              pb_sparse_merge_end(m, &stepped, &err) == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "1 of 3"));
+        pb_volume_free(&stepped);
+        for (int i = 0; i < read; ++i)
+            pb_volume_free(&layouts[i]);
         pb_volume_free(&merged);
         /* a probe parts 1 and 0 both hold (a face between their bricks), changed in part 1: named */
         uint32_t shared = UINT32_MAX;

@@ -192,13 +192,29 @@ pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint
  * is added (in part index order, as pb_volume_merge adds them; `header` is
  * what begin saw of it, and a part that no longer matches it is an error
  * naming the file); end dilates across the parts. A sparse bake's parts
- * are stitched together: pb_volume_merge only (begin refuses them). On an
- * error after begin the caller frees *out. */
+ * have their own steps (below; begin refuses them). On an error after
+ * begin the caller frees *out. */
 pb_result pb_volume_merge_begin(const pb_volume *headers, const char *const *names, uint32_t count, pb_volume *out,
                                 pb_error *err);
 pb_result pb_volume_merge_add(pb_volume *out, const pb_volume *part, const pb_volume *header, const char *name,
                               pb_error *err);
 void pb_volume_merge_end(pb_volume *out);
+
+/* A sparse bake's parts merged in steps, so that only one part's probes
+ * need be in memory beside the whole (`probebake merge`): begin takes every
+ * part's header and sparse layout (pb_volume_read, then
+ * pb_volume_free_probes), makes every check pb_volume_merge makes, builds
+ * the whole layout and allocates *out; add takes the parts whole, one at a
+ * time in part index order, each refused (naming its file) if it is not the
+ * part begin saw; end dilates and stitches across the parts and drops the
+ * probes in rock, as pb_volume_merge does, and frees *m. On an error the
+ * caller frees *out, and *m with pb_sparse_merging_free unless end ran. */
+typedef struct pb_sparse_merging pb_sparse_merging;
+pb_result pb_volume_merge_sparse_begin(const pb_volume *layouts, const char *const *names, uint32_t count,
+                                       pb_volume *out, pb_sparse_merging **m, pb_error *err);
+pb_result pb_sparse_merge_add(pb_sparse_merging *m, pb_volume *out, const pb_volume *part, pb_error *err);
+pb_result pb_sparse_merge_end(pb_sparse_merging *m, pb_volume *out, pb_error *err);
+void pb_sparse_merging_free(pb_sparse_merging *m);
 
 typedef struct pb_sparse_desc pb_sparse_desc;
 

@@ -140,6 +140,25 @@ pb_result pb_volume_merge_begin(const pb_volume *headers, const char *const *nam
     return pb_volume_alloc(out, err);
 }
 
+pb_result pb_volume_merge_sparse_begin(const pb_volume *layouts, const char *const *names, uint32_t count,
+                                       pb_volume *out, pb_sparse_merging **m, pb_error *err)
+{
+    pb_error_clear(err);
+    memset(out, 0, sizeof *out);
+    *m = NULL;
+    const pb_volume **by_index;
+    const char **name_of;
+    pb_result r = check_parts(layouts, names, count, &by_index, &name_of, err);
+    for (uint32_t i = 0; i < count && r == PB_OK; ++i) /* one kind of part, each with its layout */
+        if (!(layouts[i].flags & PB_VOLUME_SPARSE) || !layouts[i].sparse)
+            r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: not a part of a sparse bake (or its layout unread)",
+                        names[i]);
+    if (r == PB_OK)
+        r = pb_sparse_merge_begin(by_index, name_of, layouts[0].shard.count, out, m, err);
+    free(by_index), free(name_of);
+    return r;
+}
+
 pb_result pb_volume_merge_add(pb_volume *out, const pb_volume *part, const pb_volume *header, const char *name,
                               pb_error *err)
 {

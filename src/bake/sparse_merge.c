@@ -24,9 +24,49 @@ static int same_probe(const pb_volume *a, uint32_t p, const pb_volume *b, uint32
            !memcmp(a->depth + halves * p, b->depth + halves * q, 2 * halves);
 }
 
-pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *names, uint32_t N, pb_volume *out,
-                          pb_error *err)
+/* Where the whole volume's bricks and probes come from, between begin and
+ * end: each merged brick's part and its index there, each probe's filler. */
+struct pb_sparse_merging {
+    uint32_t N, B;
+    uint32_t *from_part, *from_brick; /* per merged brick */
+    uint8_t *filled;                  /* per probe of the whole */
+    uint32_t *src_part;               /* per probe: the part that filled it */
+    char (*device)[256];              /* per part: the device it names */
+    char (*name)[512];                /* per part: its file, for messages */
+    uint32_t *brick_count;            /* per part: its bricks and probes, as begin saw them */
+    uint32_t *probe_count;
+    uint64_t *scene_hash;
+    uint64_t *layout_hash;            /* per part: its bricks and their probe indices (layout_hash) */
+    uint32_t next;                    /* the part add expects next */
+};
+
+/* FNV-1a over a part's bricks and brick probe indices: a part read again
+ * for its probes must have the layout begin read. */
+static uint64_t layout_hash(const pb_sparse_layout *l)
 {
+    uint64_t h = 1469598103934665603ull;
+    const unsigned char *b = (const unsigned char *)l->bricks, *p = (const unsigned char *)l->brick_probes;
+    for (size_t i = 0; i < (size_t)l->brick_count * sizeof *l->bricks; ++i)
+        h = (h ^ b[i]) * 1099511628211ull;
+    for (size_t i = 0; i < (size_t)l->brick_count * PB_SPARSE_BRICK_PROBES * sizeof *l->brick_probes; ++i)
+        h = (h ^ p[i]) * 1099511628211ull;
+    return h;
+}
+
+void pb_sparse_merging_free(pb_sparse_merging *m)
+{
+    if (!m)
+        return;
+    free(m->from_part), free(m->from_brick), free(m->filled), free(m->src_part);
+    free(m->device), free(m->name), free(m->brick_count), free(m->probe_count), free(m->scene_hash),
+        free(m->layout_hash);
+    free(m);
+}
+
+pb_result pb_sparse_merge_begin(const pb_volume *const *parts, const char *const *names, uint32_t N, pb_volume *out,
+                                pb_sparse_merging **merging, pb_error *err)
+{
+    *merging = NULL;
     const pb_volume *p0 = parts[0];
     const pb_sparse_layout *l0 = p0->sparse;
     uint32_t L = l0->levels;
@@ -53,14 +93,34 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%llu bricks in the parts: too many",
                        (unsigned long long)bricks);
     /* bricks level by level, parts in order; where each came from */
-    pb_sparse_brick *all = malloc((size_t)(bricks ? bricks : 1) * sizeof *all);
-    uint32_t *from_part = malloc((size_t)(bricks ? bricks : 1) * sizeof *from_part);
-    uint32_t *from_brick = malloc((size_t)(bricks ? bricks : 1) * sizeof *from_brick);
+    size_t nb = bricks ? (size_t)bricks : 1;
+    pb_sparse_brick *all = malloc(nb * sizeof *all);
     pb_sparse_layout *sp = calloc(1, sizeof *sp);
-    if (!all || !from_part || !from_brick || !sp) {
-        free(all), free(from_part), free(from_brick), free(sp);
+    pb_sparse_merging *m = calloc(1, sizeof *m);
+    if (m) {
+        m->from_part = malloc(nb * sizeof *m->from_part);
+        m->from_brick = malloc(nb * sizeof *m->from_brick);
+        m->device = calloc(N, sizeof *m->device);
+        m->name = calloc(N, sizeof *m->name);
+        m->brick_count = calloc(N, sizeof *m->brick_count);
+        m->probe_count = calloc(N, sizeof *m->probe_count);
+        m->scene_hash = calloc(N, sizeof *m->scene_hash);
+        m->layout_hash = calloc(N, sizeof *m->layout_hash);
+    }
+    if (!all || !sp || !m || !m->from_part || !m->from_brick || !m->device || !m->name || !m->brick_count ||
+        !m->probe_count || !m->scene_hash || !m->layout_hash) {
+        free(all), free(sp), pb_sparse_merging_free(m);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory merging %llu bricks",
                        (unsigned long long)bricks);
+    }
+    m->N = N;
+    for (uint32_t k = 0; k < N; ++k) {
+        snprintf(m->device[k], sizeof m->device[k], "%s", parts[k]->device);
+        snprintf(m->name[k], sizeof m->name[k], "%s", names[k]);
+        m->brick_count[k] = parts[k]->sparse->brick_count;
+        m->probe_count[k] = parts[k]->probe_count;
+        m->scene_hash[k] = parts[k]->settings.scene_hash;
+        m->layout_hash[k] = layout_hash(parts[k]->sparse);
     }
     uint32_t B = 0;
     for (uint32_t level = 0; level < L; ++level)
@@ -68,17 +128,18 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
             for (uint32_t b = 0; b < parts[k]->sparse->brick_count; ++b)
                 if (parts[k]->sparse->bricks[b].level == level) {
                     all[B] = parts[k]->sparse->bricks[b];
-                    from_part[B] = k, from_brick[B] = b;
+                    m->from_part[B] = k, m->from_brick[B] = b;
                     B++;
                 }
+    m->B = B;
     uint32_t P = 0;
     pb_result r = pb_sparse_layout_build(L, l0->cells, all, B, sp, &P, NULL, err);
     free(all);
     if (r != PB_OK) {
-        free(from_part), free(from_brick), free(sp);
+        free(sp), pb_sparse_merging_free(m);
         return r;
     }
-    /* the header of part 0, the probes of every part */
+    /* the header of part 0; the probes come with each part */
     out->flags = p0->flags & ~PB_VOLUME_SHARD;
     out->probe_count = P;
     out->counts[0] = P, out->counts[1] = out->counts[2] = 1;
@@ -89,32 +150,56 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
     out->settings.passes = 0;
     out->depth_unit = p0->depth_unit;
     snprintf(out->device, sizeof out->device, "%s", p0->device);
-    for (uint32_t k = 0; k < N; ++k)
-        pb_shard_account(out, parts[k]);
-    uint8_t *filled = calloc(P ? P : 1, 1);
-    uint32_t *src_part = malloc((size_t)(P ? P : 1) * sizeof *src_part);
-    if (!filled || !src_part)
+    out->sparse = sp;
+    m->filled = calloc(P ? P : 1, 1);
+    m->src_part = malloc((size_t)(P ? P : 1) * sizeof *m->src_part);
+    if (!m->filled || !m->src_part)
         r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory merging %u probes", P);
     if (r == PB_OK)
         r = pb_volume_alloc(out, err);
+    if (r != PB_OK) {
+        pb_sparse_merging_free(m);
+        pb_volume_free(out);
+        return r;
+    }
+    *merging = m;
+    return PB_OK;
+}
+
+pb_result pb_sparse_merge_add(pb_sparse_merging *m, pb_volume *out, const pb_volume *v, pb_error *err)
+{
+    uint32_t k = m->next;
+    if (k >= m->N)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "all %u parts are merged already", m->N);
+    /* the part read again must be the one begin saw (its bricks' probes are
+     * looked up by begin's brick indices) */
+    if (!v->sparse || v->sparse->brick_count != m->brick_count[k] || v->probe_count != m->probe_count[k] ||
+        v->shard.index != k || v->settings.scene_hash != m->scene_hash[k] || strcmp(v->device, m->device[k]) ||
+        layout_hash(v->sparse) != m->layout_hash[k])
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: changed while it was merged (its bricks, probes, part "
+                       "index, scene or device)", m->name[k]);
     uint64_t halves = pb_volume_tile_halves(out->octmap_res);
-    for (uint32_t m = 0; r == PB_OK && m < B; ++m) {
-        const pb_volume *v = parts[from_part[m]];
-        for (uint32_t i = 0; r == PB_OK && i < PB_SPARSE_BRICK_PROBES; ++i) {
-            uint32_t q = sp->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)m + i];
-            uint32_t p = v->sparse->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)from_brick[m] + i];
-            if (filled[q]) {
+    const pb_sparse_layout *sp = out->sparse;
+    uint32_t L = sp->levels;
+    for (uint32_t b = 0; b < m->B; ++b) {
+        if (m->from_part[b] != k)
+            continue;
+        uint32_t own = m->from_brick[b];
+        for (uint32_t i = 0; i < PB_SPARSE_BRICK_PROBES; ++i) {
+            uint32_t q = sp->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)b + i];
+            uint32_t p = v->sparse->brick_probes[PB_SPARSE_BRICK_PROBES * (size_t)own + i];
+            if (m->filled[q]) {
                 /* a probe bricks share, maybe of two parts: one bake on one
                  * kind of device gives it one record; across different devices
                  * (transcendentals round differently) the lower part's stays */
-                if (!strcmp(v->device, parts[src_part[q]]->device) && !same_probe(out, q, v, p, halves)) {
-                    const pb_sparse_brick *br = &sp->bricks[m];
+                if (!strcmp(v->device, m->device[m->src_part[q]]) && !same_probe(out, q, v, p, halves)) {
+                    const pb_sparse_brick *br = &sp->bricks[b];
                     uint32_t step = pb_sparse_step(L, br->level);
-                    r = pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                                "%s: its probe at finest lattice point (%u, %u, %u) differs from %s's: not parts of "
-                                "one bake (another build or driver?)", names[from_part[m]],
-                                (3 * br->coord[0] + (i & 3u)) * step, (3 * br->coord[1] + ((i >> 2) & 3u)) * step,
-                                (3 * br->coord[2] + (i >> 4)) * step, names[src_part[q]]);
+                    return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                                   "%s: its probe at finest lattice point (%u, %u, %u) differs from %s's: not parts of "
+                                   "one bake (another build or driver?)", m->name[k],
+                                   (3 * br->coord[0] + (i & 3u)) * step, (3 * br->coord[1] + ((i >> 2) & 3u)) * step,
+                                   (3 * br->coord[2] + (i >> 4)) * step, m->name[m->src_part[q]]);
                 }
                 continue;
             }
@@ -125,20 +210,40 @@ pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *name
             out->probe_std_error[q] = v->probe_std_error[p];
             memcpy(out->sh + 27 * (size_t)q, v->sh + 27 * (size_t)p, 108);
             memcpy(out->depth + halves * q, v->depth + halves * p, 2 * halves);
-            filled[q] = 1, src_part[q] = from_part[m];
+            m->filled[q] = 1, m->src_part[q] = k;
         }
     }
-    free(filled), free(src_part), free(from_part), free(from_brick);
-    if (r != PB_OK) {
-        pb_sparse_layout_free(sp);
-        free(sp);
-        pb_volume_free(out);
-        return r;
-    }
-    out->sparse = sp;
+    pb_shard_account(out, v);
+    m->next++;
+    return PB_OK;
+}
+
+pb_result pb_sparse_merge_end(pb_sparse_merging *m, pb_volume *out, pb_error *err)
+{
+    uint32_t added = m->next, N = m->N;
+    pb_sparse_merging_free(m);
+    if (added != N)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u of %u parts merged", added, N);
     /* the stages that need neighbours across parts: as the one-process bake */
     pb_volume_dilate(out, PB_DILATION_ROUNDS);
-    if ((r = pb_sparse_stitch(out, err)) != PB_OK || (r = pb_sparse_drop_invalid(out, err)) != PB_OK)
+    pb_result r = pb_sparse_stitch(out, err);
+    if (r == PB_OK)
+        r = pb_sparse_drop_invalid(out, err);
+    return r;
+}
+
+pb_result pb_sparse_merge(const pb_volume *const *parts, const char *const *names, uint32_t N, pb_volume *out,
+                          pb_error *err)
+{
+    pb_sparse_merging *m;
+    pb_result r = pb_sparse_merge_begin(parts, names, N, out, &m, err);
+    for (uint32_t k = 0; k < N && r == PB_OK; ++k)
+        r = pb_sparse_merge_add(m, out, parts[k], err);
+    if (r == PB_OK)
+        r = pb_sparse_merge_end(m, out, err);
+    else
+        pb_sparse_merging_free(m);
+    if (r != PB_OK)
         pb_volume_free(out);
     return r;
 }

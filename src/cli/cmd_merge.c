@@ -9,31 +9,84 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* A grid's parts one at a time: every header checked first (nothing is
- * allocated for a foreign, missing or duplicated part), then each part read
- * whole, copied into the volume and freed, in part index order. The whole
- * volume and one part are in memory at once, not every part besides. */
-static pb_result merge_streamed(const options *o, const pb_volume *headers, pb_volume *merged, pb_error *err)
+/* Adds one part, read whole, to the merge; `i` is its place on the command line. */
+typedef pb_result (*add_part_fn)(void *merging, pb_volume *merged, const pb_volume *part, const pb_volume *header,
+                                 const char *name, pb_error *err);
+
+/* Each part read whole, handed to `add` and freed, in part index order
+ * (headers[i] says which part file i is); a signal stops between parts. */
+static pb_result add_parts_in_order(const options *o, const pb_volume *headers, add_part_fn add, void *merging,
+                                    pb_volume *merged, pb_error *err)
 {
     uint32_t n = o->part_count;
-    const char *const *names = (const char *const *)o->parts;
-    pb_result r = pb_volume_merge_begin(headers, names, n, merged, err);
+    pb_result r = PB_OK;
     for (uint32_t k = 0; k < n && r == PB_OK; ++k)
         for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
             if (headers[i].shard.index != k)
                 continue;
             pb_volume part;
-            r = pb_volume_read(names[i], &part, err);
+            r = pb_volume_read(o->parts[i], &part, err);
             if (r == PB_OK)
-                r = pb_volume_merge_add(merged, &part, &headers[i], names[i], err);
+                r = add(merging, merged, &part, &headers[i], o->parts[i], err);
             pb_volume_free(&part);
             if (r == PB_OK && cli_interrupted(NULL)) {
                 r = err->code = PB_ERROR_CANCELLED;
                 snprintf(err->message, sizeof err->message, "%s: cancelled; nothing written", o->scene);
             }
         }
+    return r;
+}
+
+static pb_result add_grid_part(void *merging, pb_volume *merged, const pb_volume *part, const pb_volume *header,
+                               const char *name, pb_error *err)
+{
+    (void)merging;
+    return pb_volume_merge_add(merged, part, header, name, err);
+}
+
+static pb_result add_sparse_part(void *merging, pb_volume *merged, const pb_volume *part, const pb_volume *header,
+                                 const char *name, pb_error *err)
+{
+    (void)header, (void)name; /* the merging state holds what begin saw of each part, and its name */
+    return pb_sparse_merge_add(merging, merged, part, err);
+}
+
+/* A grid's parts one at a time: every header checked first (nothing is
+ * allocated for a foreign, missing or duplicated part), then each part read
+ * whole, copied into the volume and freed, in part index order. The whole
+ * volume and one part are in memory at once, not every part besides. */
+static pb_result merge_grid(const options *o, const pb_volume *headers, pb_volume *merged, pb_error *err)
+{
+    pb_result r = pb_volume_merge_begin(headers, (const char *const *)o->parts, o->part_count, merged, err);
+    if (r == PB_OK)
+        r = add_parts_in_order(o, headers, add_grid_part, NULL, merged, err);
     if (r == PB_OK)
         pb_volume_merge_end(merged);
+    return r;
+}
+
+/* A sparse bake's parts, also one at a time: each read whole once for its
+ * layout (its probes freed at once), then, once the whole layout is built,
+ * again for its probes, in part index order; bricks are stitched across
+ * parts at the end, in the whole volume. Each part is read twice, and the
+ * whole volume and one part are in memory at once, not every part. */
+static pb_result merge_sparse(const options *o, pb_volume *layouts, pb_volume *merged, pb_error *err)
+{
+    uint32_t n = o->part_count;
+    pb_result r = PB_OK;
+    for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
+        pb_volume_free(&layouts[i]);
+        r = pb_volume_read(o->parts[i], &layouts[i], err);
+        pb_volume_free_probes(&layouts[i]);
+    }
+    pb_sparse_merging *m = NULL;
+    if (r == PB_OK)
+        r = pb_volume_merge_sparse_begin(layouts, (const char *const *)o->parts, n, merged, &m, err);
+    if (r == PB_OK)
+        r = add_parts_in_order(o, layouts, add_sparse_part, m, merged, err);
+    if (r == PB_OK)
+        return pb_sparse_merge_end(m, merged, err);
+    pb_sparse_merging_free(m);
     return r;
 }
 
@@ -55,19 +108,13 @@ int cmd_merge(const options *o)
     /* the output before any work: not a directory, writable, not a part */
     if (pb_output_check(out_path, (const char *const *)o->parts, n, &err) != PB_OK)
         goto out;
-    for (uint32_t i = 0; i < n; ++i) /* headers first: a grid's parts are then read one at a time */
+    for (uint32_t i = 0; i < n; ++i) /* headers first: the parts are then read one at a time */
         if (pb_volume_read_header(o->parts[i], &parts[i], &err) != PB_OK)
             goto out;
     cli_defer_signals(); /* from here a signal cancels the merge or the write */
-    if (parts[0].flags & PB_VOLUME_SPARSE) { /* bricks are stitched across parts: all of them at once */
-        for (uint32_t i = 0; i < n; ++i)
-            if (pb_volume_read(o->parts[i], &parts[i], &err) != PB_OK)
-                goto out;
-        if (pb_volume_merge(parts, (const char *const *)o->parts, n, &merged, &err) != PB_OK)
-            goto out;
-    } else if (merge_streamed(o, parts, &merged, &err) != PB_OK) {
+    if ((parts[0].flags & PB_VOLUME_SPARSE ? merge_sparse(o, parts, &merged, &err)
+                                           : merge_grid(o, parts, &merged, &err)) != PB_OK)
         goto out;
-    }
     if (pb_volume_write_ex(out_path, &merged, cli_interrupted, NULL, &err) != PB_OK)
         goto out;
     uint32_t dilated = 0;
