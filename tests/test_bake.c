@@ -3397,7 +3397,7 @@ static void settings_checked_before_the_scene_as_in_the_bake(void)
         case 4: d.octmap_res = 65, want = "octahedral map"; break;
         case 5: d.bounces = 65, want = "bounces"; break;
         case 6: d.indirect_clamp = -1.f, want = "indirect clamp"; break;
-        case 7: d.indirect_volume = 1, d.shard_count = 2, want = "a part cannot bake it alone"; break;
+        case 7: d.indirect_volume = 1, d.shard_count = 2, want = "cannot bake it alone"; break;
         case 8: d.indirect_volume = 1, d.points = &pts, memset(&d.grid, 0, sizeof d.grid), want = "not points"; break;
         case 9: sparse = &sd; break;
         case 10: sparse = &sd, sd.refine_error = 5.f, want = "--refine-error 5"; break;

@@ -240,7 +240,7 @@ expect scene-loads-bad 2 '--scene-loads takes auto, address or texel' -- "$pb" t
 printf '{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 1e30}' >"$tmp/unloadable.gltf"
 expect settings-before-load-relocation 1 "^probebake: error: 16 relocation rays per probe: at most the 8 rays per probe of a pass$" -- \
     "$pb" bake "$tmp/unloadable.gltf" --rays 8 --relocation-rays 16 -o "$tmp/x.probes"
-expect settings-before-load-volume-shard 1 "^probebake: error: --indirect volume samples the whole previous bounce's volume: a part cannot" -- \
+expect settings-before-load-volume-shard 1 "^probebake: error: --indirect volume samples the whole previous bounce's volume: a part \\(--shard, --devices\\) cannot bake it alone" -- \
     "$pb" bake "$tmp/unloadable.gltf" --indirect volume --shard 0/2 -o "$tmp/x.probes"
 expect settings-before-load-surface-error 1 "^probebake: error: --refine-error 5: the surface test's error is relative" -- \
     "$pb" bake "$tmp/unloadable.gltf" --layout sparse --refine-error 5 -o "$tmp/x.probes"
@@ -249,6 +249,8 @@ expect settings-before-load-sparse-target 1 "^probebake: error: --target-error i
 printf '{"points": [[0, 0, 0]]}' >"$tmp/one-point.json"
 expect settings-before-load-volume-points 1 "^probebake: error: --indirect volume samples the previous bounce's grid: it needs a grid" -- \
     "$pb" bake "$tmp/unloadable.gltf" --indirect volume --points "$tmp/one-point.json" -o "$tmp/x.probes"
+expect settings-before-load-devices 1 "^probebake: error: --target-error in a sparse bake depends on every probe of each level: its parts \(--shard, --devices\)" -- \
+    "$pb" bake "$tmp/unloadable.gltf" --layout sparse --target-error 0.1 --devices 0,0 -o "$tmp/x.probes"
 # the same scene with good settings: its own error, naming it
 expect settings-then-load 1 "^probebake: error: $tmp/unloadable.gltf: " -- \
     "$pb" bake "$tmp/unloadable.gltf" --rays 8 --relocation-rays 8 -o "$tmp/x.probes"

@@ -66,8 +66,8 @@ pb_result pb_bake_settings_check(const pb_bake_desc *d, pb_error *err)
     /* --indirect volume's bounces each sample the whole previous volume */
     if (d->indirect_volume && d->bounces && d->shard_count)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "--indirect volume samples the whole previous bounce's volume: a part cannot bake it alone "
-                       "(shard the path-traced bake instead)");
+                       "--indirect volume samples the whole previous bounce's volume: a part (--shard, --devices) "
+                       "cannot bake it alone (split the path-traced bake instead)");
     if (d->indirect_volume && d->bounces && d->points)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                        "--indirect volume samples the previous bounce's grid: it needs a grid, not points");
@@ -114,8 +114,8 @@ pb_result pb_sparse_settings(const pb_bake_desc *desc, const pb_sparse_desc *sd,
      * probes, which a part does not have all of */
     if (desc->shard_count && desc->target_error > 0.f)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
-                       "--target-error in a sparse bake depends on every probe of each level: its parts could not "
-                       "merge into the whole bake; give fixed --passes (or no --shard)");
+                       "--target-error in a sparse bake depends on every probe of each level: its parts (--shard, "
+                       "--devices) could not merge into the whole bake; give fixed --passes (or bake it in one part)");
     return PB_OK;
 }
 

@@ -376,7 +376,10 @@ int cmd_bake(const options *o)
         d.points = &pts;
     desc_from_options(o, q, &env, &d);
     pb_sparse_desc sd = sparse_desc_from_options(o);
-    if (pb_bake_check_settings(&d, o->sparse ? &sd : NULL, &err) != PB_OK)
+    pb_bake_desc split = d; /* --devices LIST of two or more bakes parts, as --shard does ("all": known later) */
+    if (o->devices && strchr(o->devices, ','))
+        split.shard_index = 0, split.shard_count = 2;
+    if (pb_bake_check_settings(&split, o->sparse ? &sd : NULL, &err) != PB_OK)
         goto out;
     double load_ms = cli_now_ms();
     if (pb_scene_load(o->scene, &scd, &s, &err) != PB_OK ||
