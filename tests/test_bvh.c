@@ -462,6 +462,61 @@ static void traversal_matches_brute_force(void)
     }
 }
 
+/* pb_trace_brute screens each block of triangles in the ray's sheared
+ * frame before the triangle test; this is the brute force without the
+ * screen (opaque scenes only): every triangle through pb_ray_triangle. */
+static void brute_unscreened(const pb_scene *s, const pb_ray *rays, uint32_t n, pb_hit *hits)
+{
+    for (uint32_t i = 0; i < n; ++i) {
+        pb_ray_pre r;
+        pb_ray_prepare(rays[i].origin, rays[i].direction, &r);
+        float tmax = rays[i].tmax, bu = 0.f, bv = 0.f;
+        uint32_t best = PB_NO_HIT;
+        for (uint32_t k = 0; k < s->triangle_count; ++k) {
+            const float *p = s->positions + 9 * (size_t)k;
+            float t, u, v;
+            if (pb_ray_triangle(&r, p, p + 3, p + 6, rays[i].tmin, tmax, &t, &u, &v))
+                tmax = t, best = k, bu = u, bv = v;
+        }
+        hits[i].triangle = best, hits[i].t = best == PB_NO_HIT ? rays[i].tmax : tmax;
+        hits[i].u = best == PB_NO_HIT ? 0.f : bu, hits[i].v = best == PB_NO_HIT ? 0.f : bv;
+    }
+}
+
+/* The screen only skips tests that return no hit: on rays through the
+ * sphere's vertices and along its edges (sheared coordinates of exactly 0)
+ * and on random soups, the screened brute force finds the same triangle,
+ * t, u and v as every triangle tested. */
+static void brute_force_screen_skips_only_misses(void)
+{
+    float *verts;
+    uint32_t nv;
+    pb_scene *sphere = closed_sphere(48, 96, &verts, &nv);
+    pb_scene *soup = random_soup(3000, 0.1f, 17, NULL);
+    pb_scene *scenes[2] = {sphere, soup};
+    for (int c = 0; c < 2; ++c) {
+        const pb_scene *s = scenes[c];
+        uint32_t n = scaled(8000);
+        pb_ray *rays = c == 0 ? sphere_probe_rays(s, n, 9) : random_rays(s->bounds_min, s->bounds_max, n, 23);
+        pb_hit *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b);
+        pb_trace_brute(s, rays, n, PB_TRACE_CLOSEST, a, 0);
+        brute_unscreened(s, rays, n, b);
+        uint32_t differ = 0, hits = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            differ += a[i].triangle != b[i].triangle || memcmp(&a[i].t, &b[i].t, 4) || memcmp(&a[i].u, &b[i].u, 4) ||
+                      memcmp(&a[i].v, &b[i].v, 4);
+            hits += b[i].triangle != PB_NO_HIT;
+        }
+        fprintf(stderr, "  %s: %u rays, %u hits, %u differ\n", c == 0 ? "sphere at vertices and edges" : "soup", n,
+                hits, differ);
+        CHECK(differ == 0 && hits > 0);
+        free(rays), free(a), free(b);
+    }
+    pb_scene_destroy(soup);
+    pb_scene_destroy(sphere);
+    free(verts);
+}
+
 static void watertight_sphere_cpu(void)
 {
     float *verts;
@@ -805,6 +860,7 @@ int main(void)
     RUN(bad_desc_is_refused);
     RUN(traversal_matches_brute_force);
     RUN(watertight_sphere_cpu);
+    RUN(brute_force_screen_skips_only_misses);
     RUN(reciprocal_is_accurate_everywhere);
     RUN(sliver_has_no_phantom_hit);
     RUN(robust_offset_avoids_self_intersection);

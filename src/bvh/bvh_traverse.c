@@ -12,6 +12,7 @@
 #include "probebake/bvh.h"
 #include "probebake/trace.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 typedef struct trace_job {
@@ -166,26 +167,77 @@ void pb_trace_cpu(const pb_scene *scene, const pb_bvh *bvh, const pb_ray *rays, 
     pb_parallel_for(count, 256, threads, trace_bvh_range, &j);
 }
 
+/* Brute force: every triangle against every ray, through pb_ray_triangle,
+ * in index order (the lowest index wins a tie, as nothing else decides).
+ * A block of triangles is first screened in the ray's sheared frame
+ * (pb_ray_triangle's Ax, Ay, ...: the same float operations, so the same
+ * bits): where all three vertices lie strictly on one side of the ray in x
+ * or in y, the ray's point is outside the triangle, the edge functions'
+ * exact signs are mixed and pb_ray_triangle would return 0, so it is not
+ * called. The screen reads the triangles as nine arrays (vertex, axis),
+ * which vectorize; without them (out of memory) every triangle is tested. */
+typedef struct brute_job {
+    trace_job t;
+    const float *soa; /* 9 arrays of triangle_count floats: vertex v's axis a at (3 v + a) n, or NULL */
+} brute_job;
+
+#define BRUTE_BLOCK 256
+
 static void brute_range(void *user, uint64_t b, uint64_t e)
 {
-    const trace_job *j = user;
+    const brute_job *bj = user;
+    const trace_job *j = &bj->t;
     const pb_scene *s = j->scene;
+    const uint32_t n = s->triangle_count;
+    uint8_t keep[BRUTE_BLOCK];
     for (uint64_t i = b; i < e; ++i) {
         const pb_ray *ray = &j->rays[i];
         pb_ray_pre r;
         pb_ray_prepare(ray->origin, ray->direction, &r);
         float tmax = ray->tmax, bu = 0.f, bv = 0.f;
         uint32_t best = PB_NO_HIT;
-        for (uint32_t k = 0; k < s->triangle_count; ++k) {
-            const float *p = s->positions + 9 * (size_t)k;
-            float t, u, v;
-            if (!pb_ray_triangle(&r, p, p + 3, p + 6, ray->tmin, tmax, &t, &u, &v))
-                continue;
-            if (!pb_alpha_opaque(s, k, u, v))
-                continue;
-            tmax = t, best = k, bu = u, bv = v;
-            if (j->mode == PB_TRACE_ANY)
-                break;
+        const float *q[9] = {NULL};
+        if (bj->soa)
+            for (int v = 0; v < 3; ++v) {
+                q[3 * v] = bj->soa + (size_t)(3 * v + r.kx) * n;
+                q[3 * v + 1] = bj->soa + (size_t)(3 * v + r.ky) * n;
+                q[3 * v + 2] = bj->soa + (size_t)(3 * v + r.kz) * n;
+            }
+        const float ox = r.org[r.kx], oy = r.org[r.ky], oz = r.org[r.kz], sx = r.sx, sy = r.sy;
+        int done = 0;
+        for (uint32_t k0 = 0; k0 < n && !done; k0 += BRUTE_BLOCK) {
+            uint32_t m = n - k0 < BRUTE_BLOCK ? n - k0 : BRUTE_BLOCK;
+            if (bj->soa) {
+                const float *X0 = q[0] + k0, *Y0 = q[1] + k0, *Z0 = q[2] + k0, *X1 = q[3] + k0, *Y1 = q[4] + k0,
+                            *Z1 = q[5] + k0, *X2 = q[6] + k0, *Y2 = q[7] + k0, *Z2 = q[8] + k0;
+                for (uint32_t k = 0; k < m; ++k) {
+                    float az = Z0[k] - oz, bz = Z1[k] - oz, cz = Z2[k] - oz;
+                    float ax = (X0[k] - ox) - sx * az, bx = (X1[k] - ox) - sx * bz, cx = (X2[k] - ox) - sx * cz;
+                    float ay = (Y0[k] - oy) - sy * az, by = (Y1[k] - oy) - sy * bz, cy = (Y2[k] - oy) - sy * cz;
+                    int out = (ax < 0.f) & (bx < 0.f) & (cx < 0.f);
+                    out |= (ax > 0.f) & (bx > 0.f) & (cx > 0.f);
+                    out |= (ay < 0.f) & (by < 0.f) & (cy < 0.f);
+                    out |= (ay > 0.f) & (by > 0.f) & (cy > 0.f);
+                    keep[k] = (uint8_t)!out;
+                }
+            } else {
+                memset(keep, 1, m);
+            }
+            for (uint32_t k = 0; k < m; ++k) {
+                if (!keep[k])
+                    continue;
+                const float *p = s->positions + 9 * (size_t)(k0 + k);
+                float t, u, v;
+                if (!pb_ray_triangle(&r, p, p + 3, p + 6, ray->tmin, tmax, &t, &u, &v))
+                    continue;
+                if (!pb_alpha_opaque(s, k0 + k, u, v))
+                    continue;
+                tmax = t, best = k0 + k, bu = u, bv = v;
+                if (j->mode == PB_TRACE_ANY) {
+                    done = 1;
+                    break;
+                }
+            }
         }
         finish_hit(s, ray, best, tmax, bu, bv, &j->hits[i]);
     }
@@ -194,6 +246,12 @@ static void brute_range(void *user, uint64_t b, uint64_t e)
 void pb_trace_brute(const pb_scene *scene, const pb_ray *rays, uint32_t count, pb_trace_mode mode, pb_hit *hits,
                     uint32_t threads)
 {
-    trace_job j = {scene, NULL, rays, hits, mode};
+    size_t n = scene->triangle_count;
+    float *soa = n ? malloc(9 * n * sizeof *soa) : NULL;
+    for (size_t k = 0; soa && k < n; ++k)
+        for (int c = 0; c < 9; ++c)
+            soa[(size_t)c * n + k] = scene->positions[9 * k + (size_t)c];
+    brute_job j = {{scene, NULL, rays, hits, mode}, soa};
     pb_parallel_for(count, 64, threads, brute_range, &j);
+    free(soa);
 }
