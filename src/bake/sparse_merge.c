@@ -26,17 +26,21 @@ static int same_probe(const pb_volume *a, uint32_t p, const pb_volume *b, uint32
 
 /* Where the whole volume's bricks and probes come from, between begin and
  * end: each merged brick's part and its index there, each probe's filler. */
+/* What begin saw of a part: add refuses a part read again that differs. */
+typedef struct part_seen {
+    char device[256];     /* the device it names */
+    char name[512];       /* its file, for messages */
+    uint32_t bricks, probes;
+    uint64_t scene_hash;
+    uint64_t layout_hash; /* its bricks and their probe indices (layout_hash) */
+} part_seen;
+
 struct pb_sparse_merging {
     uint32_t N, B;
     uint32_t *from_part, *from_brick; /* per merged brick */
     uint8_t *filled;                  /* per probe of the whole */
     uint32_t *src_part;               /* per probe: the part that filled it */
-    char (*device)[256];              /* per part: the device it names */
-    char (*name)[512];                /* per part: its file, for messages */
-    uint32_t *brick_count;            /* per part: its bricks and probes, as begin saw them */
-    uint32_t *probe_count;
-    uint64_t *scene_hash;
-    uint64_t *layout_hash;            /* per part: its bricks and their probe indices (layout_hash) */
+    part_seen *part;                  /* per part */
     uint32_t next;                    /* the part add expects next */
 };
 
@@ -58,8 +62,7 @@ void pb_sparse_merging_free(pb_sparse_merging *m)
     if (!m)
         return;
     free(m->from_part), free(m->from_brick), free(m->filled), free(m->src_part);
-    free(m->device), free(m->name), free(m->brick_count), free(m->probe_count), free(m->scene_hash),
-        free(m->layout_hash);
+    free(m->part);
     free(m);
 }
 
@@ -100,27 +103,21 @@ pb_result pb_sparse_merge_begin(const pb_volume *const *parts, const char *const
     if (m) {
         m->from_part = malloc(nb * sizeof *m->from_part);
         m->from_brick = malloc(nb * sizeof *m->from_brick);
-        m->device = calloc(N, sizeof *m->device);
-        m->name = calloc(N, sizeof *m->name);
-        m->brick_count = calloc(N, sizeof *m->brick_count);
-        m->probe_count = calloc(N, sizeof *m->probe_count);
-        m->scene_hash = calloc(N, sizeof *m->scene_hash);
-        m->layout_hash = calloc(N, sizeof *m->layout_hash);
+        m->part = calloc(N, sizeof *m->part);
     }
-    if (!all || !sp || !m || !m->from_part || !m->from_brick || !m->device || !m->name || !m->brick_count ||
-        !m->probe_count || !m->scene_hash || !m->layout_hash) {
+    if (!all || !sp || !m || !m->from_part || !m->from_brick || !m->part) {
         free(all), free(sp), pb_sparse_merging_free(m);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory merging %llu bricks",
                        (unsigned long long)bricks);
     }
     m->N = N;
     for (uint32_t k = 0; k < N; ++k) {
-        snprintf(m->device[k], sizeof m->device[k], "%s", parts[k]->device);
-        snprintf(m->name[k], sizeof m->name[k], "%s", names[k]);
-        m->brick_count[k] = parts[k]->sparse->brick_count;
-        m->probe_count[k] = parts[k]->probe_count;
-        m->scene_hash[k] = parts[k]->settings.scene_hash;
-        m->layout_hash[k] = layout_hash(parts[k]->sparse);
+        part_seen *ps = &m->part[k];
+        snprintf(ps->device, sizeof ps->device, "%s", parts[k]->device);
+        snprintf(ps->name, sizeof ps->name, "%s", names[k]);
+        ps->bricks = parts[k]->sparse->brick_count, ps->probes = parts[k]->probe_count;
+        ps->scene_hash = parts[k]->settings.scene_hash;
+        ps->layout_hash = layout_hash(parts[k]->sparse);
     }
     uint32_t B = 0;
     for (uint32_t level = 0; level < L; ++level)
@@ -173,11 +170,12 @@ pb_result pb_sparse_merge_add(pb_sparse_merging *m, pb_volume *out, const pb_vol
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "all %u parts are merged already", m->N);
     /* the part read again must be the one begin saw (its bricks' probes are
      * looked up by begin's brick indices) */
-    if (!v->sparse || v->sparse->brick_count != m->brick_count[k] || v->probe_count != m->probe_count[k] ||
-        v->shard.index != k || v->settings.scene_hash != m->scene_hash[k] || strcmp(v->device, m->device[k]) ||
-        layout_hash(v->sparse) != m->layout_hash[k])
+    const part_seen *seen = &m->part[k];
+    if (!v->sparse || v->sparse->brick_count != seen->bricks || v->probe_count != seen->probes ||
+        v->shard.index != k || v->settings.scene_hash != seen->scene_hash || strcmp(v->device, seen->device) ||
+        layout_hash(v->sparse) != seen->layout_hash)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: changed while it was merged (its bricks, probes, part "
-                       "index, scene or device)", m->name[k]);
+                       "index, scene or device)", seen->name);
     uint64_t halves = pb_volume_tile_halves(out->octmap_res);
     const pb_sparse_layout *sp = out->sparse;
     uint32_t L = sp->levels;
@@ -192,14 +190,14 @@ pb_result pb_sparse_merge_add(pb_sparse_merging *m, pb_volume *out, const pb_vol
                 /* a probe bricks share, maybe of two parts: one bake on one
                  * kind of device gives it one record; across different devices
                  * (transcendentals round differently) the lower part's stays */
-                if (!strcmp(v->device, m->device[m->src_part[q]]) && !same_probe(out, q, v, p, halves)) {
+                if (!strcmp(v->device, m->part[m->src_part[q]].device) && !same_probe(out, q, v, p, halves)) {
                     const pb_sparse_brick *br = &sp->bricks[b];
                     uint32_t step = pb_sparse_step(L, br->level);
                     return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
                                    "%s: its probe at finest lattice point (%u, %u, %u) differs from %s's: not parts of "
-                                   "one bake (another build or driver?)", m->name[k],
+                                   "one bake (another build or driver?)", seen->name,
                                    (3 * br->coord[0] + (i & 3u)) * step, (3 * br->coord[1] + ((i >> 2) & 3u)) * step,
-                                   (3 * br->coord[2] + (i >> 4)) * step, m->name[m->src_part[q]]);
+                                   (3 * br->coord[2] + (i >> 4)) * step, m->part[m->src_part[q]].name);
                 }
                 continue;
             }
