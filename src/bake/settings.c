@@ -119,14 +119,20 @@ pb_result pb_sparse_settings(const pb_bake_desc *desc, const pb_sparse_desc *sd,
     return PB_OK;
 }
 
-pb_result pb_bake_check_settings(const pb_bake_desc *desc, const pb_sparse_desc *sparse, pb_error *err)
+pb_result pb_bake_settings(const pb_bake_desc *desc, const pb_sparse_desc *sparse, pb_sparse_desc *sd,
+                           pb_error *err)
 {
-    pb_error_clear(err);
     pb_bake_desc d = *desc;
     pb_bake_settings_default(&d);
     pb_result r = pb_bake_settings_check(&d, err);
-    pb_sparse_desc sd;
     if (r == PB_OK && sparse)
-        r = pb_sparse_settings(desc, sparse, &sd, err);
+        r = pb_sparse_settings(desc, sparse, sd, err);
     return r;
+}
+
+pb_result pb_bake_check_settings(const pb_bake_desc *desc, const pb_sparse_desc *sparse, pb_error *err)
+{
+    pb_error_clear(err);
+    pb_sparse_desc sd;
+    return pb_bake_settings(desc, sparse, &sd, err);
 }

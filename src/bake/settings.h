@@ -20,4 +20,10 @@ pb_result pb_bake_settings_check(const pb_bake_desc *d, pb_error *err);
 pb_result pb_sparse_settings(const pb_bake_desc *desc, const pb_sparse_desc *sd, pb_sparse_desc *out,
                              pb_error *err);
 
+/* Both: desc's settings checked (on a defaulted copy), then, when sparse is
+ * not NULL, its layout's into *sd. pb_bake_check_settings and
+ * pb_bake_sparse are this. */
+pb_result pb_bake_settings(const pb_bake_desc *desc, const pb_sparse_desc *sparse, pb_sparse_desc *sd,
+                           pb_error *err);
+
 #endif

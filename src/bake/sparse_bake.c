@@ -831,11 +831,10 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
     memset(out, 0, sizeof *out);
     /* every setting checked before any work (settings.c: the command line
      * runs the same checks before it loads the scene) */
-    pb_result checked = pb_bake_check_settings(desc, sd_in, err);
+    pb_sparse_desc sd;
+    pb_result checked = pb_bake_settings(desc, sd_in, &sd, err);
     if (checked != PB_OK)
         return checked;
-    pb_sparse_desc sd;
-    pb_sparse_settings(desc, sd_in, &sd, err);
     if (!desc->indirect_volume || desc->bounces == 0) {
         pb_bake_desc d = *desc;
         d.indirect_volume = 0;

@@ -243,7 +243,7 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
     if (tt >= 0) {
         // alpha is coverage already: the texture's share folds into it,
         // and what passes there passes untinted
-        int32_t id = pb_sb_fold_transmission(r.b, pm.base_color_texture, 0, tt, (float)pass);
+        int32_t id = pb_sb_fold_transmission(r.b, pm.base_color_texture, tt, (float)pass);
         if (id < 0)
             return; // out of host memory: the builder reports it
         pm.base_color_texture = id;

@@ -11,11 +11,9 @@
  * and of `scale` (at the texel's centre, as the kernels sample), where
  * keep = 1 - factor x channel `shift` of scale / 255, clamped to [0, 1],
  * multiplies the base's linear colour (into_alpha 0) or its alpha
- * (into_alpha 1; 255 first when base_opaque); into_alpha 2: the alpha is
- * the channel itself. Wrap modes and colour space the base's (scale's wraps
+ * (into_alpha 1); into_alpha 2: the alpha is the channel itself. Wrap modes and colour space the base's (scale's wraps
  * and sRGB when base < 0). */
-static int32_t fold(pb_scene_builder *b, int32_t base, int base_opaque, int32_t scale, int shift, float factor,
-                    int into_alpha)
+static int32_t fold(pb_scene_builder *b, int32_t base, int32_t scale, int shift, float factor, int into_alpha)
 {
     /* copies: adding the texture may move the builder's arrays */
     const pb_texture st = b->textures[scale];
@@ -71,7 +69,7 @@ static int32_t fold(pb_scene_builder *b, int32_t base, int base_opaque, int32_t 
             } else if (into_alpha) {
                 float keep = 1.f - factor * (float)mb / 255.f;
                 keep = keep < 0.f ? 0.f : (keep > 1.f ? 1.f : keep);
-                float a = base_opaque ? 1.f : (float)(c >> 24) / 255.f;
+                float a = (float)(c >> 24) / 255.f;
                 texel = (c & 0x00ffffffu) | (uint32_t)lrintf(a * keep * 255.f) << 24;
             } else {
                 texel = c & 0xff000000u;
@@ -89,18 +87,17 @@ static int32_t fold(pb_scene_builder *b, int32_t base, int base_opaque, int32_t 
 
 int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_roughness, float factor)
 {
-    return fold(b, base, 0, metallic_roughness, 16, factor, 0); /* blue: metalness */
+    return fold(b, base, metallic_roughness, 16, factor, 0); /* blue: metalness */
 }
 
-int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int base_opaque, int32_t transmission,
-                                float pass)
+int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int32_t transmission, float pass)
 {
-    return fold(b, base, base_opaque, transmission, 0, pass, 1); /* red: transmission */
+    return fold(b, base, transmission, 0, pass, 1); /* red: transmission */
 }
 
 int32_t pb_sb_fold_transmission_scale(pb_scene_builder *b, int32_t base, int32_t transmission)
 {
-    return fold(b, base, 1, transmission, 0, 1.f, 2); /* red: transmission */
+    return fold(b, base, transmission, 0, 1.f, 2); /* red: transmission */
 }
 
 int32_t pb_sb_opaque_texture(pb_scene_builder *b, int32_t tex)

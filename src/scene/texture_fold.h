@@ -24,13 +24,13 @@ extern "C" {
 int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_roughness, float factor);
 
 /* Adds a texture whose alpha is the coverage KHR_materials_transmission
- * leaves: base alpha (255 when `base_opaque`: glTF ignores an opaque
- * material's alpha) x (1 - pass x the transmission texture's red / 255), at
+ * leaves on a material that was alpha-blended already (an opaque one keeps
+ * its tint: pb_sb_fold_transmission_scale): base alpha x (1 - pass x the
+ * transmission texture's red / 255), at
  * each texel of the finer of the two sizes (nearest texels, at texel
  * centres); colour, wrap modes and colour space the base's (white, sRGB,
  * with the transmission texture's wraps, when base < 0). -1 out of memory. */
-int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int base_opaque, int32_t transmission,
-                                float pass);
+int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int32_t transmission, float pass);
 
 /* Adds a texture whose alpha is the transmission texture's red channel as it
  * stands, for a material that was opaque (pb_material.transmission_in_alpha:
