@@ -641,6 +641,17 @@ print(\"red %.2f x green\" % (r / g) if r > 3 * g else \"red %g green %g\" % (r,
     expect sparse-two-devices-same-bytes 0 '^same$' -- bash -c "$(declare -f same_but_timings); same_but_timings '$tmp/swhole.probes' '$tmp/sdev.probes'"
     expect merge-sparse-with-grid 1 "not a part of the same bake as $tmp/spart0.probes" -- \
         "$pb" merge "$tmp/bad.probes" "$tmp/spart0.probes" "$tmp/part1.probes"
+    # the parts' headers are checked before any part is read whole: a missing
+    # part is named even when the part given has a corrupt layout (which the
+    # whole read would find first)
+    python3 -c 'import struct, sys
+b = bytearray(open(sys.argv[1], "rb").read())
+at = struct.unpack_from("<Q", b, 416)[0] + 64  # into the sparse tables, past their 32-byte head
+b[at:at + 256] = b"\xff" * 256
+open(sys.argv[2], "wb").write(b)' "$tmp/spart0.probes" "$tmp/scorrupt0.probes"
+    expect inspect-sparse-corrupt-layout 1 "$tmp/scorrupt0.probes: sparse brick 0 names probe" -- "$pb" inspect "$tmp/scorrupt0.probes"
+    expect merge-sparse-missing-before-reading 1 "^probebake: error: part 1/2 is missing" -- \
+        "$pb" merge "$tmp/bad.probes" "$tmp/scorrupt0.probes"
     "$pb" bake "$demo" "${shard_args[@]}" --seed 2 --shard 2/3 -o "$tmp/foreign2.probes" >/dev/null
     expect merge-missing 1 "part 1/3 is missing" -- "$pb" merge "$tmp/bad.probes" "$tmp/part0.probes" "$tmp/part2.probes"
     expect merge-duplicated 1 "$tmp/part1.probes: part 1/3 is given twice" -- \

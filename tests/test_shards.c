@@ -501,6 +501,16 @@ static void sparse_parts_merge_to_the_whole_bake(void)
             if (read == (int)i + 1)
                 pb_volume_free_probes(&layouts[i]);
         }
+        /* the headers alone: all three pass, two of them are refused for the one missing */
+        pb_volume headers[3];
+        int heads = 0;
+        for (uint32_t i = 0; i < 3; ++i)
+            heads += pb_volume_read_header(paths[i], &headers[heads], &err) == PB_OK;
+        CHECK(heads == 3 && pb_volume_merge_check(headers, lnames, 3, &err) == PB_OK &&
+              pb_volume_merge_check(headers, lnames, 2, &err) == PB_ERROR_INVALID_ARGUMENT &&
+              strstr(err.message, "part 0/3 is missing"));
+        for (int i = 0; i < heads; ++i)
+            pb_volume_free(&headers[i]);
         pb_sparse_merging *m = NULL;
         pb_result r = read == 3 ? pb_volume_merge_sparse_begin(layouts, lnames, 3, &stepped, &m, &err) : PB_ERROR_IO;
         for (uint32_t k = 0; k < 3 && r == PB_OK; ++k) {

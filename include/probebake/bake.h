@@ -185,6 +185,12 @@ pb_result pb_volume_dilate_gpu(pb_context *ctx, pb_volume *v, uint32_t rounds, p
 pb_result pb_volume_merge(const pb_volume *parts, const char *const *names, uint32_t count, pb_volume *out,
                           pb_error *err);
 
+/* Every check pb_volume_merge makes from the parts' headers alone
+ * (pb_volume_read_header): one bake's parts, each once, none missing. A
+ * sparse merge in steps runs it before it reads any part's layout, so a
+ * foreign or missing part is refused before the parts are read whole. */
+pb_result pb_volume_merge_check(const pb_volume *headers, const char *const *names, uint32_t count, pb_error *err);
+
 /* The same merge of a grid's (or points') parts in steps, so that only one
  * part need be in memory beside the whole (`probebake merge`): begin makes
  * every check pb_volume_merge makes from the parts' headers

@@ -112,6 +112,17 @@ static pb_result check_parts(const pb_volume *parts, const char *const *names, u
     return PB_OK;
 }
 
+pb_result pb_volume_merge_check(const pb_volume *headers, const char *const *names, uint32_t count, pb_error *err)
+{
+    pb_error_clear(err);
+    const pb_volume **by_index;
+    const char **name_of;
+    pb_result r = check_parts(headers, names, count, &by_index, &name_of, err);
+    if (r == PB_OK)
+        free(by_index), free(name_of);
+    return r;
+}
+
 pb_result pb_volume_merge_begin(const pb_volume *headers, const char *const *names, uint32_t count, pb_volume *out,
                                 pb_error *err)
 {

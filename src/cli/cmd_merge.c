@@ -65,15 +65,17 @@ static pb_result merge_grid(const options *o, const pb_volume *headers, pb_volum
     return r;
 }
 
-/* A sparse bake's parts, also one at a time: each read whole once for its
- * layout (its probes freed at once), then, once the whole layout is built,
- * again for its probes, in part index order; bricks are stitched across
- * parts at the end, in the whole volume. Each part is read twice, and the
- * whole volume and one part are in memory at once, not every part. */
+/* A sparse bake's parts, also one at a time: their headers checked first
+ * (a foreign or missing part is refused before any part is read whole),
+ * then each read whole once for its layout (its probes freed at once), then,
+ * once the whole layout is built, again for its probes, in part index order;
+ * bricks are stitched across parts at the end, in the whole volume. Each
+ * part is read twice, and the whole volume and one part are in memory at
+ * once, not every part. */
 static pb_result merge_sparse(const options *o, pb_volume *layouts, pb_volume *merged, pb_error *err)
 {
     uint32_t n = o->part_count;
-    pb_result r = PB_OK;
+    pb_result r = pb_volume_merge_check(layouts, (const char *const *)o->parts, n, err);
     for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
         pb_volume_free(&layouts[i]);
         r = pb_volume_read(o->parts[i], &layouts[i], err);
