@@ -3380,7 +3380,12 @@ static void settings_checked_before_the_scene_as_in_the_bake(void)
     pb_points pts = {0};
     double origin[3] = {0, 0, 0};
     pts.count = 1, pts.positions = origin;
-    enum { N = 13 };
+    pb_points no_points = {0}, bad_spacing = pts;
+    bad_spacing.spacing = -1.0;
+    float texel[3] = {1, 1, 1};
+    pb_environment empty_env = {0};
+    empty_env.rgb = texel; /* a texel, but no width */
+    enum { N = 27 };
     for (int i = 0; i < N && gs; ++i) {
         pb_bake_desc d = {0};
         d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 2;
@@ -3404,6 +3409,20 @@ static void settings_checked_before_the_scene_as_in_the_bake(void)
         case 11: sparse = &sd, d.target_error = 0.1f, d.passes = 0, d.shard_count = 2, d.shard_index = 1,
                  want = "--target-error in a sparse bake"; break;
         case 12: sparse = &sd, sd.seam_rounds = 9, want = "--refine-seams 9"; break;
+        case 13: d.points = &no_points, memset(&d.grid, 0, sizeof d.grid), want = "0 probe points"; break;
+        case 14: d.points = &bad_spacing, memset(&d.grid, 0, sizeof d.grid), want = "points spacing"; break;
+        case 15: d.passes = 1000001, want = "passes: at most 1e6"; break;
+        case 16: d.sh_window = 7, want = "SH window 7"; break;
+        case 17: d.schedule = 2, want = "schedule 2"; break;
+        case 18: d.environment = &empty_env, want = "environment map: empty"; break;
+        case 19: d.lobe_power = -1.f, want = "lobe power"; break;
+        case 20: d.inside_fraction = NAN, want = "inside fraction"; break;
+        case 21: sparse = &sd, sd.seam_error = -1.f, want = "--seam-error -1"; break;
+        case 22: sparse = &sd, sd.levels = PB_SPARSE_MAX_LEVELS + 1, want = "--max-level"; break;
+        case 23: sparse = &sd, sd.refine_error = -1.f, sd.seam_error = 0.1f, want = "--refine-error -1"; break;
+        case 24: sparse = &sd, sd.test = 7, want = "unknown refinement test 7"; break;
+        case 25: sparse = &sd, d.points = &pts, memset(&d.grid, 0, sizeof d.grid), want = "not with --points"; break;
+        case 26: sparse = &sd, sd.test_pass_scale = 65, want = "at most 64"; break;
         }
         pb_result rp = pb_bake_check_settings(&d, sparse, &pre);
         pb_volume v;

@@ -199,6 +199,19 @@ printf '{"points": []}' >"$tmp/bad3.json"
 expect points-empty 1 "$tmp/bad3.json: no points" -- "$pb" bake "$demo" --points "$tmp/bad3.json" -o "$tmp/x.probes"
 printf '{"pointz": []}' >"$tmp/bad4.json"
 expect points-unknown-key 1 'unknown key "pointz"' -- "$pb" bake "$demo" --points "$tmp/bad4.json" -o "$tmp/x.probes"
+# each malformed point names the file and the point; nothing is written
+points_bad() { # name, file contents, the error expected
+    printf '%s' "$2" >"$tmp/$1.json"
+    expect "points-$1" 1 "^probebake: error: $tmp/$1.json: $3" -- "$pb" bake "$demo" --points "$tmp/$1.json" -o "$tmp/$1.probes"
+    expect "points-$1-wrote-nothing" 0 '^absent$' -- bash -c "[ -e '$tmp/$1.probes' ] && echo present || echo absent"
+}
+points_bad not-a-number '{"points": [[0, x, 0]]}' 'expected a finite number near "x, 0\]\]\}"'
+points_bad out-of-range '{"points": [[0, 1e999, 0]]}' 'expected a finite number near "1e999'
+points_bad negative-id '{"points": [[0, 0, 0], {"id": -1, "position": [0, 1, 0]}]}' 'point 1: id must be a non-negative integer'
+points_bad fractional-id '{"points": [{"id": 1.5, "position": [0, 1, 0]}]}' 'point 0: id must be a non-negative integer'
+points_bad point-key '{"points": [{"id": 1, "pos": [0, 1, 0]}]}' 'point 0: unknown key "pos"'
+points_bad no-position '{"points": [[0, 0, 0], {"id": 4}]}' 'point 1 has no position'
+points_bad negative-spacing '{"spacing": -0.5, "points": [[0, 0, 0]]}' 'spacing must be >= 0'
 
 # environment maps: read and checked before any device work. A 4x2 flat
 # Radiance file: radiance 1 (RGBE 128,128,128,129) everywhere.

@@ -78,9 +78,14 @@ static int key(cursor *c, char *buf, size_t size)
 }
 
 /* After a member or element: 1 when a ',' announces another, 0 when the
- * container ends with `close` (or on an error, which sets c->failed). */
+ * container ends with `close` (or on an error, which sets c->failed). After
+ * an earlier error it reads nothing: the next member's parse would replace
+ * that error's message with its own (a bad "id" was reported as an unknown
+ * key "position" at the top level). */
 static int more(cursor *c, char close)
 {
+    if (c->failed)
+        return 0;
     ws(c);
     if (*c->s == ',') {
         c->s++;
