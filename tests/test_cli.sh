@@ -132,6 +132,7 @@ expect rays-zero 2 "--rays '0' is not an integer in \[1, 65536\]" -- "$pb" trace
 expect probes-negative 2 "--probes '-5'" -- "$pb" trace "$demo" --probes -5
 expect probes-garbage 2 "--probes 'lots'" -- "$pb" trace "$demo" --probes lots
 expect device-missing-value 2 '--device needs a value' -- "$pb" trace "$demo" --device
+expect trace-needs-scene 2 'trace needs a SCENE file' -- "$pb" trace
 expect shard-out-of-range 2 "--shard '3/3' is not I/N with 0 <= I < N" -- "$pb" bake "$demo" --shard 3/3 -o "$tmp/x.probes"
 expect shard-garbage 2 "--shard 'half' is not I/N" -- "$pb" bake "$demo" --shard half -o "$tmp/x.probes"
 expect merge-needs-parts 2 'merge needs OUT.probes and the parts' -- "$pb" merge "$tmp/m.probes"
@@ -338,6 +339,11 @@ expect render-missing-volume 1 "error: $tmp/none.probes: cannot open" -- \
     "$pb" render "$demo" --volume "$tmp/none.probes" -o "$tmp/r.png"
 expect render-no-such-camera 1 "camera 5 does not exist \(1 cameras\)" -- "$pb" render "$demo" --camera 5 -o "$tmp/r.png"
 expect render-eye-without-target 2 '--eye and --target go together' -- "$pb" render "$demo" --eye 0,1,2 -o "$tmp/r.png"
+expect render-needs-scene 2 'render needs a SCENE' -- "$pb" render -o "$tmp/r.png"
+expect render-camera-and-eye 2 'give --camera or --eye/--target, not both' -- \
+    "$pb" render "$demo" --camera 0 --eye 0,1,2 --target 0,0,0 -o "$tmp/r.png"
+expect render-scene-without-cameras 1 "^probebake: error: $src/tests/scenes/doorway.gltf: the scene has no cameras" -- \
+    "$pb" render "$src/tests/scenes/doorway.gltf" --camera 0 -o "$tmp/r.png"
 expect render-up-parallel 1 'up vector is parallel' -- \
     "$pb" render "$demo" --eye 0,1,0 --target 0,2,0 -o "$tmp/r.png"
 expect render-bad-eye 2 "--eye '1,2' is not three" -- "$pb" render "$demo" --eye 1,2 --target 0,0,0 -o "$tmp/r.png"
@@ -372,6 +378,8 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
         expect trace-loads-$loads-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
             "$pb" trace "$demo" --scene-loads $loads --verify --validation --probes 64 --rays 128
     done
+    expect trace-too-many-rays 1 "^probebake: error: $demo: [0-9]+ rays requested; at most 2\\^28 per trace" -- \
+        "$pb" trace "$demo" --probes 10000 --rays 65536
     expect bake-tiny 0 "wrote $tmp/a.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --validation -o "$tmp/a.probes"
     expect bake-inspect 0 '"probes": 8,' -- "$pb" inspect "$tmp/a.probes" --json
@@ -536,6 +544,10 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect render-probes 0 "wrote $tmp/r.png: 32x24, probes, 1 spp" -- \
         "$pb" render "$demo" --volume "$tmp/a.probes" --size 32x24 --pfm --validation -o "$tmp/r.png"
     expect render-png-pfm 0 '^PNG PF$' -- bash -c "printf '%s %s\n' \$(head -c 4 '$tmp/r.png' | tail -c 3) \$(head -c 2 '$tmp/r.pfm')"
+    # a volume of another scene lights it, with a warning; a scene without
+    # cameras is seen from in front of its bounds, above
+    expect render-volume-of-another-scene 0 "warning: $tmp/a.probes was baked from a different scene than .*doorway.gltf" -- \
+        "$pb" render "$src/tests/scenes/doorway.gltf" --volume "$tmp/a.probes" --size 16x12 -o "$tmp/other.png"
     expect render-diff-json 0 '"relative_rmse": [0-9.]+, "relative_rmse_indirect": [0-9.]+' -- \
         "$pb" render "$demo" --volume "$tmp/a.probes" --mode diff --size 16x12 --spp 1 --json -o "$tmp/d.png"
     # a diff against a given reference (bench/sparse_vs_grid.sh): the same image

@@ -341,8 +341,28 @@ static void sparse_lookup_finds_the_finest_brick(void)
     CHECK(pb_sparse_find(&l, far) == 0);
     pb_sparse_brick dup[2] = {{1, {1, 1, 1}}, {1, {1, 1, 1}}}, out[1] = {{1, {6, 0, 0}}};
     pb_sparse_layout bad;
-    CHECK(pb_sparse_layout_build(3, test_cells, dup, 2, &bad, &P, NULL, &err) == PB_ERROR_INVALID_ARGUMENT);
-    CHECK(pb_sparse_layout_build(3, test_cells, out, 1, &bad, &P, NULL, &err) == PB_ERROR_INVALID_ARGUMENT);
+    uint32_t bad_P;
+    CHECK(pb_sparse_layout_build(3, test_cells, dup, 2, &bad, &bad_P, NULL, &err) == PB_ERROR_INVALID_ARGUMENT);
+    CHECK(pb_sparse_layout_build(3, test_cells, out, 1, &bad, &bad_P, NULL, &err) == PB_ERROR_INVALID_ARGUMENT);
+    pb_sparse_brick finer[1] = {{3, {0, 0, 0}}}; /* level 3 of 3 levels (0-2) */
+    CHECK(pb_sparse_layout_build(3, test_cells, finer, 1, &bad, &bad_P, NULL, &err) == PB_ERROR_INVALID_ARGUMENT &&
+          strstr(err.message, "brick 0 has level 3 of 3"));
+    CHECK(pb_sparse_layout_build(0, test_cells, test_bricks, 4, &bad, &bad_P, NULL, &err) == PB_ERROR_INVALID_ARGUMENT &&
+          strstr(err.message, "0 levels"));
+    /* a deep copy: the same tables, its own arrays */
+    pb_sparse_layout c;
+    CHECKF(pb_sparse_layout_copy(&l, &c, &err) == PB_OK, "%s", err.message);
+    CHECK(c.brick_count == l.brick_count && c.chunk_count == l.chunk_count && c.bricks != l.bricks &&
+          c.brick_probes != l.brick_probes && c.indirection != l.indirection && c.chunks != l.chunks &&
+          !memcmp(c.bricks, l.bricks, l.brick_count * sizeof *l.bricks) &&
+          !memcmp(c.brick_probes, l.brick_probes, (size_t)l.brick_count * PB_SPARSE_BRICK_PROBES * sizeof(uint32_t)) &&
+          !memcmp(c.indirection, l.indirection, (size_t)test_cells[0] * test_cells[1] * test_cells[2] * 4) &&
+          !memcmp(c.chunks, l.chunks, l.chunk_count * sizeof(uint32_t)) && pb_sparse_layout_validate(&c, P, &err) == PB_OK);
+    float mid[3] = {0.5f, 0.5f, 0.5f};
+    uint32_t found = pb_sparse_find(&l, mid);
+    c.brick_probes[0] ^= 1u;
+    pb_sparse_layout_free(&c);
+    CHECK(pb_sparse_find(&l, mid) == found && pb_sparse_layout_validate(&l, P, &err) == PB_OK);
     free(keys);
     pb_sparse_layout_free(&l);
 }
