@@ -546,6 +546,8 @@ if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect render-png-pfm 0 '^PNG PF$' -- bash -c "printf '%s %s\n' \$(head -c 4 '$tmp/r.png' | tail -c 3) \$(head -c 2 '$tmp/r.pfm')"
     # a volume of another scene lights it, with a warning; a scene without
     # cameras is seen from in front of its bounds, above
+    expect render-no-camera-view 0 "info: $src/tests/scenes/doorway.gltf has no camera: seen from \\([-0-9.e]+, [-0-9.e]+, [-0-9.e]+\\) towards" -- \
+        "$pb" render "$src/tests/scenes/doorway.gltf" --mode direct --size 16x12 -o "$tmp/nocam.png"
     expect render-volume-of-another-scene 0 "warning: $tmp/a.probes was baked from a different scene than .*doorway.gltf" -- \
         "$pb" render "$src/tests/scenes/doorway.gltf" --volume "$tmp/a.probes" --size 16x12 -o "$tmp/other.png"
     expect render-diff-json 0 '"relative_rmse": [0-9.]+, "relative_rmse_indirect": [0-9.]+' -- \

@@ -2,6 +2,7 @@
  * sky volume lighting a floor evenly, the reference converging like
  * 1/sqrt(spp), and the display pipeline (tone curve, exposure, heat map). */
 #include "scenes_gen.h"
+#include "render/render_types.h"
 #include "sample/sample_gpu.h"
 
 static pb_context *ctx;
@@ -398,6 +399,93 @@ static void display_pipeline(void)
     CHECK(fabs(pb_image_relative_rmse(twice, img, 2, 2) - sqrt(2.125) / 1.25) < 1e-6);
 }
 
+/* Where the centre ray of view v first meets the scene: 1 a front face, -1 a
+ * back face, 0 nothing. */
+static int centre_hit(const pb_scene *s, const pb_bvh *bvh, const pb_camera_view *v)
+{
+    pb_ray r = {{v->eye[0], v->eye[1], v->eye[2]}, 0.f, {v->forward[0], v->forward[1], v->forward[2]}, INFINITY};
+    pb_hit h;
+    pb_trace_cpu(s, bvh, &r, 1, PB_TRACE_CLOSEST, &h, 1);
+    return h.triangle == PB_NO_HIT ? 0 : h.backface ? -1 : 1;
+}
+
+static int inside_bounds(const pb_scene *s, const float p[3])
+{
+    int in = 1;
+    for (int k = 0; k < 3; ++k)
+        in &= p[k] > s->bounds_min[k] && p[k] < s->bounds_max[k];
+    return in;
+}
+
+/* A scene without a camera: an object is seen from outside its bounds, a
+ * room (or a level) from inside, where its lit fronts are: the view from
+ * outside shows only its walls' single-sided backs, which render black. */
+static void default_view_sees_fronts(void)
+{
+    const float yfov = 0.87f, aspect = 4.f / 3.f;
+    pb_error err;
+    /* an object: a box facing out; a room: the same box facing in, with a
+     * smaller box facing out inside it */
+    double lo[3] = {-1, 0, -2}, hi[3] = {1, 1.5, 2}, clo[3] = {-0.3, 0, -0.3}, chi[3] = {0.3, 0.6, 0.3};
+    double p[24 * 9];
+    for (int room = 0; room < 2; ++room) {
+        uint32_t t = box_tris(p, lo, hi, room);
+        if (room)
+            t += box_tris(p + 9 * t, clo, chi, 0);
+        pb_scene *s = NULL;
+        pb_bvh *bvh = NULL;
+        CHECKF(pb_scene_from_triangles(p, t, NULL, NULL, 0, &s, &err) == PB_OK &&
+               pb_bvh_build(s, NULL, &bvh, &err) == PB_OK, "%s", err.message);
+        if (!bvh) {
+            pb_scene_destroy(s);
+            continue;
+        }
+        pb_camera_view v;
+        pb_camera_default(s, bvh, yfov, aspect, &v);
+        pb_render_desc d = {0};
+        d.camera = v, d.width = 8, d.height = 6;
+        fprintf(stderr, "  %s: eye (%.2f, %.2f, %.2f), looking (%.2f, %.2f, %.2f): %s the bounds\n",
+                room ? "a room" : "an object", v.eye[0], v.eye[1], v.eye[2], v.forward[0], v.forward[1], v.forward[2],
+                inside_bounds(s, v.eye) ? "inside" : "outside");
+        CHECK(inside_bounds(s, v.eye) == room && centre_hit(s, bvh, &v) == 1 && pb_render_check(&d, &err) == PB_OK);
+        pb_bvh_destroy(bvh);
+        pb_scene_destroy(s);
+    }
+    /* the doorway scene (two rooms, a lamp in one, no camera): lit in the
+     * default view (path traced), black from outside */
+    pb_scene *s = NULL;
+    pb_bvh *bvh = NULL;
+    CHECKF(pb_scene_load(source_path("tests/scenes/doorway.gltf"), NULL, &s, &err) == PB_OK &&
+           pb_bvh_build(s, NULL, &bvh, &err) == PB_OK, "%s", err.message);
+    if (bvh) {
+        CHECK(s->camera_count == 0);
+        pb_render_desc d = {0};
+        d.width = 32, d.height = 24, d.mode = PB_RENDER_REFERENCE, d.spp = 4, d.bounces = 3;
+        float img[32 * 24 * 4];
+        double mean[2] = {0, 0};
+        for (int inside = 0; inside < 2; ++inside) {
+            pb_camera_default(s, inside ? bvh : NULL, yfov, 32.f / 24.f, &d.camera); /* no BVH: the view from outside */
+            CHECKF(pb_render_cpu(s, bvh, &d, img, NULL, &err) == PB_OK, "%s", err.message);
+            for (int i = 0; i < 32 * 24; ++i)
+                mean[inside] += (img[4 * i] + img[4 * i + 1] + img[4 * i + 2]) / (3.0 * 32 * 24);
+        }
+        fprintf(stderr, "  doorway: mean radiance %.4g from outside, %.4g in the default view\n", mean[0], mean[1]);
+        CHECK(mean[0] == 0.0 && mean[1] > 0.0);
+    }
+    pb_bvh_destroy(bvh);
+    pb_scene_destroy(s);
+    /* an empty scene: a view of the sky, valid */
+    pb_scene *e = NULL;
+    CHECKF(pb_scene_from_triangles(NULL, 0, NULL, NULL, 0, &e, &err) == PB_OK, "%s", err.message);
+    if (e) {
+        pb_render_desc d = {0};
+        d.width = 8, d.height = 6;
+        pb_camera_default(e, NULL, yfov, aspect, &d.camera);
+        CHECKF(pb_render_check(&d, &err) == PB_OK, "%s", err.message);
+        pb_scene_destroy(e);
+    }
+}
+
 int main(void)
 {
     if (!(ctx = test_gpu_context()))
@@ -410,5 +498,6 @@ int main(void)
     RUN(sparse_kernel_matches_cpu_reference);
     RUN(constant_sky_lights_floor_evenly);
     RUN(reference_converges);
+    RUN(default_view_sees_fronts);
     return test_gpu_finish(ctx);
 }

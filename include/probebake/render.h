@@ -71,6 +71,19 @@ pb_result pb_render_cpu(const pb_scene *scene, const pb_bvh *bvh, const pb_rende
 /* Camera from a glTF camera of the scene (yfov 0.8 rad for orthographic). */
 void pb_camera_from_scene(const pb_camera *c, pb_camera_view *out);
 
+/* A view of a scene that has no camera (src/render/default_view.c): from in
+ * front of its bounds, above, looking at their centre (how an object or a
+ * terrain is seen), where from there a small grid of CPU rays through bvh
+ * meets the fronts of surfaces (or double-sided ones) at least as often as
+ * the backs of single-sided ones. Else (a level or a room seen from outside,
+ * whose walls show their black backs; an empty view) the view from inside
+ * the bounds whose rays meet the most fronts, far ones (a quarter of the
+ * bounds away) counting fully and nearer ones less, less the backs, times
+ * log2(1 + the different triangles they meet): eyes on a 5 x 3 x 5 lattice
+ * of the bounds looking along the four horizontal axes, a little down.
+ * Deterministic; `aspect` is the image's width / height. */
+void pb_camera_default(const pb_scene *s, const pb_bvh *bvh, float yfov, float aspect, pb_camera_view *out);
+
 /* --- images --- */
 
 /* Tone mapping for display: linear x 2^exposure, the ACES filmic fit

@@ -83,9 +83,12 @@ static int check_combinations(const options *o, const char *mode_name, pb_render
 }
 
 /* The camera: --eye/--target, else the scene's (--camera, default its
- * first), else a view of the bounds' centre from the front, above. */
-static pb_result camera_from_options(const options *o, const pb_scene *s, pb_camera_view *cam, pb_error *err)
+ * first), else *chosen_later = 1 and a view of the bounds' centre from the
+ * front, above, which pb_camera_default with the BVH may replace. */
+static pb_result camera_from_options(const options *o, const pb_scene *s, pb_camera_view *cam, int *chosen_later,
+                                     pb_error *err)
 {
+    *chosen_later = 0;
     float yfov = (o->fov_deg > 0.f ? o->fov_deg : 50.f) * 0.017453293f;
     if (o->has_eye) {
         for (int k = 0; k < 3; ++k) {
@@ -107,18 +110,8 @@ static pb_result camera_from_options(const options *o, const pb_scene *s, pb_cam
         snprintf(err->message, sizeof err->message, "%s: the scene has no cameras", o->scene);
         return err->code = PB_ERROR_INVALID_ARGUMENT;
     } else {
-        float c[3], ext = 0.f;
-        for (int k = 0; k < 3; ++k) {
-            c[k] = 0.5f * (s->bounds_min[k] + s->bounds_max[k]);
-            ext = fmaxf(ext, s->bounds_max[k] - s->bounds_min[k]);
-        }
-        float eye[3] = {c[0], c[1] + 0.3f * ext, c[2] + 1.2f * ext};
-        for (int k = 0; k < 3; ++k) {
-            cam->eye[k] = eye[k];
-            cam->forward[k] = c[k] - eye[k];
-            cam->up[k] = k == 1 ? 1.f : 0.f;
-        }
-        cam->yfov = yfov;
+        pb_camera_default(s, NULL, yfov, 1.f, cam); /* from outside, until the BVH can tell */
+        *chosen_later = 1;
     }
     return PB_OK;
 }
@@ -339,12 +332,21 @@ int cmd_render(const options *o)
     memcpy(d.sky, o->sky, sizeof d.sky);
     d.environment = o->env ? &env : NULL;
     d.show_probes = (uint32_t)o->show_probes;
-    if (camera_from_options(o, s, &d.camera, &err) != PB_OK)
+    int default_view;
+    if (camera_from_options(o, s, &d.camera, &default_view, &err) != PB_OK)
         goto out;
     if (pb_render_check(&d, &err) != PB_OK) /* before any device work */
         goto out;
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
+    if (default_view) { /* no camera: from outside, or from inside where outside shows only walls' backs */
+        pb_camera_default(s, bvh, d.camera.yfov, (float)width / (float)height, &d.camera);
+        if (!o->log.quiet)
+            fprintf(stderr, "probebake: info: %s has no camera: seen from (%.3g, %.3g, %.3g) towards (%.2f, %.2f, %.2f) "
+                    "(--eye and --target choose)\n", o->scene, d.camera.eye[0] + s->origin[0],
+                    d.camera.eye[1] + s->origin[1], d.camera.eye[2] + s->origin[2], d.camera.forward[0],
+                    d.camera.forward[1], d.camera.forward[2]);
+    }
     pb_context_desc cd = cli_context_desc(o, o->device, log);
     if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
