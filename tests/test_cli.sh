@@ -351,8 +351,6 @@ expect render-spheres-need-volume 2 '--show-probes needs --volume' -- "$pb" rend
 expect render-no-partial-file 0 '^absent$' -- bash -c "[ -e '$tmp/r.png' ] && echo present || echo absent"
 expect render-bad-emitter-sampling 2 '--emitter-sampling takes solid-angle or area' -- \
     "$pb" render "$demo" --emitter-sampling cosine -o "$tmp/r.png"
-expect render-emitters-by-area 0 'wrote .*direct, 1 spp' -- \
-    "$pb" render "$demo" --mode direct --size 32x24 --emitter-sampling area -o "$tmp/ea.png"
 
 # no Vulkan driver at all: one clear line, exit 1, nothing else
 expect no-driver-devices 1 'error: no Vulkan 1.2 driver found .*mesa-vulkan-drivers' -- \
@@ -363,6 +361,35 @@ one_error_line no-driver-one-line -- env VK_DRIVER_FILES=/nonexistent.json VK_IC
 
 if [ "${PB_CLI_GPU:-1}" = 1 ]; then
     expect devices 0 'llvmpipe|GPU|CPU' -- "$pb" devices
+    expect render-emitters-by-area 0 'wrote .*direct, 1 spp' -- \
+        "$pb" render "$demo" --mode direct --size 32x24 --emitter-sampling area -o "$tmp/ea.png"
+    # world coordinates on the command line keep double precision: the demo
+    # moved 1e7 m away (float steps are 1 m there) takes --bounds and --eye
+    # to the centimetre
+    python3 -c 'import json, sys
+d = json.load(open(sys.argv[1]))
+scene = d["scenes"][d.get("scene", 0)]
+d["nodes"].append({"name": "far", "translation": [1e7, 0, 1e7], "children": scene["nodes"]})
+scene["nodes"] = [len(d["nodes"]) - 1]
+json.dump(d, open(sys.argv[2], "w"))' "$demo" "$tmp/far.gltf"
+    expect info-far-bounds 0 '^bounds      \(9999998, 0, 9999997\.5\) \.\. \(10000002, 3, 10000002\.5\) m$' -- \
+        "$pb" info "$tmp/far.gltf"
+    "$pb" bake "$tmp/far.gltf" --bounds 9999998.3,0.5,9999997.8,10000001.7,2.5,10000002.2 --counts 2,2,2 --rays 16 \
+        --passes 1 --octmap-res 4 --quiet -o "$tmp/far.probes" >/dev/null
+    expect bake-far-bounds 0 '"origin": \[9999999\.1[45][0-9]*, 1, 9999998\.(89|90)[0-9]*\],  *"spacing": \[1\.7[0-9]*, 1, 2\.2[0-9]*\]' -- \
+        bash -c "'$pb' inspect '$tmp/far.probes' --json | tr -d '\n'"
+    "$pb" render "$demo" --mode direct --size 32x24 --eye 0.3,1.5,2.3 --target 0.3,1.2,0 --pfm --quiet \
+        -o "$tmp/near-eye.png" >/dev/null
+    "$pb" render "$tmp/far.gltf" --mode direct --size 32x24 --eye 10000000.3,1.5,10000002.3 --target 10000000.3,1.2,1e7 \
+        --pfm --quiet -o "$tmp/far-eye.png" >/dev/null
+    expect render-far-eye 0 '^same view$' -- python3 -c 'import struct, sys
+def pfm(path):
+    b = open(path, "rb").read()
+    head = b.split(b"\n", 3)
+    return struct.unpack("<%df" % ((len(head[3])) // 4), head[3])
+a, b = pfm(sys.argv[1]), pfm(sys.argv[2])
+worst = max(abs(x - y) / max(1.0, abs(y)) for x, y in zip(a, b))
+print("same view" if len(a) == len(b) and worst < 1e-3 else "differs by %g" % worst)' "$tmp/near-eye.pfm" "$tmp/far-eye.pfm"
     expect devices-json 0 '"subgroup_size": [0-9]+.*"kernels": "(native64|portable)"' -- "$pb" devices --json
     expect trace-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
         "$pb" trace "$demo" --verify --validation --probes 64 --rays 128

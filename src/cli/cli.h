@@ -26,7 +26,8 @@ typedef struct options {
     const char *points;
     const char *env;
     const char *textures;       /* export: the output directory */
-    float spacing, sky[3], bounds[6], target_error, env_intensity, env_rotation;
+    float spacing, sky[3], target_error, env_intensity, env_rotation;
+    double bounds[6]; /* world coordinates: double, as a scene's origin is (1e7 m offsets) */
     int has_sky, indirect_volume;
     uint32_t sh_window;
     float sh_window_width, indirect_clamp;
@@ -45,7 +46,8 @@ typedef struct options {
     /* render */
     const char *volume, *mode, *atlas, *sh_view, *reference;
     const char *seams_of;   /* render --mode diff: seam metrics on another (sparse) volume's seams */
-    float eye[3], target[3], up[3], fov_deg, exposure;
+    double eye[3], target[3], up[3]; /* world coordinates: double, as bounds */
+    float fov_deg, exposure;
     int has_eye, has_target, has_up, has_camera, has_exposure, pfm, show_probes;
     uint32_t camera, width, height, spp;
     int has_spp;
@@ -75,7 +77,7 @@ int cli_usage_error(const char *fmt, const char *arg);
 void cli_log_to_stderr(pb_log_level level, const char *msg, void *user);
 double cli_now_ms(void);
 /* Parses "a,b,c" into n floats; 1 on success. */
-int cli_parse_floats(const char *s, int n, float *out);
+int cli_parse_doubles(const char *s, int n, double *out);
 
 /* Parses argv into o (defaults first); prints --help / --version and exits
  * 0 for them. Returns 0, or the exit code of a usage error (2) after its

@@ -39,14 +39,14 @@ int cli_fail(const pb_error *err)
     return err->code == PB_ERROR_CANCELLED ? 128 + (interrupted ? (int)interrupted : SIGINT) : 1;
 }
 
-int cli_parse_floats(const char *s, int n, float *out)
+int cli_parse_doubles(const char *s, int n, double *out)
 {
     for (int k = 0; k < n; ++k) {
         char *end = NULL;
         double v = strtod(s, &end);
         if (end == s || !isfinite(v))
             return 0;
-        out[k] = (float)v;
+        out[k] = v;
         if (k + 1 < n) {
             if (*end != ',')
                 return 0;

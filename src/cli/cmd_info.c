@@ -3,6 +3,7 @@
  * dropped, materials, textures, lights, cameras, extensions, bounds). */
 #include "cli/cli.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -25,6 +26,17 @@ static void json_name_list(const char *list)
         p += n + (e ? 2 : 0);
     }
     printf("]");
+}
+
+/* A world coordinate to the millimetre, in at least 6 significant digits:
+ * "%.6g" printed a scene 1e7 m from the origin as 1e+07 .. 1e+07. */
+static json_num mm(double x)
+{
+    json_num j;
+    double a = fabs(x);
+    int digits = a >= 1e3 ? (int)floor(log10(a)) + 4 : 6;
+    snprintf(j.s, sizeof j.s, "%.*g", digits > 17 ? 17 : digits, x);
+    return j;
 }
 
 int cmd_info(const options *o)
@@ -116,7 +128,8 @@ int cmd_info(const options *o)
         if (st->extensions_used[0])
             printf("extensions  used: %s; applied: %s\n", st->extensions_used,
                    st->extensions_applied[0] ? st->extensions_applied : "none");
-        printf("bounds      (%.6g, %.6g, %.6g) .. (%.6g, %.6g, %.6g) m\n", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+        printf("bounds      (%s, %s, %s) .. (%s, %s, %s) m\n", mm(lo[0]).s, mm(lo[1]).s, mm(lo[2]).s, mm(hi[0]).s,
+               mm(hi[1]).s, mm(hi[2]).s);
     }
     pb_scene_destroy(s);
     return 0;

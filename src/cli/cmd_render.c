@@ -93,8 +93,8 @@ static pb_result camera_from_options(const options *o, const pb_scene *s, pb_cam
     if (o->has_eye) {
         for (int k = 0; k < 3; ++k) {
             cam->eye[k] = (float)(o->eye[k] - s->origin[k]);
-            cam->forward[k] = o->target[k] - o->eye[k];
-            cam->up[k] = o->has_up ? o->up[k] : (k == 1 ? 1.f : 0.f);
+            cam->forward[k] = (float)(o->target[k] - o->eye[k]);
+            cam->up[k] = o->has_up ? (float)o->up[k] : (k == 1 ? 1.f : 0.f);
         }
         cam->yfov = yfov;
     } else if (s->camera_count > 0) {

@@ -292,8 +292,8 @@ static int apply(options *o, const char *a, const char *next)
           : !strcmp(a, "--reference") ? &o->reference
                                       : &o->seams_of) = next;
     } else if (!strcmp(a, "--eye") || !strcmp(a, "--target") || !strcmp(a, "--up")) {
-        float *dst = !strcmp(a, "--eye") ? o->eye : !strcmp(a, "--target") ? o->target : o->up;
-        if (!next || !cli_parse_floats(next, 3, dst)) {
+        double *dst = !strcmp(a, "--eye") ? o->eye : !strcmp(a, "--target") ? o->target : o->up;
+        if (!next || !cli_parse_doubles(next, 3, dst)) {
             fprintf(stderr, "probebake: error: %s '%s' is not three comma-separated finite numbers\n", a,
                     next ? next : "");
             return 2;
@@ -462,7 +462,7 @@ static int apply(options *o, const char *a, const char *next)
             o->has_sky = 1;
         } else {
             for (int k = 0; k < 6; ++k)
-                o->bounds[k] = (float)vals[k];
+                o->bounds[k] = vals[k];
             if (!(vals[3] > vals[0] && vals[4] > vals[1] && vals[5] > vals[2])) {
                 fprintf(stderr, "probebake: error: --bounds '%s': need x0,y0,z0,x1,y1,z1 with x1>x0, y1>y0, z1>z0\n",
                         next);
