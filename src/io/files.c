@@ -62,7 +62,7 @@ pb_result pb_input_open(const char *path, uint64_t max_bytes, FILE **out, uint64
     FILE *f = fdopen(fd, "rb");
     if (!f) {
         close(fd);
-        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: cannot open a stream", path);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory opening a stream", path);
     }
     *out = f;
     if (size)

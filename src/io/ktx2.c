@@ -20,9 +20,10 @@ static void put_u64(unsigned char *b, uint64_t v)
 
 #define BAND_BYTES (1u << 20) /* texels asked for and written at a time */
 
-pb_result pb_ktx2_write(const char *path, uint32_t vk_format, uint32_t width, uint32_t height, pb_ktx2_rows_fn rows,
-                        void *user, pb_error *err)
+pb_result pb_ktx2_stage(const char *path, uint32_t vk_format, uint32_t width, uint32_t height, pb_ktx2_rows_fn rows,
+                        void *user, pb_output **staged, pb_error *err)
 {
+    *staged = NULL;
     static const unsigned char id[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
     uint32_t channels, bits;
     if (vk_format == PB_VK_FORMAT_R32G32B32A32_SFLOAT)
@@ -95,8 +96,10 @@ pb_result pb_ktx2_write(const char *path, uint32_t vk_format, uint32_t width, ui
         }
         r = pb_output_put(out, bytes, (uint64_t)count * row_bytes, err);
     }
-    if (out)
-        r = r == PB_OK ? pb_output_commit(out, err) : (pb_output_abort(out), r);
+    if (r == PB_OK)
+        *staged = out;
+    else
+        pb_output_abort(out);
     free(texels);
     free(bytes);
     return r;

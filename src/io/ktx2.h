@@ -7,6 +7,7 @@
 #define PB_IO_KTX2_H
 
 #include "probebake/base.h"
+#include "probebake/files.h"
 
 #include <stddef.h>
 
@@ -22,11 +23,14 @@
  * texture row 0. */
 typedef void (*pb_ktx2_rows_fn)(void *user, uint32_t y0, uint32_t count, void *out);
 
-/* Writes path (files.h's atomic write) as a KTX2 file of one width x height
- * image in vk_format (one of the three above), its texels asked of `rows` a
- * band of rows at a time and written as they come: the image is never
- * whole in memory. PB_ERROR_INVALID_ARGUMENT for another format. */
-pb_result pb_ktx2_write(const char *path, uint32_t vk_format, uint32_t width, uint32_t height, pb_ktx2_rows_fn rows,
-                        void *user, pb_error *err);
+/* Writes a KTX2 file of one width x height image in vk_format (one of the
+ * three above) to path's temporary file (files.h's pb_output_begin), its
+ * texels asked of `rows` a band of rows at a time and written as they come:
+ * the image is never whole in memory. The file is not in place until the
+ * caller commits *staged (pb_output_commit), or aborts it: an export stages
+ * all its files before it commits any. PB_ERROR_INVALID_ARGUMENT for another
+ * format; on an error *staged is NULL and nothing is left. */
+pb_result pb_ktx2_stage(const char *path, uint32_t vk_format, uint32_t width, uint32_t height, pb_ktx2_rows_fn rows,
+                        void *user, pb_output **staged, pb_error *err);
 
 #endif

@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #define MANIFEST_VERSION 1
 #define TEXELS_PER_ROW 2048u /* WebGL2 guarantees 2048 per side */
@@ -84,12 +85,12 @@ static void fill_sparse(void *user, uint32_t y0, uint32_t count, void *out)
     }
 }
 
-static pb_result write_ktx2(const char *dir, const char *name, uint32_t format, uint32_t w, uint32_t h,
-                            pb_ktx2_rows_fn rows, atlas *a, pb_error *err)
+static pb_result stage_ktx2(const char *dir, const char *name, uint32_t format, uint32_t w, uint32_t h,
+                            pb_ktx2_rows_fn rows, atlas *a, pb_output **staged, pb_error *err)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, name);
-    return pb_ktx2_write(path, format, w, h, rows, a, err);
+    return pb_ktx2_stage(path, format, w, h, rows, a, staged, err);
 }
 
 pb_result pb_volume_export_textures(const pb_volume *v, const char *dir, pb_error *err)
@@ -105,36 +106,42 @@ pb_result pb_volume_export_textures(const pb_volume *v, const char *dir, pb_erro
                        "%s: the textures are for a grid or sparse volume (the sampler interpolates a grid); this "
                        "one has %u placed points", dir, v->probe_count);
     struct stat st;
+    int made_dir = 0; /* removed again if the export fails */
     if (stat(dir, &st) != 0) {
         if (errno != ENOENT || mkdir(dir, 0755) != 0)
             return pb_fail(err, PB_ERROR_IO, "%s: cannot make the directory: %s", dir, strerror(errno));
+        made_dir = 1;
     } else if (!S_ISDIR(st.st_mode)) {
         return pb_fail(err, PB_ERROR_IO, "%s: exists and is not a directory", dir);
     }
     uint32_t P = v->probe_count, n = v->octmap_res, tile = n + 2;
     uint32_t *words = NULL, word_count = 0;
-    if (sp && pb_sparse_layout_words(sp, &words, &word_count) != PB_OK)
-        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory for the sparse layout", dir);
+    pb_output *staged[5] = {NULL}; /* the KTX2 files and the manifest, committed together at the end */
+    pb_result r = PB_OK;
+    if (sp && pb_sparse_layout_words(sp, &words, &word_count) != PB_OK) {
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory for the sparse layout", dir);
+        goto done;
+    }
     /* pb_probes, pb_sh (and pb_sparse) share the row width; the depth atlas is square in tiles */
     uint32_t W = 7u * P > word_count ? 7u * P : word_count;
     W = W < TEXELS_PER_ROW ? W : TEXELS_PER_ROW;
     uint32_t probe_rows = (P + W - 1) / W, sh_rows = (7u * P + W - 1) / W, sparse_rows = (word_count + W - 1) / W;
     if ((uint64_t)sparse_rows > TEXELS_PER_ROW * 8u) { /* past any WebGL2 device's largest texture */
-        free(words);
-        return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: the sparse layout's %u words need %u rows of %u texels", dir,
-                       word_count, sparse_rows, W);
+        r = pb_fail(err, PB_ERROR_TOO_LARGE, "%s: the sparse layout's %u words need %u rows of %u texels", dir,
+                    word_count, sparse_rows, W);
+        goto done;
     }
     uint32_t T = (uint32_t)ceil(sqrt((double)P)), depth_rows = (P + T - 1) / T;
     atlas at = {v, W, T, tile, words, word_count};
-    pb_result r = write_ktx2(dir, "probes.ktx2", PB_VK_FORMAT_R32G32B32A32_SFLOAT, W, probe_rows, fill_probes, &at,
-                             err);
+    r = stage_ktx2(dir, "probes.ktx2", PB_VK_FORMAT_R32G32B32A32_SFLOAT, W, probe_rows, fill_probes, &at, &staged[0],
+                   err);
     if (r == PB_OK)
-        r = write_ktx2(dir, "sh.ktx2", PB_VK_FORMAT_R32G32B32A32_SFLOAT, W, sh_rows, fill_sh, &at, err);
+        r = stage_ktx2(dir, "sh.ktx2", PB_VK_FORMAT_R32G32B32A32_SFLOAT, W, sh_rows, fill_sh, &at, &staged[1], err);
     if (r == PB_OK)
-        r = write_ktx2(dir, "depth.ktx2", PB_VK_FORMAT_R16G16_SFLOAT, T * tile, depth_rows * tile, fill_depth, &at,
-                       err);
+        r = stage_ktx2(dir, "depth.ktx2", PB_VK_FORMAT_R16G16_SFLOAT, T * tile, depth_rows * tile, fill_depth, &at,
+                       &staged[2], err);
     if (r == PB_OK && sp)
-        r = write_ktx2(dir, "sparse.ktx2", PB_VK_FORMAT_R32_UINT, W, sparse_rows, fill_sparse, &at, err);
+        r = stage_ktx2(dir, "sparse.ktx2", PB_VK_FORMAT_R32_UINT, W, sparse_rows, fill_sparse, &at, &staged[3], err);
     if (r != PB_OK)
         goto done;
     uint32_t largest = W > T * tile ? W : T * tile;
@@ -174,8 +181,21 @@ pb_result pb_volume_export_textures(const pb_volume *v, const char *dir, pb_erro
         depth_rows * tile, sparse_texture, largest, P);
     char path[4096];
     snprintf(path, sizeof path, "%s/manifest.json", dir);
-    r = pb_output_write(path, text, (uint64_t)len, NULL, NULL, err);
+    r = pb_output_begin(path, NULL, NULL, &staged[4], err);
+    if (r == PB_OK)
+        r = pb_output_put(staged[4], text, (uint64_t)len, err);
+    /* every file written: in place together, the manifest last (a failure
+     * before here leaves none of them, and no folder this call made) */
+    for (int i = 0; i < 5 && r == PB_OK; ++i)
+        if (staged[i]) {
+            r = pb_output_commit(staged[i], err);
+            staged[i] = NULL;
+        }
 done:
+    for (int i = 0; i < 5; ++i)
+        pb_output_abort(staged[i]);
+    if (r != PB_OK && made_dir)
+        rmdir(dir); /* empty unless a commit failed part way */
     free(words);
     return r;
 }

@@ -17,6 +17,7 @@ extern "C" {
 }
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
@@ -26,6 +27,7 @@ extern "C" {
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <map>
 #include <memory>
 #include <string>
@@ -41,6 +43,29 @@ pb_result fail(reader &r, pb_result code, const std::string &what)
 } // namespace pb_gltf
 
 namespace {
+
+// tinygltf lets a std::bad_alloc reach one of its noexcept functions, where
+// C++ calls std::terminate: that load cannot fail the usual way (found by
+// failing each allocation in turn, tests/test_out_of_memory.sh). While
+// tinygltf reads, a terminate handler says why on one line naming the file
+// and exits 1, instead of an abort without a word. The file being read is
+// kept here for it: the handler takes no argument.
+thread_local const char *tinygltf_reading;
+
+[[noreturn]] void tinygltf_terminated()
+{
+    const char *why = "an exception tinygltf could not pass on";
+    try {
+        if (std::exception_ptr e = std::current_exception())
+            std::rethrow_exception(e);
+    } catch (const std::bad_alloc &) {
+        why = "out of host memory";
+    } catch (...) {
+    }
+    fprintf(stderr, "probebake: error: %s: %s while tinygltf read it\n", tinygltf_reading ? tinygltf_reading : "glTF file",
+            why);
+    _exit(1);
+}
 
 // The allocator of the loader's per-vertex and per-index arrays: a large
 // scene's are hundreds of MB, filled right after they are made, so they ask
@@ -967,13 +992,26 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
         bytes = patched.data(), size = patched.size();
     }
     std::string gerr, gwarn;
-    bool ok;
+    bool ok = false;
+    const char *thrown = nullptr; /* what escaped tinygltf, if anything */
+    bool no_memory = false;
+    std::terminate_handler before = std::set_terminate(tinygltf_terminated);
+    tinygltf_reading = path;
     try {
         ok = glb ? loader.LoadBinaryFromMemory(&model, &gerr, &gwarn, bytes, (unsigned)size, base)
                  : loader.LoadASCIIFromString(&model, &gerr, &gwarn, (const char *)bytes, (unsigned)size, base);
+    } catch (const std::bad_alloc &) {
+        no_memory = true;
     } catch (const std::exception &e) { // nlohmann throws on some malformed input
-        return pb_fail(err, PB_ERROR_PARSE, "%s: malformed glTF: %s", path, e.what());
+        gerr = e.what(), thrown = gerr.c_str();
     }
+    tinygltf_reading = nullptr;
+    std::set_terminate(before);
+    /* tinygltf catches some exceptions itself and returns their what() as its error */
+    if (no_memory || (!ok && !thrown && gerr.find("bad_alloc") != std::string::npos))
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory while tinygltf read it", path);
+    if (thrown)
+        return pb_fail(err, PB_ERROR_PARSE, "%s: malformed glTF: %s", path, thrown);
     if (!ok) {
         std::string msg = first_line(gerr.empty() ? gwarn : gerr);
         pb_result code = PB_ERROR_PARSE;

@@ -1,0 +1,110 @@
+#!/usr/bin/env bash
+# Out of host memory at every allocation: each host-only command (info,
+# inspect, merge, export) is run once per heap allocation it makes, with that
+# one allocation failing (tests/fail_alloc.c, LD_PRELOAD). Each run must
+# either succeed or exit 1 with exactly one error line, never crash (a signal)
+# and never leave an output file, or any other file, behind when it fails.
+# Commands that make more than PB_OOM_RUNS (120) allocations are sampled
+# evenly.
+# Usage: test_out_of_memory.sh PROBEBAKE SOURCE_DIR FAIL_ALLOC_SO
+set -u
+shopt -s nullglob dotglob
+pb=$1
+src=$2
+shim=$3
+demo=$src/tests/scenes/demo.gltf
+max_runs=${PB_OOM_RUNS:-120}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+
+# allocations NAME OUT -- command...: the command's allocation count
+allocations() {
+    local out=$2
+    shift 3
+    rm -rf "$out"
+    env LD_PRELOAD="$shim" PB_FAIL_ALLOC_COUNT="$tmp/count" "$@" >/dev/null 2>&1 || return 1
+    rm -rf "$out"
+    cat "$tmp/count"
+}
+
+# each_allocation_fails NAME OUT -- command...: OUT (a file or folder, or -)
+# is what the command writes
+each_allocation_fails() {
+    local t0=$SECONDS
+    local name=$1 out=$2
+    shift 3
+    local total
+    if ! total=$(allocations "$name" "$out" -- "$@"); then
+        failed=$((failed + 1))
+        echo "[ FAIL ] $name: the command fails with no allocation failing"
+        return
+    fi
+    local step=$(((total + max_runs - 1) / max_runs)) runs=0 ok=0 refused=0 bad=0 n rc why line lines
+    local before=("$tmp/out"/*) after
+    for ((n = 1; n <= total; n += step)); do
+        [ -e "$out" ] && rm -rf "$out"
+        env LD_PRELOAD="$shim" PB_FAIL_ALLOC=$n "$@" >/dev/null 2>"$tmp/err"
+        rc=$?
+        runs=$((runs + 1))
+        if [ $rc -eq 0 ]; then
+            ok=$((ok + 1))
+            continue
+        fi
+        lines=0 # bash builtins only: this loop runs hundreds of times
+        while IFS= read -r line; do
+            [[ $line == *error:* ]] && lines=$((lines + 1))
+        done <"$tmp/err"
+        why=""
+        [ $rc -ne 1 ] && why="exit $rc"
+        [ $rc -eq 1 ] && [ $lines -ne 1 ] && why="$lines error lines"
+        [ "$out" != - ] && [ -e "$out" ] && why="$why, left $out"
+        after=("$tmp/out"/*)
+        [ "${after[*]}" != "${before[*]}" ] && why="$why, left files: ${after[*]}"
+        if [ -n "$why" ]; then
+            bad=$((bad + 1))
+            [ $bad -le 5 ] && echo "    allocation $n of $total: ${why#, }: $(head -c 300 "$tmp/err" | tr '\n' ' ')"
+        else
+            refused=$((refused + 1))
+        fi
+    done
+    rm -rf "$out"
+    if [ $bad -eq 0 ] && [ $refused -gt 0 ]; then
+        passed=$((passed + 1))
+        echo "[  OK  ] $name: $runs of $total allocations failed in turn: $refused one-line errors, $ok survived ($((SECONDS - t0)) s)"
+    else
+        failed=$((failed + 1))
+        echo "[ FAIL ] $name: $runs of $total allocations failed in turn: $bad runs crashed, printed other than" \
+             "one error line, or left files; $refused one-line errors, $ok survived"
+    fi
+}
+
+mkdir "$tmp/in" "$tmp/out"
+# inputs: a grid bake in 3 parts, a sparse bake in 2 (these need the device)
+for i in 0 1 2; do
+    "$pb" bake "$demo" --counts 6,5,7 --rays 16 --passes 1 --octmap-res 4 --quiet --shard "$i/3" \
+        -o "$tmp/in/g$i.probes" >/dev/null || { echo "[ FAIL ] could not bake the parts"; exit 1; }
+done
+for i in 0 1; do
+    "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 0.3 --rays 16 --passes 1 --octmap-res 4 --quiet \
+        --shard "$i/2" -o "$tmp/in/s$i.probes" >/dev/null || { echo "[ FAIL ] could not bake the parts"; exit 1; }
+done
+"$pb" merge "$tmp/in/g.probes" "$tmp/in"/g[012].probes >/dev/null
+"$pb" merge "$tmp/in/s.probes" "$tmp/in"/s[01].probes >/dev/null
+
+each_allocation_fails info - -- "$pb" info "$demo"
+each_allocation_fails inspect - -- "$pb" inspect "$tmp/in/s.probes"
+each_allocation_fails inspect-json - -- "$pb" inspect "$tmp/in/g.probes" --json
+each_allocation_fails merge-grid "$tmp/out/g.probes" -- "$pb" merge "$tmp/out/g.probes" "$tmp/in"/g[012].probes
+each_allocation_fails merge-sparse "$tmp/out/s.probes" -- "$pb" merge "$tmp/out/s.probes" "$tmp/in"/s[01].probes
+each_allocation_fails export "$tmp/out/tex" -- "$pb" export "$tmp/in/s.probes" --textures "$tmp/out/tex"
+duck=$src/../shared/scenes/samples/Duck/Duck.gltf
+if [ -f "$duck" ]; then # an external buffer, a PNG texture
+    each_allocation_fails info-textured - -- "$pb" info "$duck"
+else
+    echo "skip info-textured: $duck absent"
+fi
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
