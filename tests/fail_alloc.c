@@ -44,9 +44,21 @@ static void init(void)
     ready = 1;
 }
 
-static int fails(void)
+/* PB_FAIL_ALLOC_OURS=1: only allocations called from the program itself are
+ * counted (not from a shared library: the Vulkan driver, the C++ runtime),
+ * so a command that drives a device can fail in its own code only */
+static int ours_only;
+static void *program_base;
+
+static int from_program(void *caller)
 {
-    if (!atomic_load(&in_main))
+    Dl_info info;
+    return dladdr(caller, &info) && info.dli_fbase == program_base;
+}
+
+static int fails_from(void *caller)
+{
+    if (!atomic_load(&in_main) || (ours_only && !from_program(caller)))
         return 0;
     unsigned long n = atomic_fetch_add(&calls, 1) + 1;
     return fail_at && n == fail_at;
@@ -68,6 +80,10 @@ int __libc_start_main(int (*main)(int, char **, char **), int argc, char **argv,
         (int (*)(int (*)(int, char **, char **), int, char **, void (*)(void), void (*)(void), void (*)(void),
                  void *))dlsym(RTLD_NEXT, "__libc_start_main");
     real_main = main;
+    Dl_info info;
+    const char *ours = getenv("PB_FAIL_ALLOC_OURS");
+    ours_only = ours && !strcmp(ours, "1") && dladdr((void *)main, &info);
+    program_base = ours_only ? info.dli_fbase : NULL;
     return start(counted_main, argc, argv, init, fini, rtld_fini, stack_end);
 }
 
@@ -91,7 +107,7 @@ void *malloc(size_t n)
     init();
     if (ready < 0)
         return from_bootstrap(n);
-    if (fails()) {
+    if (fails_from(__builtin_return_address(0))) {
         errno = ENOMEM;
         return NULL;
     }
@@ -107,7 +123,7 @@ void *calloc(size_t a, size_t b)
             memset(p, 0, a * b);
         return p;
     }
-    if (fails()) {
+    if (fails_from(__builtin_return_address(0))) {
         errno = ENOMEM;
         return NULL;
     }
@@ -123,7 +139,7 @@ void *realloc(void *p, size_t n)
             memcpy(q, p, n < sizeof bootstrap ? n : sizeof bootstrap);
         return q;
     }
-    if (fails()) {
+    if (fails_from(__builtin_return_address(0))) {
         errno = ENOMEM;
         return NULL;
     }
@@ -143,7 +159,7 @@ void free(void *p)
 void *aligned_alloc(size_t align, size_t n)
 {
     init();
-    if (fails()) {
+    if (fails_from(__builtin_return_address(0))) {
         errno = ENOMEM;
         return NULL;
     }
@@ -153,7 +169,7 @@ void *aligned_alloc(size_t align, size_t n)
 int posix_memalign(void **out, size_t align, size_t n)
 {
     init();
-    if (fails())
+    if (fails_from(__builtin_return_address(0)))
         return ENOMEM;
     return real_posix_memalign(out, align, n);
 }
