@@ -139,6 +139,44 @@ static const char *textured_triangle(const char *name, const char *extensions, c
 
 /* ------------------------------------------------------------ tests */
 
+/* glTF cameras of both kinds, on nodes that move and turn them: an
+ * orthographic camera keeps its extents and clip planes (the renderer draws it
+ * in perspective at 0.8 rad, pb_camera_from_scene), a perspective one its
+ * field of view and aspect; both look down their node's -Z. */
+static void cameras_of_both_kinds(void)
+{
+    const char *path = write_gltf(
+        "cameras.gltf",
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1,2]}],"
+        "\"nodes\":[{\"mesh\":0},{\"camera\":0,\"translation\":[1,2,3]},"
+        "{\"camera\":1,\"rotation\":[0,0.70710678,0,0.70710678]}],"
+        "\"cameras\":[{\"type\":\"orthographic\",\"orthographic\":{\"xmag\":2,\"ymag\":1.5,\"znear\":0.1,\"zfar\":50}},"
+        "{\"type\":\"perspective\",\"perspective\":{\"yfov\":0.6,\"aspectRatio\":1.5,\"znear\":0.01}}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}",
+        tri_pos, 36);
+    pb_scene *s = load_ok(path);
+    if (!s)
+        return;
+    CHECK(s->camera_count == 2);
+    if (s->camera_count == 2) {
+        const pb_camera *o = &s->cameras[0], *p = &s->cameras[1];
+        double at[3] = {o->position[0] + s->origin[0], o->position[1] + s->origin[1], o->position[2] + s->origin[2]};
+        CHECK(!o->perspective && o->xmag == 2.f && o->ymag == 1.5f && o->znear == 0.1f && o->zfar == 50.f);
+        CHECK(near3(at, 1, 2, 3, 1e-6) && fabsf(o->forward[2] + 1.f) < 1e-6f && fabsf(o->up[1] - 1.f) < 1e-6f);
+        CHECK(p->perspective && p->yfov == 0.6f && p->aspect == 1.5f && p->znear == 0.01f && p->zfar == 0.f);
+        /* turned 90 degrees about +Y: -Z goes to -X */
+        CHECK(fabsf(p->forward[0] + 1.f) < 1e-6f && fabsf(p->forward[2]) < 1e-6f);
+        pb_camera_view v;
+        pb_camera_from_scene(o, &v);
+        CHECK(v.yfov == 0.8f);
+        pb_camera_from_scene(p, &v);
+        CHECK(v.yfov == 0.6f);
+    }
+    pb_scene_destroy(s);
+}
+
 static void demo_scene_loads_everything(void)
 {
     pb_scene *s = load_ok(source_path("tests/scenes/demo.gltf"));
@@ -1779,6 +1817,7 @@ static void exr_and_hdr_of_one_map_agree(void)
 int main(void)
 {
     RUN(demo_scene_loads_everything);
+    RUN(cameras_of_both_kinds);
     RUN(hierarchy_composes_matrix_and_trs);
     RUN(mirrored_transform_keeps_front_faces);
     RUN(strips_fans_and_unindexed);
