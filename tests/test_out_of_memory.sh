@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Out of host memory at every allocation: each host-only command (info,
 # inspect, merge, export) is run once per heap allocation it makes, with that
-# one allocation failing (tests/fail_alloc.c, LD_PRELOAD), and a bake at a
-# sample of its own allocations. Each run must either succeed or exit 1 with
-# exactly one error line, never end on a signal, and never leave its output,
-# or any other file, behind when it fails. Commands that make more than
-# PB_OOM_RUNS (120) allocations are sampled evenly.
+# one allocation failing (tests/fail_alloc.c, LD_PRELOAD), and a bake and a
+# render (--pfm: two images) at a sample of their own allocations. Each run
+# must either succeed or exit 1 with exactly one error line, never end on a
+# signal, and never leave its output, or any other file, behind when it
+# fails. Commands that make more than PB_OOM_RUNS (120) allocations are
+# sampled evenly, their last three allocations always.
 # Usage: test_out_of_memory.sh PROBEBAKE SOURCE_DIR FAIL_ALLOC_SO
 set -u
 shopt -s nullglob dotglob
@@ -21,17 +22,16 @@ failed=0
 
 # allocations NAME OUT -- command...: the command's allocation count
 allocations() {
-    local out=$2
     shift 3
-    rm -rf "$out"
+    rm -rf "$tmp/out"/*
     env LD_PRELOAD="$shim" PB_FAIL_ALLOC_OURS="${OURS:-0}" PB_FAIL_ALLOC_COUNT="$tmp/count" "$@" >/dev/null 2>&1 ||
         return 1
-    rm -rf "$out"
+    rm -rf "$tmp/out"/*
     cat "$tmp/count"
 }
 
 # each_allocation_fails NAME OUT -- command...: OUT (a file or folder, or -)
-# is what the command writes
+# is what the command writes, in $tmp/out (emptied before each run)
 each_allocation_fails() {
     local t0=$SECONDS
     local name=$1 out=$2
@@ -44,9 +44,17 @@ each_allocation_fails() {
     fi
     local most=${RUNS:-$max_runs}
     local step=$(((total + most - 1) / most)) runs=0 ok=0 refused=0 bad=0 n rc why line lines
-    local before=("$tmp/out"/*) after
+    local after
+    # evenly, and the last three always (outputs are written last)
+    local sample=() last=0
     for ((n = 1; n <= total; n += step)); do
-        [ -e "$out" ] && rm -rf "$out"
+        sample+=($n) last=$n
+    done
+    for ((n = total - 2 > last ? total - 2 : last + 1; n <= total; ++n)); do
+        sample+=($n)
+    done
+    for n in "${sample[@]}"; do
+        rm -rf "$tmp/out"/*
         env LD_PRELOAD="$shim" PB_FAIL_ALLOC_OURS="${OURS:-0}" PB_FAIL_ALLOC=$n "$@" >/dev/null 2>"$tmp/err"
         rc=$?
         runs=$((runs + 1))
@@ -63,7 +71,7 @@ each_allocation_fails() {
         [ $rc -eq 1 ] && [ $lines -ne 1 ] && why="$lines error lines"
         [ "$out" != - ] && [ -e "$out" ] && why="$why, left $out"
         after=("$tmp/out"/*)
-        [ "${after[*]}" != "${before[*]}" ] && why="$why, left files: ${after[*]}"
+        [ ${#after[@]} -ne 0 ] && why="$why, left files: ${after[*]}"
         if [ -n "$why" ]; then
             bad=$((bad + 1))
             [ $bad -le 5 ] && echo "    allocation $n of $total: ${why#, }: $(head -c 300 "$tmp/err" | tr '\n' ' ')"
@@ -71,7 +79,7 @@ each_allocation_fails() {
             refused=$((refused + 1))
         fi
     done
-    rm -rf "$out"
+    rm -rf "$tmp/out"/*
     if [ $bad -eq 0 ] && [ $refused -gt 0 ]; then
         passed=$((passed + 1))
         echo "[  OK  ] $name: $runs of $total allocations failed in turn: $refused one-line errors, $ok survived ($((SECONDS - t0)) s)"
@@ -107,6 +115,8 @@ each_allocation_fails export "$tmp/out/tex" -- "$pb" export "$tmp/in/s.probes" -
 # another allocation, and each must end as cleanly
 OURS=1 RUNS=${PB_OOM_BAKE_RUNS:-16} each_allocation_fails bake "$tmp/out/b.probes" -- \
     "$pb" bake "$demo" --counts 2,2,2 --rays 16 --passes 1 --octmap-res 4 --quiet -o "$tmp/out/b.probes"
+OURS=1 RUNS=${PB_OOM_BAKE_RUNS:-16} each_allocation_fails render "$tmp/out/r.png" -- \
+    "$pb" render "$demo" --volume "$tmp/in/s.probes" --mode diff --spp 1 --size 32x24 --pfm --quiet -o "$tmp/out/r.png"
 duck=$src/../shared/scenes/samples/Duck/Duck.gltf
 if [ -f "$duck" ]; then # an external buffer, a PNG texture
     each_allocation_fails info-textured - -- "$pb" info "$duck"

@@ -400,8 +400,11 @@ int cmd_render(const options *o)
     }
     if (o->pfm && pb_write_pfm(pfm, img, d.width, d.height, &err) != PB_OK)
         goto out;
-    if (pb_write_png(o->output, rgb8, d.width, d.height, &err) != PB_OK)
+    if (pb_write_png(o->output, rgb8, d.width, d.height, &err) != PB_OK) {
+        if (o->pfm) /* not half of the pair: the linear image written just before goes too */
+            remove(pfm);
         goto out;
+    }
     FILE *report = strcmp(o->output, "-") ? stdout : stderr; /* stdout carries the image for -o - */
     if (o->json)
         print_json(report, o, mode_name, &d, spp, ms, diff ? &m : NULL);
