@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Out of host memory at every allocation: each host-only command (info,
 # inspect, merge, export) is run once per heap allocation it makes, with that
-# one allocation failing (tests/fail_alloc.c, LD_PRELOAD), and a bake and a
-# render (--pfm: two images) at a sample of their own allocations. Each run
+# one allocation failing (tests/fail_alloc.c, LD_PRELOAD), and a sparse bake
+# and a render (--pfm: two images) at a sample of their own allocations. Each run
 # must either succeed or exit 1 with exactly one error line, never end on a
 # signal, and never leave its output, or any other file, behind when it
 # fails. Commands that make more than PB_OOM_RUNS (120) allocations are
@@ -113,8 +113,9 @@ each_allocation_fails export "$tmp/out/tex" -- "$pb" export "$tmp/in/s.probes" -
 # driver's, which no program can answer; the driver's threads and the light
 # cells' worker make the order vary from run to run, so each run may meet
 # another allocation, and each must end as cleanly
-OURS=1 RUNS=${PB_OOM_BAKE_RUNS:-16} each_allocation_fails bake "$tmp/out/b.probes" -- \
-    "$pb" bake "$demo" --counts 2,2,2 --rays 16 --passes 1 --octmap-res 4 --quiet -o "$tmp/out/b.probes"
+OURS=1 RUNS=${PB_OOM_BAKE_RUNS:-16} each_allocation_fails bake-sparse "$tmp/out/b.probes" -- \
+    "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 0.5 --rays 16 --passes 1 --octmap-res 4 --quiet \
+    -o "$tmp/out/b.probes"
 OURS=1 RUNS=${PB_OOM_BAKE_RUNS:-16} each_allocation_fails render "$tmp/out/r.png" -- \
     "$pb" render "$demo" --volume "$tmp/in/s.probes" --mode diff --spp 1 --size 32x24 --pfm --quiet -o "$tmp/out/r.png"
 duck=$src/../shared/scenes/samples/Duck/Duck.gltf

@@ -13,7 +13,7 @@ int pb_alias_build(const double *w, uint32_t n, float *prob, uint32_t *alias)
     uint32_t *small = malloc((size_t)n * sizeof *small), *large = malloc((size_t)n * sizeof *large);
     if (!scaled || !small || !large) {
         free(scaled), free(small), free(large);
-        return 0;
+        return -1;
     }
     uint32_t ns = 0, nl = 0;
     for (uint32_t i = 0; i < n; ++i) {

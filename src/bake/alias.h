@@ -7,8 +7,12 @@
 
 #include <stdint.h>
 
-/* weights: n >= 1 non-negative values with a positive sum. prob, alias: n
- * entries out. Returns 0 when out of memory or the weights sum to 0. */
+/* weights: n >= 1 non-negative values. prob, alias: n entries out. Returns
+ * 1 with the table built, 0 when the weights sum to 0 (nothing to draw;
+ * prob and alias untouched), -1 when out of host memory: callers must tell
+ * the two apart (once, every caller read a failed allocation as "no weight"
+ * and went on: punctual lights or an environment map were silently left
+ * out of the bake, and the light cells drew from an unbuilt table). */
 int pb_alias_build(const double *weights, uint32_t n, float *prob, uint32_t *alias);
 
 uint32_t pb_alias_sample(const float *prob, const uint32_t *alias, uint32_t n, float u);

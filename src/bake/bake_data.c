@@ -106,7 +106,7 @@ pb_result pb_bake_emitters_build(const pb_scene *s, pb_bake_emitters *out, pb_er
         total += power[k];
         out->tri[k++] = t;
     }
-    if (!pb_alias_build(power, n, out->prob, out->alias)) {
+    if (pb_alias_build(power, n, out->prob, out->alias) <= 0) { /* emissive triangles have area: power > 0 */
         free(power), free(area);
         pb_bake_emitters_free(out);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the emitter table");
@@ -145,10 +145,12 @@ pb_result pb_light_table_build(const pb_scene *s, pb_light_table *out, pb_error 
         w[i] = lum * l->intensity > 0 ? lum * l->intensity : 0.0;
         total += w[i];
     }
-    if (!(total > 0) || !pb_alias_build(w, n, out->keep, out->alias)) {
+    int built = total > 0 ? pb_alias_build(w, n, out->keep, out->alias) : 0;
+    if (built <= 0) {
         free(w);
         pb_light_table_free(out);
-        return PB_OK; /* nothing that shines: no table */
+        return built < 0 ? pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for %u lights", n)
+                         : PB_OK; /* nothing that shines: no table */
     }
     for (uint32_t i = 0; i < n; ++i)
         out->p[i] = (float)(w[i] / total);

@@ -121,7 +121,13 @@ pb_result pb_env_table_build(const pb_environment *env, pb_env_table *out, pb_er
         w[i] = w[i] > 0 ? w[i] : 0;
         total += w[i];
     }
-    if (total > 0 && pb_alias_build(w, (uint32_t)n, keep, alias)) {
+    int built = total > 0 ? pb_alias_build(w, (uint32_t)n, keep, alias) : 0;
+    if (built < 0) {
+        free(w), free(keep), free(alias);
+        pb_env_table_free(out);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for the environment's sampling table");
+    }
+    if (built) {
         for (uint64_t i = 0; i < n; ++i) {
             pb_env_texel *e = &out->texels[i];
             memcpy(e->rgb, env->rgb + 3 * i, sizeof e->rgb);

@@ -200,7 +200,12 @@ pb_result pb_guide_build(const pb_bake_pass *pass, uint32_t paths, pb_guide *out
             continue;
         float kp[PB_GUIDE_BINS];
         uint32_t al[PB_GUIDE_BINS];
-        if (!pb_alias_build(w, PB_GUIDE_BINS, kp, al))
+        int built = pb_alias_build(w, PB_GUIDE_BINS, kp, al);
+        if (built < 0) {
+            r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for path guiding");
+            break;
+        }
+        if (!built)
             continue;
         float *tb = out->table + 4 * (size_t)out->learned * PB_GUIDE_BINS;
         for (uint32_t b = 0; b < PB_GUIDE_BINS; ++b) {

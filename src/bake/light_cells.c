@@ -206,10 +206,13 @@ static int make_clusters(cells_build *b)
             return 0;
         for (uint32_t i = 0; i < n; ++i)
             wm[i] = b->p[k[f + i].index];
-        if (!pb_alias_build(wm, n, out->member_keep + f, out->member_alias + f))
+        int built = pb_alias_build(wm, n, out->member_keep + f, out->member_alias + f);
+        free(wm);
+        if (built < 0)
+            return 0;
+        if (!built)
             for (uint32_t i = 0; i < n; ++i) /* no power at all: never drawn (q = 0) */
                 out->member_keep[f + i] = 1.f, out->member_alias[f + i] = i;
-        free(wm);
     }
     return 1;
 }
@@ -347,8 +350,11 @@ static int make_tables(cells_build *b)
             continue; /* no emitter measured unblocked: by power */
         for (uint32_t cl = 0; cl < C; ++cl)
             q[cl] = PB_LIGHT_CELL_POWER_SHARE * b->share[cl] + (1.0 - PB_LIGHT_CELL_POWER_SHARE) * Lc[cl] / total;
-        if (!(ok = pb_alias_build(q, C, keep, alias)))
+        int built = pb_alias_build(q, C, keep, alias);
+        if (!(ok = built >= 0))
             break;
+        if (!built)
+            continue; /* q is a power share and a measured share: it sums to 1 */
         float *tb = out->table + 4 * (size_t)out->learned * C;
         for (uint32_t cl = 0; cl < C; ++cl) {
             tb[4 * cl] = keep[cl];

@@ -68,9 +68,17 @@ int pb_surface_sampler_init(const pb_scene *s, pb_surface_sampler *out)
         area[t] = pb_triangle_area(s->positions + 9 * (size_t)t);
         out->area_total += area[t];
     }
-    if (!s->triangle_count || !pb_alias_build(area, s->triangle_count, out->keep, out->alias))
-        out->area_total = 0.0;
+    int built = s->triangle_count ? pb_alias_build(area, s->triangle_count, out->keep, out->alias) : 0;
     free(area);
+    if (built < 0) {
+        pb_surface_sampler_free(out);
+        return 0;
+    }
+    if (!built) { /* no area at all: a table that draws each triangle, none of which gives a point */
+        out->area_total = 0.0;
+        for (uint32_t t = 0; t < n; ++t)
+            out->keep[t] = 1.f, out->alias[t] = t;
+    }
     return 1;
 }
 
