@@ -181,6 +181,11 @@ expect inspect-sh-view 0 "wrote $tmp/sh.png: 52x35, SH irradiance view of 6 prob
     "$pb" inspect "$tmp/v.probes" --sh-view "$tmp/sh.png"
 expect inspect-atlas-unwritable 1 "error: $tmp/no/such/dir/a.png: cannot write in $tmp/no/such/dir: No such file or directory" -- \
     "$pb" inspect "$tmp/v.probes" --atlas "$tmp/no/such/dir/a.png"
+# the two debug images together or not at all: the SH view's folder is missing,
+# so the depth atlas (made first) is not left behind either
+expect inspect-views-neither 1 "error: $tmp/no/such/dir/s.png: cannot write in" -- \
+    "$pb" inspect "$tmp/v.probes" --atlas "$tmp/both-a.png" --sh-view "$tmp/no/such/dir/s.png"
+expect inspect-views-neither-left 0 '^absent$' -- bash -c "[ -e '$tmp/both-a.png' ] && echo present || echo absent"
 expect export-textures 0 "wrote $tmp/tex/manifest.json, probes.ktx2, sh.ktx2, depth.ktx2: 6 probes \(3 x 2 x 1\)" -- \
     "$pb" export "$tmp/v.probes" --textures "$tmp/tex"
 expect export-manifest 0 '"pb_tex_width": 42,' -- cat "$tmp/tex/manifest.json"

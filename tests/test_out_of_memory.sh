@@ -5,7 +5,7 @@
 # and a render (--pfm: two images) at a sample of their own allocations. Each run
 # must either succeed or exit 1 with exactly one error line, never end on a
 # signal, and never leave its output, or any other file, behind when it
-# fails. Commands that make more than PB_OOM_RUNS (120) allocations are
+# fails. Commands that make more than PB_OOM_RUNS (80) allocations are
 # sampled evenly, their last three allocations always.
 # Usage: test_out_of_memory.sh PROBEBAKE SOURCE_DIR FAIL_ALLOC_SO
 set -u
@@ -14,7 +14,7 @@ pb=$1
 src=$2
 shim=$3
 demo=$src/tests/scenes/demo.gltf
-max_runs=${PB_OOM_RUNS:-120}
+max_runs=${PB_OOM_RUNS:-80}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 passed=0
@@ -106,6 +106,10 @@ done
 each_allocation_fails info - -- "$pb" info "$demo"
 each_allocation_fails inspect - -- "$pb" inspect "$tmp/in/s.probes"
 each_allocation_fails inspect-json - -- "$pb" inspect "$tmp/in/g.probes" --json
+# the two debug images: their own allocations only, as for render (stb's PNG
+# encoder asserts when its own allocations fail: a known abort, RESULTS)
+OURS=1 each_allocation_fails inspect-images "$tmp/out/a.png" -- "$pb" inspect "$tmp/in/g.probes" --atlas "$tmp/out/a.png" \
+    --sh-view "$tmp/out/s.png"
 each_allocation_fails merge-grid "$tmp/out/g.probes" -- "$pb" merge "$tmp/out/g.probes" "$tmp/in"/g[012].probes
 each_allocation_fails merge-sparse "$tmp/out/s.probes" -- "$pb" merge "$tmp/out/s.probes" "$tmp/in"/s[01].probes
 each_allocation_fails export "$tmp/out/tex" -- "$pb" export "$tmp/in/s.probes" --textures "$tmp/out/tex"
@@ -113,10 +117,10 @@ each_allocation_fails export "$tmp/out/tex" -- "$pb" export "$tmp/in/s.probes" -
 # driver's, which no program can answer; the driver's threads and the light
 # cells' worker make the order vary from run to run, so each run may meet
 # another allocation, and each must end as cleanly
-OURS=1 RUNS=${PB_OOM_BAKE_RUNS:-16} each_allocation_fails bake-sparse "$tmp/out/b.probes" -- \
+OURS=1 RUNS=${PB_OOM_BAKE_RUNS:-12} each_allocation_fails bake-sparse "$tmp/out/b.probes" -- \
     "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 0.5 --rays 16 --passes 1 --octmap-res 4 --quiet \
     -o "$tmp/out/b.probes"
-OURS=1 RUNS=${PB_OOM_BAKE_RUNS:-16} each_allocation_fails render "$tmp/out/r.png" -- \
+OURS=1 RUNS=${PB_OOM_BAKE_RUNS:-12} each_allocation_fails render "$tmp/out/r.png" -- \
     "$pb" render "$demo" --volume "$tmp/in/s.probes" --mode diff --spp 1 --size 32x24 --pfm --quiet -o "$tmp/out/r.png"
 duck=$src/../shared/scenes/samples/Duck/Duck.gltf
 if [ -f "$duck" ]; then # an external buffer, a PNG texture

@@ -102,30 +102,37 @@ int cmd_inspect(const options *o)
         pb_volume_free(&v);
         return 1;
     }
+    /* the debug images: both outputs checked and both images made before
+     * either is written, and the first removed if the second cannot be: a
+     * failure leaves neither */
     const char *views[2] = {o->atlas, o->sh_view};
-    for (int k = 0; k < 2; ++k) {
-        if (!views[k])
-            continue;
-        const char *inputs[1] = {o->scene};
-        if (pb_output_check(views[k], inputs, 1, &err) != PB_OK) {
-            pb_volume_free(&v);
-            return cli_fail(&err);
-        }
-        unsigned char *img = NULL;
-        uint32_t w = 0, h = 0;
-        pb_result r = k == 0 ? pb_volume_depth_atlas(&v, &img, &w, &h, &err) : pb_volume_sh_atlas(&v, 16, &img, &w, &h, &err);
-        if (r == PB_OK)
-            r = pb_write_png(views[k], img, w, h, &err);
-        free(img);
-        if (r != PB_OK) {
-            pb_volume_free(&v);
-            return cli_fail(&err);
-        }
-        if (!o->json)
-            printf("wrote %s: %ux%u, %s of %u probes%s\n", views[k], w, h,
+    unsigned char *img[2] = {NULL, NULL};
+    uint32_t w[2] = {0, 0}, h[2] = {0, 0};
+    const char *inputs[1] = {o->scene};
+    pb_result r = PB_OK;
+    for (int k = 0; k < 2 && r == PB_OK; ++k)
+        if (views[k])
+            r = pb_output_check(views[k], inputs, 1, &err);
+    for (int k = 0; k < 2 && r == PB_OK; ++k)
+        if (views[k])
+            r = k == 0 ? pb_volume_depth_atlas(&v, &img[k], &w[k], &h[k], &err)
+                       : pb_volume_sh_atlas(&v, 16, &img[k], &w[k], &h[k], &err);
+    int written = 0;
+    for (int k = 0; k < 2 && r == PB_OK; ++k)
+        if (views[k] && (r = pb_write_png(views[k], img[k], w[k], h[k], &err)) == PB_OK)
+            written |= 1 << k;
+    if (r != PB_OK && (written & 1))
+        remove(views[0]);
+    free(img[0]), free(img[1]);
+    if (r != PB_OK) {
+        pb_volume_free(&v);
+        return cli_fail(&err);
+    }
+    for (int k = 0; k < 2 && !o->json; ++k)
+        if (views[k])
+            printf("wrote %s: %ux%u, %s of %u probes%s\n", views[k], w[k], h[k],
                    k == 0 ? "depth atlas" : "SH irradiance view", v.probe_count,
                    v.sparse ? "; tile frames by finest level (0 blue, 1 green, 2 red), dim on odd bricks" : "");
-    }
     uint32_t counts[6] = {0};
     for (uint32_t i = 0; i < v.probe_count; ++i)
         for (int b = 0; b < 6; ++b)
