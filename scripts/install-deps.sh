@@ -22,7 +22,7 @@ pkgs=(
   build-essential cmake pkg-config
   libvulkan-dev vulkan-validationlayers
   glslang-tools spirv-tools
-  libtinygltf-dev nlohmann-json3-dev libstb-dev
+  libtinygltf-dev nlohmann-json3-dev libstb-dev zlib1g-dev
   libdraco-dev libmeshoptimizer-dev
   libwebp-dev libavif-dev libopenexr-dev
   clang

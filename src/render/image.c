@@ -1,5 +1,5 @@
 /* Display and comparison of rendered images: exposure, ACES tone curve,
- * sRGB, error heat maps and metrics, PNG (stb_image_write) and PFM files. */
+ * sRGB, error heat maps and metrics, PNG (over zlib) and PFM files. */
 #include "common/common.h"
 #include "common/srgb.h"
 #include "probebake/files.h"
@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <stb_image_write.h>
+#include <zlib.h>
 
 float pb_tonemap_aces(float x)
 {
@@ -107,40 +107,88 @@ double pb_image_relative_rmse(const float *a, const float *b, uint32_t width, ui
     return n && sum > 0 ? sqrt(se / n) / (sum / n) : 0.0;
 }
 
-/* stb_image_write's output callback: appends to a growing buffer. */
-typedef struct byte_sink {
-    unsigned char *b;
-    size_t n, cap;
-    int failed;
-} byte_sink;
-
-static void sink_put(void *user, void *data, int size)
+/* PNG, 8-bit RGB, written here over zlib: each row takes the filter whose
+ * bytes, read as signed, sum smallest in magnitude (PNG's usual heuristic),
+ * and the rows are deflated at zlib's default level. zlib reports a failed
+ * allocation (Z_MEM_ERROR); stb_image_write, used before, asserted and
+ * aborted (tests/test_out_of_memory.sh). */
+static void put_be32(unsigned char *p, uint32_t v)
 {
-    byte_sink *s = user;
-    if (s->failed || size <= 0)
-        return;
-    if (s->n + (size_t)size > s->cap) {
-        size_t cap = s->cap ? 2 * s->cap : 65536;
-        while (cap < s->n + (size_t)size)
-            cap *= 2;
-        unsigned char *nb = realloc(s->b, cap);
-        if (!nb) {
-            s->failed = 1;
-            return;
+    p[0] = (unsigned char)(v >> 24), p[1] = (unsigned char)(v >> 16), p[2] = (unsigned char)(v >> 8);
+    p[3] = (unsigned char)v;
+}
+
+/* A chunk whose `n` data bytes already stand at at + 8: length, type, CRC. */
+static unsigned char *png_chunk(unsigned char *at, const char type[4], uint32_t n)
+{
+    put_be32(at, n);
+    memcpy(at + 4, type, 4);
+    put_be32(at + 8 + n, (uint32_t)crc32(crc32(0L, Z_NULL, 0), at + 4, 4 + n));
+    return at + 12 + n;
+}
+
+static unsigned char paeth(int a, int b, int c)
+{
+    int p = a + b - c, pa = abs(p - a), pb = abs(p - b), pc = abs(p - c);
+    return (unsigned char)(pa <= pb && pa <= pc ? a : pb <= pc ? b : c);
+}
+
+/* Row y filtered five ways into five rows of `stride` bytes; the type with
+ * the smallest sum of |signed byte| is returned. */
+static int png_filter(const unsigned char *cur, const unsigned char *up, size_t stride, unsigned char *five)
+{
+    long best = -1;
+    int best_type = 0;
+    for (int f = 0; f < 5; ++f) {
+        unsigned char *o = five + (size_t)f * stride;
+        long sum = 0;
+        for (size_t i = 0; i < stride; ++i) {
+            int a = i >= 3 ? cur[i - 3] : 0, b = up ? up[i] : 0, c = up && i >= 3 ? up[i - 3] : 0;
+            int pred = f == 0 ? 0 : f == 1 ? a : f == 2 ? b : f == 3 ? (a + b) / 2 : paeth(a, b, c);
+            o[i] = (unsigned char)(cur[i] - pred);
+            sum += o[i] < 128 ? o[i] : 256 - o[i];
         }
-        s->b = nb, s->cap = cap;
+        if (best < 0 || sum < best)
+            best = sum, best_type = f;
     }
-    memcpy(s->b + s->n, data, (size_t)size);
-    s->n += (size_t)size;
+    return best_type;
 }
 
 pb_result pb_write_png(const char *path, const unsigned char *rgb8, uint32_t width, uint32_t height, pb_error *err)
 {
-    byte_sink sink = {0};
-    int ok = stbi_write_png_to_func(sink_put, &sink, (int)width, (int)height, 3, rgb8, (int)width * 3) != 0;
-    pb_result r = ok && !sink.failed ? pb_output_write(path, sink.b, sink.n, NULL, NULL, err)
-                                     : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: cannot encode the image", path);
-    free(sink.b);
+    size_t stride = 3 * (size_t)width, row = stride + 1, raw_n = row * height;
+    uLong bound = compressBound((uLong)raw_n);
+    unsigned char *raw = malloc(raw_n), *five = malloc(5 * stride);
+    unsigned char *b = malloc(8 + 25 + 12 + (size_t)bound + 12);
+    pb_result r = PB_OK;
+    if (!raw || !five || !b) {
+        r = pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory for the image", path);
+        goto done;
+    }
+    for (uint32_t y = 0; y < height; ++y) {
+        const unsigned char *cur = rgb8 + stride * y, *up = y ? cur - stride : NULL;
+        int f = png_filter(cur, up, stride, five);
+        raw[row * y] = (unsigned char)f;
+        memcpy(raw + row * y + 1, five + (size_t)f * stride, stride);
+    }
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    memcpy(b, signature, 8);
+    unsigned char *at = b + 8;
+    put_be32(at + 8, width), put_be32(at + 12, height);
+    at[16] = 8, at[17] = 2, at[18] = 0, at[19] = 0, at[20] = 0; /* 8 bits, RGB, deflate, adaptive, no interlace */
+    at = png_chunk(at, "IHDR", 13);
+    uLongf zn = bound;
+    int z = compress2(at + 8, &zn, raw, (uLong)raw_n, Z_DEFAULT_COMPRESSION);
+    if (z != Z_OK) {
+        r = pb_fail(err, z == Z_MEM_ERROR ? PB_ERROR_OUT_OF_HOST_MEMORY : PB_ERROR_IO, "%s: cannot compress the image (%s)",
+                    path, z == Z_MEM_ERROR ? "out of host memory" : "zlib error");
+        goto done;
+    }
+    at = png_chunk(at, "IDAT", (uint32_t)zn);
+    at = png_chunk(at, "IEND", 0);
+    r = pb_output_write(path, b, (uint64_t)(at - b), NULL, NULL, err);
+done:
+    free(raw), free(five), free(b);
     return r;
 }
 
