@@ -422,7 +422,7 @@ static int inside_bounds(const pb_scene *s, const float p[3])
  * outside shows only its walls' single-sided backs, which render black. */
 static void default_view_sees_fronts(void)
 {
-    const float yfov = 0.87f, aspect = 4.f / 3.f;
+    const float yfov = 0.87f;
     pb_error err;
     /* an object: a box facing out; a room: the same box facing in, with a
      * smaller box facing out inside it */
@@ -441,7 +441,7 @@ static void default_view_sees_fronts(void)
             continue;
         }
         pb_camera_view v;
-        pb_camera_default(s, bvh, yfov, aspect, &v);
+        pb_camera_default(s, bvh, yfov, 4, 3, &v);
         pb_render_desc d = {0};
         d.camera = v, d.width = 8, d.height = 6;
         fprintf(stderr, "  %s: eye (%.2f, %.2f, %.2f), looking (%.2f, %.2f, %.2f): %s the bounds\n",
@@ -464,7 +464,7 @@ static void default_view_sees_fronts(void)
         float img[32 * 24 * 4];
         double mean[2] = {0, 0};
         for (int inside = 0; inside < 2; ++inside) {
-            pb_camera_default(s, inside ? bvh : NULL, yfov, 32.f / 24.f, &d.camera); /* no BVH: the view from outside */
+            pb_camera_default(s, inside ? bvh : NULL, yfov, 32, 24, &d.camera); /* no BVH: the view from outside */
             CHECKF(pb_render_cpu(s, bvh, &d, img, NULL, &err) == PB_OK, "%s", err.message);
             for (int i = 0; i < 32 * 24; ++i)
                 mean[inside] += (img[4 * i] + img[4 * i + 1] + img[4 * i + 2]) / (3.0 * 32 * 24);
@@ -480,7 +480,7 @@ static void default_view_sees_fronts(void)
     if (e) {
         pb_render_desc d = {0};
         d.width = 8, d.height = 6;
-        pb_camera_default(e, NULL, yfov, aspect, &d.camera);
+        pb_camera_default(e, NULL, yfov, 4, 3, &d.camera);
         CHECKF(pb_render_check(&d, &err) == PB_OK, "%s", err.message);
         pb_scene_destroy(e);
     }

@@ -15,6 +15,8 @@
 #include <sys/sysmacros.h>
 #include <sys/un.h>
 
+#include <stb_image.h>
+
 /* Every finite half converts to float and back to itself; NaNs stay NaN;
  * +-0 and +-Inf keep their bit patterns. (Exhaustive: the domain is small.) */
 static void half_round_trip_exhaustive(void)
@@ -976,6 +978,36 @@ static void large_arrays_ask_for_huge_pages(void)
     pb_volume_free(&v);
 }
 
+/* pb_write_png (zlib, filters chosen per row) read back by another decoder
+ * (stb_image): every byte of images whose rows favour each filter (flat,
+ * ramps across and down, noise), at widths of 1, 3 and 97 pixels. */
+static void png_reads_back(void)
+{
+    static const uint32_t sizes[4][2] = {{1, 1}, {3, 5}, {97, 4}, {64, 64}};
+    test_rng r = {5};
+    for (int s = 0; s < 4; ++s) {
+        uint32_t w = sizes[s][0], h = sizes[s][1];
+        unsigned char *px = malloc((size_t)w * h * 3);
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    uint32_t kind = (y / 8 + (uint32_t)c) % 4; /* flat, across, down, noise */
+                    px[3 * ((size_t)y * w + x) + c] =
+                        (unsigned char)(kind == 0 ? 200 : kind == 1 ? 3 * x : kind == 2 ? 5 * y : rng_uniform(&r) * 256);
+                }
+        char path[512];
+        snprintf(path, sizeof path, "%s/img%d.png", temp_dir(), s);
+        pb_error err;
+        CHECKF(pb_write_png(path, px, w, h, &err) == PB_OK, "%s", err.message);
+        int rw = 0, rh = 0, rc = 0;
+        unsigned char *back = stbi_load(path, &rw, &rh, &rc, 3);
+        CHECKF(back && (uint32_t)rw == w && (uint32_t)rh == h && rc == 3 && !memcmp(back, px, (size_t)w * h * 3),
+               "%ux%u: %s", w, h, back ? "other pixels" : stbi_failure_reason());
+        stbi_image_free(back);
+        free(px);
+    }
+}
+
 int main(void)
 {
     RUN(half_round_trip_exhaustive);
@@ -996,5 +1028,6 @@ int main(void)
     RUN(sparse_files_round_trip_and_refuse_damage);
     RUN(sparse_atlas_marks_levels);
     RUN(large_arrays_ask_for_huge_pages);
+    RUN(png_reads_back);
     return test_summary();
 }

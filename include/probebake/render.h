@@ -81,8 +81,9 @@ void pb_camera_from_scene(const pb_camera *c, pb_camera_view *out);
  * bounds away) counting fully and nearer ones less, less the backs, times
  * log2(1 + the different triangles they meet): eyes on a 5 x 3 x 5 lattice
  * of the bounds looking along the four horizontal axes, a little down.
- * Deterministic; `aspect` is the image's width / height. */
-void pb_camera_default(const pb_scene *s, const pb_bvh *bvh, float yfov, float aspect, pb_camera_view *out);
+ * Deterministic; width x height is the image's size (its aspect). */
+void pb_camera_default(const pb_scene *s, const pb_bvh *bvh, float yfov, uint32_t width, uint32_t height,
+                       pb_camera_view *out);
 
 /* --- images --- */
 

@@ -110,7 +110,7 @@ static pb_result camera_from_options(const options *o, const pb_scene *s, pb_cam
         snprintf(err->message, sizeof err->message, "%s: the scene has no cameras", o->scene);
         return err->code = PB_ERROR_INVALID_ARGUMENT;
     } else {
-        pb_camera_default(s, NULL, yfov, 1.f, cam); /* from outside, until the BVH can tell */
+        pb_camera_default(s, NULL, yfov, 1, 1, cam); /* from outside, until the BVH can tell */
         *chosen_later = 1;
     }
     return PB_OK;
@@ -340,7 +340,7 @@ int cmd_render(const options *o)
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     if (default_view) { /* no camera: from outside, or from inside where outside shows only walls' backs */
-        pb_camera_default(s, bvh, d.camera.yfov, (float)width / (float)height, &d.camera);
+        pb_camera_default(s, bvh, d.camera.yfov, width, height, &d.camera);
         if (!o->log.quiet)
             fprintf(stderr, "probebake: info: %s has no camera: seen from (%.3g, %.3g, %.3g) towards (%.2f, %.2f, %.2f) "
                     "(--eye and --target choose)\n", o->scene, d.camera.eye[0] + s->origin[0],

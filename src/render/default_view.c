@@ -6,7 +6,9 @@
  * view is scored by a small grid of CPU rays: the view from outside stands
  * where it sees more fronts of surfaces than backs, else the view from
  * inside the bounds that sees the most of them. */
+#include "common/vec3.h"
 #include "probebake/render.h"
+#include "render/render_types.h"
 #include "probebake/trace.h"
 
 #include <math.h>
@@ -17,18 +19,12 @@ enum {
     INSIDE_X = 5, INSIDE_Y = 3, INSIDE_Z = 5 /* eyes inside the bounds, at cell centres */
 };
 
-static void normalize(float v[3])
+/* v scaled to unit length */
+static void unit(float v[3])
 {
-    float l = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    float l = pb_length3(v);
     for (int k = 0; k < 3; ++k)
         v[k] /= l;
-}
-
-static void cross(const float a[3], const float b[3], float out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
 /* What view v sees, over a GRID_X x GRID_Y grid of rays across its frustum:
@@ -38,26 +34,22 @@ static void cross(const float a[3], const float b[3], float out[3])
  * the share of rays that meet the back of a single-sided surface (a wall
  * seen from behind, or an eye inside a solid), *seen the number of
  * different triangles whose fronts they meet. Misses count for none. */
-static void view_score(const pb_scene *s, const pb_bvh *bvh, const pb_camera_view *v, float aspect, float reach,
-                       double *front, double *back, uint32_t *seen)
+static void view_score(const pb_scene *s, const pb_bvh *bvh, const pb_camera_view *v, uint32_t width, uint32_t height,
+                       float reach, double *front, double *back, uint32_t *seen)
 {
-    float f[3] = {v->forward[0], v->forward[1], v->forward[2]}, r[3], u[3];
-    normalize(f);
-    cross(f, v->up, r);
-    normalize(r);
-    cross(r, f, u);
-    float ty = tanf(0.5f * v->yfov), tx = ty * aspect;
+    float f[3], r[3], u[3]; /* the renderer's own basis: r and u span the image's half-width and half-height */
+    pb_render_camera_basis(v, width, height, f, r, u);
     pb_ray rays[GRID_X * GRID_Y];
     pb_hit hits[GRID_X * GRID_Y];
     for (int j = 0; j < GRID_Y; ++j)
         for (int i = 0; i < GRID_X; ++i) {
-            float sx = tx * (2.f * (i + 0.5f) / GRID_X - 1.f), sy = ty * (1.f - 2.f * (j + 0.5f) / GRID_Y);
+            float sx = 2.f * (i + 0.5f) / GRID_X - 1.f, sy = 1.f - 2.f * (j + 0.5f) / GRID_Y;
             pb_ray *ray = &rays[j * GRID_X + i];
             for (int k = 0; k < 3; ++k) {
                 ray->origin[k] = v->eye[k];
                 ray->direction[k] = f[k] + sx * r[k] + sy * u[k];
             }
-            normalize(ray->direction);
+            unit(ray->direction);
             ray->tmin = 0.f;
             ray->tmax = INFINITY;
         }
@@ -83,7 +75,8 @@ static void view_score(const pb_scene *s, const pb_bvh *bvh, const pb_camera_vie
     *back = bsum / (GRID_X * GRID_Y);
 }
 
-void pb_camera_default(const pb_scene *s, const pb_bvh *bvh, float yfov, float aspect, pb_camera_view *out)
+void pb_camera_default(const pb_scene *s, const pb_bvh *bvh, float yfov, uint32_t width, uint32_t height,
+                       pb_camera_view *out)
 {
     float c[3], ext = 0.f;
     for (int k = 0; k < 3; ++k) {
@@ -102,7 +95,7 @@ void pb_camera_default(const pb_scene *s, const pb_bvh *bvh, float yfov, float a
     float reach = 0.25f * ext;
     double front, back;
     uint32_t seen;
-    view_score(s, bvh, &outside, aspect, reach, &front, &back, &seen);
+    view_score(s, bvh, &outside, width, height, reach, &front, &back, &seen);
     if (front > 0.0 && front >= back)
         return; /* it sees the scene's surfaces from their front */
     /* from inside: eyes on a lattice of the bounds, each looking along the
@@ -121,7 +114,7 @@ void pb_camera_default(const pb_scene *s, const pb_bvh *bvh, float yfov, float a
                     pb_camera_view v = {{0, 0, 0}, {look[d][0], look[d][1], look[d][2]}, {0, 1, 0}, yfov};
                     for (int k = 0; k < 3; ++k)
                         v.eye[k] = s->bounds_min[k] + (s->bounds_max[k] - s->bounds_min[k]) * (at[k] + 0.5f) / steps[k];
-                    view_score(s, bvh, &v, aspect, reach, &front, &back, &seen);
+                    view_score(s, bvh, &v, width, height, reach, &front, &back, &seen);
                     double score = (front - back) * log2(1.0 + seen);
                     if (score > best)
                         best = score, *out = v;
