@@ -26,6 +26,7 @@ extern "C" {
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <map>
@@ -54,6 +55,10 @@ thread_local const char *tinygltf_reading;
 
 [[noreturn]] void tinygltf_terminated()
 {
+    /* the handler is the process's while any thread reads: a terminate on a
+     * thread that is not reading a file ends as C++'s default one does */
+    if (!tinygltf_reading)
+        std::abort();
     const char *why = "an exception tinygltf could not pass on";
     try {
         if (std::exception_ptr e = std::current_exception())
@@ -62,8 +67,7 @@ thread_local const char *tinygltf_reading;
         why = "out of host memory";
     } catch (...) {
     }
-    fprintf(stderr, "probebake: error: %s: %s while tinygltf read it\n", tinygltf_reading ? tinygltf_reading : "glTF file",
-            why);
+    fprintf(stderr, "probebake: error: %s: %s while tinygltf read it\n", tinygltf_reading, why);
     _exit(1);
 }
 
