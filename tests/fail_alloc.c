@@ -135,8 +135,9 @@ void *realloc(void *p, size_t n)
     init();
     if (is_bootstrap(p)) { /* never happens in practice: move it to the real heap */
         void *q = real_malloc(n);
+        size_t left = (size_t)(bootstrap + sizeof bootstrap - (char *)p); /* bytes of the buffer from p on */
         if (q)
-            memcpy(q, p, n < sizeof bootstrap ? n : sizeof bootstrap);
+            memcpy(q, p, n < left ? n : left);
         return q;
     }
     if (fails_from(__builtin_return_address(0))) {
