@@ -992,8 +992,9 @@ static void png_reads_back(void)
             for (uint32_t x = 0; x < w; ++x)
                 for (int c = 0; c < 3; ++c) {
                     uint32_t kind = (y / 8 + (uint32_t)c) % 4; /* flat, across, down, noise */
-                    px[3 * ((size_t)y * w + x) + c] =
-                        (unsigned char)(kind == 0 ? 200 : kind == 1 ? 3 * x : kind == 2 ? 5 * y : rng_uniform(&r) * 256);
+                    uint32_t v = kind == 0 ? 200u : kind == 1 ? 3u * x : kind == 2 ? 5u * y
+                                                                     : (uint32_t)(rng_uniform(&r) * 256.0);
+                    px[3 * ((size_t)y * w + x) + c] = (unsigned char)(v & 255u);
                 }
         char path[512];
         snprintf(path, sizeof path, "%s/img%d.png", temp_dir(), s);
