@@ -415,6 +415,11 @@ print("same view" if len(a) == len(b) and worst < 1e-3 else "differs by %g" % wo
     expect bake-tiny 0 "wrote $tmp/a.probes: 8 probes" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --validation -o "$tmp/a.probes"
     expect bake-inspect 0 '"probes": 8,' -- "$pb" inspect "$tmp/a.probes" --json
+    # every timing the file holds is filled: the upload (the CLI's) and the
+    # relocation's GPU time (a part of trace and sh) were written as 0 before
+    t='[0-9.e+-]+' pos='(0\.0*[1-9]|[1-9])[0-9.e+-]*' # a time, a time above 0
+    expect bake-inspect-timings 0 "^time +load $t ms, bvh $t ms, upload $pos ms; GPU trace $pos ms, sh $t ms, depth $t ms \\(relocation: $pos ms of trace and sh\\); $pos ms total\$" -- \
+        "$pb" inspect "$tmp/a.probes"
     expect bake-sparse 0 '^sparse: 2 levels, bricks 1 [0-9]+ .*; [0-9]+ bakes, [1-9][0-9]* test probes thrown away; [0-9]+ probes inside geometry dropped' -- \
         "$pb" bake "$demo" --layout sparse --max-level 1 --spacing 1 --rays 32 --passes 2 --octmap-res 4 --validation \
         -o "$tmp/s.probes"

@@ -154,6 +154,7 @@ static pb_result bake_once(pb_context *ctx, const pb_scene *scene, pb_gpu_scene 
                     (unsigned long long)j.run.long_paths);
         out->timings.trace = j.run.t_trace;
         out->timings.sh = j.run.t_sh;
+        out->timings.relocate = gpu_relocate; /* a part of trace and sh */
         out->timings.octmap = j.run.t_depth;
         out->timings.total = pb_now_ms() - t_start;
     }

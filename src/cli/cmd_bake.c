@@ -63,12 +63,15 @@ static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_b
     pb_gpu_scene *scenes[MAX_DEVICES] = {0};
     uint32_t n = device_list(o->devices, names, MAX_DEVICES, err);
     pb_result r = n ? PB_OK : PB_ERROR_INVALID_ARGUMENT;
+    double upload_ms = 0.0; /* summed over the devices, as the parts' other timings are */
     /* contexts one after another (instance set-up is not for threads) */
     for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
         pb_context_desc cd = cli_context_desc(o, names[i], log);
         r = pb_context_create(&cd, &ctxs[i], err);
+        double t0 = cli_now_ms();
         if (r == PB_OK)
             r = pb_gpu_scene_create(ctxs[i], s, bvh, &scenes[i], err);
+        upload_ms += cli_now_ms() - t0;
     }
     if (r == PB_OK && !o->log.quiet)
         fprintf(stderr, "probebake: %u devices, one part each:", n);
@@ -81,6 +84,8 @@ static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_b
         pb_sparse_desc sd = sparse_desc_from_options(o);
         r = pb_bake_devices(ctxs, scenes, n, s, d, o->sparse ? &sd : NULL, vol, err);
     }
+    if (r == PB_OK)
+        vol->timings.upload = upload_ms;
     for (uint32_t i = 0; r == PB_OK && o->validation && i < n; ++i)
         if (pb_context_validation_messages(ctxs[i])) {
             snprintf(err->message, sizeof err->message, "%u Vulkan validation messages on device %s",
@@ -294,10 +299,10 @@ static void print_report(FILE *report, const options *o, const pb_bake_desc *d, 
             vol->settings.passes);
     cli_print_error_summary(report, vol);
     const pb_volume_timings *t = &vol->timings;
-    fprintf(report, "time: load %.0f ms, bvh %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M traversals/s), sh %.0f ms, "
-                    "depth %.0f ms; total %.0f ms wall\n",
-            t->load, t->bvh, t->trace, t->trace > 0 ? rays / (t->trace * 1e3) : 0.0,
-            t->trace > 0 ? (double)vol->traversals / (t->trace * 1e3) : 0.0, t->sh, t->octmap, t->total);
+    fprintf(report, "time: load %.0f ms, bvh %.1f ms, upload %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M "
+                    "traversals/s), sh %.0f ms, depth %.0f ms (relocation: %.0f ms of trace and sh); total %.0f ms wall\n",
+            t->load, t->bvh, t->upload, t->trace, t->trace > 0 ? rays / (t->trace * 1e3) : 0.0,
+            t->trace > 0 ? (double)vol->traversals / (t->trace * 1e3) : 0.0, t->sh, t->octmap, t->relocate, t->total);
 }
 
 /* The bake on one device (--device, or the default pick). */
@@ -308,8 +313,10 @@ static pb_result bake_on_device(const options *o, const pb_scene *s, const pb_bv
     pb_gpu_scene *gs = NULL;
     pb_context_desc cd = cli_context_desc(o, o->device, log);
     pb_result r = pb_context_create(&cd, &ctx, err);
+    double upload_ms = cli_now_ms();
     if (r == PB_OK)
         r = pb_gpu_scene_create(ctx, s, bvh, &gs, err);
+    upload_ms = cli_now_ms() - upload_ms;
     if (r == PB_OK) {
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
         if (o->sparse) {
@@ -319,6 +326,8 @@ static pb_result bake_on_device(const options *o, const pb_scene *s, const pb_bv
             r = pb_bake(ctx, s, gs, d, vol, err);
         }
     }
+    if (r == PB_OK)
+        vol->timings.upload = upload_ms; /* the caller's, as load and bvh are */
     if (r == PB_OK && o->validation && pb_context_validation_messages(ctx)) {
         snprintf(err->message, sizeof err->message, "%u Vulkan validation messages",
                  pb_context_validation_messages(ctx));

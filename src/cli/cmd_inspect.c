@@ -253,7 +253,10 @@ int cmd_inspect(const options *o)
             printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),
                    s->sh_window_width > 0.f ? s->sh_window_width : 3.f, s->indirect_clamp);
         cli_print_error_summary(stdout, &v);
-        printf("time        %.1f ms total\n", v.timings.total);
+        const pb_volume_timings *t = &v.timings;
+        printf("time        load %.3g ms, bvh %.3g ms, upload %.3g ms; GPU trace %.3g ms, sh %.3g ms, depth %.3g ms "
+               "(relocation: %.3g ms of trace and sh); %.4g ms total\n", t->load, t->bvh, t->upload, t->trace, t->sh, t->octmap,
+               t->relocate, t->total);
     }
     pb_volume_free(&v);
     return 0;
