@@ -553,6 +553,75 @@ static void bounded_submissions_same_bytes(void)
     pb_scene_destroy(s);
 }
 
+/* pb_buffer_fill: records made in place (mapped memory) or a staging
+ * buffer's worth at a time (a context that stages), on all host cores, are
+ * the records asked for, at the offset asked for, and nothing else moves. A
+ * 40-byte record does not divide the 16 MiB staging buffer, and a million of
+ * them take three. */
+typedef struct fill_pattern {
+    uint32_t words; /* per record */
+    uint32_t seed;
+} fill_pattern;
+
+static uint32_t fill_word(const fill_pattern *p, uint64_t record, uint32_t w)
+{
+    return pb_hash32((uint32_t)record * 2654435761u ^ (uint32_t)(record >> 32) ^ w * 40503u ^ p->seed);
+}
+
+static void fill_records(void *user, void *out, uint64_t first, uint64_t n)
+{
+    const fill_pattern *p = user;
+    for (uint64_t i = 0; i < n; ++i)
+        for (uint32_t w = 0; w < p->words; ++w)
+            ((uint32_t *)out)[i * p->words + w] = fill_word(p, first + i, w);
+}
+
+static void buffer_fill_mapped_and_staged(void)
+{
+    pb_context_desc d = {NULL, 1, 0, 1, test_log};
+    pb_context *staged = NULL;
+    pb_error err;
+    CHECKF(pb_context_create(&d, &staged, &err) == PB_OK, "%s", err.message);
+    if (!staged)
+        return;
+    const uint64_t count = 1000000, offset = 24, tail = 8;
+    const fill_pattern pat = {10, 7}; /* 40-byte records */
+    const size_t bytes = (size_t)(offset + count * 40 + tail);
+    uint8_t *sentinel = malloc(bytes), *back = malloc(bytes);
+    for (size_t i = 0; i < bytes; ++i)
+        sentinel[i] = (uint8_t)(i * 7 + 3);
+    pb_context *ctxs[2] = {ctx, staged};
+    for (int c = 0; c < 2; ++c) {
+        pb_buffer b;
+        CHECK(pb_buffer_create(ctxs[c], bytes, PB_MEMORY_DEVICE, "fill test", &b, &err) == PB_OK);
+        CHECK(c == 0 || b.mapped == NULL); /* the second context stages */
+        CHECK(pb_buffer_upload(ctxs[c], &b, 0, sentinel, bytes, &err) == PB_OK);
+        CHECKF(pb_buffer_fill(ctxs[c], &b, offset, 40, count, fill_records, (void *)&pat, &err) == PB_OK, "%s",
+               err.message);
+        /* one record too many, or a record past the end: refused, nothing written */
+        CHECK(pb_buffer_fill(ctxs[c], &b, offset, 40, count + 1, fill_records, (void *)&pat, &err) ==
+              PB_ERROR_INVALID_ARGUMENT);
+        CHECK(pb_buffer_fill(ctxs[c], &b, bytes - 39, 40, 1, fill_records, (void *)&pat, &err) ==
+              PB_ERROR_INVALID_ARGUMENT);
+        memset(back, 0, bytes);
+        CHECK(pb_buffer_download(ctxs[c], &b, 0, back, bytes, &err) == PB_OK);
+        uint64_t bad = 0;
+        for (uint64_t i = 0; i < count; ++i)
+            for (uint32_t w = 0; w < 10; ++w) {
+                uint32_t got;
+                memcpy(&got, back + offset + 40 * i + 4 * w, 4);
+                bad += got != fill_word(&pat, i, w);
+            }
+        CHECKF(bad == 0, "%s: %llu words wrong", c ? "staged" : "mapped", (unsigned long long)bad);
+        CHECK(memcmp(back, sentinel, offset) == 0);
+        CHECK(memcmp(back + bytes - tail, sentinel + bytes - tail, tail) == 0);
+        pb_buffer_destroy(ctxs[c], &b);
+    }
+    CHECK(pb_context_validation_messages(staged) == 0);
+    free(sentinel), free(back);
+    pb_context_destroy(staged);
+}
+
 /* shaders/include/ray_offset.glsl == pb_offset_ray_origin, bit for bit, over
  * magnitudes from 1e-7 to 1e7 (both sides of the 1/32 switch), signs, zeros. */
 static void ray_offset_gpu_matches_cpu(void)
@@ -1020,6 +1089,7 @@ int main(void)
     RUN(sync_validation_catches_a_missing_barrier);
     RUN(dispatch_spread_permutes_blocks);
     RUN(bounded_submissions_same_bytes);
+    RUN(buffer_fill_mapped_and_staged);
     RUN(ray_offset_gpu_matches_cpu);
     RUN(exact_diff_gpu_matches_cpu);
     RUN(portable_kernels_need_no_64bit_types);

@@ -77,6 +77,50 @@ static pb_result upload_array(pb_context *ctx, pb_buffer *b, const void *data, u
     return r;
 }
 
+/* The per-triangle records, triangle k in the BVH's leaf order. */
+typedef struct scene_fill {
+    const pb_scene *scene;
+    const pb_bvh *bvh;
+} scene_fill;
+
+static void fill_tris(void *user, void *out, uint64_t first, uint64_t n)
+{
+    const scene_fill *f = user;
+    gpu_tri *t = out;
+    for (uint64_t i = 0; i < n; ++i) {
+        uint64_t k = first + i;
+        uint32_t m = f->scene->material[f->bvh->tri_order[k]];
+        const pb_material *pm = &f->scene->materials[m];
+        memcpy(t[i].v, f->bvh->tri_positions + 9 * k, 36); /* the BVH's positions are in leaf order already */
+        /* thin glass is opaque to the traversal: glass_step (bake.glsl) lets rays through */
+        t[i].flags = m | (pm->alpha_mode != PB_ALPHA_OPAQUE && !(pm->transmission > 0.f) ? PB_FLAG_ALPHA_MASK : 0u);
+    }
+}
+
+static void fill_uvs(void *user, void *out, uint64_t first, uint64_t n)
+{
+    const scene_fill *f = user;
+    for (uint64_t i = 0; i < n; ++i)
+        memcpy((float *)out + 6 * i, f->scene->texcoords + 6 * (size_t)f->bvh->tri_order[first + i], 24);
+}
+
+static void fill_colors(void *user, void *out, uint64_t first, uint64_t n)
+{
+    const scene_fill *f = user;
+    for (uint64_t i = 0; i < n; ++i)
+        memcpy((float *)out + 12 * i, f->scene->colors + 12 * (size_t)f->bvh->tri_order[first + i], 48);
+}
+
+static void fill_normals(void *user, void *out, uint64_t first, uint64_t n)
+{
+    const scene_fill *f = user;
+    for (uint64_t i = 0; i < n; ++i) {
+        const float *nv = f->scene->normals + 9 * (size_t)f->bvh->tri_order[first + i];
+        for (int v = 0; v < 3; ++v)
+            ((uint32_t *)out)[3 * i + v] = pb_normal_pack(nv + 3 * v);
+    }
+}
+
 pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_bvh *bvh, pb_gpu_scene **out,
                               pb_error *err)
 {
@@ -116,14 +160,12 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         return pb_fail(err, PB_ERROR_TOO_LARGE, "%s: more than 2^32 texels", scene->path);
 
     pb_gpu_scene *gs = calloc(1, sizeof *gs);
-    gpu_tri *tris = pb_calloc_large((size_t)n + 1, sizeof *tris);
-    float *uvs = malloc(sizes[2] ? (size_t)sizes[2] : 24);
     gpu_material *mats = malloc((size_t)(scene->material_count ? scene->material_count : 1) * sizeof *mats);
     gpu_texture *texs = malloc((size_t)(scene->texture_count ? scene->texture_count : 1) * sizeof *texs);
     if (gs)
         gs->tri_order = pb_malloc_large((size_t)(n ? n : 1) * 4);
-    if (!gs || !tris || !uvs || !mats || !texs || !gs->tri_order) {
-        free(tris), free(uvs), free(mats), free(texs);
+    if (!gs || !mats || !texs || !gs->tri_order) {
+        free(mats), free(texs);
         if (gs)
             free(gs->tri_order);
         free(gs);
@@ -137,33 +179,37 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         const pb_texture *pt = &scene->textures[t];
         texs[t] = (gpu_texture){(uint32_t)pt->offset, pt->width, pt->height, pt->wrap_s | (pt->wrap_t << 8)};
     }
-    for (uint32_t k = 0; k < n; ++k) {
-        uint32_t tri = bvh->tri_order[k];
-        uint32_t m = scene->material[tri];
-        memcpy(tris[k].v, bvh->tri_positions + 9 * (size_t)k, 36);
-        /* thin glass is opaque to the traversal: glass_step (bake.glsl) lets rays through */
-        const pb_material *pm = &scene->materials[m];
-        tris[k].flags = m | (pm->alpha_mode != PB_ALPHA_OPAQUE && !(pm->transmission > 0.f) ? PB_FLAG_ALPHA_MASK : 0u);
-        memcpy(uvs + 6 * (size_t)k, scene->texcoords + 6 * (size_t)tri, 24);
-        if (scene->colors)
-            memcpy(uvs + 6 * (size_t)n + 12 * (size_t)k, scene->colors + 12 * (size_t)tri, 48);
-        if (smooth) {
-            uint32_t *packed = (uint32_t *)(uvs + (scene->colors ? 18 : 6) * (size_t)n) + 3 * (size_t)k;
-            for (int v = 0; v < 3; ++v)
-                packed[v] = pb_normal_pack(scene->normals + 9 * (size_t)tri + 3 * v);
-        }
-    }
     memcpy(gs->tri_order, bvh->tri_order, (size_t)n * 4);
     gs->triangle_count = n;
     gs->stack_size = PB_BVH_STACK_SIZE(bvh->stats.wide_depth);
 
+    /* The per-triangle arrays are made where the device reads them, on all
+     * host cores (pb_buffer_fill), in tri_uv's layout (scene.glsl's
+     * SceneRefs): texture coordinates, vertex colours, packed normals. */
+    const scene_fill f = {scene, bvh};
+    const uint64_t uv_bytes = (uint64_t)n * 24u, color_bytes = scene->colors ? (uint64_t)n * 48u : 0u;
+    static const uint32_t zero_texel[4];
     pb_result r = upload_array(ctx, &gs->nodes, bvh->wide_nodes, sizes[0], names[0], err);
-    if (r == PB_OK) r = upload_array(ctx, &gs->tris, tris, sizes[1], names[1], err);
-    if (r == PB_OK) r = upload_array(ctx, &gs->tri_uv, uvs, sizes[2], names[2], err);
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, sizes[1], PB_MEMORY_DEVICE, names[1], &gs->tris, err);
+    if (r == PB_OK)
+        r = pb_buffer_fill(ctx, &gs->tris, 0, sizeof(gpu_tri), n, fill_tris, (void *)&f, err);
+    if (r == PB_OK)
+        r = pb_buffer_upload(ctx, &gs->tris, (uint64_t)n * sizeof(gpu_tri), zero_texel, 16, err);
+    if (r == PB_OK)
+        r = pb_buffer_create(ctx, sizes[2], PB_MEMORY_DEVICE, names[2], &gs->tri_uv, err);
+    /* only a texture reads texture coordinates (surface_uv in scene.glsl):
+     * a scene without one leaves them unwritten (the terrain's 100 MB) */
+    if (r == PB_OK && scene->texture_count)
+        r = pb_buffer_fill(ctx, &gs->tri_uv, 0, 24, n, fill_uvs, (void *)&f, err);
+    if (r == PB_OK && scene->colors)
+        r = pb_buffer_fill(ctx, &gs->tri_uv, uv_bytes, 48, n, fill_colors, (void *)&f, err);
+    if (r == PB_OK && smooth)
+        r = pb_buffer_fill(ctx, &gs->tri_uv, uv_bytes + color_bytes, 12, n, fill_normals, (void *)&f, err);
     if (r == PB_OK) r = upload_array(ctx, &gs->materials, mats, sizes[3], names[3], err);
     if (r == PB_OK) r = upload_array(ctx, &gs->textures, texs, sizes[4], names[4], err);
     if (r == PB_OK) r = upload_array(ctx, &gs->texels, scene->texels, sizes[5], names[5], err);
-    free(tris), free(uvs), free(mats), free(texs);
+    free(mats), free(texs);
     if (r == PB_OK)
         r = make_scene_set(ctx, scene, gs, err);
     if (r != PB_OK) {

@@ -168,6 +168,53 @@ pb_result pb_buffer_upload(pb_context *ctx, pb_buffer *dst, VkDeviceSize offset,
     return staged_copy(ctx, dst, offset, (void *)data, size, 1, err); /* not written through when uploading */
 }
 
+typedef struct fill_job {
+    pb_fill_fn fill;
+    void *user;
+    char *base;            /* where record `first` goes */
+    uint64_t first;
+    uint32_t record_bytes;
+} fill_job;
+
+static void fill_range(void *arg, uint64_t begin, uint64_t end)
+{
+    const fill_job *j = arg;
+    j->fill(j->user, j->base + begin * j->record_bytes, j->first + begin, end - begin);
+}
+
+#define FILL_GRAIN 16384u /* records per block handed to a thread */
+
+pb_result pb_buffer_fill(pb_context *ctx, pb_buffer *dst, VkDeviceSize offset, uint32_t record_bytes, uint64_t count,
+                         pb_fill_fn fill, void *user, pb_error *err)
+{
+    if (count == 0)
+        return PB_OK;
+    if (record_bytes == 0 || offset > dst->size || count > (dst->size - offset) / record_bytes)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "fill past the end of a buffer");
+    if (dst->mapped) {
+        fill_job j = {fill, user, (char *)dst->mapped + offset, 0, record_bytes};
+        pb_parallel_for(count, FILL_GRAIN, 0, fill_range, &j);
+        return PB_OK;
+    }
+    uint64_t per_chunk = STAGING_CHUNK / record_bytes ? STAGING_CHUNK / record_bytes : 1; /* whole records */
+    if (per_chunk > count)
+        per_chunk = count;
+    pb_buffer staging;
+    pb_result r = pb_buffer_create(ctx, per_chunk * record_bytes, PB_MEMORY_UPLOAD, "staging buffer", &staging, err);
+    for (uint64_t first = 0; r == PB_OK && first < count; first += per_chunk) {
+        uint64_t n = count - first < per_chunk ? count - first : per_chunk;
+        fill_job j = {fill, user, staging.mapped, first, record_bytes};
+        pb_parallel_for(n, FILL_GRAIN, 0, fill_range, &j);
+        if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
+            break;
+        pb_cmd_copy(ctx, &staging, 0, dst, offset + first * record_bytes, n * record_bytes);
+        pb_cmd_barrier_to_host(ctx);
+        r = pb_cmd_submit_wait(ctx, NULL, err);
+    }
+    pb_buffer_destroy(ctx, &staging); /* zeroed by a failed create */
+    return r;
+}
+
 pb_result pb_buffer_download(pb_context *ctx, const pb_buffer *src, VkDeviceSize offset, void *data, VkDeviceSize size,
                              pb_error *err)
 {

@@ -111,6 +111,16 @@ pb_result pb_buffer_upload(pb_context *ctx, pb_buffer *dst, VkDeviceSize offset,
 pb_result pb_buffer_download(pb_context *ctx, const pb_buffer *src, VkDeviceSize offset, void *data,
                              VkDeviceSize size, pb_error *err);
 
+/* Makes `count` records of `record_bytes` each at `offset` in dst where the
+ * device reads them: fill(user, out, first, n) writes records [first, first
+ * + n) to out, and is called on all host cores for disjoint ranges. Mapped
+ * memory (UMA) is written in place; elsewhere each staging buffer's worth is
+ * made and copied in turn. A large array (the scene's triangles) is then
+ * neither held twice on the host nor copied once more. */
+typedef void (*pb_fill_fn)(void *user, void *out, uint64_t first, uint64_t n);
+pb_result pb_buffer_fill(pb_context *ctx, pb_buffer *dst, VkDeviceSize offset, uint32_t record_bytes, uint64_t count,
+                         pb_fill_fn fill, void *user, pb_error *err);
+
 typedef struct pb_pipeline {
     VkPipelineLayout layout;
     VkPipeline pipeline;
