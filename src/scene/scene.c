@@ -3,6 +3,7 @@
 #include "scene/scene_builder.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -73,12 +74,19 @@ pb_result pb_scene_from_triangles(const double *world_positions, uint32_t triang
     return r;
 }
 
-uint64_t pb_scene_bent_triangles(const pb_scene *s)
+typedef struct bent_count {
+    const pb_scene *s;
+    _Atomic uint64_t bent;
+} bent_count;
+
+static void count_bent(void *user, uint64_t begin, uint64_t end)
 {
+    bent_count *c = user;
+    const pb_scene *s = c->s;
     uint64_t bent = 0;
-    for (uint32_t t = 0; t < s->triangle_count; ++t) {
+    for (uint64_t t = begin; t < end; ++t) {
         /* the face normal in double, as the builder gives triangles without normals */
-        const float *p = s->positions + 9 * (size_t)t, *n = s->normals + 9 * (size_t)t;
+        const float *p = s->positions + 9 * t, *n = s->normals + 9 * t;
         double e1[3], e2[3];
         for (int k = 0; k < 3; ++k)
             e1[k] = (double)p[3 + k] - p[k], e2[k] = (double)p[6 + k] - p[k];
@@ -91,7 +99,15 @@ uint64_t pb_scene_bent_triangles(const pb_scene *s)
             b |= !(fabs(g[0] * n[3 * v] + g[1] * n[3 * v + 1] + g[2] * n[3 * v + 2]) >= PB_BENT_NORMAL_COS * l);
         bent += (uint64_t)b;
     }
-    return bent;
+    atomic_fetch_add(&c->bent, bent); /* a sum: the same in any order */
+}
+
+/* On all host cores: a large scene's load, upload and hash each ask. */
+uint64_t pb_scene_bent_triangles(const pb_scene *s)
+{
+    bent_count c = {s, 0};
+    pb_parallel_for(s->triangle_count, 1u << 16, 0, count_bent, &c);
+    return atomic_load(&c.bent);
 }
 
 void pb_scene_destroy(pb_scene *s)
