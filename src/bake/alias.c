@@ -1,4 +1,5 @@
 #include "bake/alias.h"
+#include "common/common.h"
 
 #include <stdlib.h>
 
@@ -9,8 +10,9 @@ int pb_alias_build(const double *w, uint32_t n, float *prob, uint32_t *alias)
         sum += w[i];
     if (!(sum > 0) || n == 0)
         return 0;
-    double *scaled = malloc((size_t)n * sizeof *scaled);
-    uint32_t *small = malloc((size_t)n * sizeof *small), *large = malloc((size_t)n * sizeof *large);
+    /* a large scene's surface table: millions of entries in fresh pages */
+    double *scaled = pb_malloc_large((size_t)n * sizeof *scaled);
+    uint32_t *small = pb_malloc_large((size_t)n * sizeof *small), *large = pb_malloc_large((size_t)n * sizeof *large);
     if (!scaled || !small || !large) {
         free(scaled), free(small), free(large);
         return -1;

@@ -381,7 +381,7 @@ pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb
     b.p = malloc(E * sizeof *b.p);
     b.centroid = malloc(3 * (size_t)E * sizeof *b.centroid);
     b.k = malloc(E * sizeof *b.k);
-    out->cluster_of = calloc(T, sizeof *out->cluster_of);
+    out->cluster_of = pb_calloc_large(T, sizeof *out->cluster_of); /* per triangle */
     out->member_tri = malloc(E * sizeof *out->member_tri);
     out->member_keep = malloc(E * sizeof *out->member_keep);
     out->member_alias = malloc(E * sizeof *out->member_alias);

@@ -2,6 +2,7 @@
 #include "bake/surface_cells.h"
 #include "bake/alias.h"
 #include "bake/path_cpu.h"
+#include "common/common.h"
 #include "probebake/trace.h"
 
 #include <math.h>
@@ -52,22 +53,34 @@ uint32_t pb_cell_grid_index(const pb_cell_grid *g, const float x[3])
     return (c[2] * g->dims[1] + c[1]) * g->dims[0] + c[0];
 }
 
+typedef struct triangle_areas {
+    const pb_scene *s;
+    double *area;
+} triangle_areas;
+
+static void areas_range(void *user, uint64_t begin, uint64_t end)
+{
+    const triangle_areas *ta = user;
+    for (uint64_t t = begin; t < end; ++t)
+        ta->area[t] = pb_triangle_area(ta->s->positions + 9 * t);
+}
+
 int pb_surface_sampler_init(const pb_scene *s, pb_surface_sampler *out)
 {
     memset(out, 0, sizeof *out);
     uint32_t n = s->triangle_count ? s->triangle_count : 1;
-    double *area = malloc(n * sizeof *area);
-    out->keep = malloc(n * sizeof *out->keep);
-    out->alias = malloc(n * sizeof *out->alias);
+    double *area = pb_malloc_large(n * sizeof *area); /* per triangle: huge pages where large */
+    out->keep = pb_malloc_large(n * sizeof *out->keep);
+    out->alias = pb_malloc_large(n * sizeof *out->alias);
     if (!area || !out->keep || !out->alias) {
         free(area);
         pb_surface_sampler_free(out);
         return 0;
     }
-    for (uint32_t t = 0; t < s->triangle_count; ++t) {
-        area[t] = pb_triangle_area(s->positions + 9 * (size_t)t);
+    triangle_areas ta = {s, area};
+    pb_parallel_for(s->triangle_count, 1u << 16, 0, areas_range, &ta);
+    for (uint32_t t = 0; t < s->triangle_count; ++t) /* in order: the same total on any number of threads */
         out->area_total += area[t];
-    }
     int built = s->triangle_count ? pb_alias_build(area, s->triangle_count, out->keep, out->alias) : 0;
     free(area);
     if (built < 0) {
