@@ -1325,6 +1325,53 @@ static void vertex_colours_are_albedo(void)
     pb_scene_destroy(s);
 }
 
+/* The scene's per-triangle arrays made in a staging buffer and copied
+ * (a discrete GPU's path) bake the bytes that mapped memory does (pb_buffer_fill
+ * in the upload): vertex colours (the gradient box), texture coordinates and
+ * packed vertex normals (the Duck, when ../shared is present). */
+static void staged_upload_matches_mapped(void)
+{
+    pb_context_desc cd = {getenv("PB_TEST_DEVICE"), 1, 0, 1, {test_log_line, NULL}};
+    cd.portable_kernels = test_portable_kernels();
+    cd.scene_loads = test_scene_loads();
+    pb_context *staged = NULL;
+    pb_error err;
+    CHECKF(pb_context_create(&cd, &staged, &err) == PB_OK, "%s", err.message);
+    if (!staged)
+        return;
+    const char *paths[2] = {vertex_colored_box("vc_staged.gltf", gradient_albedo),
+                            source_path("../shared/scenes/samples/Duck/Duck.gltf")};
+    for (int i = 0; i < 2; ++i) {
+        pb_scene *s = NULL;
+        if (i == 1 && access(paths[i], R_OK) != 0) {
+            skip("%s absent: textures and vertex normals not staged", paths[i]);
+            break;
+        }
+        CHECKF(pb_scene_load(paths[i], NULL, &s, &err) == PB_OK, "%s", err.message);
+        if (!s)
+            continue;
+        CHECK(i == 0 ? s->colors != NULL : (s->texture_count > 0 && pb_scene_bent_triangles(s) > 0));
+        pb_bake_desc d = {0};
+        pb_probe_grid_fit(s->bounds_min, s->bounds_max, 27, &d.grid);
+        d.rays_per_probe = 64, d.passes = 1, d.bounces = 2, d.octmap_res = 4;
+        if (i == 1)
+            d.sky[0] = d.sky[1] = d.sky[2] = 1.f;
+        baked a = bake(s, &d), b = bake_on(staged, s, &d);
+        CHECK(a.ok && b.ok && b.gs->tris.mapped == NULL);
+        if (a.ok && b.ok) {
+            uint32_t P = a.vol.probe_count;
+            size_t depth_bytes = (size_t)pb_volume_tile_halves(d.octmap_res) * 2 * P;
+            CHECKF(b.vol.probe_count == P && !memcmp(a.vol.sh, b.vol.sh, (size_t)P * 27 * sizeof(float)) &&
+                       !memcmp(a.vol.depth, b.vol.depth, depth_bytes),
+                   "%s: staged and mapped bakes differ", paths[i]);
+        }
+        release(&a), release(&b);
+        pb_scene_destroy(s);
+    }
+    CHECK(pb_context_validation_messages(staged) == 0);
+    pb_context_destroy(staged);
+}
+
 /* The context makes each pipeline once: a second bake with the same
  * settings creates none and writes the same volume; a bake with another
  * feature set (probe NEE) gets pipelines of its own, and its volume differs. */
@@ -3525,6 +3572,7 @@ int main(void)
     RUN(closed_emissive_box);
     RUN(kernels_match_cpu_reference);
     RUN(staged_depth_sums_match_mapped);
+    RUN(staged_upload_matches_mapped);
     RUN(depth_sums_drain_block_by_block);
     RUN(multi_bounce_matches_cpu_reference);
     RUN(cpu_reference_casts_through_the_given_tracer);
