@@ -98,7 +98,10 @@ enum {
     PB_TECHNIQUE_SOLID_ANGLE = 1u << 3  /* emitter triangles near a point sampled by solid angle */
 };
 
-/* Stage timings in milliseconds (0 for stages that did not run). */
+/* Stage timings in milliseconds (0 for stages that did not run). pb_bake
+ * fills trace, sh, octmap, relocate (the relocation's GPU time, a part of
+ * trace and sh) and total; load, bvh and upload (pb_gpu_scene_create) are
+ * the caller's, who ran those steps (the CLI sets them). */
 typedef struct pb_volume_timings {
     double load, bvh, upload, trace, sh, octmap, relocate, total;
 } pb_volume_timings;
