@@ -33,9 +33,13 @@ ctest --test-dir build -j"$jobs" --output-on-failure
 # One sanitizer build serves the tests and the fuzzers: clang, ASan + UBSan,
 # and libFuzzer's coverage hooks (PB_FUZZ), so the fuzz targets need no second
 # build of the core (clang also builds the whole tree faster than gcc here:
-# 83 s against 113 s for gcc's sanitizer build and 46 s for the fuzz build)
+# 83 s against 113 s for gcc's sanitizer build and 46 s for the fuzz build).
+# Line tables only: a sanitizer's report names file and line as with full
+# debug information, and the build takes 74 s instead of 83.
+san_flags="-O2 -gline-tables-only -DNDEBUG"
 CC=clang CXX=clang++ cmake -S . -B build-san -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPB_SANITIZE=ON -DPB_FUZZ=ON \
-    -DPB_BUILD_BENCH=OFF >/dev/null
+    -DPB_BUILD_BENCH=OFF -DCMAKE_C_FLAGS_RELWITHDEBINFO="$san_flags" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$san_flags" \
+    >/dev/null
 cmake --build build-san -j"$jobs"
 echo "== CPU-side tests under AddressSanitizer + UndefinedBehaviorSanitizer (PB_TEST_QUICK: a tenth of the rays) ($(date +%T))"
 PB_TEST_QUICK=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
