@@ -283,6 +283,167 @@ static void strips_fans_and_unindexed(void)
     pb_scene_destroy(s);
 }
 
+/* A .glb of `json` and a BIN chunk of `bin`. */
+static const char *write_glb_bin(const char *name, const char *json, const void *bin, uint32_t bin_size)
+{
+    uint32_t jlen = (uint32_t)((strlen(json) + 3) & ~3u), blen = (bin_size + 3) & ~3u;
+    uint32_t total = 12 + 8 + jlen + 8 + blen;
+    unsigned char *glb = calloc(1, total);
+    uint32_t hdr[3] = {0x46546C67u, 2, total}, jc[2] = {jlen, 0x4E4F534Au}, bc[2] = {blen, 0x004E4942u};
+    memcpy(glb, hdr, 12);
+    memcpy(glb + 12, jc, 8);
+    memset(glb + 20, ' ', jlen);
+    memcpy(glb + 20, json, strlen(json));
+    memcpy(glb + 20 + jlen, bc, 8);
+    memcpy(glb + 28 + jlen, bin, bin_size);
+    const char *path = write_file(name, glb, total);
+    free(glb);
+    return path;
+}
+
+/* Primitives far larger than a block of the loader's threads (16,384
+ * triangles as they are assembled, 65,536 as they are rebased), with
+ * non-finite and degenerate triangles spread over the blocks, a mirrored
+ * node, vertex normals (some zero) and colours (some out of range or NaN)
+ * on the second primitive only: every array as the rules say, in order,
+ * computed here again from the file's floats. The face normals are
+ * compared bit for bit with the rounded triangle's: GCC 12's -O3 once
+ * computed them from the doubles before rounding. */
+static void large_primitives_assembled_in_blocks(void)
+{
+    enum { NA = 50000, NB = 40000 };
+    size_t na = 9 * (size_t)NA, nb = 9 * (size_t)NB, ncol = 12 * (size_t)NB;
+    size_t bytes = 4 * (na + nb + nb + ncol);
+    float *bin = malloc(bytes);
+    float *pa = bin, *pbv = pa + na, *nbv = pbv + nb, *cb = nbv + nb;
+    uint64_t st = 12345;
+    for (size_t i = 0; i < na + nb; ++i) {
+        st = st * 6364136223846793005ull + 1442695040888963407ull;
+        float x = (float)((st >> 40) / 16777216.0) * 40.f - 20.f; /* 24 random bits */
+        pa[i] = i % 3 == 1 ? x * 0.25f : x;
+    }
+    for (uint32_t t = 0; t < NA + NB; ++t) { /* small triangles: corners near the first */
+        float *v = t < NA ? pa + 9 * (size_t)t : pbv + 9 * (size_t)(t - NA);
+        for (int k = 3; k < 9; ++k)
+            v[k] = v[k % 3] + (v[k] - v[k % 3]) * 1e-3f;
+        if (t % 997 == 5)
+            v[4 + t % 3] = t % 2 ? NAN : INFINITY;
+        else if (t % 1009 == 7)
+            memcpy(v + 6, v, 12); /* degenerate */
+    }
+    for (size_t i = 0; i < nb; ++i)
+        nbv[i] = i % 301 < 3 ? 0.f : (float)((i * 7919) % 200) / 100.f - 1.f;
+    for (size_t i = 0; i < ncol; ++i)
+        cb[i] = i % 97 == 0 ? NAN : (float)((i * 104729) % 300) / 200.f - 0.25f;
+    char json[2048];
+    snprintf(json, sizeof json,
+             "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1]}],"
+             "\"nodes\":[{\"mesh\":0},{\"mesh\":1,\"scale\":[1,-1,1],\"translation\":[3,0,-2]}],"
+             "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]},"
+             "{\"primitives\":[{\"attributes\":{\"POSITION\":1,\"NORMAL\":2,\"COLOR_0\":3}}]}],"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":%u,\"type\":\"VEC3\"},"
+             "{\"bufferView\":1,\"componentType\":5126,\"count\":%u,\"type\":\"VEC3\"},"
+             "{\"bufferView\":2,\"componentType\":5126,\"count\":%u,\"type\":\"VEC3\"},"
+             "{\"bufferView\":3,\"componentType\":5126,\"count\":%u,\"type\":\"VEC4\"}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":%zu},{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu}],"
+             "\"buffers\":[{\"byteLength\":%zu}]}",
+             3 * NA, 3 * NB, 3 * NB, 3 * NB, 4 * na, 4 * na, 4 * nb, 4 * (na + nb), 4 * nb, 4 * (na + 2 * nb),
+             4 * ncol, bytes);
+    pb_scene *s = load_ok(write_glb_bin("blocks.glb", json, bin, (uint32_t)bytes));
+    if (!s) {
+        free(bin);
+        return;
+    }
+    /* the world triangles in order (the mirror reverses the winding), the
+     * non-finite ones dropped as they come, the origin their box's centre */
+    double *w = malloc(sizeof(double) * 9 * (NA + NB));
+    uint32_t *src = malloc(sizeof(uint32_t) * (NA + NB));
+    uint32_t n = 0, nonfinite = 0;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t t = 0; t < NA + NB; ++t) {
+        double *o = w + 9 * (size_t)n;
+        int finite = 1;
+        for (int c = 0; c < 3; ++c) {
+            int from = t < NA ? c : (c ? 3 - c : 0);
+            const float *v = t < NA ? pa + 9 * (size_t)t + 3 * from : pbv + 9 * (size_t)(t - NA) + 3 * from;
+            double x = v[0], y = v[1], z = v[2];
+            if (t >= NA)
+                x += 3, y = -y, z -= 2;
+            o[3 * c] = x, o[3 * c + 1] = y, o[3 * c + 2] = z;
+        }
+        for (int k = 0; k < 9; ++k)
+            finite &= isfinite(o[k]) != 0;
+        if (!finite) {
+            nonfinite++;
+            continue;
+        }
+        for (int k = 0; k < 9; ++k) {
+            lo[k % 3] = fmin(lo[k % 3], o[k]);
+            hi[k % 3] = fmax(hi[k % 3], o[k]);
+        }
+        src[n++] = t;
+    }
+    uint32_t kept = 0, degenerate = 0, bad_pos = 0, bad_face = 0, bad_vertex = 0, bad_col = 0;
+    for (int k = 0; k < 3; ++k)
+        CHECKF(s->origin[k] == 0.5 * (lo[k] + hi[k]), "origin %d: %.17g, want %.17g", k, s->origin[k],
+               0.5 * (lo[k] + hi[k]));
+    for (uint32_t i = 0; i < n; ++i) {
+        float p[9];
+        for (int k = 0; k < 9; ++k)
+            p[k] = (float)(w[9 * (size_t)i + k] - 0.5 * (lo[k % 3] + hi[k % 3]));
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k)
+            e1[k] = (double)p[3 + k] - p[k], e2[k] = (double)p[6 + k] - p[k];
+        double g[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        if (g[0] == 0 && g[1] == 0 && g[2] == 0) {
+            degenerate++;
+            continue;
+        }
+        if (kept >= s->triangle_count)
+            break;
+        const float *sp = s->positions + 9 * (size_t)kept, *sn = s->normals + 9 * (size_t)kept;
+        bad_pos += memcmp(sp, p, sizeof p) != 0;
+        uint32_t t = src[i];
+        double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        for (int c = 0; c < 3; ++c) {
+            float want[3] = {(float)(g[0] / gl), (float)(g[1] / gl), (float)(g[2] / gl)};
+            if (t >= NA) { /* the file's normal: cofactors of diag(1,-1,1) negated by the mirror, unit */
+                const float *fn = nbv + 9 * (size_t)(t - NA) + 3 * (c ? 3 - c : 0);
+                double v[3] = {fn[0], -(double)fn[1], fn[2]};
+                double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                if (l > 0)
+                    for (int k = 0; k < 3; ++k)
+                        want[k] = (float)((double)(float)v[k] / sqrt((double)(float)v[0] * (float)v[0] +
+                                                                     (double)(float)v[1] * (float)v[1] +
+                                                                     (double)(float)v[2] * (float)v[2]));
+                bad_vertex += sn[3 * c] != want[0] || sn[3 * c + 1] != want[1] || sn[3 * c + 2] != want[2];
+            } else {
+                bad_face += sn[3 * c] != want[0] || sn[3 * c + 1] != want[1] || sn[3 * c + 2] != want[2];
+            }
+            for (int k = 0; k < 4; ++k) { /* white before the first coloured primitive, [0, 1] after */
+                float x = t < NA ? 1.f : cb[12 * (size_t)(t - NA) + 4 * (c ? 3 - c : 0) + k];
+                x = isfinite(x) ? fminf(fmaxf(x, 0.f), 1.f) : 1.f;
+                bad_col += !s->colors || s->colors[12 * (size_t)kept + 4 * c + k] != x;
+            }
+        }
+        kept++;
+    }
+    fprintf(stderr, "  %u + %u triangles: %u kept, %u non-finite, %u degenerate (loader: %u, %llu, %llu)\n", NA, NB,
+            kept, nonfinite, degenerate, s->triangle_count, (unsigned long long)s->stats.dropped_nonfinite,
+            (unsigned long long)s->stats.dropped_degenerate);
+    CHECK(s->triangle_count == kept && kept == n - degenerate);
+    CHECK(s->stats.dropped_nonfinite == nonfinite && s->stats.dropped_degenerate == degenerate);
+    CHECK(nonfinite > 50 && degenerate > 50);
+    CHECKF(bad_pos == 0 && bad_face == 0 && bad_vertex == 0 && bad_col == 0,
+           "%u positions, %u face normals, %u vertex normals, %u colours differ", bad_pos, bad_face, bad_vertex,
+           bad_col);
+    free(w);
+    free(src);
+    free(bin);
+    pb_scene_destroy(s);
+}
+
 /* A .glb: header, JSON chunk (space padded), BIN chunk of the triangle. */
 static const char *write_glb(const char *name, const char *json)
 {
@@ -1861,6 +2022,7 @@ int main(void)
     RUN(hierarchy_composes_matrix_and_trs);
     RUN(mirrored_transform_keeps_front_faces);
     RUN(strips_fans_and_unindexed);
+    RUN(large_primitives_assembled_in_blocks);
     RUN(glb_and_external_buffers);
     RUN(normalized_integer_texcoords);
     RUN(vertex_colours_loaded);

@@ -23,6 +23,7 @@ extern "C" {
 #include <tiny_gltf.h>
 
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -509,6 +510,67 @@ pb_result read_indices(reader &r, int index, size_t nv, index_array &order)
     return PB_OK;
 }
 
+// A primitive's triangles, assembled on all host cores: each writes its own
+// slot of the scene builder (pb_sb_put_triangle), and pb_sb_commit drops
+// the non-finite ones in order afterwards, so the arrays do not depend on
+// the threads. On a large mesh most of this is the first touch of the
+// builder's fresh pages, which the kernel clears on the touching core.
+struct triangle_job {
+    pb_scene_builder *b;
+    const double *world; // mat4, column-major
+    double nm[9];        // normal matrix (cofactors), column-major
+    double det;
+    const uint32_t *tris; // vertex-index triples
+    const double *pos, *nrm, *uv, *col; // nrm, uv, col: NULL when absent
+    int col_n;
+    const double *uv_transform; // 6: the material's texture transform
+    uint32_t material;
+    bool vertex_normals;
+    uint64_t first; // the builder's slot of triangle 0
+    unsigned char *keep;
+    std::atomic<uint64_t> dropped;
+};
+
+const uint64_t TRIANGLE_GRAIN = 16384;
+
+void put_triangles(void *user, uint64_t begin, uint64_t end)
+{
+    triangle_job &j = *static_cast<triangle_job *>(user);
+    bool flip = j.det < 0; // mirrored transform: glTF says reverse the winding
+    const double *nm = j.nm, *x = j.uv_transform;
+    uint64_t dropped = 0;
+    for (uint64_t t = begin; t < end; ++t) {
+        double p[9];
+        float n[9], tc[6], rgba[12];
+        for (int k = 0; k < 3; ++k) {
+            uint32_t v = j.tris[3 * t + (flip && k ? 3 - k : k)];
+            xform_point(j.world, &j.pos[3 * v], &p[3 * k]);
+            if (j.nrm) {
+                const double *vn = &j.nrm[3 * v];
+                double wn[3];
+                wn[0] = nm[0] * vn[0] + nm[3] * vn[1] + nm[6] * vn[2];
+                wn[1] = nm[1] * vn[0] + nm[4] * vn[1] + nm[7] * vn[2];
+                wn[2] = nm[2] * vn[0] + nm[5] * vn[1] + nm[8] * vn[2];
+                if (flip)
+                    wn[0] = -wn[0], wn[1] = -wn[1], wn[2] = -wn[2]; // cofactors of a mirror point inward
+                for (int c = 0; c < 3; ++c)
+                    n[3 * k + c] = (float)wn[c];
+            }
+            double u0 = j.uv ? j.uv[2 * v] : 0.0, v0 = j.uv ? j.uv[2 * v + 1] : 0.0;
+            tc[2 * k] = (float)(x[0] * u0 + x[1] * v0 + x[2]);
+            tc[2 * k + 1] = (float)(x[3] * u0 + x[4] * v0 + x[5]);
+            for (int c = 0; c < 4 && j.col_n; ++c)
+                rgba[4 * k + c] = c < j.col_n ? (float)j.col[(size_t)j.col_n * v + c] : 1.f;
+        }
+        int kept = pb_sb_put_triangle(j.b, j.first + t, p, j.vertex_normals ? n : nullptr, tc,
+                                      j.col_n ? rgba : nullptr, j.material);
+        j.keep[t] = (unsigned char)kept;
+        dropped += !kept;
+    }
+    if (dropped)
+        j.dropped.fetch_add(dropped);
+}
+
 pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 world, const char *mesh_name)
 {
     r.b->stats.primitives++;
@@ -599,35 +661,26 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
                                                std::to_string(prim.material));
         material = (uint32_t)prim.material;
     }
-    double nm[9];
-    double det = normal_matrix(world, nm);
-    bool flip = det < 0; // mirrored transform: glTF says reverse the winding
-    for (size_t t = 0; t + 2 < tris.size(); t += 3) {
-        double p[9];
-        float n[9], tc[6], rgba[12];
-        for (int k = 0; k < 3; ++k) {
-            uint32_t v = tris[t + (flip && k ? 3 - k : k)];
-            xform_point(world, &pos[3 * v], &p[3 * k]);
-            if (have_n) {
-                double wn[3]; // nm is the 3x3 cofactor matrix, column-major
-                wn[0] = nm[0] * nrm[3 * v] + nm[3] * nrm[3 * v + 1] + nm[6] * nrm[3 * v + 2];
-                wn[1] = nm[1] * nrm[3 * v] + nm[4] * nrm[3 * v + 1] + nm[7] * nrm[3 * v + 2];
-                wn[2] = nm[2] * nrm[3 * v] + nm[5] * nrm[3 * v + 1] + nm[8] * nrm[3 * v + 2];
-                if (det < 0)
-                    wn[0] = -wn[0], wn[1] = -wn[1], wn[2] = -wn[2]; // cofactors of a mirror point inward
-                for (int c = 0; c < 3; ++c)
-                    n[3 * k + c] = (float)wn[c];
-            }
-            const std::array<double, 6> &x = r.uv_transform[material];
-            double u0 = have_uv ? uv[2 * v] : 0.0, v0 = have_uv ? uv[2 * v + 1] : 0.0;
-            tc[2 * k] = (float)(x[0] * u0 + x[1] * v0 + x[2]);
-            tc[2 * k + 1] = (float)(x[3] * u0 + x[4] * v0 + x[5]);
-            for (int c = 0; c < 4 && col_n; ++c)
-                rgba[4 * k + c] = c < col_n ? (float)col[(size_t)col_n * v + c] : 1.f;
-        }
-        if (!pb_sb_add_triangle(r.b, p, have_n && !r.face_normals ? n : nullptr, tc, col_n ? rgba : nullptr, material))
-            return fail(r, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
-    }
+    triangle_job job;
+    job.b = r.b;
+    job.world = world;
+    job.det = normal_matrix(world, job.nm);
+    job.tris = tris.data();
+    job.pos = pos.data(), job.nrm = have_n ? nrm.data() : nullptr, job.uv = have_uv ? uv.data() : nullptr;
+    job.col = col_n ? col.data() : nullptr;
+    job.col_n = col_n;
+    job.uv_transform = r.uv_transform[material].data();
+    job.material = material;
+    job.vertex_normals = have_n && !r.face_normals;
+    uint64_t n = tris.size() / 3;
+    std::unique_ptr<unsigned char[]> keep(new (std::nothrow) unsigned char[n ? n : 1]);
+    if (!keep || !pb_sb_reserve(r.b, n, col_n != 0))
+        return fail(r, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
+    job.first = r.b->count;
+    job.keep = keep.get();
+    job.dropped.store(0);
+    pb_parallel_for(n, TRIANGLE_GRAIN, 0, put_triangles, &job);
+    pb_sb_commit(r.b, n, job.dropped.load() ? keep.get() : nullptr);
     return PB_OK;
 }
 

@@ -78,20 +78,20 @@ static int normalize3f(const float v[3], float out[3])
     return 1;
 }
 
-int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, const float *rgba,
-                       uint32_t material)
+static int finite9(const double p[9])
 {
-    b->stats.triangles_in++;
-    for (int i = 0; i < 9; ++i) {
-        if (!isfinite(p[i])) {
-            b->stats.dropped_nonfinite++;
-            return 1;
-        }
-    }
-    if (b->count + 1 > b->capacity) {
-        /* all four arrays share one capacity and grow together */
+    for (int i = 0; i < 9; ++i)
+        if (!isfinite(p[i]))
+            return 0;
+    return 1;
+}
+
+int pb_sb_reserve(pb_scene_builder *b, uint64_t n, int colours)
+{
+    if (b->count + n > b->capacity) {
+        /* all the per-triangle arrays share one capacity and grow together */
         uint64_t cap = b->capacity;
-        if (!grow((void **)&b->pos, &cap, b->count + 1, 9 * sizeof(double))) {
+        if (!grow((void **)&b->pos, &cap, b->count + n, 9 * sizeof(double))) {
             b->out_of_memory = 1;
             return 0;
         }
@@ -113,7 +113,7 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
         }
         b->capacity = cap;
     }
-    if (rgba && !b->rgba) { /* the first coloured triangle: the ones before are white */
+    if (colours && !b->rgba) { /* the first coloured triangles: the ones before are white */
         b->rgba = pb_malloc_large((size_t)(b->capacity * 12 * sizeof(float)));
         if (!b->rgba) {
             b->out_of_memory = 1;
@@ -122,7 +122,15 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
         for (uint64_t k = 0; k < 12 * b->count; ++k)
             b->rgba[k] = 1.f;
     }
-    uint64_t i = b->count++;
+    return 1;
+}
+
+int pb_sb_put_triangle(pb_scene_builder *b, uint64_t slot, const double p[9], const float *n, const float *uv,
+                       const float *rgba, uint32_t material)
+{
+    if (!finite9(p))
+        return 0;
+    uint64_t i = slot;
     memcpy(b->pos + 9 * i, p, 9 * sizeof(double));
     for (int k = 0; b->rgba && k < 12; ++k) /* glTF colours are in [0, 1] */
         b->rgba[12 * i + k] = !rgba ? 1.f : isfinite(rgba[k]) ? fminf(fmaxf(rgba[k], 0.f), 1.f) : 1.f;
@@ -138,6 +146,48 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
     for (int k = 0; k < 6; ++k)
         du[k] = (uv && isfinite(uv[k])) ? uv[k] : 0.f;
     b->mat[i] = material;
+    return 1;
+}
+
+void pb_sb_commit(pb_scene_builder *b, uint64_t n, const unsigned char *keep)
+{
+    b->stats.triangles_in += n;
+    if (!keep) {
+        b->count += n;
+        return;
+    }
+    uint64_t kept = b->count;
+    for (uint64_t k = 0; k < n; ++k) {
+        uint64_t i = b->count + k;
+        if (!keep[k]) {
+            b->stats.dropped_nonfinite++;
+            continue;
+        }
+        if (kept != i) { /* down over a dropped slot */
+            memcpy(b->pos + 9 * kept, b->pos + 9 * i, 9 * sizeof(double));
+            memcpy(b->nrm + 9 * kept, b->nrm + 9 * i, 9 * sizeof(float));
+            memcpy(b->uv + 6 * kept, b->uv + 6 * i, 6 * sizeof(float));
+            b->mat[kept] = b->mat[i];
+            if (b->rgba)
+                memcpy(b->rgba + 12 * kept, b->rgba + 12 * i, 12 * sizeof(float));
+        }
+        ++kept;
+    }
+    b->count = kept;
+}
+
+int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, const float *rgba,
+                       uint32_t material)
+{
+    if (!finite9(p)) { /* dropped before it takes room */
+        b->stats.triangles_in++;
+        b->stats.dropped_nonfinite++;
+        return 1;
+    }
+    if (!pb_sb_reserve(b, 1, rgba != NULL))
+        return 0;
+    pb_sb_put_triangle(b, b->count, p, n, uv, rgba, material);
+    pb_sb_commit(b, 1, NULL);
     return 1;
 }
 
@@ -215,6 +265,111 @@ static void unit3(const double in[3], float out[3])
         out[k] = (float)(in[k] / l);
 }
 
+#define FINISH_GRAIN 65536u /* triangles per block of the rebase */
+
+enum { TRI_NONFINITE, TRI_DEGENERATE, TRI_KEPT };
+
+typedef struct finish_part {
+    double lo[3], hi[3]; /* the block's world bounds */
+    float flo[3], fhi[3]; /* its kept triangles' rebased bounds */
+} finish_part;
+
+typedef struct finish_job {
+    double *pos; /* the builder's: 9 doubles per triangle in, 9 floats at each slot's front out */
+    float *nrm;
+    uint32_t material_count;
+    uint32_t *mat;
+    double origin[3];
+    finish_part *part; /* one per block, merged in block order */
+    unsigned char *status; /* TRI_* per triangle */
+} finish_job;
+
+/* Minima and maxima keep the first of equal values (-0 before +0 or the
+ * other way), so blocks merged in order give what one scan gives. */
+static void bound_block(finish_job *j, uint64_t begin, uint64_t end)
+{
+    finish_part *q = &j->part[begin / FINISH_GRAIN];
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint64_t i = 3 * begin; i < 3 * end; ++i)
+        for (int k = 0; k < 3; ++k) {
+            double v = j->pos[3 * i + k];
+            lo[k] = v < lo[k] ? v : lo[k];
+            hi[k] = v > hi[k] ? v : hi[k];
+        }
+    memcpy(q->lo, lo, sizeof lo);
+    memcpy(q->hi, hi, sizeof hi);
+}
+
+/* Rebases, rounds and tests each triangle of a block in its own slot: its
+ * floats go over the front of its doubles, a missing vertex normal becomes
+ * the face normal of the rounded triangle, a material past the end the
+ * last one. Two loops, the tests reading the floats back from memory: in
+ * one, GCC 12's SLP vectorizer at -O3 computed the edges from the doubles
+ * before rounding (the face normals of 15 of the demo's 40 triangles an ulp
+ * off, zero components as 5e-9; CMakeLists.txt now turns it off). */
+static void rebase_block(finish_job *j, uint64_t begin, uint64_t end)
+{
+    for (uint64_t i = begin; i < end; ++i) {
+        float p[9];
+        for (int k = 0; k < 9; ++k)
+            p[k] = (float)(j->pos[9 * i + k] - j->origin[k % 3]);
+        memcpy(j->pos + 9 * i, p, sizeof p);
+    }
+    finish_part *q = &j->part[begin / FINISH_GRAIN];
+    float flo[3] = {INFINITY, INFINITY, INFINITY}, fhi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint64_t i = begin; i < end; ++i) {
+        float p[9];
+        memcpy(p, j->pos + 9 * i, sizeof p);
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = (double)p[3 + k] - p[k];
+            e2[k] = (double)p[6 + k] - p[k];
+        }
+        double c0 = e1[1] * e2[2] - e1[2] * e2[1];
+        double c1 = e1[2] * e2[0] - e1[0] * e2[2];
+        double c2 = e1[0] * e2[1] - e1[1] * e2[0];
+        int finite = 1;
+        for (int k = 0; k < 9; ++k)
+            finite &= isfinite(p[k]) != 0;
+        if (!finite) {
+            j->status[i] = TRI_NONFINITE;
+            continue;
+        }
+        if (c0 == 0 && c1 == 0 && c2 == 0) {
+            j->status[i] = TRI_DEGENERATE;
+            continue;
+        }
+        j->status[i] = TRI_KEPT;
+        for (int k = 0; k < 9; ++k) {
+            flo[k % 3] = p[k] < flo[k % 3] ? p[k] : flo[k % 3];
+            fhi[k % 3] = p[k] > fhi[k % 3] ? p[k] : fhi[k % 3];
+        }
+        float *dn = j->nrm + 9 * i;
+        double cl = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+        for (int v = 0; v < 3; ++v)
+            if (isnan(dn[3 * v])) /* no normal of its own: the face's */
+                dn[3 * v] = (float)(c0 / cl), dn[3 * v + 1] = (float)(c1 / cl), dn[3 * v + 2] = (float)(c2 / cl);
+        uint32_t m = j->mat[i];
+        j->mat[i] = m < j->material_count ? m : j->material_count - 1;
+    }
+    memcpy(q->flo, flo, sizeof flo);
+    memcpy(q->fhi, fhi, sizeof fhi);
+}
+
+/* pb_parallel_for's ranges start at multiples of FINISH_GRAIN, and one
+ * thread gets the whole range at once: block by block either way */
+static void bound_range(void *user, uint64_t begin, uint64_t end)
+{
+    for (uint64_t q = begin; q < end; q += FINISH_GRAIN)
+        bound_block(user, q, end - q < FINISH_GRAIN ? end : q + FINISH_GRAIN);
+}
+
+static void rebase_range(void *user, uint64_t begin, uint64_t end)
+{
+    for (uint64_t q = begin; q < end; q += FINISH_GRAIN)
+        rebase_block(user, q, end - q < FINISH_GRAIN ? end : q + FINISH_GRAIN);
+}
+
 pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb_error *err)
 {
     *out = NULL;
@@ -230,22 +385,37 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
             return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
     }
 
+    /* the rebase's work, in blocks on all host cores (below) */
+    uint64_t blocks = (b->count + FINISH_GRAIN - 1) / FINISH_GRAIN;
+    finish_job job = {b->pos, b->nrm, b->material_count, b->mat, {0, 0, 0}, NULL, NULL};
+    job.part = calloc(blocks ? blocks : 1, sizeof *job.part);
+    job.status = pb_malloc_large((size_t)(b->count ? b->count : 1));
+    if (!job.part || !job.status) {
+        free(job.part);
+        free(job.status);
+        return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
+    }
+
     /* origin: centre of the world AABB of every finite triangle, in double */
+    pb_parallel_for(b->count, FINISH_GRAIN, 0, bound_range, &job);
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (uint64_t i = 0; i < 3 * b->count; ++i)
+    for (uint64_t q = 0; q < blocks; ++q) /* in order, as one scan would meet them (ties between -0 and +0) */
         for (int k = 0; k < 3; ++k) {
-            double v = b->pos[3 * i + k];
-            lo[k] = v < lo[k] ? v : lo[k];
-            hi[k] = v > hi[k] ? v : hi[k];
+            lo[k] = job.part[q].lo[k] < lo[k] ? job.part[q].lo[k] : lo[k];
+            hi[k] = job.part[q].hi[k] > hi[k] ? job.part[q].hi[k] : hi[k];
         }
     double origin[3] = {0, 0, 0};
     if (b->count)
         for (int k = 0; k < 3; ++k)
             origin[k] = 0.5 * (lo[k] + hi[k]);
+    memcpy(job.origin, origin, sizeof origin);
 
     pb_scene *s = calloc(1, sizeof *s);
-    if (!s)
+    if (!s) {
+        free(job.part);
+        free(job.status);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
+    }
     if (!b->capacity) { /* no triangle was added: one element each, as for any scene */
         b->pos = malloc(9 * sizeof(double)), b->nrm = malloc(9 * sizeof(float));
         b->uv = malloc(6 * sizeof(float)), b->mat = malloc(sizeof(uint32_t));
@@ -253,62 +423,54 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
     }
     if (!b->pos || !b->nrm || !b->uv || !b->mat) {
         pb_scene_destroy(s);
+        free(job.part);
+        free(job.status);
         return pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "%s: out of host memory", path);
     }
     /* The per-triangle arrays are the builder's, compacted in place (a kept
      * triangle never moves up), so a large scene's load touches no new pages
-     * for them. The float positions go over the double ones: triangle i's 72
-     * bytes are read before any float lands on them (kept <= i, and a float
-     * triangle is 36 bytes). */
+     * for them. The float positions go over the double ones: first each
+     * triangle's floats over the front of its own 72 bytes, then down to
+     * their place in order (kept <= i, and a float triangle is 36 bytes). */
     s->positions = (float *)(void *)b->pos, s->normals = b->nrm, s->texcoords = b->uv, s->material = b->mat;
     s->colors = b->rgba;
     const double *pos = b->pos;
     b->pos = NULL, b->nrm = NULL, b->uv = NULL, b->mat = NULL, b->rgba = NULL;
 
-    /* rebase, round to float, then drop what became (or was) zero area */
-    uint32_t kept = 0;
+    /* rebase, round to float, then drop what became (or was) zero area:
+     * each triangle in its own slot on all cores, then the kept ones moved
+     * down in order on one */
+    pb_parallel_for(b->count, FINISH_GRAIN, 0, rebase_range, &job);
     float flo[3] = {INFINITY, INFINITY, INFINITY}, fhi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (uint64_t i = 0; i < b->count; ++i) {
-        float p[9];
-        for (int k = 0; k < 9; ++k)
-            p[k] = (float)(pos[9 * i + k] - origin[k % 3]);
-        double e1[3], e2[3];
+    for (uint64_t q = 0; q < blocks; ++q)
         for (int k = 0; k < 3; ++k) {
-            e1[k] = (double)p[3 + k] - p[k];
-            e2[k] = (double)p[6 + k] - p[k];
+            flo[k] = job.part[q].flo[k] < flo[k] ? job.part[q].flo[k] : flo[k];
+            fhi[k] = job.part[q].fhi[k] > fhi[k] ? job.part[q].fhi[k] : fhi[k];
         }
-        double c0 = e1[1] * e2[2] - e1[2] * e2[1];
-        double c1 = e1[2] * e2[0] - e1[0] * e2[2];
-        double c2 = e1[0] * e2[1] - e1[1] * e2[0];
-        int finite = 1;
-        for (int k = 0; k < 9; ++k)
-            finite &= isfinite(p[k]) != 0;
-        if (!finite) {
-            b->stats.dropped_nonfinite++;
+    uint32_t kept = 0;
+    for (uint64_t i = 0; i < b->count; ++i) {
+        if (job.status[i] != TRI_KEPT) {
+            if (job.status[i] == TRI_NONFINITE)
+                b->stats.dropped_nonfinite++;
+            else
+                b->stats.dropped_degenerate++;
             continue;
         }
-        if (c0 == 0 && c1 == 0 && c2 == 0) {
-            b->stats.dropped_degenerate++;
-            continue;
+        /* the floats at the front of the slot's 72 bytes, down to their place
+         * (36 bytes at kept <= i: below the next slot's doubles) */
+        if (i != 0)
+            memmove(s->positions + 9 * (uint64_t)kept, pos + 9 * i, 9 * sizeof(float));
+        if (kept != i) {
+            memmove(s->normals + 9 * (uint64_t)kept, s->normals + 9 * i, 9 * sizeof(float));
+            memmove(s->texcoords + 6 * (uint64_t)kept, s->texcoords + 6 * i, 6 * sizeof(float));
+            if (s->colors)
+                memmove(s->colors + 12 * (uint64_t)kept, s->colors + 12 * i, 12 * sizeof(float));
+            s->material[kept] = s->material[i];
         }
-        for (int k = 0; k < 9; ++k) {
-            flo[k % 3] = p[k] < flo[k % 3] ? p[k] : flo[k % 3];
-            fhi[k % 3] = p[k] > fhi[k % 3] ? p[k] : fhi[k % 3];
-        }
-        memcpy(s->positions + 9 * (uint64_t)kept, p, sizeof p);
-        float *dn = s->normals + 9 * (uint64_t)kept;
-        memmove(dn, s->normals + 9 * i, 9 * sizeof(float));
-        double cl = sqrt(c0 * c0 + c1 * c1 + c2 * c2);
-        for (int v = 0; v < 3; ++v)
-            if (isnan(dn[3 * v])) /* no normal of its own: the face's */
-                dn[3 * v] = (float)(c0 / cl), dn[3 * v + 1] = (float)(c1 / cl), dn[3 * v + 2] = (float)(c2 / cl);
-        memmove(s->texcoords + 6 * (uint64_t)kept, s->texcoords + 6 * i, 6 * sizeof(float));
-        if (s->colors)
-            memmove(s->colors + 12 * (uint64_t)kept, s->colors + 12 * i, 12 * sizeof(float));
-        uint32_t m = s->material[i];
-        s->material[kept] = m < b->material_count ? m : b->material_count - 1;
         ++kept;
     }
+    free(job.part);
+    free(job.status);
     s->triangle_count = kept;
     shrink((void **)&s->positions, kept, 9 * sizeof(float)); /* the builder's spare capacity back */
     shrink((void **)&s->normals, kept, 9 * sizeof(float));

@@ -1,6 +1,7 @@
 /* Scene builder: collects world-space triangles, materials, textures, lights
  * and cameras from a loader (the glTF wrapper, or an in-memory soup), drops
- * and counts bad triangles, then rebases everything to the AABB centre.
+ * and counts bad triangles, then rebases everything to the AABB centre (on
+ * all host cores; the same arrays on any number).
  * C interface so the one C++ file (gltf_load.cpp) stays a thin wrapper. */
 #ifndef PB_SCENE_BUILDER_H
 #define PB_SCENE_BUILDER_H
@@ -46,6 +47,22 @@ void pb_sb_free(pb_scene_builder *b);
  * Returns 0 only when out of memory. */
 int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, const float *rgba,
                        uint32_t material);
+
+/* A primitive's triangles in one batch, written on several threads:
+ * pb_sb_reserve makes room for n more, pb_sb_put_triangle writes each into
+ * its own slot (count + i, any thread, any order), and pb_sb_commit takes
+ * the n slots in order, dropping those put refused. The arrays and counts
+ * come out as n pb_sb_add_triangle calls leave them. */
+/* Returns 0 when out of memory. colours: some triangle of the batch has
+ * vertex colours (the triangles before it are then made white). */
+int pb_sb_reserve(pb_scene_builder *b, uint64_t n, int colours);
+/* Writes slot `slot` (at most count + n - 1 of the last reserve) as
+ * pb_sb_add_triangle stores a triangle; touches no other slot and no
+ * shared state. Returns 0, writing nothing, for a non-finite triangle. */
+int pb_sb_put_triangle(pb_scene_builder *b, uint64_t slot, const double p[9], const float *n, const float *uv,
+                       const float *rgba, uint32_t material);
+/* keep[i]: what put returned for slot count + i (NULL: all 1). */
+void pb_sb_commit(pb_scene_builder *b, uint64_t n, const unsigned char *keep);
 
 /* Appends and returns the index, or -1 when out of memory. */
 int32_t pb_sb_add_material(pb_scene_builder *b, const pb_material *m);
