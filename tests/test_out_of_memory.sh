@@ -104,6 +104,13 @@ done
 "$pb" merge "$tmp/in/s.probes" "$tmp/in"/s[01].probes >/dev/null
 
 each_allocation_fails info - -- "$pb" info "$demo"
+# a primitive without a material takes the default one, which the loader
+# adds after the file's: when that addition fails, the primitive must not
+# read a material that is not there (it did: a crash). Small, so every
+# allocation fails in turn.
+printf '%s' '{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}],"bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]}' \
+    >"$tmp/in/nomat.gltf"
+RUNS=100000 each_allocation_fails info-no-material - -- "$pb" info "$tmp/in/nomat.gltf"
 each_allocation_fails inspect - -- "$pb" inspect "$tmp/in/s.probes"
 each_allocation_fails inspect-json - -- "$pb" inspect "$tmp/in/g.probes" --json
 # the two debug images (PNG over zlib, which reports a failed allocation)

@@ -573,6 +573,10 @@ void put_triangles(void *user, uint64_t begin, uint64_t end)
 
 pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 world, const char *mesh_name)
 {
+    // the builder refused something already (the default material's index
+    // is then -1): nothing more to read
+    if (r.b->out_of_memory)
+        return fail(r, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
     r.b->stats.primitives++;
     if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
         prim.mode != TINYGLTF_MODE_TRIANGLE_FAN && prim.mode != -1) {
