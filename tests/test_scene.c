@@ -444,6 +444,52 @@ static void large_primitives_assembled_in_blocks(void)
     pb_scene_destroy(s);
 }
 
+/* Vertex colours exist once a coloured triangle stays: a coloured
+ * primitive whose triangles are all dropped (non-finite) leaves the scene
+ * without colours, as before its triangles were written in batches. */
+static void colours_only_from_kept_triangles(void)
+{
+    enum { N = 20000 }; /* more than one block of the loader's threads */
+    size_t np = 9 * (size_t)N, nc = 12 * (size_t)N;
+    size_t bytes = 4 * (9 + np + nc);
+    float *bin = calloc(1, bytes);
+    memcpy(bin, tri_pos, 36); /* the first primitive: one plain triangle */
+    for (size_t i = 0; i < np; ++i)
+        bin[9 + i] = i % 9 == 4 ? NAN : (float)(i % 7);
+    for (size_t i = 0; i < nc; ++i)
+        bin[9 + np + i] = 0.25f;
+    for (int finite_one = 0; finite_one < 2; ++finite_one) {
+        if (finite_one) /* the second primitive's last triangle kept */
+            for (int k = 0; k < 9; ++k)
+                bin[9 + np - 9 + k] = tri_pos[k] + 2.f;
+        char json[1536];
+        snprintf(json, sizeof json,
+                 "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                 "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}},"
+                 "{\"attributes\":{\"POSITION\":1,\"COLOR_0\":2}}]}],"
+                 "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+                 "{\"bufferView\":1,\"componentType\":5126,\"count\":%u,\"type\":\"VEC3\"},"
+                 "{\"bufferView\":2,\"componentType\":5126,\"count\":%u,\"type\":\"VEC4\"}],"
+                 "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":%zu},"
+                 "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu}],\"buffers\":[{\"byteLength\":%zu}]}",
+                 3 * N, 3 * N, 4 * np, 36 + 4 * np, 4 * nc, bytes);
+        pb_scene *s = load_ok(write_glb_bin("colours.glb", json, bin, (uint32_t)bytes));
+        if (!s)
+            continue;
+        CHECKF(s->triangle_count == 1u + (uint32_t)finite_one && s->stats.dropped_nonfinite == N - (uint32_t)finite_one,
+               "%u triangles, %llu non-finite", s->triangle_count, (unsigned long long)s->stats.dropped_nonfinite);
+        if (!finite_one) {
+            CHECKF(s->colors == NULL, "colours with no coloured triangle kept");
+        } else if (s->colors) { /* the plain triangle white, the kept coloured one its colour */
+            CHECK(s->colors[0] == 1.f && s->colors[11] == 1.f && s->colors[12] == 0.25f && s->colors[23] == 0.25f);
+        } else {
+            CHECKF(0, "no colours with a coloured triangle kept");
+        }
+        pb_scene_destroy(s);
+    }
+    free(bin);
+}
+
 /* A .glb: header, JSON chunk (space padded), BIN chunk of the triangle. */
 static const char *write_glb(const char *name, const char *json)
 {
@@ -2023,6 +2069,7 @@ int main(void)
     RUN(mirrored_transform_keeps_front_faces);
     RUN(strips_fans_and_unindexed);
     RUN(large_primitives_assembled_in_blocks);
+    RUN(colours_only_from_kept_triangles);
     RUN(glb_and_external_buffers);
     RUN(normalized_integer_texcoords);
     RUN(vertex_colours_loaded);

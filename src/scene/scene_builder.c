@@ -121,6 +121,7 @@ int pb_sb_reserve(pb_scene_builder *b, uint64_t n, int colours)
         }
         for (uint64_t k = 0; k < 12 * b->count; ++k)
             b->rgba[k] = 1.f;
+        b->rgba_pending = 1;
     }
     return 1;
 }
@@ -149,13 +150,9 @@ int pb_sb_put_triangle(pb_scene_builder *b, uint64_t slot, const double p[9], co
     return 1;
 }
 
-void pb_sb_commit(pb_scene_builder *b, uint64_t n, const unsigned char *keep)
+/* The kept slots of the batch moved down over the dropped ones, in order. */
+static void compact(pb_scene_builder *b, uint64_t n, const unsigned char *keep)
 {
-    b->stats.triangles_in += n;
-    if (!keep) {
-        b->count += n;
-        return;
-    }
     uint64_t kept = b->count;
     for (uint64_t k = 0; k < n; ++k) {
         uint64_t i = b->count + k;
@@ -174,6 +171,23 @@ void pb_sb_commit(pb_scene_builder *b, uint64_t n, const unsigned char *keep)
         ++kept;
     }
     b->count = kept;
+}
+
+void pb_sb_commit(pb_scene_builder *b, uint64_t n, const unsigned char *keep)
+{
+    uint64_t first = b->count;
+    b->stats.triangles_in += n;
+    if (keep)
+        compact(b, n, keep);
+    else
+        b->count += n;
+    /* colours made for a batch that kept no triangle (empty, or all
+     * non-finite): a scene has colours only once a coloured triangle stays */
+    if (b->rgba_pending && b->count == first) {
+        free(b->rgba);
+        b->rgba = NULL;
+    }
+    b->rgba_pending = 0;
 }
 
 int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, const float *rgba,

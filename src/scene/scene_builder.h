@@ -20,6 +20,7 @@ typedef struct pb_scene_builder {
     float *nrm;        /* 9 per triangle */
     float *uv;         /* 6 per triangle */
     float *rgba;       /* 12 per triangle once any triangle has vertex colours (NULL before) */
+    int rgba_pending;  /* rgba made by the last pb_sb_reserve: freed if its batch keeps no triangle */
     uint32_t *mat;
     /* everything else */
     pb_material *materials;
