@@ -23,7 +23,6 @@ extern "C" {
 #include <tiny_gltf.h>
 
 #include <array>
-#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -527,8 +526,7 @@ struct triangle_job {
     uint32_t material;
     bool vertex_normals;
     uint64_t first; // the builder's slot of triangle 0
-    unsigned char *keep;
-    std::atomic<uint64_t> dropped;
+    unsigned char *keep; // what pb_sb_put_triangle returned for each
 };
 
 const uint64_t TRIANGLE_GRAIN = 16384;
@@ -538,7 +536,6 @@ void put_triangles(void *user, uint64_t begin, uint64_t end)
     triangle_job &j = *static_cast<triangle_job *>(user);
     bool flip = j.det < 0; // mirrored transform: glTF says reverse the winding
     const double *nm = j.nm, *x = j.uv_transform;
-    uint64_t dropped = 0;
     for (uint64_t t = begin; t < end; ++t) {
         double p[9];
         float n[9], tc[6], rgba[12];
@@ -562,13 +559,9 @@ void put_triangles(void *user, uint64_t begin, uint64_t end)
             for (int c = 0; c < 4 && j.col_n; ++c)
                 rgba[4 * k + c] = c < j.col_n ? (float)j.col[(size_t)j.col_n * v + c] : 1.f;
         }
-        int kept = pb_sb_put_triangle(j.b, j.first + t, p, j.vertex_normals ? n : nullptr, tc,
-                                      j.col_n ? rgba : nullptr, j.material);
-        j.keep[t] = (unsigned char)kept;
-        dropped += !kept;
+        j.keep[t] = (unsigned char)pb_sb_put_triangle(j.b, j.first + t, p, j.vertex_normals ? n : nullptr, tc,
+                                                      j.col_n ? rgba : nullptr, j.material);
     }
-    if (dropped)
-        j.dropped.fetch_add(dropped);
 }
 
 pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 world, const char *mesh_name)
@@ -682,9 +675,8 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
         return fail(r, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
     job.first = r.b->count;
     job.keep = keep.get();
-    job.dropped.store(0);
     pb_parallel_for(n, TRIANGLE_GRAIN, 0, put_triangles, &job);
-    pb_sb_commit(r.b, n, job.dropped.load() ? keep.get() : nullptr);
+    pb_sb_commit(r.b, n, keep.get());
     return PB_OK;
 }
 
