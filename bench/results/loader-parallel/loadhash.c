@@ -29,8 +29,15 @@ int main(int argc, char **argv)
             h = pb_hash64(s->bounds_max, sizeof s->bounds_max, h);
             h = pb_hash64(&s->stats, sizeof s->stats, h);
             h = pb_hash64(s->materials, s->material_count * sizeof *s->materials, h);
-            if (getenv("LH_PARTS")) { uint64_t hp[10] = {pb_hash64(s->positions, n*36, 0), pb_hash64(s->normals, n*36, 0), pb_hash64(s->texcoords, n*24, 0), pb_hash64(s->material, n*4, 0), s->colors ? pb_hash64(s->colors, n*48, 0) : 0, pb_hash64(s->origin, 24, 0), pb_hash64(s->bounds_min, 12, 0), pb_hash64(s->bounds_max, 12, 0), pb_hash64(&s->stats, sizeof s->stats, 0), pb_hash64(s->materials, s->material_count * sizeof *s->materials, 0)};
-                for (int q = 0; q < 10; ++q) printf("%04llx ", (unsigned long long)(hp[q] & 0xffff)); printf("\n"); }
+            if (getenv("LH_PARTS")) { /* each array's own hash, to see which one differs */
+                const void *part[10] = {s->positions, s->normals, s->texcoords, s->material, s->colors,
+                                        s->origin, s->bounds_min, s->bounds_max, &s->stats, s->materials};
+                size_t bytes[10] = {n * 36, n * 36, n * 24, n * 4, s->colors ? n * 48 : 0, 24, 12, 12,
+                                    sizeof s->stats, s->material_count * sizeof *s->materials};
+                for (int q = 0; q < 10; ++q)
+                    printf("%04llx ", (unsigned long long)(pb_hash64(part[q], bytes[q], 0) & 0xffff));
+                printf("\n");
+            }
             printf("%s fn%d %u tris %016llx in %llu deg %llu nonfin %llu colors %d\n", argv[a], fn, s->triangle_count,
                    (unsigned long long)h, (unsigned long long)s->stats.triangles_in,
                    (unsigned long long)s->stats.dropped_degenerate, (unsigned long long)s->stats.dropped_nonfinite,
