@@ -217,4 +217,44 @@ static inline void bend_normals(pb_scene *s, float amount)
     }
 }
 
+/* Gives every material of s a normal map (scale 1): a new size x size
+ * texture (wrapping) of random tangent-space normals tilted up to max_tilt
+ * radians from +Z, and every triangle texture coordinates from a fixed
+ * linear map of its corners' positions, skewed so that no axis-aligned
+ * plane (the demo's walls) maps to a line. A colour texture then reads them
+ * too. 0 out of memory. */
+static inline int give_normal_map(pb_scene *s, uint32_t size, float max_tilt, uint64_t seed)
+{
+    if (!s->texcoords)
+        return 0;
+    pb_texture *tx = realloc(s->textures, (s->texture_count + 1) * sizeof *tx);
+    if (!tx)
+        return 0;
+    s->textures = tx;
+    uint32_t *texels = realloc(s->texels, (size_t)(s->texel_count + (uint64_t)size * size) * sizeof *texels);
+    if (!texels)
+        return 0;
+    s->texels = texels;
+    tx[s->texture_count] = (pb_texture){size, size, s->texel_count, PB_WRAP_REPEAT, PB_WRAP_REPEAT, 0};
+    test_rng r = {seed * 0x9E3779B97F4A7C15ull + 7};
+    for (uint32_t i = 0; i < size * size; ++i) {
+        double tilt = max_tilt * sqrt(rng_uniform(&r)), phi = 6.283185307179586 * rng_uniform(&r);
+        double n[3] = {sin(tilt) * cos(phi), sin(tilt) * sin(phi), cos(tilt)};
+        uint32_t w = 0xff000000u;
+        for (int k = 0; k < 3; ++k)
+            w |= (uint32_t)lround((n[k] + 1.0) * 127.5) << (8 * k);
+        texels[s->texel_count + i] = w;
+    }
+    for (uint32_t m = 0; m < s->material_count; ++m)
+        s->materials[m].normal_texture = (int32_t)s->texture_count, s->materials[m].normal_scale = 1.f;
+    s->texel_count += (uint64_t)size * size;
+    s->texture_count++;
+    for (uint64_t c = 0; c < 3 * (uint64_t)s->triangle_count; ++c) {
+        const float *x = s->positions + 3 * c;
+        s->texcoords[2 * c] = 0.37f * x[0] + 0.13f * x[1] + 0.21f * x[2];
+        s->texcoords[2 * c + 1] = -0.17f * x[0] + 0.31f * x[1] + 0.29f * x[2];
+    }
+    return 1;
+}
+
 #endif

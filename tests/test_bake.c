@@ -492,6 +492,69 @@ static void shading_normals_weigh_reflected_light(void)
     }
 }
 
+/* Normal maps weigh reflected light as shading normals do: floor_scene
+ * (as shading_normals_weigh_reflected_light) with a 1 x 1 normal map of
+ * tangent-space normal m (as the kernels decode its bytes), X and Y times
+ * the scale, and texture coordinates u = a x / 400, v = b z / 400: the
+ * frame's X runs along a x and its Y against b z (glTF: up the image), so
+ * the floor's shading normal is normalize(a m_x, m_z, -b m_y) (x, y, z).
+ * Tilted toward the light and away from it (mirrored u), tilted along z
+ * (Y, under mirrored v) toward a light from +z, scale 0 (flat) and 2. */
+static void normal_maps_weigh_reflected_light(void)
+{
+    struct { float tx, ty, scale, a, b, light_x, light_z; } cases[5] = {
+        {30.f, 0.f, 1.f, 1.f, 1.f, 1.f, 0.f},  {30.f, 0.f, 1.f, -1.f, 1.f, 1.f, 0.f},
+        {0.f, 30.f, 1.f, 1.f, -1.f, 0.f, 1.f}, {30.f, 0.f, 0.f, 1.f, 1.f, 1.f, 0.f},
+        {20.f, 0.f, 2.f, 1.f, 1.f, 1.f, 0.f}};
+    const float I = 3.f, rad = 3.14159265f / 180.f, elevation = 45.f * rad;
+    for (int c = 0; c < 5; ++c) {
+        pb_scene *s = floor_scene();
+        if (!s)
+            return;
+        /* the texel: bytes of (m + 1) / 2, m tilted by tx about Y toward +X and by ty toward +Y */
+        double m[3] = {sin(cases[c].tx * rad), sin(cases[c].ty * rad), cos(cases[c].tx * rad) * cos(cases[c].ty * rad)};
+        uint32_t w = 0xff000000u;
+        for (int k = 0; k < 3; ++k) {
+            uint32_t byte = (uint32_t)lround((m[k] + 1.0) * 127.5);
+            w |= byte << (8 * k);
+            m[k] = (2.0 * (byte / 255.0) - 1.0) * (k < 2 ? cases[c].scale : 1.0); /* as decoded */
+        }
+        s->textures = calloc(1, sizeof *s->textures);
+        s->texels = malloc(sizeof *s->texels);
+        if (!s->textures || !s->texels) {
+            pb_scene_destroy(s);
+            return;
+        }
+        s->texels[0] = w;
+        s->textures[0] = (pb_texture){1, 1, 0, PB_WRAP_REPEAT, PB_WRAP_REPEAT, 0};
+        s->texture_count = 1, s->texel_count = 1;
+        s->materials[0].normal_texture = 0, s->materials[0].normal_scale = cases[c].scale;
+        for (uint32_t v = 0; v < 6; ++v) {
+            const float *x = s->positions + 3 * v;
+            s->texcoords[2 * v] = cases[c].a * x[0] / 400.f, s->texcoords[2 * v + 1] = cases[c].b * x[2] / 400.f;
+        }
+        CHECK(pb_scene_normal_mapped(s) == 1);
+        double n[3] = {cases[c].a * m[0], m[2], -cases[c].b * m[1]};
+        double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        float l[3] = {cases[c].light_x * cosf(elevation), sinf(elevation), cases[c].light_z * cosf(elevation)};
+        test_directional_light(s, I, -l[0], -l[1], -l[2]);
+        double cosine = (n[0] * l[0] + n[1] * l[1] + n[2] * l[2]) / nl;
+        double lit = cosine > 0.0 ? 0.5 * I * cosine : 0.0;
+        pb_bake_desc d = floor_probe(s, 0);
+        baked b = bake(s, &d);
+        if (b.ok) {
+            double want[3] = {lit, lit, lit}, scale[3] = {0.5 * I, 0.5 * I, 0.5 * I};
+            float down[3], worst = floor_step_error(b.vol.sh, want, scale, down);
+            fprintf(stderr, "  normal map tilted %2.0f (X) %2.0f (Y), scale %.0f, u %+.0f x, v %+.0f z: irradiance from "
+                    "the floor %.4f (want %.4f), worst of 3 normals %.2f%% of rho I\n", cases[c].tx, cases[c].ty,
+                    cases[c].scale, cases[c].a, cases[c].b, down[0], lit, 100 * worst);
+            CHECK(worst < 0.01f);
+        }
+        release(&b);
+        pb_scene_destroy(s);
+    }
+}
+
 /* One point light, nothing else: the SH is the projected delta E = I/d^2
  * from the light's direction (exactly, apart from float rounding). */
 static void point_light(void)
@@ -892,15 +955,21 @@ static pb_scene *load_demo_shaded(int bent)
  * moments summed on the device (pass 0 stores them, pass 1 adds). */
 static void kernels_match_cpu_reference(void)
 {
-    double dc[2] = {0, 0};
-    for (int bent = 0; bent <= 1; ++bent) {
-        pb_scene *s = load_demo_shaded(bent);
+    double dc[3] = {0, 0, 0};
+    for (int bent = 0; bent <= 2; ++bent) {
+        pb_scene *s = load_demo_shaded(bent != 0);
+        if (s && bent == 2)
+            CHECK(give_normal_map(s, 8, 0.6f, 5));
         if (s)
-            dc[bent] = kernels_match_cpu_reference_on(s, bent ? "bent normals" : "face normals");
+            dc[bent] = kernels_match_cpu_reference_on(s, bent == 2 ? "bent normals, normal-mapped"
+                                                         : bent  ? "bent normals"
+                                                                 : "face normals");
         pb_scene_destroy(s);
     }
-    fprintf(stderr, "  bent normals change the irradiance by %+.2f%%\n", 100 * (dc[1] / dc[0] - 1));
-    CHECK(dc[0] > 0 && fabs(dc[1] / dc[0] - 1) > 0.01); /* else the second comparison proved nothing */
+    fprintf(stderr, "  bent normals change the irradiance by %+.2f%%, a normal map on them by %+.2f%%\n",
+            100 * (dc[1] / dc[0] - 1), 100 * (dc[2] / dc[1] - 1));
+    /* else the second and third comparisons proved nothing */
+    CHECK(dc[0] > 0 && fabs(dc[1] / dc[0] - 1) > 0.01 && fabs(dc[2] / dc[1] - 1) > 0.01);
 }
 
 /* The depth sums stay on the device across passes and are read once, at
@@ -1322,6 +1391,57 @@ static void vertex_colours_are_albedo(void)
         free(sh), free(white);
     }
     release(&b);
+    pb_scene_destroy(s);
+}
+
+/* Normal maps draw the bounces: the demo scene with bent vertex normals and
+ * give_normal_map's random normal map, 3 bounces, 8 passes, the kernel
+ * against the CPU reference path for path (as
+ * multi_bounce_matches_cpu_reference); the reference without the map must
+ * differ. The same through the wavefront schedule's kernels. */
+static void normal_maps_match_cpu_reference(void)
+{
+    pb_scene *s = load_demo_shaded(1);
+    if (!s)
+        return;
+    CHECK(give_normal_map(s, 8, 0.6f, 11));
+    for (uint32_t schedule = PB_SCHEDULE_MEGAKERNEL; schedule <= PB_SCHEDULE_WAVEFRONT; ++schedule) {
+        pb_bake_desc d = {0};
+        pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
+        d.rays_per_probe = 128, d.passes = 8, d.bounces = 3, d.octmap_res = 4, d.skip_relocation = 1;
+        d.schedule = schedule;
+        baked b = bake(s, &d);
+        if (!b.ok) {
+            release(&b);
+            break;
+        }
+        uint32_t P = b.vol.probe_count, compared = 0;
+        float *sh = malloc((size_t)P * 27 * sizeof(float)), *flat = malloc((size_t)P * 27 * sizeof(float));
+        pb_bake_emitters em;
+        CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
+        reference_bake(s, &d, multi_bounce_template(s, &b, &em, d.seed), P, 8, sh);
+        for (uint32_t m = 0; m < s->material_count; ++m)
+            s->materials[m].normal_texture = -1;
+        reference_bake(s, &d, multi_bounce_template(s, &b, &em, d.seed), P, 8, flat);
+        for (uint32_t m = 0; m < s->material_count; ++m)
+            s->materials[m].normal_texture = (int32_t)s->texture_count - 1;
+        double worst = 0, apart = 0;
+        for (uint32_t p = 0; p < P; ++p) {
+            if (b.vol.probe_flags[p] & PB_PROBE_DILATED)
+                continue;
+            ++compared;
+            double c = fmax(1e-6, fabs(sh[27 * p]));
+            worst = fmax(worst, fabs(sh[27 * p] - b.vol.sh[27 * p]) / c);
+            apart = fmax(apart, fabs(flat[27 * p] - b.vol.sh[27 * p]) / c);
+        }
+        fprintf(stderr, "  %s: %u probes (%u not dilated), 3 bounces, 8 passes: DC irradiance differs by at most "
+                        "%.3f%% from the CPU reference (%.1f%% from the reference without the normal map)\n",
+                schedule ? "wavefront" : "megakernel", P, compared, 100 * worst, 100 * apart);
+        CHECK(compared >= P / 2 && worst < 0.01 && apart > 0.02);
+        pb_bake_emitters_free(&em);
+        free(sh), free(flat);
+        release(&b);
+    }
     pb_scene_destroy(s);
 }
 
@@ -3568,6 +3688,7 @@ int main(void)
     RUN(real_hdr_environment);
     RUN(environment_lights_floor);
     RUN(shading_normals_weigh_reflected_light);
+    RUN(normal_maps_weigh_reflected_light);
     RUN(thin_glass_tints_light);
     RUN(closed_emissive_box);
     RUN(kernels_match_cpu_reference);
@@ -3578,6 +3699,7 @@ int main(void)
     RUN(cpu_reference_casts_through_the_given_tracer);
     RUN(light_cells_match_cpu_reference);
     RUN(vertex_colours_are_albedo);
+    RUN(normal_maps_match_cpu_reference);
     RUN(dilation_kernel_matches_cpu_reference);
     RUN(pipelines_are_made_once_per_context);
     RUN(volume_carries_the_scene_hash);

@@ -111,16 +111,22 @@ expect info-extensions 0 '^extensions  used: KHR_lights_punctual, KHR_materials_
 expect info-json-extensions 0 '"extensions_applied": \["KHR_lights_punctual", "KHR_materials_emissive_strength"\],' -- "$pb" info "$demo" --json
 expect info-json-bounds-max 0 '"bounds_max": \[2, 3, 2.5\]' -- "$pb" info "$demo" --json
 expect info-shading-flat 0 '^shading     0 of 40 triangles smooth' -- "$pb" info "$demo"
-expect info-glass 0 '^materials   3 \(0 emissive, 0 alpha-masked, 1 blended, 1 of them thin glass\)' -- \
+expect info-glass 0 '^materials   3 \(0 emissive, 0 alpha-masked, 1 blended, 1 of them thin glass; 0 normal-mapped\)' -- \
     "$pb" info "$src/tests/scenes/skylight.gltf"
 expect info-glass-json 0 '"glass_materials": 1,' -- "$pb" info "$src/tests/scenes/skylight.gltf" --json
 expect shading-normals-bad 2 "error: --shading-normals takes vertex or face" -- "$pb" info "$demo" --shading-normals x
+expect normal-maps-bad 2 "error: --normal-maps takes on or off" -- "$pb" info "$demo" --normal-maps x
 helmet=$src/../shared/scenes/samples/DamagedHelmet/DamagedHelmet.gltf
-if [ -f "$helmet" ]; then # its normal and occlusion maps are counted, not decoded
-    expect info-textures-unread 0 '^textures    4 \(of the file.s 5, 2 the bake never reads, not decoded' -- \
+if [ -f "$helmet" ]; then # its occlusion map is counted, not decoded; its normal map too under --normal-maps off
+    expect info-textures-unread 0 '^textures    5 \(of the file.s 5, 1 the bake never reads, not decoded' -- \
         "$pb" info "$helmet"
+    expect info-normal-mapped 0 '^materials   2 .*; 1 normal-mapped\)' -- "$pb" info "$helmet"
     expect info-json-textures-in 0 '"textures_in": 5,' -- "$pb" info "$helmet" --json
-    expect info-json-textures-unread 0 '"textures_unread": 2,' -- "$pb" info "$helmet" --json
+    expect info-json-textures-unread 0 '"textures_unread": 1,' -- "$pb" info "$helmet" --json
+    expect info-json-normal-maps-off 0 '"normal_mapped_materials": 0,' -- "$pb" info "$helmet" --json --normal-maps off
+    expect info-json-normal-maps-off-unread 0 '"textures_unread": 2,' -- "$pb" info "$helmet" --json --normal-maps off
+else
+    echo "skip info-textures-unread: $helmet absent"
 fi
 duck=$src/../shared/scenes/samples/Duck/Duck.gltf
 if [ -f "$duck" ]; then # vertex normals shade smooth, unless --shading-normals face

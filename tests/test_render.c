@@ -65,6 +65,8 @@ static void render_matches_cpu(const pb_sparse_desc *sd, int bent)
         return;
     if (bent) /* shading normals: every mode shades with them */
         bend_normals(s, 0.4f);
+    if (bent == 2) /* and a normal map bends them */
+        CHECK(give_normal_map(s, 8, 0.6f, 3));
     pb_bake_desc bd = {0};
     pb_probe_grid_fit(s->bounds_min, s->bounds_max, sd ? 500 : 60, &bd.grid);
     bd.rays_per_probe = sd ? 32 : 64;
@@ -111,6 +113,18 @@ static void render_matches_cpu(const pb_sparse_desc *sd, int bent)
             memcpy(plain, g, n * 16);
         if (pass == 0)
             memcpy(direct, g, n * 16);
+        if (pass == 0 && bent == 2) { /* the normal map bends what direct light shows */
+            for (uint32_t m = 0; m < s->material_count; ++m)
+                s->materials[m].normal_texture = -1;
+            CHECKF(pb_render_cpu(s, p.bvh, &d, c, cd, &err) == PB_OK, "%s", err.message);
+            for (uint32_t m = 0; m < s->material_count; ++m)
+                s->materials[m].normal_texture = (int32_t)s->texture_count - 1;
+            uint32_t changed = 0;
+            for (uint32_t i = 0; i < n; ++i)
+                changed += fabsf(lum(c + 4 * i) - lum(direct + 4 * i)) > 1e-3f * fmaxf(1.f, lum(direct + 4 * i));
+            fprintf(stderr, "  %u pixels differ from the CPU's direct image without the normal map\n", changed);
+            CHECK(changed > n / 4);
+        }
         if (pass == 5) { /* the other sampler: other light samples where the panel lights */
             uint32_t changed = 0;
             for (uint32_t i = 0; i < n; ++i)
@@ -163,6 +177,11 @@ static void kernel_matches_cpu_reference(void)
 static void kernel_matches_cpu_with_shading_normals(void)
 {
     render_matches_cpu(NULL, 1);
+}
+
+static void kernel_matches_cpu_with_normal_maps(void)
+{
+    render_matches_cpu(NULL, 2);
 }
 
 static void sparse_kernel_matches_cpu_reference(void)
@@ -495,6 +514,7 @@ int main(void)
     RUN(bad_parameters_refused);
     RUN(kernel_matches_cpu_reference);
     RUN(kernel_matches_cpu_with_shading_normals);
+    RUN(kernel_matches_cpu_with_normal_maps);
     RUN(sparse_kernel_matches_cpu_reference);
     RUN(constant_sky_lights_floor_evenly);
     RUN(reference_converges);

@@ -1232,11 +1232,13 @@ static void oversized_texture_refused_unread(void)
 }
 
 /* Only the textures the bake reads are decoded: base colour, emissive,
- * metallic-roughness where a metallic factor > 0 folds it, transmission.
+ * metallic-roughness where a metallic factor > 0 folds it, transmission,
+ * normal maps unless --normal-maps off (pb_scene_desc.no_normal_maps).
  * Here the normal and occlusion maps are corrupt and 121 M pixels, past a
- * budget the colour texture fills exactly: neither is warned about nor
- * counted. With a metallic factor the corrupt metallic texture is read, and
- * warned about, while the normal and occlusion maps still are not. */
+ * budget the colour texture fills exactly: the occlusion map is neither
+ * warned about nor counted, the normal map only where normal maps are read.
+ * With a metallic factor the corrupt metallic texture is read, and warned
+ * about, while the occlusion map still is not. */
 static void unread_maps_not_decoded(void)
 {
     unsigned char jpg[160];
@@ -1255,30 +1257,36 @@ static void unread_maps_not_decoded(void)
         "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
         "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
         "\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}";
-    for (int metal = 0; metal < 2; ++metal) {
+    for (int v = 0; v < 4; ++v) {
+        int metal = v & 1, normals = v >> 1;
         char json[2048];
         snprintf(json, sizeof json, fmt, metal ? "1.0" : "0.0");
         const char *path = write_gltf("unread-maps.gltf", json, tri_pos, 36);
         warning_counter any = {{": ", NULL}, 0}, corrupt = {{"could not be decoded", NULL}, 0};
         pb_scene_desc d = {{count_warnings, &any}, 0, 0, 16 * 8};
+        d.no_normal_maps = !normals;
         pb_scene *s = NULL;
         pb_error err;
         pb_result r = pb_scene_load(path, &d, &s, &err);
-        CHECKF(r == PB_OK, "metallic %d: %s", metal, err.message);
+        CHECKF(r == PB_OK, "metallic %d, normal maps %d: %s", metal, normals, err.message);
         if (r != PB_OK)
             continue;
-        CHECKF(s->texture_count == 1 && s->materials[0].base_color_texture == 0 && s->textures[0].width == 16,
-               "metallic %d: %u textures, colour texture %d", metal, s->texture_count, s->materials[0].base_color_texture);
-        CHECKF(any.count == metal, "metallic %d: %d warnings, want %d", metal, any.count, metal);
-        /* 5 textures: 1, 2 and 4 (normal, occlusion, no material's) never read, 3 (metallic) without a factor */
-        CHECKF(s->stats.textures_in == 5 && s->stats.textures_unread == (metal ? 3u : 4u),
-               "metallic %d: %u textures in the file, %u unread", metal, s->stats.textures_in, s->stats.textures_unread);
+        CHECKF(s->texture_count == 1 && s->materials[0].base_color_texture == 0 && s->textures[0].width == 16 &&
+                   s->materials[0].normal_texture == -1,
+               "metallic %d, normal maps %d: %u textures, colour texture %d", metal, normals, s->texture_count,
+               s->materials[0].base_color_texture);
+        CHECKF(any.count == metal + normals, "metallic %d, normal maps %d: %d warnings, want %d", metal, normals,
+               any.count, metal + normals);
+        /* 5 textures: 2 and 4 (occlusion, no material's) never read, 1 (normal) only with normal maps, 3
+         * (metallic) only under a factor */
+        CHECKF(s->stats.textures_in == 5 && s->stats.textures_unread == 4u - (uint32_t)metal - (uint32_t)normals,
+               "metallic %d, normal maps %d: %u textures in the file, %u unread", metal, normals, s->stats.textures_in,
+               s->stats.textures_unread);
         pb_scene_destroy(s);
-        if (metal) { /* the one warning is the metallic texture's */
-            d.log.user_data = &corrupt;
-            CHECK(pb_scene_load(path, &d, &s, &err) == PB_OK && corrupt.count == 1);
-            pb_scene_destroy(s);
-        }
+        /* the warnings are the corrupt metallic and normal textures' */
+        d.log.user_data = &corrupt;
+        CHECK(pb_scene_load(path, &d, &s, &err) == PB_OK && corrupt.count == metal + normals);
+        pb_scene_destroy(s);
     }
 }
 
@@ -1316,16 +1324,18 @@ static void shared_scenes_load(void)
                 masked += s->materials[m].alpha_mode == PB_ALPHA_MASK;
             CHECK(masked == 3);
         }
-        /* of its 5 textures the bake reads 3 (colour, metallic-roughness,
-         * emissive; normal and occlusion maps are not decoded), and its
-         * metallic texture folded into the colour is a 4th */
+        /* of its 5 textures the bake reads 4 (colour, metallic-roughness,
+         * emissive, normal; the occlusion map is not decoded), and its
+         * metallic texture folded into the colour is a 5th */
         if (s && !strcmp(cases[i].path, "samples/DamagedHelmet/DamagedHelmet.gltf"))
-            CHECKF(s->materials[0].emissive_texture >= 0 && s->texture_count == 4 && s->materials[0].metallic == 0.f &&
-                       s->materials[0].base_color_texture == 3,
-                   "DamagedHelmet: %u textures, colour %d, emissive %d, metallic %g", s->texture_count,
-                   s->materials[0].base_color_texture, s->materials[0].emissive_texture, s->materials[0].metallic);
+            CHECKF(s->materials[0].emissive_texture >= 0 && s->texture_count == 5 && s->materials[0].metallic == 0.f &&
+                       s->materials[0].base_color_texture == 3 && s->materials[0].normal_texture == 4 &&
+                       !s->textures[4].srgb,
+                   "DamagedHelmet: %u textures, colour %d, emissive %d, normal %d, metallic %g", s->texture_count,
+                   s->materials[0].base_color_texture, s->materials[0].emissive_texture,
+                   s->materials[0].normal_texture, s->materials[0].metallic);
         if (s && !strcmp(cases[i].path, "samples/DamagedHelmet/DamagedHelmet.gltf"))
-            CHECK(s->stats.textures_in == 5 && s->stats.textures_unread == 2);
+            CHECK(s->stats.textures_in == 5 && s->stats.textures_unread == 1);
         pb_scene_destroy(s);
     }
     char bad[1024];
@@ -1624,6 +1634,78 @@ static void gpu_instancing_draws_each_instance(void)
 }
 
 /* ------------------------------------------------------------ transmission */
+
+/* glTF normalTexture: the texture is made linear (its bytes as they stand),
+ * its scale read (default 1); read with other UVs than the material's
+ * colour (TEXCOORD_1, another KHR_texture_transform) it is a warning and not
+ * applied, on an unlit material silently not; pb_scene_desc.no_normal_maps
+ * (--normal-maps off) reads none, leaves the texture undecoded and gives
+ * the scene the hash it has without normalTexture in the file. */
+static void normal_maps_read(void)
+{
+    unsigned char px[2 * 4] = {128, 200, 255, 255, 10, 128, 250, 255};
+    char png[600];
+    snprintf(png, sizeof png, "%s/normal-map.png", temp_dir());
+    CHECK(stbi_write_png(png, 2, 1, 4, px, 8) != 0);
+    const char *mats[5] = {
+        "{\"normalTexture\":{\"index\":0}}",
+        "{\"normalTexture\":{\"index\":0,\"scale\":0.5}}",
+        "{\"normalTexture\":{\"index\":0,\"texCoord\":1}}",
+        "{\"normalTexture\":{\"index\":0,\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.5,0]}}}}",
+        "{\"normalTexture\":{\"index\":0},\"extensions\":{\"KHR_materials_unlit\":{}}}"};
+    const char *plain = "{}";
+    pb_scene *sc[3] = {NULL, NULL, NULL};
+    for (int variant = 0; variant < 3; ++variant) { /* with maps, --normal-maps off, a file without them */
+        char json[4096];
+        int n = snprintf(json, sizeof json,
+                         "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+                         "\"meshes\":[{\"primitives\":[");
+        for (int i = 0; i < 5; ++i)
+            n += snprintf(json + n, sizeof json - (size_t)n, "%s{\"attributes\":{\"POSITION\":0},\"material\":%d}",
+                          i ? "," : "", i);
+        n += snprintf(json + n, sizeof json - (size_t)n, "]}],\"materials\":[");
+        for (int i = 0; i < 5; ++i)
+            n += snprintf(json + n, sizeof json - (size_t)n, "%s%s", i ? "," : "",
+                          variant == 2 ? (i == 4 ? "{\"extensions\":{\"KHR_materials_unlit\":{}}}" : plain) : mats[i]);
+        snprintf(json + n, sizeof json - (size_t)n,
+                 "],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"normal-map.png\"}],"
+                 "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
+                 "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}");
+        warning_counter warned = {{"normalTexture is read with other UVs", NULL}, 0};
+        pb_scene_desc d = {{count_warnings, &warned}, 0, 0, 0};
+        d.no_normal_maps = variant == 1;
+        pb_error err;
+        const char *path = write_gltf(variant == 2 ? "normal-map-none.gltf" : "normal-map.gltf", json, tri_pos, 36);
+        CHECKF(pb_scene_load(path, &d, &sc[variant], &err) == PB_OK, "%s", err.message);
+        if (!sc[variant] || sc[variant]->material_count < 5)
+            break;
+        const pb_scene *s = sc[variant];
+        const pb_material *m = s->materials;
+        if (variant == 0) {
+            CHECKF(warned.count == 2, "%d warnings", warned.count);
+            CHECK(pb_scene_normal_mapped(s) == 2 && s->texture_count == 1 && s->stats.textures_unread == 0);
+            CHECK(m[0].normal_texture == 0 && m[0].normal_scale == 1.f);
+            CHECK(m[1].normal_texture == 0 && m[1].normal_scale == 0.5f);
+            CHECK(m[2].normal_texture == -1 && m[3].normal_texture == -1 && m[4].normal_texture == -1);
+            if (s->texture_count == 1) { /* linear: the bytes as the file has them */
+                const pb_texture *tx = &s->textures[0];
+                CHECK(tx->srgb == 0 && tx->width == 2 && tx->height == 1);
+                CHECKF(s->texels[tx->offset] == 0xffffc880u && s->texels[tx->offset + 1] == 0xfffa800au,
+                       "texels %08x %08x", s->texels[tx->offset], s->texels[tx->offset + 1]);
+            }
+        } else {
+            CHECKF(warned.count == 0, "%d warnings", warned.count);
+            CHECK(pb_scene_normal_mapped(s) == 0 && s->texture_count == 0);
+            CHECK(s->stats.textures_in == 1 && s->stats.textures_unread == 1);
+        }
+    }
+    if (sc[0] && sc[1] && sc[2]) {
+        CHECK(pb_scene_hash(sc[0]) != pb_scene_hash(sc[1]));
+        CHECK(pb_scene_hash(sc[1]) == pb_scene_hash(sc[2]));
+    }
+    for (int i = 0; i < 3; ++i)
+        pb_scene_destroy(sc[i]);
+}
 
 /* KHR_materials_transmission (thin): the material becomes alpha-blended
  * glass, its alpha the coverage (1 for an opaque material), its
@@ -2091,6 +2173,7 @@ int main(void)
     RUN(corrupt_compressed_data_refused);
     RUN(gpu_instancing_draws_each_instance);
     RUN(transmission_is_coverage);
+    RUN(normal_maps_read);
     RUN(metallic_texture_folded_into_the_colour);
     RUN(webp_and_avif_textures_read_as_their_originals);
     RUN(exr_environment_maps_read_exactly);

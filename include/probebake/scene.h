@@ -55,6 +55,14 @@ typedef struct pb_material {
      * red channel, which scales transmission per texel (coverage 1, the
      * light through tinted as without a texture). 0 otherwise. */
     uint32_t transmission_in_alpha;
+    /* glTF normalTexture: the scene texture of tangent-space normals
+     * (linear RGB, +X along increasing u, +Y against increasing v, as glTF
+     * says), -1 for none; normal_scale multiplies the sampled normal's X and
+     * Y (normalTexture.scale, default 1). The tangent frame comes from each
+     * triangle's texture coordinates (docs/scene.md, "Normal maps"). Last,
+     * so a scene without normal maps keeps its hash. */
+    int32_t normal_texture;
+    float normal_scale;
 } pb_material;
 
 /* Decoded texture: RGBA8 texels at pb_scene.texels[offset ...], row-major,
@@ -159,6 +167,7 @@ typedef struct pb_scene_desc {
     uint64_t max_texture_total_pixels; /* all images of a file; default PB_MAX_TEXTURE_TOTAL_PIXELS */
     uint32_t face_normals;    /* 1: every triangle keeps its face normal, whatever NORMAL says (flat
                                  shading: `--shading-normals face`); default 0, the file's vertex normals */
+    uint32_t no_normal_maps;  /* 1: normalTexture is not read (`--normal-maps off`); default 0, read */
 } pb_scene_desc;
 
 /* 8192 x 8192 (256 MiB as RGBA8) per image, and 16 such images per file
@@ -205,6 +214,11 @@ uint64_t pb_scene_bent_triangles(const pb_scene *scene);
  * through them, tinted, where there is one (docs/bake.md, "Thin glass"); a
  * scene without compiles that out. */
 uint32_t pb_scene_glass_materials(const pb_scene *scene);
+
+/* Materials with a normal map (normal_texture >= 0). The bake bends its
+ * shading normals by them where there is one (docs/bake.md, "Normal maps");
+ * a scene without compiles that out. */
+uint32_t pb_scene_normal_mapped(const pb_scene *scene);
 
 /* Default-initialised material (glTF defaults: white, opaque, cutoff 0.5). */
 pb_material pb_material_default(void);

@@ -30,6 +30,14 @@ uint texel_index(float s, float t, uint w, uint h, uint wrap_s, uint wrap_t)
     return uint(iy) * w + uint(ix);
 }
 
+// The RGBA8 word of texture `tex` (>= 0) at uv, nearest texel
+// (pb_texture_texel in src/bvh/alpha.h).
+uint texture_texel(SceneRefs s, int tex, vec2 uv)
+{
+    Texture t = TextureBuf(s.textures).t[tex];
+    return UintBuf(s.texels).v[t.offset + texel_index(uv.x, uv.y, t.width, t.height, t.wrap & 0xffu, t.wrap >> 8)];
+}
+
 // Threshold of an alpha-blended surface at a hit: src/bvh/alpha.h says why
 // a hash of the hit point.
 float alpha_blend_threshold(uint material, float u, float v)
@@ -43,12 +51,8 @@ bool alpha_opaque(SceneRefs s, uint tri, uint f, float u, float v)
 {
     Material m = MaterialBuf(s.materials).m[f & ~PB_FLAG_ALPHA_MASK];
     float a = m.base_alpha;
-    if (m.texture >= 0) {
-        Texture tx = TextureBuf(s.textures).t[m.texture];
-        vec2 st = surface_uv(s, tri, u, v);
-        uint texel = UintBuf(s.texels).v[tx.offset + texel_index(st.x, st.y, tx.width, tx.height, tx.wrap & 0xffu, tx.wrap >> 8)];
-        a *= float(texel >> 24) * (1.0 / 255.0);
-    }
+    if (m.texture >= 0)
+        a *= float(texture_texel(s, m.texture, surface_uv(s, tri, u, v)) >> 24) * (1.0 / 255.0);
     if ((s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
         a *= vertex_color(s, tri, u, v).a;
     if (m.mode == 2u) // glTF BLEND

@@ -29,6 +29,7 @@ struct ShadeMaterial {
     vec4 base_color;
     vec4 emissive_metallic; // rgb emission (strength applied), w metallic
     ivec4 tex;              // base colour texture, emissive texture, PB_MATERIAL_* bits, transmission (float bits)
+    // then (load_normal_map) the normal texture and its scale (float bits), and a word of padding
 };
 // ShadeMaterial.tex.z bits (src/bake/bake_types.h)
 #define PB_MATERIAL_DOUBLE_SIDED 1
@@ -41,22 +42,35 @@ struct Light {
     vec4 cone;              // x cos(outer), y 1 / max(1e-3, cos(inner) - cos(outer))
 };
 
-// Material `index` of the ShadeMaterial array at `materials`, read as six
-// 64-bit words (scene.glsl's PB_WORD): on lavapipe a divergent load is one
-// masked load per SIMD lane and component, so 64-bit components halve them
-// (bench/RESULTS.md, "Shading loads"). The same bits as a ShadeMaterial[]
-// buffer reference's.
+// Material `index` of the ShadeMaterial array at `materials` (8 64-bit
+// words each, src/bake/bake_types.h), its first six words (scene.glsl's
+// PB_WORD): on lavapipe a divergent load is one masked load per SIMD lane
+// and component, so 64-bit components halve them (bench/RESULTS.md,
+// "Shading loads"). The normal map's word is read apart, only by scenes
+// that have one.
 ShadeMaterial load_shade_material(pb_addr materials, uint index)
 {
     Words64 w = Words64(materials);
     uvec2 wd[6];
     for (uint i = 0u; i < 6u; ++i)
-        wd[i] = PB_WORD(w, 6u * index + i);
+        wd[i] = PB_WORD(w, 8u * index + i);
     ShadeMaterial m;
     m.base_color = uintBitsToFloat(uvec4(wd[0], wd[1]));
     m.emissive_metallic = uintBitsToFloat(uvec4(wd[2], wd[3]));
     m.tex = ivec4(uvec4(wd[4], wd[5]));
     return m;
+}
+
+// Material `index`'s normal map: its texture (-1: none) and the scale of
+// the sampled normal's X and Y.
+struct NormalMap {
+    int tex;
+    float scale;
+};
+NormalMap load_normal_map(pb_addr materials, uint index)
+{
+    uvec2 wd = PB_WORD(Words64(materials), 8u * index + 6u);
+    return NormalMap(int(wd.x), uintBitsToFloat(wd.y));
 }
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer LightBuf { Light l[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Vec4Buf { vec4 v[]; };
@@ -135,6 +149,7 @@ layout(constant_id = 2) const uint PB_BAKE_FEATURES = 0xffffffffu;
 #define PB_FEATURE_SHADING_NORMALS 512u
 #define PB_FEATURE_TRANSMISSION 1024u
 #define PB_FEATURE_SOLID_ANGLE 2048u
+#define PB_FEATURE_NORMAL_MAPS 4096u
 
 // Pass indices from here on are relocation passes (src/bake/bake_types.h):
 // they read only each probe ray's first hit
@@ -219,8 +234,7 @@ vec4 texture_rgba(SceneRefs s, int tex, vec2 uv)
 {
     if (tex < 0)
         return vec4(1.0);
-    Texture t = TextureBuf(s.textures).t[tex];
-    uint texel = UintBuf(s.texels).v[t.offset + texel_index(uv.x, uv.y, t.width, t.height, t.wrap & 0xffu, t.wrap >> 8)];
+    uint texel = texture_texel(s, tex, uv);
     vec3 c = vec3(float(texel & 0xffu), float((texel >> 8) & 0xffu), float((texel >> 16) & 0xffu)) / 255.0;
     return vec4(srgb_to_linear(c), float(texel >> 24) * (1.0 / 255.0));
 }

@@ -13,6 +13,7 @@
 #include "guide.glsl"
 #include "light_cells.glsl"
 #include "spherical_triangle.glsl"
+#include "normal_map.glsl"
 
 // Multiple importance sampling, power heuristic: the weight of a sample
 // drawn with density a when density b could also have drawn it.
@@ -395,7 +396,10 @@ bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, 
                 return false; // inside a single-sided surface: no light
             ps.ng = -ps.ng;
         }
-        vec2 uv = m.tex.x >= 0 || m.tex.y >= 0 ? surface_uv(s, tr.tri, tr.u, tr.v) : vec2(0.0);
+        NormalMap nm = NormalMap(-1, 0.0);
+        if (bake_feature(PB_FEATURE_NORMAL_MAPS) && (s.flags & PB_SCENE_NORMAL_MAPS) != 0u)
+            nm = load_normal_map(P.materials, t.flags & ~PB_FLAG_ALPHA_MASK);
+        vec2 uv = m.tex.x >= 0 || m.tex.y >= 0 || nm.tex >= 0 ? surface_uv(s, tr.tri, tr.u, tr.v) : vec2(0.0);
         if ((ps.bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
             float w = 1.0;
             // the density with which NEE at the ray's origin draws this point
@@ -420,6 +424,8 @@ bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, 
         ps.x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ps.ng);
         bool smooth_shaded = bake_feature(PB_FEATURE_SHADING_NORMALS) && (s.flags & PB_SCENE_SHADING_NORMALS) != 0u;
         ps.ns = smooth_shaded ? shading_normal(s, tr.tri, tr.u, tr.v, ps.ng) : ps.ng;
+        if (nm.tex >= 0)
+            ps.ns = normal_mapped(s, nm.tex, nm.scale, tr.tri, uv, e1, e2, ps.ns, ps.ng, back);
         if (ps.bounce == 0u) {
             ps.res.shade = true;
             ps.res.x = ps.x;

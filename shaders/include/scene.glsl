@@ -12,6 +12,7 @@
 #define PB_SCENE_VERTEX_COLORS 1u
 #define PB_SCENE_SHADING_NORMALS 2u
 #define PB_SCENE_TRANSMISSION 4u
+#define PB_SCENE_NORMAL_MAPS 8u
 #define PB_INF uintBitsToFloat(0x7f800000u)
 
 // 4-wide quantized BVH node (include/probebake/bvh.h), decoded: child i's

@@ -9,6 +9,7 @@
 #include "bake/depth_lists.h"
 #include "bake/guide.h"
 #include "bake/light_cells.h"
+#include "bake/normal_map.h"
 #include "bake/path_cpu.h"
 #include "bake/shading_normals.h"
 #include "bake/spherical_triangle.h"
@@ -69,8 +70,7 @@ static void texture_rgba(const pb_scene *s, int32_t tex, float u, float v, float
         rgba[0] = rgba[1] = rgba[2] = rgba[3] = 1.f;
         return;
     }
-    const pb_texture *t = &s->textures[tex];
-    uint32_t texel = s->texels[t->offset + pb_texel_index(u, v, t->width, t->height, t->wrap_s, t->wrap_t)];
+    uint32_t texel = pb_texture_texel(s, tex, u, v);
     for (int k = 0; k < 3; ++k)
         rgba[k] = pb_srgb_to_linear((float)((texel >> (8 * k)) & 0xffu) / 255.f);
     rgba[3] = (float)(texel >> 24) * (1.f / 255.f);
@@ -563,6 +563,12 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         float ns[3] = {ng[0], ng[1], ng[2]};
         if (c->smooth)
             pb_shading_normal_cpu(s, h.tri, h.u, h.v, ng, ns);
+        if (m->normal_map[0] >= 0) {
+            float scale, bent[3];
+            memcpy(&scale, &m->normal_map[1], 4);
+            pb_normal_mapped_cpu(s, m->normal_map[0], scale, h.tri, tu, tv, e1, e2, ns, ng, back, bent);
+            memcpy(ns, bent, sizeof bent);
+        }
         if (bounce == 0) {
             res.shade = 1;
             memcpy(res.x, x, sizeof x);

@@ -40,6 +40,9 @@ void pb_bake_materials(const pb_scene *scene, gpu_shade_material *out)
         g->tex[2] = (m->double_sided ? PB_MATERIAL_DOUBLE_SIDED : 0) |
                     (m->transmission_in_alpha ? PB_MATERIAL_TAU_IN_ALPHA : 0);
         memcpy(&g->tex[3], &m->transmission, 4); /* float bits */
+        g->normal_map[0] = m->normal_texture;
+        memcpy(&g->normal_map[1], &m->normal_scale, 4);
+        g->pad[0] = g->pad[1] = 0;
     }
 }
 

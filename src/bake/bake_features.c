@@ -22,6 +22,7 @@ uint32_t pb_bake_features(const gpu_bake_params *p)
     f |= (p->scene.flags & PB_SCENE_SHADING_NORMALS) ? PB_FEATURE_SHADING_NORMALS : 0u;
     f |= (p->scene.flags & PB_SCENE_TRANSMISSION) ? PB_FEATURE_TRANSMISSION : 0u;
     f |= p->emitter_count && !p->emitters_by_area ? PB_FEATURE_SOLID_ANGLE : 0u;
+    f |= (p->scene.flags & PB_SCENE_NORMAL_MAPS) ? PB_FEATURE_NORMAL_MAPS : 0u;
     return f;
 }
 
@@ -29,7 +30,7 @@ void pb_bake_features_name(uint32_t features, char *out, size_t size)
 {
     static const char *names[] = {"probe-nee", "guide", "light-cells", "volume", "light-select",
                                   "emitters", "environment", "lights", "vertex-colours", "shading-normals", "transmission",
-                                  "solid-angle"};
+                                  "solid-angle", "normal-maps"};
     size_t used = 0;
     if (size)
         out[0] = '\0';

@@ -22,6 +22,7 @@ enum {
     PB_FEATURE_SHADING_NORMALS = 1u << 9, /* scene.flags: vertex normals bent from the faces */
     PB_FEATURE_TRANSMISSION = 1u << 10,   /* scene.flags: thin glass */
     PB_FEATURE_SOLID_ANGLE = 1u << 11,    /* emitters sampled by solid angle where near */
+    PB_FEATURE_NORMAL_MAPS = 1u << 12,    /* scene.flags: normal maps bend the shading normals */
 };
 
 /* The features a pass with these parameters uses: a pipeline specialised to

@@ -14,8 +14,10 @@ typedef struct gpu_shade_material {
     float base_color[4];
     float emissive_metallic[4];
     int32_t tex[4]; /* base colour texture, emissive texture, PB_MATERIAL_* bits, transmission (float bits) */
+    int32_t normal_map[2]; /* normal texture (-1: none), its scale (float bits): load_normal_map */
+    int32_t pad[2];
 } gpu_shade_material;
-_Static_assert(sizeof(gpu_shade_material) == 48, "ShadeMaterial layout");
+_Static_assert(sizeof(gpu_shade_material) == 64, "ShadeMaterial layout");
 
 typedef struct gpu_light {
     float position_type[4];

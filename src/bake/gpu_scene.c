@@ -219,7 +219,8 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     gs->refs = (gpu_scene_refs){gs->nodes.address, gs->tris.address, gs->tri_uv.address, gs->materials.address,
                                 gs->textures.address, gs->texels.address, n,
                                 (scene->colors ? PB_SCENE_VERTEX_COLORS : 0u) |
-                                    (smooth ? PB_SCENE_SHADING_NORMALS : 0u) | (glass ? PB_SCENE_TRANSMISSION : 0u)};
+                                    (smooth ? PB_SCENE_SHADING_NORMALS : 0u) | (glass ? PB_SCENE_TRANSMISSION : 0u) |
+                                    (pb_scene_normal_mapped(scene) ? PB_SCENE_NORMAL_MAPS : 0u)};
     gs->ctx = ctx;
     gs->bvh = bvh;
     gs->bytes = total;

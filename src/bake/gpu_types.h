@@ -21,6 +21,9 @@
 /* ... a material is thin glass (pb_material.transmission > 0): its triangles
  * are opaque to the traversal, and the ray's owner decides (glass_step) */
 #define PB_SCENE_TRANSMISSION 4u
+/* ... a material has a normal map (pb_material.normal_texture): the
+ * kernels bend its shading normals (normal_map.glsl) */
+#define PB_SCENE_NORMAL_MAPS 8u
 
 typedef struct gpu_material {
     float base_alpha;

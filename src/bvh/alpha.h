@@ -36,6 +36,14 @@ static inline uint32_t pb_texel_index(float s, float t, uint32_t w, uint32_t h, 
     return (uint32_t)iy * w + (uint32_t)ix;
 }
 
+/* The RGBA8 word of scene texture `tex` (>= 0) at (s, t), nearest texel
+ * (texture_texel in alpha.glsl). */
+static inline uint32_t pb_texture_texel(const pb_scene *sc, int32_t tex, float s, float t)
+{
+    const pb_texture *tx = &sc->textures[tex];
+    return sc->texels[tx->offset + pb_texel_index(s, t, tx->width, tx->height, tx->wrap_s, tx->wrap_t)];
+}
+
 /* The stochastic threshold of an alpha-blended surface at a hit: a hash of
  * the material and the hit's barycentric bits ("hashed alpha testing",
  * Wyman and McGuire 2017, keyed on the surface point instead of a per-ray
@@ -62,13 +70,11 @@ static inline int pb_alpha_opaque(const pb_scene *s, uint32_t tri, float u, floa
         return 1; /* thin glass: the ray's owner decides (glass_step in src/bake/bake_cpu.c) */
     float a = m->base_color[3];
     if (m->base_color_texture >= 0) {
-        const pb_texture *tx = &s->textures[m->base_color_texture];
         const float *uv = s->texcoords + 6 * (size_t)tri;
         float w0 = 1.f - u - v;
         float ts = w0 * uv[0] + u * uv[2] + v * uv[4];
         float tt = w0 * uv[1] + u * uv[3] + v * uv[5];
-        uint32_t texel = s->texels[tx->offset + pb_texel_index(ts, tt, tx->width, tx->height, tx->wrap_s, tx->wrap_t)];
-        a *= (float)(texel >> 24) * (1.f / 255.f);
+        a *= (float)(pb_texture_texel(s, m->base_color_texture, ts, tt) >> 24) * (1.f / 255.f);
     }
     if (s->colors) {
         float vc[4];

@@ -39,6 +39,7 @@ typedef struct options {
     int portable_kernels;       /* --portable-kernels: pb_context_desc.portable_kernels */
     uint32_t scene_loads;       /* --scene-loads: pb_context_desc.scene_loads (pb_scene_loads) */
     int face_normals;           /* --shading-normals face: pb_scene_desc.face_normals */
+    int no_normal_maps;         /* --normal-maps off: pb_scene_desc.no_normal_maps */
     int emitters_by_area;       /* --emitter-sampling area: pb_bake_desc.emitters_by_area */
     uint32_t schedule;          /* --schedule: pb_bake_desc.schedule (pb_bake_schedule) */
     uint32_t probes, rays, seed, probe;

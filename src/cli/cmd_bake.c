@@ -360,6 +360,7 @@ int cmd_bake(const options *o)
     pb_log log = {cli_log_to_stderr, (void *)&o->log};
     pb_scene_desc scd = {log, 0};
     scd.face_normals = (uint32_t)o->face_normals;
+    scd.no_normal_maps = (uint32_t)o->no_normal_maps;
     pb_scene *s = NULL;
     pb_bvh *bvh = NULL;
     pb_volume vol = {0};

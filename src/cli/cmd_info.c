@@ -45,6 +45,7 @@ int cmd_info(const options *o)
         return cli_usage_error("%s needs a SCENE file", "info");
     pb_scene_desc sd = {{cli_log_to_stderr, (void *)&o->log}, 0};
     sd.face_normals = (uint32_t)o->face_normals;
+    sd.no_normal_maps = (uint32_t)o->no_normal_maps;
     pb_scene *s;
     pb_error err;
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK)
@@ -57,6 +58,7 @@ int cmd_info(const options *o)
     }
     uint64_t smooth = pb_scene_bent_triangles(s); /* shaded with their vertex normals */
     uint32_t emissive = 0, masked = 0, blended = 0, glass = pb_scene_glass_materials(s);
+    uint32_t normal_mapped = pb_scene_normal_mapped(s);
     for (uint32_t m = 0; m < s->material_count; ++m) {
         const pb_material *mt = &s->materials[m];
         emissive += mt->emissive[0] > 0 || mt->emissive[1] > 0 || mt->emissive[2] > 0;
@@ -73,9 +75,9 @@ int cmd_info(const options *o)
                (unsigned long long)st->dropped_nonfinite, st->primitives, st->primitives_skipped,
                st->normals_generated, (unsigned long long)smooth, st->nodes);
         printf("  \"materials\": %u,\n  \"emissive_materials\": %u,\n  \"masked_materials\": %u,\n"
-               "  \"blended_materials\": %u,\n  \"glass_materials\": %u,\n  \"textures\": %u,\n"
-               "  \"textures_in\": %u,\n  \"textures_unread\": %u,\n",
-               s->material_count, emissive, masked, blended, glass, s->texture_count, st->textures_in,
+               "  \"blended_materials\": %u,\n  \"glass_materials\": %u,\n  \"normal_mapped_materials\": %u,\n"
+               "  \"textures\": %u,\n  \"textures_in\": %u,\n  \"textures_unread\": %u,\n",
+               s->material_count, emissive, masked, blended, glass, normal_mapped, s->texture_count, st->textures_in,
                st->textures_unread);
         printf("  \"lights\": [");
         for (uint32_t i = 0; i < s->light_count; ++i) {
@@ -113,11 +115,11 @@ int cmd_info(const options *o)
                st->primitives, st->primitives_skipped, st->normals_generated, st->nodes);
         printf("shading     %llu of %u triangles smooth (vertex normals bent from the face)\n",
                (unsigned long long)smooth, s->triangle_count);
-        printf("materials   %u (%u emissive, %u alpha-masked, %u blended, %u of them thin glass)\n", s->material_count,
-               emissive, masked, blended, glass);
+        printf("materials   %u (%u emissive, %u alpha-masked, %u blended, %u of them thin glass; %u normal-mapped)\n",
+               s->material_count, emissive, masked, blended, glass, normal_mapped);
         printf("textures    %u", s->texture_count);
         if (st->textures_unread)
-            printf(" (of the file's %u, %u the bake never reads, not decoded: normal, occlusion or unused maps)",
+            printf(" (of the file's %u, %u the bake never reads, not decoded: occlusion or unused maps)",
                    st->textures_in, st->textures_unread);
         printf("\n");
         printf("lights      %u", s->light_count);

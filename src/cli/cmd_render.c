@@ -264,6 +264,7 @@ int cmd_render(const options *o)
     pb_log log = {cli_log_to_stderr, (void *)&o->log};
     pb_scene_desc sd = {log, 0};
     sd.face_normals = (uint32_t)o->face_normals;
+    sd.no_normal_maps = (uint32_t)o->no_normal_maps;
     pb_scene *s = NULL;
     pb_bvh *bvh = NULL;
     pb_context *ctx = NULL;

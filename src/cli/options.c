@@ -80,6 +80,8 @@ void cli_print_help(void)
            "                                 same volume, bit for bit (docs/bake.md, \"Schedules\")\n"
            "  --shading-normals vertex|face  reflect with the file's vertex normals interpolated (default)\n"
            "                                 or each triangle's face normal (flat); render too, info counts\n"
+           "  --normal-maps on|off           bend the shading normals by the materials' glTF normal maps\n"
+           "                                 (default on); render too, info counts\n"
            "  --sh-window none|hanning[:W]|lanczos[:W]   taper SH bands against ringing (default none; W 3)\n"
            "  --max-lights-per-hit N         above N punctual lights, each hit draws one by power (default 8)\n"
            "  --clamp-indirect X             clamp each reflected-light path contribution to radiance X\n"
@@ -209,6 +211,7 @@ static int parse_open_range(const char *s, float lo, float hi, float *out)
     X(OPT_SEAM_ERROR, "seam-error", required_argument) \
     X(OPT_SCENE_LOADS, "scene-loads", required_argument) \
     X(OPT_SHADING_NORMALS, "shading-normals", required_argument) \
+    X(OPT_NORMAL_MAPS, "normal-maps", required_argument) \
     X(OPT_EMITTER_SAMPLING, "emitter-sampling", required_argument) \
     X(OPT_SCHEDULE, "schedule", required_argument)
 
@@ -390,6 +393,10 @@ static int apply(options *o, const char *a, const char *next)
         if (!next || (strcmp(next, "vertex") && strcmp(next, "face")))
             return cli_usage_error("%s takes vertex or face", a);
         o->face_normals = !strcmp(next, "face");
+    } else if (!strcmp(a, "--normal-maps")) {
+        if (!next || (strcmp(next, "on") && strcmp(next, "off")))
+            return cli_usage_error("%s takes on or off", a);
+        o->no_normal_maps = !strcmp(next, "off");
     } else if (!strcmp(a, "--indirect")) {
         if (!next || (strcmp(next, "path") && strcmp(next, "volume")))
             return cli_usage_error("%s takes path or volume", a);

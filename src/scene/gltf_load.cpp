@@ -1108,6 +1108,7 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     snprintf(b->stats.extensions_applied, sizeof b->stats.extensions_applied, "%s", applied.c_str());
 
     reader r{model, path, b, err, {}, 0, {}, {}, {}, {}, {}, desc->face_normals != 0, &ictx};
+    r.no_normal_maps = desc->no_normal_maps != 0;
     res = decode_meshopt_views(r);
     if (res != PB_OK)
         return res;

@@ -263,6 +263,36 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
     pm.transmission = (float)pass;
 }
 
+// glTF normalTexture: tangent-space normals that bend the shading normal
+// (docs/scene.md, "Normal maps"). The kernels build each triangle's tangent
+// frame from its texture coordinates, so the map must be read with the UVs
+// the material's colour texture is read with (TEXCOORD_0 under the
+// material's one transform); else it is not applied, with a warning. Its
+// scale must be finite.
+void read_normal_map(reader &r, const tinygltf::NormalTextureInfo &info, const std::array<double, 6> &xf,
+                     pb_material &pm)
+{
+    if (info.index < 0)
+        return;
+    int tc;
+    if (!reads_material_uvs(info.texCoord, transform_of(info.extensions), xf, &tc)) {
+        pb_logf(&r.b->log, PB_LOG_WARN,
+                "%s: material '%s': its normalTexture is read with other UVs than its base colour "
+                "(TEXCOORD_%d or another KHR_texture_transform); not applied", r.path, pm.name, tc);
+        return;
+    }
+    if (!std::isfinite(info.scale) || std::fabs(info.scale) > 1e6) {
+        pb_logf(&r.b->log, PB_LOG_WARN, "%s: material '%s': normalTexture scale %g is not usable; not applied",
+                r.path, pm.name, info.scale);
+        return;
+    }
+    int32_t t = texture_of(r, info.index, pm.name);
+    if (t < 0)
+        return; // not decoded (warned), or textures skipped
+    pm.normal_texture = t;
+    pm.normal_scale = (float)info.scale;
+}
+
 } // namespace
 
 pb_result read_textures(reader &r, int skip)
@@ -352,6 +382,9 @@ void read_materials(reader &r)
         if (mt.extensions.find("KHR_materials_unlit") == mt.extensions.end())
             apply_transmission(r, mt, xf, pm);
         fold_metallic(r, pbr.metallicRoughnessTexture, xf, pm);
+        // an unlit surface reflects nothing: no normal bends it
+        if (!r.no_normal_maps && mt.extensions.find("KHR_materials_unlit") == mt.extensions.end())
+            read_normal_map(r, mt.normalTexture, xf, pm);
         r.uv_transform.push_back(xf);
         pb_sb_add_material(r.b, &pm);
     }

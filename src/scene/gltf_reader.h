@@ -48,6 +48,7 @@ struct reader {
     std::vector<char> texture_read;
     std::vector<int> texture_srgb;
     bool skip_textures = false; // pb_scene_desc.skip_textures: none is made
+    bool no_normal_maps = false; // pb_scene_desc.no_normal_maps: normalTexture not read
 };
 
 // A one-line error naming the file; returns `code`.

@@ -20,6 +20,8 @@ pb_material pb_material_default(void)
     m.alpha_cutoff = 0.5f;
     m.base_color_texture = -1;
     m.emissive_texture = -1;
+    m.normal_texture = -1;
+    m.normal_scale = 1.f;
     m.alpha_mode = PB_ALPHA_OPAQUE;
     return m;
 }
@@ -127,6 +129,14 @@ void pb_scene_destroy(pb_scene *s)
     free(s);
 }
 
+uint32_t pb_scene_normal_mapped(const pb_scene *s)
+{
+    uint32_t mapped = 0;
+    for (uint32_t i = 0; i < s->material_count; ++i)
+        mapped += s->materials[i].normal_texture >= 0;
+    return mapped;
+}
+
 uint32_t pb_scene_glass_materials(const pb_scene *s)
 {
     uint32_t glass = 0;
@@ -153,6 +163,11 @@ static uint64_t materials_hash(const pb_scene *scene)
         h = pb_hash64(&scene->materials[i].transmission, sizeof(float), h);
         if (scene->materials[i].transmission_in_alpha) /* else the hash it had before the flag */
             h = pb_hash64(&scene->materials[i].transmission_in_alpha, sizeof(uint32_t), h);
+    }
+    /* normal maps, where a material has one (else the hash it had before) */
+    for (uint32_t i = 0; pb_scene_normal_mapped(scene) && i < scene->material_count; ++i) {
+        h = pb_hash64(&scene->materials[i].normal_texture, sizeof(int32_t), h);
+        h = pb_hash64(&scene->materials[i].normal_scale, sizeof(float), h);
     }
     return h;
 }
