@@ -6,8 +6,8 @@
 
 #include "alpha.glsl"
 
-// The shading normal n of leaf-ordered triangle `tri` (edges e1, e2 from
-// its first corner), bent by texture `tex` at uv. glTF's texel c is the
+// The shading normal n of a triangle (edges e1, e2 from its first corner,
+// texture coordinates c), bent by texture `tex` at uv. glTF's texel c is the
 // normal (2 c - 1) x (scale, scale, 1) in a frame whose X runs along
 // increasing u and Y against increasing v (up the image). The frame is the
 // triangle's own, from its texture coordinates' derivatives (dp/du and
@@ -18,13 +18,11 @@
 // front's and the bent normal is turned back, as the surface's relief
 // seen from behind. n itself where the frame or the texel is degenerate,
 // or where the bent normal would leave the geometric surface.
-vec3 normal_mapped(SceneRefs s, int tex, float scale, uint tri, vec2 uv, vec3 e1, vec3 e2, vec3 n, vec3 ng,
+vec3 normal_mapped(SceneRefs s, int tex, float scale, TriUV c, vec2 uv, vec3 e1, vec3 e2, vec3 n, vec3 ng,
                    bool back)
 {
-    FloatBuf t = FloatBuf(s.tri_uv);
-    uint b = 6u * tri;
-    precise float du1 = t.v[b + 2u] - t.v[b], dv1 = t.v[b + 3u] - t.v[b + 1u];
-    precise float du2 = t.v[b + 4u] - t.v[b], dv2 = t.v[b + 5u] - t.v[b + 1u];
+    precise float du1 = c.c1.x - c.c0.x, dv1 = c.c1.y - c.c0.y;
+    precise float du2 = c.c2.x - c.c0.x, dv2 = c.c2.y - c.c0.y;
     precise float det = du1 * dv2 - du2 * dv1;
     // dp/du and dp/dv times det; only their directions are used, so det's sign
     precise vec3 dpdu = dv2 * e1 - dv1 * e2, dpdv = du1 * e2 - du2 * e1;
@@ -40,8 +38,8 @@ vec3 normal_mapped(SceneRefs s, int tex, float scale, uint tri, vec2 uv, vec3 e1
     vec3 B = cross(nf, T);
     B = dot(B, dpdv) > 0.0 ? -B : B;
     uint texel = texture_texel(s, tex, uv);
-    vec3 c = vec3(float(texel & 0xffu), float((texel >> 8) & 0xffu), float((texel >> 16) & 0xffu)) / 255.0;
-    precise vec3 m = (2.0 * c - 1.0) * vec3(scale, scale, 1.0);
+    vec3 rgb = vec3(float(texel & 0xffu), float((texel >> 8) & 0xffu), float((texel >> 16) & 0xffu)) / 255.0;
+    precise vec3 m = (2.0 * rgb - 1.0) * vec3(scale, scale, 1.0);
     precise vec3 p = m.x * T + m.y * B + m.z * nf;
     float lp = length(p);
     if (!(lp > 1e-6 && lp < 1e30))

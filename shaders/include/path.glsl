@@ -399,7 +399,13 @@ bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, 
         NormalMap nm = NormalMap(-1, 0.0);
         if (bake_feature(PB_FEATURE_NORMAL_MAPS) && (s.flags & PB_SCENE_NORMAL_MAPS) != 0u)
             nm = load_normal_map(P.materials, t.flags & ~PB_FLAG_ALPHA_MASK);
-        vec2 uv = m.tex.x >= 0 || m.tex.y >= 0 || nm.tex >= 0 ? surface_uv(s, tr.tri, tr.u, tr.v) : vec2(0.0);
+        // read once: the textures' coordinates, and the normal map's frame
+        TriUV tuv = TriUV(vec2(0.0), vec2(0.0), vec2(0.0));
+        vec2 uv = vec2(0.0);
+        if (m.tex.x >= 0 || m.tex.y >= 0 || nm.tex >= 0) {
+            tuv = load_tri_uv(s, tr.tri);
+            uv = interpolate_uv(tuv, tr.u, tr.v);
+        }
         if ((ps.bounce > 0u || see_direct) && m.emissive_metallic.rgb != vec3(0.0)) {
             float w = 1.0;
             // the density with which NEE at the ray's origin draws this point
@@ -425,7 +431,7 @@ bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, 
         bool smooth_shaded = bake_feature(PB_FEATURE_SHADING_NORMALS) && (s.flags & PB_SCENE_SHADING_NORMALS) != 0u;
         ps.ns = smooth_shaded ? shading_normal(s, tr.tri, tr.u, tr.v, ps.ng) : ps.ng;
         if (nm.tex >= 0)
-            ps.ns = normal_mapped(s, nm.tex, nm.scale, tr.tri, uv, e1, e2, ps.ns, ps.ng, back);
+            ps.ns = normal_mapped(s, nm.tex, nm.scale, tuv, uv, e1, e2, ps.ns, ps.ng, back);
         if (ps.bounce == 0u) {
             ps.res.shade = true;
             ps.res.x = ps.x;

@@ -184,14 +184,29 @@ struct SceneRefs {
 // in the CPU reference's order (bake_cpu.c, alpha.h), unfused. Shading and
 // the alpha test call it only where a texture reads them: on lavapipe each of
 // these six loads is a branch per SIMD lane, skipped when no lane needs it.
-vec2 surface_uv(SceneRefs s, uint tri, float u, float v)
+// A triangle's texture coordinates, corner by corner.
+struct TriUV {
+    vec2 c0, c1, c2;
+};
+
+TriUV load_tri_uv(SceneRefs s, uint tri)
 {
     FloatBuf uv = FloatBuf(s.tri_uv);
     uint b = 6u * tri;
+    return TriUV(vec2(uv.v[b], uv.v[b + 1u]), vec2(uv.v[b + 2u], uv.v[b + 3u]), vec2(uv.v[b + 4u], uv.v[b + 5u]));
+}
+
+vec2 interpolate_uv(TriUV c, float u, float v)
+{
     precise float w0 = 1.0 - u - v;
-    precise float ts = w0 * uv.v[b + 0u] + u * uv.v[b + 2u] + v * uv.v[b + 4u];
-    precise float tt = w0 * uv.v[b + 1u] + u * uv.v[b + 3u] + v * uv.v[b + 5u];
+    precise float ts = w0 * c.c0.x + u * c.c1.x + v * c.c2.x;
+    precise float tt = w0 * c.c0.y + u * c.c1.y + v * c.c2.y;
     return vec2(ts, tt);
+}
+
+vec2 surface_uv(SceneRefs s, uint tri, float u, float v)
+{
+    return interpolate_uv(load_tri_uv(s, tri), u, v);
 }
 
 // Vertex colour (glTF COLOR_0) of leaf-ordered triangle `tri` at (u, v):
