@@ -111,6 +111,10 @@ each_allocation_fails info - -- "$pb" info "$demo"
 printf '%s' '{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}],"bufferViews":[{"buffer":0,"byteLength":36}],"buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}]}' \
     >"$tmp/in/nomat.gltf"
 RUNS=100000 each_allocation_fails info-no-material - -- "$pb" info "$tmp/in/nomat.gltf"
+# a material whose normal map is decoded (a 2 x 1 PNG) beside its colour texture: every allocation
+printf '%s' '{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0,"TEXCOORD_0":1},"material":0}]}],"materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0},"metallicFactor":0},"normalTexture":{"index":1,"scale":0.5}}],"textures":[{"source":0},{"source":0}],"images":[{"uri":"data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAABCAYAAAD0In+KAAAAEUlEQVR4nGNoOPH/P1fDr/8AGREFyoKwXaYAAAAASUVORK5CYII="}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"},{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}],"bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":24}],"buffers":[{"byteLength":60,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/"}]}' \
+    >"$tmp/in/normalmap.gltf"
+RUNS=100000 each_allocation_fails info-normal-map - -- "$pb" info "$tmp/in/normalmap.gltf"
 each_allocation_fails inspect - -- "$pb" inspect "$tmp/in/s.probes"
 each_allocation_fails inspect-json - -- "$pb" inspect "$tmp/in/g.probes" --json
 # the two debug images (PNG over zlib, which reports a failed allocation)
