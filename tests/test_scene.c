@@ -1638,7 +1638,9 @@ static void gpu_instancing_draws_each_instance(void)
 /* glTF normalTexture: the texture is made linear (its bytes as they stand),
  * its scale read (default 1); read with other UVs than the material's
  * colour (TEXCOORD_1, another KHR_texture_transform) it is a warning and not
- * applied, on an unlit material silently not; pb_scene_desc.no_normal_maps
+ * applied, on an unlit material silently not; where it is the material's
+ * only texture, the material's UVs take its transform (the triangle's
+ * coordinates 0 become its offset); pb_scene_desc.no_normal_maps
  * (--normal-maps off) reads none, leaves the texture undecoded and gives
  * the scene the hash it has without normalTexture in the file. */
 static void normal_maps_read(void)
@@ -1647,28 +1649,32 @@ static void normal_maps_read(void)
     char png[600];
     snprintf(png, sizeof png, "%s/normal-map.png", temp_dir());
     CHECK(stbi_write_png(png, 2, 1, 4, px, 8) != 0);
-    const char *mats[5] = {
+    const char *mats[6] = {
         "{\"normalTexture\":{\"index\":0}}",
         "{\"normalTexture\":{\"index\":0,\"scale\":0.5}}",
         "{\"normalTexture\":{\"index\":0,\"texCoord\":1}}",
-        "{\"normalTexture\":{\"index\":0,\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.5,0]}}}}",
-        "{\"normalTexture\":{\"index\":0},\"extensions\":{\"KHR_materials_unlit\":{}}}"};
-    const char *plain = "{}";
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":1}},"
+        "\"normalTexture\":{\"index\":0,\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.5,0]}}}}",
+        "{\"normalTexture\":{\"index\":0},\"extensions\":{\"KHR_materials_unlit\":{}}}",
+        "{\"normalTexture\":{\"index\":0,\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.5,0.25]}}}}"};
+    /* the file without normal maps: the same materials less their normalTexture */
+    const char *plain[6] = {"{}", "{}", "{}", "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":1}}}",
+                            "{\"extensions\":{\"KHR_materials_unlit\":{}}}", "{}"};
     pb_scene *sc[3] = {NULL, NULL, NULL};
     for (int variant = 0; variant < 3; ++variant) { /* with maps, --normal-maps off, a file without them */
         char json[4096];
         int n = snprintf(json, sizeof json,
                          "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
                          "\"meshes\":[{\"primitives\":[");
-        for (int i = 0; i < 5; ++i)
+        for (int i = 0; i < 6; ++i)
             n += snprintf(json + n, sizeof json - (size_t)n, "%s{\"attributes\":{\"POSITION\":0},\"material\":%d}",
                           i ? "," : "", i);
         n += snprintf(json + n, sizeof json - (size_t)n, "]}],\"materials\":[");
-        for (int i = 0; i < 5; ++i)
+        for (int i = 0; i < 6; ++i)
             n += snprintf(json + n, sizeof json - (size_t)n, "%s%s", i ? "," : "",
-                          variant == 2 ? (i == 4 ? "{\"extensions\":{\"KHR_materials_unlit\":{}}}" : plain) : mats[i]);
+                          variant == 2 ? plain[i] : mats[i]);
         snprintf(json + n, sizeof json - (size_t)n,
-                 "],\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"normal-map.png\"}],"
+                 "],\"textures\":[{\"source\":0},{\"source\":0}],\"images\":[{\"uri\":\"normal-map.png\"}],"
                  "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
                  "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}");
         warning_counter warned = {{"normalTexture is read with other UVs", NULL}, 0};
@@ -1677,17 +1683,21 @@ static void normal_maps_read(void)
         pb_error err;
         const char *path = write_gltf(variant == 2 ? "normal-map-none.gltf" : "normal-map.gltf", json, tri_pos, 36);
         CHECKF(pb_scene_load(path, &d, &sc[variant], &err) == PB_OK, "%s", err.message);
-        if (!sc[variant] || sc[variant]->material_count < 5)
+        if (!sc[variant] || sc[variant]->material_count < 6 || sc[variant]->triangle_count != 6)
             break;
         const pb_scene *s = sc[variant];
         const pb_material *m = s->materials;
         if (variant == 0) {
             CHECKF(warned.count == 2, "%d warnings", warned.count);
-            CHECK(pb_scene_normal_mapped(s) == 2 && s->texture_count == 1 && s->stats.textures_unread == 0);
+            CHECK(pb_scene_normal_mapped(s) == 3 && s->texture_count == 2 && s->stats.textures_in == 2 &&
+                  s->stats.textures_unread == 0);
             CHECK(m[0].normal_texture == 0 && m[0].normal_scale == 1.f);
             CHECK(m[1].normal_texture == 0 && m[1].normal_scale == 0.5f);
             CHECK(m[2].normal_texture == -1 && m[3].normal_texture == -1 && m[4].normal_texture == -1);
-            if (s->texture_count == 1) { /* linear: the bytes as the file has them */
+            CHECK(m[3].base_color_texture == 1 && m[5].normal_texture == 0);
+            CHECKF(s->texcoords[30] == 0.5f && s->texcoords[31] == 0.25f && s->texcoords[0] == 0.f,
+                   "uv %g %g", s->texcoords[30], s->texcoords[31]);
+            if (s->texture_count == 2) { /* linear: the bytes as the file has them */
                 const pb_texture *tx = &s->textures[0];
                 CHECK(tx->srgb == 0 && tx->width == 2 && tx->height == 1);
                 CHECKF(s->texels[tx->offset] == 0xffffc880u && s->texels[tx->offset + 1] == 0xfffa800au,
@@ -1695,8 +1705,9 @@ static void normal_maps_read(void)
             }
         } else {
             CHECKF(warned.count == 0, "%d warnings", warned.count);
-            CHECK(pb_scene_normal_mapped(s) == 0 && s->texture_count == 0);
-            CHECK(s->stats.textures_in == 1 && s->stats.textures_unread == 1);
+            CHECK(pb_scene_normal_mapped(s) == 0 && s->texture_count == 1 && s->textures[0].srgb == 1);
+            CHECK(s->texcoords[30] == 0.f && s->texcoords[31] == 0.f); /* no normal map: no transform */
+            CHECK(s->stats.textures_in == 2 && s->stats.textures_unread == 1);
         }
     }
     if (sc[0] && sc[1] && sc[2]) {

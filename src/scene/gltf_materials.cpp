@@ -263,6 +263,18 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
     pm.transmission = (float)pass;
 }
 
+// Whether the normal map is the only texture material `mt` reads (pm: as
+// read so far): then the material's UVs may take its transform.
+bool only_normal_map(const tinygltf::Material &mt, const pb_material &pm)
+{
+    auto ext = mt.extensions.find("KHR_materials_transmission");
+    bool transmission_texture = ext != mt.extensions.end() && ext->second.IsObject() &&
+                                ext->second.Has("transmissionTexture");
+    return pm.base_color_texture < 0 && pm.emissive_texture < 0 &&
+           mt.pbrMetallicRoughness.metallicRoughnessTexture.index < 0 && !transmission_texture &&
+           mt.normalTexture.index >= 0;
+}
+
 // glTF normalTexture: tangent-space normals that bend the shading normal
 // (docs/scene.md, "Normal maps"). The kernels build each triangle's tangent
 // frame from its texture coordinates, so the map must be read with the UVs
@@ -354,7 +366,8 @@ void read_materials(reader &r)
         }
         /* KHR_texture_transform: the scene keeps one UV set per triangle, so a
          * material's UVs take its base colour texture's transform (else its
-         * emissive texture's); a different one on the other is warned of */
+         * emissive texture's, else its normal map's); a different one on the
+         * other is warned of */
         std::array<double, 6> xf = {1, 0, 0, 0, 1, 0}, xe = xf;
         int tc_base = -1, tc_em = -1;
         const tinygltf::Value *tb = nullptr;
@@ -370,8 +383,11 @@ void read_materials(reader &r)
             texture_transform(*tb, xf, &tc_base);
         if (te)
             texture_transform(*te, xe, &tc_em);
+        const tinygltf::Value *tn = transform_of(mt.normalTexture.extensions);
         if (!tb && te && pm.base_color_texture < 0)
             xf = xe, tc_base = tc_em;
+        else if (tn && !r.no_normal_maps && only_normal_map(mt, pm)) // its UVs are the only ones read
+            texture_transform(*tn, xf, &tc_base);
         else if (te && pm.emissive_texture >= 0 && pm.base_color_texture >= 0 && xe != xf)
             pb_logf(&r.b->log, PB_LOG_WARN,
                     "%s: material '%s': its emissive texture's KHR_texture_transform differs from its base colour "
