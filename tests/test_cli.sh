@@ -128,6 +128,14 @@ if [ -f "$helmet" ]; then # its occlusion map is counted, not decoded; its norma
 else
     echo "skip info-textures-unread: $helmet absent"
 fi
+alphablend=$src/../shared/scenes/samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf
+if [ -f "$alphablend" ]; then # its normal-mapped floor has TANGENT, which is said to be unread (once)
+    expect info-tangent-unread 0 "mesh 'BedMesh': its TANGENT is not read" -- "$pb" info "$alphablend"
+    expect info-tangent-unread-once 0 '^1$' -- bash -c "\"\$0\" info \"\$1\" 2>&1 | grep -c 'TANGENT is not read'" \
+        "$pb" "$alphablend"
+else
+    echo "skip info-tangent-unread: $alphablend absent"
+fi
 duck=$src/../shared/scenes/samples/Duck/Duck.gltf
 if [ -f "$duck" ]; then # vertex normals shade smooth, unless --shading-normals face
     expect info-shading-duck 0 '^shading     4183 of 4212 triangles smooth' -- "$pb" info "$duck"

@@ -658,6 +658,13 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
                                                std::to_string(prim.material));
         material = (uint32_t)prim.material;
     }
+    // TANGENT is not read: a normal map's frame comes from each triangle's UVs (docs/bake.md, "Normal maps")
+    if (!r.tangents_noted && prim.attributes.count("TANGENT") && material < r.b->material_count &&
+        r.b->materials[material].normal_texture >= 0) {
+        pb_logf(&r.b->log, PB_LOG_INFO, "%s: mesh '%s': its TANGENT is not read; normal maps take each triangle's "
+                "frame from its texture coordinates", r.path, mesh_name);
+        r.tangents_noted = true;
+    }
     triangle_job job;
     job.b = r.b;
     job.world = world;
