@@ -413,6 +413,22 @@ static float floor_step_error(const float *sh, const double want[3], const doubl
     return worst;
 }
 
+/* floor_scene s (lit as the caller set it) baked by floor_probe at bounce 0:
+ * floor_step_error against `lit` for every channel, on the scale rho I / 2
+ * (*down: the irradiance facing the floor); -1 when the bake failed. */
+static float floor_lit_error(pb_scene *s, double lit, float I, float down[3])
+{
+    pb_bake_desc d = floor_probe(s, 0);
+    baked b = bake(s, &d);
+    float worst = -1.f;
+    if (b.ok) {
+        double want[3] = {lit, lit, lit}, scale[3] = {0.5 * I, 0.5 * I, 0.5 * I};
+        worst = floor_step_error(b.vol.sh, want, scale, down);
+    }
+    release(&b);
+    return worst;
+}
+
 /* floor_scene under a map with a small, bright sun, a probe 1 m above,
  * direct light excluded: the probe sees only the floor, of radiance rho E /
  * pi, where E is the map's irradiance on an upward surface (per texel in
@@ -478,16 +494,12 @@ static void shading_normals_weigh_reflected_light(void)
         test_directional_light(s, I, -l[0], -l[1], -l[2]);
         float cosine = ns[0] * l[0] + ns[1] * l[1];
         double lit = cases[c].elevation > 0.f && cosine > 0.f ? 0.5 * I * cosine : 0.0;
-        pb_bake_desc d = floor_probe(s, 0);
-        baked b = bake(s, &d);
-        if (b.ok) {
-            double want[3] = {lit, lit, lit}, scale[3] = {0.5 * I, 0.5 * I, 0.5 * I};
-            float down[3], worst = floor_step_error(b.vol.sh, want, scale, down);
+        float down[3], worst = floor_lit_error(s, lit, I, down);
+        if (worst >= 0.f) {
             fprintf(stderr, "  tilt %+3.0f, light at %+3.0f deg: irradiance from the floor %.4f (want %.4f), worst of "
                     "3 normals %.2f%% of rho I\n", cases[c].tilt, cases[c].elevation, down[0], lit, 100 * worst);
             CHECK(worst < 0.01f);
         }
-        release(&b);
         pb_scene_destroy(s);
     }
 }
@@ -540,17 +552,13 @@ static void normal_maps_weigh_reflected_light(void)
         test_directional_light(s, I, -l[0], -l[1], -l[2]);
         double cosine = (n[0] * l[0] + n[1] * l[1] + n[2] * l[2]) / nl;
         double lit = cosine > 0.0 ? 0.5 * I * cosine : 0.0;
-        pb_bake_desc d = floor_probe(s, 0);
-        baked b = bake(s, &d);
-        if (b.ok) {
-            double want[3] = {lit, lit, lit}, scale[3] = {0.5 * I, 0.5 * I, 0.5 * I};
-            float down[3], worst = floor_step_error(b.vol.sh, want, scale, down);
+        float down[3], worst = floor_lit_error(s, lit, I, down);
+        if (worst >= 0.f) {
             fprintf(stderr, "  normal map tilted %2.0f (X) %2.0f (Y), scale %.0f, u %+.0f x, v %+.0f z: irradiance from "
                     "the floor %.4f (want %.4f), worst of 3 normals %.2f%% of rho I\n", cases[c].tx, cases[c].ty,
                     cases[c].scale, cases[c].a, cases[c].b, down[0], lit, 100 * worst);
             CHECK(worst < 0.01f);
         }
-        release(&b);
         pb_scene_destroy(s);
     }
 }

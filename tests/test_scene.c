@@ -1635,6 +1635,26 @@ static void gpu_instancing_draws_each_instance(void)
 
 /* ------------------------------------------------------------ transmission */
 
+/* The head of a glTF file of `count` primitives, each POSITION accessor 0
+ * (one triangle) with material i, and those materials (JSON objects), into
+ * json: up to and with `"materials":[...],`; extensions_used: its
+ * extensionsUsed array's JSON, or NULL. Returns the characters written. */
+static int gltf_one_triangle_per_material(char *json, size_t size, const char *extensions_used,
+                                          const char *const *mats, int count)
+{
+    int n = snprintf(json, size, "{\"asset\":{\"version\":\"2.0\"},%s%s%s\"scenes\":[{\"nodes\":[0]}],"
+                     "\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[",
+                     extensions_used ? "\"extensionsUsed\":" : "", extensions_used ? extensions_used : "",
+                     extensions_used ? "," : "");
+    for (int i = 0; i < count; ++i)
+        n += snprintf(json + n, size - (size_t)n, "%s{\"attributes\":{\"POSITION\":0},\"material\":%d}",
+                      i ? "," : "", i);
+    n += snprintf(json + n, size - (size_t)n, "]}],\"materials\":[");
+    for (int i = 0; i < count; ++i)
+        n += snprintf(json + n, size - (size_t)n, "%s%s", i ? "," : "", mats[i]);
+    return n + snprintf(json + n, size - (size_t)n, "],");
+}
+
 /* glTF normalTexture: the texture is made linear (its bytes as they stand),
  * its scale read (default 1); read with other UVs than the material's
  * colour (TEXCOORD_1, another KHR_texture_transform) it is a warning and not
@@ -1663,18 +1683,9 @@ static void normal_maps_read(void)
     pb_scene *sc[3] = {NULL, NULL, NULL};
     for (int variant = 0; variant < 3; ++variant) { /* with maps, --normal-maps off, a file without them */
         char json[4096];
-        int n = snprintf(json, sizeof json,
-                         "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
-                         "\"meshes\":[{\"primitives\":[");
-        for (int i = 0; i < 6; ++i)
-            n += snprintf(json + n, sizeof json - (size_t)n, "%s{\"attributes\":{\"POSITION\":0},\"material\":%d}",
-                          i ? "," : "", i);
-        n += snprintf(json + n, sizeof json - (size_t)n, "]}],\"materials\":[");
-        for (int i = 0; i < 6; ++i)
-            n += snprintf(json + n, sizeof json - (size_t)n, "%s%s", i ? "," : "",
-                          variant == 2 ? plain[i] : mats[i]);
+        int n = gltf_one_triangle_per_material(json, sizeof json, NULL, variant == 2 ? plain : mats, 6);
         snprintf(json + n, sizeof json - (size_t)n,
-                 "],\"textures\":[{\"source\":0},{\"source\":0}],\"images\":[{\"uri\":\"normal-map.png\"}],"
+                 "\"textures\":[{\"source\":0},{\"source\":0}],\"images\":[{\"uri\":\"normal-map.png\"}],"
                  "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
                  "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],\"buffers\":[{\"byteLength\":36,\"uri\":\"@BUF@\"}]}");
         warning_counter warned = {{"normalTexture is read with other UVs", NULL}, 0};
@@ -1756,14 +1767,7 @@ static void transmission_is_coverage(void)
         "{\"alphaMode\":\"BLEND\",\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"extensions\":{"
         "\"KHR_materials_transmission\":{\"transmissionFactor\":0.5,\"transmissionTexture\":{\"index\":0}}}}"};
     char json[4096];
-    int n = snprintf(json, sizeof json,
-                     "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_materials_transmission\"],"
-                     "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[");
-    for (int i = 0; i < 8; ++i)
-        n += snprintf(json + n, sizeof json - (size_t)n, "%s{\"attributes\":{\"POSITION\":0},\"material\":%d}",
-                      i ? "," : "", i);
-    n += snprintf(json + n, sizeof json - (size_t)n, "]}],\"materials\":[%s,%s,%s,%s,%s,%s,%s,%s],", mats[0],
-                  mats[1], mats[2], mats[3], mats[4], mats[5], mats[6], mats[7]);
+    int n = gltf_one_triangle_per_material(json, sizeof json, "[\"KHR_materials_transmission\"]", mats, 8);
     snprintf(json + n, sizeof json - (size_t)n,
              "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"transmission-base.png\"}],"
              "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}],"
