@@ -257,4 +257,29 @@ static inline int give_normal_map(pb_scene *s, uint32_t size, float max_tilt, ui
     return 1;
 }
 
+/* Gives every triangle of s file tangents (pb_scene.tangents): at each
+ * corner the unit n x (0.3, 0.9, 0.4) of its vertex normal n (or of the
+ * face normal where n is parallel to that axis), handedness +1 on even
+ * triangles and -1 on odd ones: another frame than the texture
+ * coordinates'. 0 out of memory. */
+static inline int give_tangents(pb_scene *s)
+{
+    free(s->tangents);
+    s->tangents = malloc((size_t)s->triangle_count * 12 * sizeof(float));
+    if (!s->tangents)
+        return 0;
+    const float axis[3] = {0.3f, 0.9f, 0.4f};
+    for (uint32_t t = 0; t < s->triangle_count; ++t)
+        for (int v = 0; v < 3; ++v) {
+            const float *n = s->normals + 9 * (size_t)t + 3 * v;
+            float c[3] = {n[1] * axis[2] - n[2] * axis[1], n[2] * axis[0] - n[0] * axis[2], n[0] * axis[1] - n[1] * axis[0]};
+            float l = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+            float *o = s->tangents + 12 * (size_t)t + 4 * v;
+            for (int k = 0; k < 3; ++k)
+                o[k] = l > 1e-3f ? c[k] / l : (k == 0 ? 1.f : 0.f);
+            o[3] = t & 1 ? -1.f : 1.f;
+        }
+    return 1;
+}
+
 #endif

@@ -511,15 +511,20 @@ static void shading_normals_weigh_reflected_light(void)
  * frame's X runs along a x and its Y against b z (glTF: up the image), so
  * the floor's shading normal is normalize(a m_x, m_z, -b m_y) (x, y, z).
  * Tilted toward the light and away from it (mirrored u), tilted along z
- * (Y, under mirrored v) toward a light from +z, scale 0 (flat) and 2. */
+ * (Y, under mirrored v) toward a light from +z, scale 0 (flat) and 2. Then
+ * with the file's tangents (pb_scene.tangents) along +z, handedness w: they
+ * take the place of the coordinates' frame, T = +z and B = w (n x T) = w x,
+ * so the normal is normalize(w m_y, m_z, m_x): X toward a light from +z,
+ * and Y under w = -1 toward one from -x. */
 static void normal_maps_weigh_reflected_light(void)
 {
-    struct { float tx, ty, scale, a, b, light_x, light_z; } cases[5] = {
-        {30.f, 0.f, 1.f, 1.f, 1.f, 1.f, 0.f},  {30.f, 0.f, 1.f, -1.f, 1.f, 1.f, 0.f},
-        {0.f, 30.f, 1.f, 1.f, -1.f, 0.f, 1.f}, {30.f, 0.f, 0.f, 1.f, 1.f, 1.f, 0.f},
-        {20.f, 0.f, 2.f, 1.f, 1.f, 1.f, 0.f}};
+    struct { float tx, ty, scale, a, b, light_x, light_z, w; } cases[7] = {
+        {30.f, 0.f, 1.f, 1.f, 1.f, 1.f, 0.f, 0.f},  {30.f, 0.f, 1.f, -1.f, 1.f, 1.f, 0.f, 0.f},
+        {0.f, 30.f, 1.f, 1.f, -1.f, 0.f, 1.f, 0.f}, {30.f, 0.f, 0.f, 1.f, 1.f, 1.f, 0.f, 0.f},
+        {20.f, 0.f, 2.f, 1.f, 1.f, 1.f, 0.f, 0.f},  {30.f, 0.f, 1.f, 1.f, 1.f, 0.f, 1.f, 1.f},
+        {0.f, 30.f, 1.f, 1.f, 1.f, -1.f, 0.f, -1.f}};
     const float I = 3.f, rad = 3.14159265f / 180.f, elevation = 45.f * rad;
-    for (int c = 0; c < 5; ++c) {
+    for (int c = 0; c < 7; ++c) {
         pb_scene *s = floor_scene();
         if (!s)
             return;
@@ -545,8 +550,16 @@ static void normal_maps_weigh_reflected_light(void)
             const float *x = s->positions + 3 * v;
             s->texcoords[2 * v] = cases[c].a * x[0] / 400.f, s->texcoords[2 * v + 1] = cases[c].b * x[2] / 400.f;
         }
+        if (cases[c].w != 0.f) {
+            s->tangents = calloc(2 * 12, sizeof(float));
+            for (int k = 0; s->tangents && k < 6; ++k)
+                s->tangents[4 * k + 2] = 1.f, s->tangents[4 * k + 3] = cases[c].w;
+            CHECK(pb_scene_tangent_triangles(s) == 2);
+        }
         CHECK(pb_scene_normal_mapped(s) == 1);
         double n[3] = {cases[c].a * m[0], m[2], -cases[c].b * m[1]};
+        if (cases[c].w != 0.f)
+            n[0] = cases[c].w * m[1], n[1] = m[2], n[2] = m[0];
         double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         float l[3] = {cases[c].light_x * cosf(elevation), sinf(elevation), cases[c].light_z * cosf(elevation)};
         test_directional_light(s, I, -l[0], -l[1], -l[2]);
@@ -554,9 +567,14 @@ static void normal_maps_weigh_reflected_light(void)
         double lit = cosine > 0.0 ? 0.5 * I * cosine : 0.0;
         float down[3], worst = floor_lit_error(s, lit, I, down);
         if (worst >= 0.f) {
-            fprintf(stderr, "  normal map tilted %2.0f (X) %2.0f (Y), scale %.0f, u %+.0f x, v %+.0f z: irradiance from "
-                    "the floor %.4f (want %.4f), worst of 3 normals %.2f%% of rho I\n", cases[c].tx, cases[c].ty,
-                    cases[c].scale, cases[c].a, cases[c].b, down[0], lit, 100 * worst);
+            fprintf(stderr, "  normal map tilted %2.0f (X) %2.0f (Y), scale %.0f, %s: irradiance from the floor %.4f "
+                    "(want %.4f), worst of 3 normals %.2f%% of rho I\n", cases[c].tx, cases[c].ty, cases[c].scale,
+                    cases[c].w > 0.f   ? "tangents +z, w +1"
+                    : cases[c].w < 0.f ? "tangents +z, w -1"
+                    : cases[c].a < 0.f ? "u -x, v +z"
+                    : cases[c].b < 0.f ? "u +x, v -z"
+                                       : "u +x, v +z",
+                    down[0], lit, 100 * worst);
             CHECK(worst < 0.01f);
         }
         pb_scene_destroy(s);
@@ -963,21 +981,24 @@ static pb_scene *load_demo_shaded(int bent)
  * moments summed on the device (pass 0 stores them, pass 1 adds). */
 static void kernels_match_cpu_reference(void)
 {
-    double dc[3] = {0, 0, 0};
-    for (int bent = 0; bent <= 2; ++bent) {
+    double dc[4] = {0, 0, 0, 0};
+    const char *labels[4] = {"face normals", "bent normals", "bent normals, normal-mapped",
+                             "bent normals, normal-mapped, the file's tangents"};
+    for (int bent = 0; bent <= 3; ++bent) {
         pb_scene *s = load_demo_shaded(bent != 0);
-        if (s && bent == 2)
+        if (s && bent >= 2)
             CHECK(give_normal_map(s, 8, 0.6f, 5));
+        if (s && bent == 3)
+            CHECK(give_tangents(s) && pb_scene_tangent_triangles(s) == s->triangle_count);
         if (s)
-            dc[bent] = kernels_match_cpu_reference_on(s, bent == 2 ? "bent normals, normal-mapped"
-                                                         : bent  ? "bent normals"
-                                                                 : "face normals");
+            dc[bent] = kernels_match_cpu_reference_on(s, labels[bent]);
         pb_scene_destroy(s);
     }
-    fprintf(stderr, "  bent normals change the irradiance by %+.2f%%, a normal map on them by %+.2f%%\n",
-            100 * (dc[1] / dc[0] - 1), 100 * (dc[2] / dc[1] - 1));
-    /* else the second and third comparisons proved nothing */
-    CHECK(dc[0] > 0 && fabs(dc[1] / dc[0] - 1) > 0.01 && fabs(dc[2] / dc[1] - 1) > 0.01);
+    fprintf(stderr, "  bent normals change the irradiance by %+.2f%%, a normal map on them by %+.2f%%, the file's "
+            "tangents by %+.2f%%\n", 100 * (dc[1] / dc[0] - 1), 100 * (dc[2] / dc[1] - 1), 100 * (dc[3] / dc[2] - 1));
+    /* else the later comparisons proved nothing */
+    CHECK(dc[0] > 0 && fabs(dc[1] / dc[0] - 1) > 0.01 && fabs(dc[2] / dc[1] - 1) > 0.01 &&
+          fabs(dc[3] / dc[2] - 1) > 0.005);
 }
 
 /* The depth sums stay on the device across passes and are read once, at
@@ -1406,33 +1427,41 @@ static void vertex_colours_are_albedo(void)
  * give_normal_map's random normal map, 3 bounces, 8 passes, the kernel
  * against the CPU reference path for path (as
  * multi_bounce_matches_cpu_reference); the reference without the map must
- * differ. The same through the wavefront schedule's kernels. */
+ * differ. The same through the wavefront schedule's kernels; then with the
+ * file's tangents (give_tangents), where the reference with the texture
+ * coordinates' frames must differ. */
 static void normal_maps_match_cpu_reference(void)
 {
     pb_scene *s = load_demo_shaded(1);
     if (!s)
         return;
     CHECK(give_normal_map(s, 8, 0.6f, 11));
-    for (uint32_t schedule = PB_SCHEDULE_MEGAKERNEL; schedule <= PB_SCHEDULE_WAVEFRONT; ++schedule) {
+    for (int variant = 0; variant < 3; ++variant) {
+        if (variant == 2)
+            CHECK(give_tangents(s));
         pb_bake_desc d = {0};
         pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
         d.rays_per_probe = 128, d.passes = 8, d.bounces = 3, d.octmap_res = 4, d.skip_relocation = 1;
-        d.schedule = schedule;
+        d.schedule = variant == 1 ? PB_SCHEDULE_WAVEFRONT : PB_SCHEDULE_MEGAKERNEL;
         baked b = bake(s, &d);
         if (!b.ok) {
             release(&b);
             break;
         }
         uint32_t P = b.vol.probe_count, compared = 0;
-        float *sh = malloc((size_t)P * 27 * sizeof(float)), *flat = malloc((size_t)P * 27 * sizeof(float));
+        float *sh = malloc((size_t)P * 27 * sizeof(float)), *other = malloc((size_t)P * 27 * sizeof(float));
         pb_bake_emitters em;
         CHECK(pb_bake_emitters_build(s, &em, NULL) == PB_OK);
         reference_bake(s, &d, multi_bounce_template(s, &b, &em, d.seed), P, 8, sh);
-        for (uint32_t m = 0; m < s->material_count; ++m)
+        /* the other reference: without the map, or (variant 2) without the file's tangents */
+        float *tangents = s->tangents;
+        s->tangents = NULL;
+        for (uint32_t m = 0; variant < 2 && m < s->material_count; ++m)
             s->materials[m].normal_texture = -1;
-        reference_bake(s, &d, multi_bounce_template(s, &b, &em, d.seed), P, 8, flat);
+        reference_bake(s, &d, multi_bounce_template(s, &b, &em, d.seed), P, 8, other);
         for (uint32_t m = 0; m < s->material_count; ++m)
             s->materials[m].normal_texture = (int32_t)s->texture_count - 1;
+        s->tangents = tangents;
         double worst = 0, apart = 0;
         for (uint32_t p = 0; p < P; ++p) {
             if (b.vol.probe_flags[p] & PB_PROBE_DILATED)
@@ -1440,14 +1469,15 @@ static void normal_maps_match_cpu_reference(void)
             ++compared;
             double c = fmax(1e-6, fabs(sh[27 * p]));
             worst = fmax(worst, fabs(sh[27 * p] - b.vol.sh[27 * p]) / c);
-            apart = fmax(apart, fabs(flat[27 * p] - b.vol.sh[27 * p]) / c);
+            apart = fmax(apart, fabs(other[27 * p] - b.vol.sh[27 * p]) / c);
         }
         fprintf(stderr, "  %s: %u probes (%u not dilated), 3 bounces, 8 passes: DC irradiance differs by at most "
-                        "%.3f%% from the CPU reference (%.1f%% from the reference without the normal map)\n",
-                schedule ? "wavefront" : "megakernel", P, compared, 100 * worst, 100 * apart);
+                        "%.3f%% from the CPU reference (%.1f%% from the reference %s)\n",
+                variant == 2 ? "the file's tangents" : variant ? "wavefront" : "megakernel", P, compared, 100 * worst,
+                100 * apart, variant == 2 ? "with the coordinates' frames" : "without the normal map");
         CHECK(compared >= P / 2 && worst < 0.01 && apart > 0.02);
         pb_bake_emitters_free(&em);
-        free(sh), free(flat);
+        free(sh), free(other);
         release(&b);
     }
     pb_scene_destroy(s);

@@ -129,12 +129,12 @@ else
     echo "skip info-textures-unread: $helmet absent"
 fi
 alphablend=$src/../shared/scenes/samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf
-if [ -f "$alphablend" ]; then # its normal-mapped floor has TANGENT, which is said to be unread (once)
-    expect info-tangent-unread 0 "mesh 'BedMesh': its TANGENT is not read" -- "$pb" info "$alphablend"
-    expect info-tangent-unread-once 0 '^1$' -- bash -c "\"\$0\" info \"\$1\" 2>&1 | grep -c 'TANGENT is not read'" \
-        "$pb" "$alphablend"
+if [ -f "$alphablend" ]; then # its normal-mapped box has TANGENT: read, counted; not under --normal-maps off
+    expect info-tangents 0 '^shading     0 of 61 triangles smooth .*, 30 with the file.s tangents' -- \
+        "$pb" info "$alphablend"
+    expect info-json-tangents-off 0 '"tangent_triangles": 0,' -- "$pb" info "$alphablend" --json --normal-maps off
 else
-    echo "skip info-tangent-unread: $alphablend absent"
+    echo "skip info-tangents: $alphablend absent"
 fi
 duck=$src/../shared/scenes/samples/Duck/Duck.gltf
 if [ -f "$duck" ]; then # vertex normals shade smooth, unless --shading-normals face

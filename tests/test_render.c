@@ -65,8 +65,10 @@ static void render_matches_cpu(const pb_sparse_desc *sd, int bent)
         return;
     if (bent) /* shading normals: every mode shades with them */
         bend_normals(s, 0.4f);
-    if (bent == 2) /* and a normal map bends them */
+    if (bent >= 2) /* and a normal map bends them */
         CHECK(give_normal_map(s, 8, 0.6f, 3));
+    if (bent == 3) /* in the file's tangent frames */
+        CHECK(give_tangents(s));
     pb_bake_desc bd = {0};
     pb_probe_grid_fit(s->bounds_min, s->bounds_max, sd ? 500 : 60, &bd.grid);
     bd.rays_per_probe = sd ? 32 : 64;
@@ -113,7 +115,7 @@ static void render_matches_cpu(const pb_sparse_desc *sd, int bent)
             memcpy(plain, g, n * 16);
         if (pass == 0)
             memcpy(direct, g, n * 16);
-        if (pass == 0 && bent == 2) { /* the normal map bends what direct light shows */
+        if (pass == 0 && bent >= 2) { /* the normal map bends what direct light shows */
             for (uint32_t m = 0; m < s->material_count; ++m)
                 s->materials[m].normal_texture = -1;
             CHECKF(pb_render_cpu(s, p.bvh, &d, c, cd, &err) == PB_OK, "%s", err.message);
@@ -182,6 +184,11 @@ static void kernel_matches_cpu_with_shading_normals(void)
 static void kernel_matches_cpu_with_normal_maps(void)
 {
     render_matches_cpu(NULL, 2);
+}
+
+static void kernel_matches_cpu_with_normal_maps_and_tangents(void)
+{
+    render_matches_cpu(NULL, 3);
 }
 
 static void sparse_kernel_matches_cpu_reference(void)
@@ -515,6 +522,7 @@ int main(void)
     RUN(kernel_matches_cpu_reference);
     RUN(kernel_matches_cpu_with_shading_normals);
     RUN(kernel_matches_cpu_with_normal_maps);
+    RUN(kernel_matches_cpu_with_normal_maps_and_tangents);
     RUN(sparse_kernel_matches_cpu_reference);
     RUN(constant_sky_lights_floor_evenly);
     RUN(reference_converges);

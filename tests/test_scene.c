@@ -1729,6 +1729,71 @@ static void normal_maps_read(void)
         pb_scene_destroy(sc[i]);
 }
 
+/* glTF TANGENT of a normal-mapped primitive: read into pb_scene.tangents in
+ * world space through its node (a turn of 90 degrees about +Y takes +X to
+ * -Z), the handedness turned by a mirrored node (scale -1 in x: +X to -X,
+ * w -1); a primitive whose material has no normal map keeps none (zeros),
+ * and without normal maps (--normal-maps off) the scene has none. A TANGENT
+ * accessor of another count than POSITION is a one-line error. */
+static void tangents_read(void)
+{
+    float bin[27] = {0, 0, 0, 1, 0, 0, 0, 1, 0,           /* positions */
+                     0, 0, 1, 0, 0, 1,                    /* texture coordinates */
+                     1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1}; /* tangents */
+    const char *fmt =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1,2,3]}],"
+        "\"nodes\":[{\"mesh\":0},{\"mesh\":0,\"rotation\":[0,0.70710678,0,0.70710678]},{\"mesh\":0,\"scale\":[-1,1,1]},"
+        "{\"mesh\":1,\"translation\":[0,0,2]}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1,\"TANGENT\":%d},\"material\":0}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1,\"TANGENT\":2},\"material\":1}]}],"
+        "\"materials\":[{\"normalTexture\":{\"index\":0}},{}],"
+        "\"textures\":[{\"source\":0}],\"images\":[{\"uri\":\"normal-map.png\"}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"},"
+        "{\"bufferView\":2,\"componentType\":5126,\"count\":3,\"type\":\"VEC4\"},"
+        "{\"bufferView\":2,\"componentType\":5126,\"count\":2,\"type\":\"VEC4\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":24},"
+        "{\"buffer\":0,\"byteOffset\":60,\"byteLength\":48}],\"buffers\":[{\"byteLength\":108,\"uri\":\"@BUF@\"}]}";
+    unsigned char px[4] = {128, 128, 255, 255};
+    char png[600], json[4096];
+    snprintf(png, sizeof png, "%s/normal-map.png", temp_dir());
+    CHECK(stbi_write_png(png, 1, 1, 4, px, 4) != 0);
+    snprintf(json, sizeof json, fmt, 2);
+    const char *path = write_gltf("tangents.gltf", json, bin, sizeof bin);
+    for (int off = 0; off < 2; ++off) {
+        pb_scene_desc d = {0};
+        d.no_normal_maps = (uint32_t)off;
+        pb_scene *s = NULL;
+        pb_error err;
+        CHECKF(pb_scene_load(path, &d, &s, &err) == PB_OK, "%s", err.message);
+        if (!s || s->triangle_count != 4) {
+            pb_scene_destroy(s);
+            return;
+        }
+        if (off) {
+            CHECK(s->tangents == NULL && pb_scene_tangent_triangles(s) == 0);
+        } else if (s->tangents) {
+            const float want[4][4] = {{1, 0, 0, 1}, {0, 0, -1, 1}, {-1, 0, 0, -1}, {0, 0, 0, 0}};
+            float worst = 0;
+            for (int t = 0; t < 4; ++t)
+                for (int v = 0; v < 3; ++v)
+                    for (int k = 0; k < 4; ++k)
+                        worst = fmaxf(worst, fabsf(s->tangents[12 * t + 4 * v + k] - want[t][k]));
+            CHECKF(worst < 1e-6f, "tangents %g from the expected", worst);
+            CHECK(pb_scene_tangent_triangles(s) == 3);
+        } else {
+            CHECK(s->tangents != NULL);
+        }
+        pb_scene_destroy(s);
+    }
+    snprintf(json, sizeof json, fmt, 3); /* 2 tangents for 3 positions */
+    path = write_gltf("tangents-count.gltf", json, bin, sizeof bin);
+    pb_scene *s = NULL;
+    pb_error err;
+    CHECK(pb_scene_load(path, NULL, &s, &err) == PB_ERROR_PARSE && strstr(err.message, "TANGENT and POSITION") &&
+          !strchr(err.message, '\n') && s == NULL);
+}
+
 /* KHR_materials_transmission (thin): the material becomes alpha-blended
  * glass, its alpha the coverage (1 for an opaque material), its
  * transmission t (1 - metallic) (test_bake's thin_glass_tints_light bakes
@@ -2189,6 +2254,7 @@ int main(void)
     RUN(gpu_instancing_draws_each_instance);
     RUN(transmission_is_coverage);
     RUN(normal_maps_read);
+    RUN(tangents_read);
     RUN(metallic_texture_folded_into_the_colour);
     RUN(webp_and_avif_textures_read_as_their_originals);
     RUN(exr_environment_maps_read_exactly);

@@ -130,6 +130,10 @@ typedef struct pb_scene {
     float *colors;            /* 12 floats per triangle, RGBA per corner (glTF COLOR_0, linear; white where a
                                  primitive has none); NULL when no primitive has vertex colours */
     uint32_t *material;       /* material index per triangle */
+    float *tangents;          /* 12 floats per triangle, per corner the file's tangent (glTF TANGENT of a
+                                 normal-mapped primitive): unit x, y, z, then w = +-1, its handedness (the
+                                 bitangent is w (n x t)); all 0 at a corner without one, whose normal map takes
+                                 its frame from the texture coordinates. NULL when no triangle has one */
 
     uint32_t material_count;
     pb_material *materials;   /* at least one: a default grey material is appended if needed */
@@ -197,7 +201,8 @@ void pb_scene_destroy(pb_scene *scene);
 
 /* The scene's identity as a volume records it (settings.scene_hash): a hash
  * of the local triangle positions and the materials, and of the vertex
- * normals where they shade (pb_scene_bent_triangles > 0). A volume baked from
+ * normals where they shade (pb_scene_bent_triangles > 0), and of the file's
+ * tangents where a normal map reads them. A volume baked from
  * a different scene (or a changed one, or with --shading-normals face where
  * the normals shade) has another; `merge` refuses to join them. */
 uint64_t pb_scene_hash(const pb_scene *scene);
@@ -219,6 +224,11 @@ uint32_t pb_scene_glass_materials(const pb_scene *scene);
  * shading normals by them where there is one (docs/bake.md, "Normal maps");
  * a scene without compiles that out. */
 uint32_t pb_scene_normal_mapped(const pb_scene *scene);
+
+/* Triangles whose normal map takes its frame from the file's tangents (all
+ * three corners have one: pb_scene.tangents); the others' from their texture
+ * coordinates. */
+uint64_t pb_scene_tangent_triangles(const pb_scene *scene);
 
 /* Default-initialised material (glTF defaults: white, opaque, cutoff 0.5). */
 pb_material pb_material_default(void);

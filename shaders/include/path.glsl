@@ -431,7 +431,7 @@ bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, 
         bool smooth_shaded = bake_feature(PB_FEATURE_SHADING_NORMALS) && (s.flags & PB_SCENE_SHADING_NORMALS) != 0u;
         ps.ns = smooth_shaded ? shading_normal(s, tr.tri, tr.u, tr.v, ps.ng) : ps.ng;
         if (nm.tex >= 0)
-            ps.ns = normal_mapped(s, nm.tex, nm.scale, tuv, uv, e1, e2, ps.ns, ps.ng, back);
+            ps.ns = normal_mapped(s, nm.tex, nm.scale, tr.tri, tr.u, tr.v, tuv, uv, e1, e2, ps.ns, ps.ng, back);
         if (ps.bounce == 0u) {
             ps.res.shade = true;
             ps.res.x = ps.x;

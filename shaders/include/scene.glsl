@@ -13,6 +13,7 @@
 #define PB_SCENE_SHADING_NORMALS 2u
 #define PB_SCENE_TRANSMISSION 4u
 #define PB_SCENE_NORMAL_MAPS 8u
+#define PB_SCENE_TANGENTS 16u
 #define PB_INF uintBitsToFloat(0x7f800000u)
 
 // 4-wide quantized BVH node (include/probebake/bvh.h), decoded: child i's
@@ -172,7 +173,8 @@ struct SceneRefs {
     pb_addr nodes;     // Node4[] (48 bytes each)
     pb_addr tris;      // 10 words per triangle: 9 position floats, flags (material | PB_FLAG_ALPHA_MASK)
     pb_addr tri_uv;    // float[6] per triangle; then, with PB_SCENE_VERTEX_COLORS, float[12] per triangle (RGBA per corner);
-                       // then, with PB_SCENE_SHADING_NORMALS, uint[3] per triangle (vertex normals, 16-bit octahedral)
+                       // then, with PB_SCENE_SHADING_NORMALS, uint[3] per triangle (vertex normals, 16-bit octahedral);
+                       // then, with PB_SCENE_TANGENTS, uint[4] per triangle (the file's tangents: normal_map.glsl)
     pb_addr materials; // Material[]
     pb_addr textures;  // Texture[]
     pb_addr texels;    // RGBA8 words

@@ -566,7 +566,7 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         if (m->normal_map[0] >= 0) {
             float scale, bent[3];
             memcpy(&scale, &m->normal_map[1], 4);
-            pb_normal_mapped_cpu(s, m->normal_map[0], scale, h.tri, tu, tv, e1, e2, ns, ng, back, bent);
+            pb_normal_mapped_cpu(s, m->normal_map[0], scale, h.tri, h.u, h.v, tu, tv, e1, e2, ns, ng, back, bent);
             memcpy(ns, bent, sizeof bent);
         }
         if (bounce == 0) {

@@ -3,6 +3,7 @@
 #include "bake/gpu_scene.h"
 #include "bake/guide_cache.h"
 #include "bake/light_cells_gpu.h"
+#include "bake/normal_map.h"
 #include "bake/shading_normals.h"
 #include "common/common.h"
 #include "probebake/scene.h"
@@ -111,6 +112,13 @@ static void fill_colors(void *user, void *out, uint64_t first, uint64_t n)
         memcpy((float *)out + 12 * i, f->scene->colors + 12 * (size_t)f->bvh->tri_order[first + i], 48);
 }
 
+static void fill_tangents(void *user, void *out, uint64_t first, uint64_t n)
+{
+    const scene_fill *f = user;
+    for (uint64_t i = 0; i < n; ++i)
+        pb_tangents_pack(f->scene->tangents + 12 * (size_t)f->bvh->tri_order[first + i], (uint32_t *)out + 4 * i);
+}
+
 static void fill_normals(void *user, void *out, uint64_t first, uint64_t n)
 {
     const scene_fill *f = user;
@@ -134,15 +142,18 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
     uint32_t n = scene->triangle_count;
     int smooth = pb_scene_bent_triangles(scene) != 0; /* else the kernels keep the face normals */
     int glass = pb_scene_glass_materials(scene) != 0; /* else the kernels compile glass_step out */
+    int mapped = pb_scene_normal_mapped(scene) != 0;  /* else the kernels compile normal maps out */
+    int tangents = mapped && scene->tangents;         /* else every normal map's frame is from the UVs */
     uint64_t sizes[6] = {
         (uint64_t)bvh->wide_node_count * sizeof(pb_bvh4_node),
         (uint64_t)n * sizeof(gpu_tri) + 16u, /* + a texel: the last record's texels end 8 bytes past it */
-        (uint64_t)n * ((scene->colors ? 72u : 24u) + (smooth ? 12u : 0u)), /* UVs, vertex colours, normals */
+        (uint64_t)n * ((scene->colors ? 72u : 24u) + (smooth ? 12u : 0u) + (tangents ? 16u : 0u)),
         (uint64_t)scene->material_count * sizeof(gpu_material),
         (uint64_t)scene->texture_count * sizeof(gpu_texture),
         scene->texel_count * 4u,
     };
-    static const char *const names[6] = {"BVH nodes", "triangles", "texture coordinates, vertex colours and normals",
+    static const char *const names[6] = {"BVH nodes", "triangles",
+                                         "texture coordinates, vertex colours, normals and tangents",
                                          "materials", "textures", "texels"};
     uint64_t total = 0;
     for (int i = 0; i < 6; ++i) {
@@ -206,6 +217,9 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
         r = pb_buffer_fill(ctx, &gs->tri_uv, uv_bytes, 48, n, fill_colors, (void *)&f, err);
     if (r == PB_OK && smooth)
         r = pb_buffer_fill(ctx, &gs->tri_uv, uv_bytes + color_bytes, 12, n, fill_normals, (void *)&f, err);
+    if (r == PB_OK && tangents)
+        r = pb_buffer_fill(ctx, &gs->tri_uv, uv_bytes + color_bytes + (smooth ? (uint64_t)n * 12u : 0u), 16, n,
+                           fill_tangents, (void *)&f, err);
     if (r == PB_OK) r = upload_array(ctx, &gs->materials, mats, sizes[3], names[3], err);
     if (r == PB_OK) r = upload_array(ctx, &gs->textures, texs, sizes[4], names[4], err);
     if (r == PB_OK) r = upload_array(ctx, &gs->texels, scene->texels, sizes[5], names[5], err);
@@ -220,7 +234,7 @@ pb_result pb_gpu_scene_create(pb_context *ctx, const pb_scene *scene, const pb_b
                                 gs->textures.address, gs->texels.address, n,
                                 (scene->colors ? PB_SCENE_VERTEX_COLORS : 0u) |
                                     (smooth ? PB_SCENE_SHADING_NORMALS : 0u) | (glass ? PB_SCENE_TRANSMISSION : 0u) |
-                                    (pb_scene_normal_mapped(scene) ? PB_SCENE_NORMAL_MAPS : 0u)};
+                                    (mapped ? PB_SCENE_NORMAL_MAPS : 0u) | (tangents ? PB_SCENE_TANGENTS : 0u)};
     gs->ctx = ctx;
     gs->bvh = bvh;
     gs->bytes = total;

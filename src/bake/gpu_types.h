@@ -24,6 +24,9 @@
 /* ... a material has a normal map (pb_material.normal_texture): the
  * kernels bend its shading normals (normal_map.glsl) */
 #define PB_SCENE_NORMAL_MAPS 8u
+/* ... and the file's tangents after the normals (4 words per triangle,
+ * pb_tangents_pack) */
+#define PB_SCENE_TANGENTS 16u
 
 typedef struct gpu_material {
     float base_alpha;

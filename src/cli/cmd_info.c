@@ -59,6 +59,7 @@ int cmd_info(const options *o)
     uint64_t smooth = pb_scene_bent_triangles(s); /* shaded with their vertex normals */
     uint32_t emissive = 0, masked = 0, blended = 0, glass = pb_scene_glass_materials(s);
     uint32_t normal_mapped = pb_scene_normal_mapped(s);
+    uint64_t tangent_tris = pb_scene_tangent_triangles(s); /* normal maps framed by the file's TANGENT */
     for (uint32_t m = 0; m < s->material_count; ++m) {
         const pb_material *mt = &s->materials[m];
         emissive += mt->emissive[0] > 0 || mt->emissive[1] > 0 || mt->emissive[2] > 0;
@@ -70,10 +71,11 @@ int cmd_info(const options *o)
         json_string(o->scene);
         printf(",\n  \"triangles\": %u,\n  \"triangles_in\": %llu,\n  \"dropped_degenerate\": %llu,\n"
                "  \"dropped_nonfinite\": %llu,\n  \"primitives\": %u,\n  \"primitives_skipped\": %u,\n"
-               "  \"normals_generated\": %u,\n  \"smooth_triangles\": %llu,\n  \"nodes\": %u,\n",
+               "  \"normals_generated\": %u,\n  \"smooth_triangles\": %llu,\n  \"tangent_triangles\": %llu,\n"
+               "  \"nodes\": %u,\n",
                s->triangle_count, (unsigned long long)st->triangles_in, (unsigned long long)st->dropped_degenerate,
                (unsigned long long)st->dropped_nonfinite, st->primitives, st->primitives_skipped,
-               st->normals_generated, (unsigned long long)smooth, st->nodes);
+               st->normals_generated, (unsigned long long)smooth, (unsigned long long)tangent_tris, st->nodes);
         printf("  \"materials\": %u,\n  \"emissive_materials\": %u,\n  \"masked_materials\": %u,\n"
                "  \"blended_materials\": %u,\n  \"glass_materials\": %u,\n  \"normal_mapped_materials\": %u,\n"
                "  \"textures\": %u,\n  \"textures_in\": %u,\n  \"textures_unread\": %u,\n",
@@ -113,8 +115,9 @@ int cmd_info(const options *o)
                (unsigned long long)st->dropped_nonfinite);
         printf("primitives  %u (%u points/lines skipped, %u without normals: flat normals generated), %u nodes\n",
                st->primitives, st->primitives_skipped, st->normals_generated, st->nodes);
-        printf("shading     %llu of %u triangles smooth (vertex normals bent from the face)\n",
-               (unsigned long long)smooth, s->triangle_count);
+        printf("shading     %llu of %u triangles smooth (vertex normals bent from the face), %llu with the file's "
+               "tangents for a normal map\n", (unsigned long long)smooth, s->triangle_count,
+               (unsigned long long)tangent_tris);
         printf("materials   %u (%u emissive, %u alpha-masked, %u blended, %u of them thin glass; %u normal-mapped)\n",
                s->material_count, emissive, masked, blended, glass, normal_mapped);
         printf("textures    %u", s->texture_count);

@@ -520,7 +520,7 @@ struct triangle_job {
     double nm[9];        // normal matrix (cofactors), column-major
     double det;
     const uint32_t *tris; // vertex-index triples
-    const double *pos, *nrm, *uv, *col; // nrm, uv, col: NULL when absent
+    const double *pos, *nrm, *uv, *col, *tan; // nrm, uv, col, tan: NULL when absent
     int col_n;
     const double *uv_transform; // 6: the material's texture transform
     uint32_t material;
@@ -538,7 +538,7 @@ void put_triangles(void *user, uint64_t begin, uint64_t end)
     const double *nm = j.nm, *x = j.uv_transform;
     for (uint64_t t = begin; t < end; ++t) {
         double p[9];
-        float n[9], tc[6], rgba[12];
+        float n[9], tc[6], rgba[12], tn[12];
         for (int k = 0; k < 3; ++k) {
             uint32_t v = j.tris[3 * t + (flip && k ? 3 - k : k)];
             xform_point(j.world, &j.pos[3 * v], &p[3 * k]);
@@ -558,9 +558,15 @@ void put_triangles(void *user, uint64_t begin, uint64_t end)
             tc[2 * k + 1] = (float)(x[3] * u0 + x[4] * v0 + x[5]);
             for (int c = 0; c < 4 && j.col_n; ++c)
                 rgba[4 * k + c] = c < j.col_n ? (float)j.col[(size_t)j.col_n * v + c] : 1.f;
+            if (j.tan) { // a direction along the surface: the world matrix itself; a mirror turns the handedness
+                const double *vt = &j.tan[4 * v], *w = j.world;
+                for (int c = 0; c < 3; ++c)
+                    tn[4 * k + c] = (float)(w[c] * vt[0] + w[4 + c] * vt[1] + w[8 + c] * vt[2]);
+                tn[4 * k + 3] = (float)(flip ? -vt[3] : vt[3]);
+            }
         }
         j.keep[t] = (unsigned char)pb_sb_put_triangle(j.b, j.first + t, p, j.vertex_normals ? n : nullptr, tc,
-                                                      j.col_n ? rgba : nullptr, j.material);
+                                                      j.col_n ? rgba : nullptr, j.tan ? tn : nullptr, j.material);
     }
 }
 
@@ -658,13 +664,17 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
                                                std::to_string(prim.material));
         material = (uint32_t)prim.material;
     }
-    // TANGENT is not read: a normal map's frame comes from each triangle's UVs (docs/bake.md, "Normal maps")
-    if (!r.tangents_noted && prim.attributes.count("TANGENT") && material < r.b->material_count &&
-        r.b->materials[material].normal_texture >= 0) {
-        pb_logf(&r.b->log, PB_LOG_INFO, "%s: mesh '%s': its TANGENT is not read; normal maps take each triangle's "
-                "frame from its texture coordinates", r.path, mesh_name);
-        r.tangents_noted = true;
-    }
+    // TANGENT, where the material's normal map reads it (else its frame comes
+    // from the texture coordinates: docs/bake.md, "Normal maps")
+    double_array tan;
+    auto ait = prim.attributes.find("TANGENT");
+    bool have_t = ait != prim.attributes.end() && material < r.b->material_count &&
+                  r.b->materials[material].normal_texture >= 0;
+    if (have_t && (res = read_accessor(r, ait->second, 4, tan, "TANGENT")) != PB_OK)
+        return res;
+    if (have_t && tan.size() / 4 != nv)
+        return fail(r, PB_ERROR_PARSE, "TANGENT and POSITION accessors of mesh '" + std::string(mesh_name) +
+                                           "' differ in count");
     triangle_job job;
     job.b = r.b;
     job.world = world;
@@ -672,13 +682,14 @@ pb_result read_primitive(reader &r, const tinygltf::Primitive &prim, const mat4 
     job.tris = tris.data();
     job.pos = pos.data(), job.nrm = have_n ? nrm.data() : nullptr, job.uv = have_uv ? uv.data() : nullptr;
     job.col = col_n ? col.data() : nullptr;
+    job.tan = have_t ? tan.data() : nullptr;
     job.col_n = col_n;
     job.uv_transform = r.uv_transform[material].data();
     job.material = material;
     job.vertex_normals = have_n && !r.face_normals;
     uint64_t n = tris.size() / 3;
     std::unique_ptr<unsigned char[]> keep(new (std::nothrow) unsigned char[n ? n : 1]);
-    if (!keep || !pb_sb_reserve(r.b, n, col_n != 0))
+    if (!keep || !pb_sb_reserve(r.b, n, col_n != 0, have_t))
         return fail(r, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory");
     job.first = r.b->count;
     job.keep = keep.get();

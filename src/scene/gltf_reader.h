@@ -49,7 +49,6 @@ struct reader {
     std::vector<int> texture_srgb;
     bool skip_textures = false; // pb_scene_desc.skip_textures: none is made
     bool no_normal_maps = false; // pb_scene_desc.no_normal_maps: normalTexture not read
-    bool tangents_noted = false; // a normal-mapped primitive's TANGENT was said to be unread
 };
 
 // A one-line error naming the file; returns `code`.

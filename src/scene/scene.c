@@ -120,6 +120,7 @@ void pb_scene_destroy(pb_scene *s)
     free(s->normals);
     free(s->texcoords);
     free(s->colors);
+    free(s->tangents);
     free(s->material);
     free(s->materials);
     free(s->textures);
@@ -135,6 +136,16 @@ uint32_t pb_scene_normal_mapped(const pb_scene *s)
     for (uint32_t i = 0; i < s->material_count; ++i)
         mapped += s->materials[i].normal_texture >= 0;
     return mapped;
+}
+
+uint64_t pb_scene_tangent_triangles(const pb_scene *s)
+{
+    uint64_t n = 0;
+    for (uint32_t t = 0; s->tangents && t < s->triangle_count; ++t) {
+        const float *w = s->tangents + 12 * (size_t)t + 3;
+        n += w[0] != 0.f && w[4] != 0.f && w[8] != 0.f;
+    }
+    return n;
 }
 
 uint32_t pb_scene_glass_materials(const pb_scene *s)
@@ -178,5 +189,7 @@ uint64_t pb_scene_hash(const pb_scene *scene)
     /* vertex normals that shade are part of what was baked; face normals add
      * nothing, so a flat scene (or --shading-normals face) keeps the hash it
      * had before vertex normals were read */
-    return pb_scene_bent_triangles(scene) ? pb_hash64(scene->normals, (size_t)scene->triangle_count * 36, h) : h;
+    h = pb_scene_bent_triangles(scene) ? pb_hash64(scene->normals, (size_t)scene->triangle_count * 36, h) : h;
+    /* the file's tangents, where a normal map reads them (else the hash it had before) */
+    return scene->tangents ? pb_hash64(scene->tangents, (size_t)scene->triangle_count * 48, h) : h;
 }

@@ -53,6 +53,7 @@ void pb_sb_free(pb_scene_builder *b)
     free(b->nrm);
     free(b->uv);
     free(b->rgba);
+    free(b->tan);
     free(b->mat);
     free(b->materials);
     free(b->textures);
@@ -86,7 +87,7 @@ static int finite9(const double p[9])
     return 1;
 }
 
-int pb_sb_reserve(pb_scene_builder *b, uint64_t n, int colours)
+int pb_sb_reserve(pb_scene_builder *b, uint64_t n, int colours, int tangents)
 {
     if (b->count + n > b->capacity) {
         /* all the per-triangle arrays share one capacity and grow together */
@@ -107,7 +108,10 @@ int pb_sb_reserve(pb_scene_builder *b, uint64_t n, int colours)
         float *cols = b->rgba && mat ? pb_realloc_large(b->rgba, (size_t)(cap * 12 * sizeof(float))) : NULL;
         if (cols)
             b->rgba = cols;
-        if (!mat || (b->rgba && !cols)) {
+        float *tans = b->tan && mat ? pb_realloc_large(b->tan, (size_t)(cap * 12 * sizeof(float))) : NULL;
+        if (tans)
+            b->tan = tans;
+        if (!mat || (b->rgba && !cols) || (b->tan && !tans)) {
             b->out_of_memory = 1;
             return 0;
         }
@@ -123,11 +127,20 @@ int pb_sb_reserve(pb_scene_builder *b, uint64_t n, int colours)
             b->rgba[k] = 1.f;
         b->rgba_pending = 1;
     }
+    if (tangents && !b->tan) { /* the first triangles with tangents: the ones before have none */
+        b->tan = pb_malloc_large((size_t)(b->capacity * 12 * sizeof(float)));
+        if (!b->tan) {
+            b->out_of_memory = 1;
+            return 0;
+        }
+        memset(b->tan, 0, (size_t)(12 * b->count * sizeof(float)));
+        b->tan_pending = 1;
+    }
     return 1;
 }
 
 int pb_sb_put_triangle(pb_scene_builder *b, uint64_t slot, const double p[9], const float *n, const float *uv,
-                       const float *rgba, uint32_t material)
+                       const float *rgba, const float *tangent, uint32_t material)
 {
     if (!finite9(p))
         return 0;
@@ -143,6 +156,13 @@ int pb_sb_put_triangle(pb_scene_builder *b, uint64_t slot, const double p[9], co
     for (int v = 0; v < 3; ++v)
         if (!n || !normalize3f(n + 3 * v, dn + 3 * v))
             dn[3 * v] = dn[3 * v + 1] = dn[3 * v + 2] = NAN;
+    for (int v = 0; b->tan && v < 3; ++v) { /* unit, w +-1; else none (0) */
+        float *dt = b->tan + 12 * i + 4 * v;
+        if (tangent && isfinite(tangent[4 * v + 3]) && normalize3f(tangent + 4 * v, dt))
+            dt[3] = tangent[4 * v + 3] < 0.f ? -1.f : 1.f;
+        else
+            dt[0] = dt[1] = dt[2] = dt[3] = 0.f;
+    }
     float *du = b->uv + 6 * i;
     for (int k = 0; k < 6; ++k)
         du[k] = (uv && isfinite(uv[k])) ? uv[k] : 0.f;
@@ -167,6 +187,8 @@ static void compact(pb_scene_builder *b, uint64_t n, const unsigned char *keep)
             b->mat[kept] = b->mat[i];
             if (b->rgba)
                 memcpy(b->rgba + 12 * kept, b->rgba + 12 * i, 12 * sizeof(float));
+            if (b->tan)
+                memcpy(b->tan + 12 * kept, b->tan + 12 * i, 12 * sizeof(float));
         }
         ++kept;
     }
@@ -187,7 +209,12 @@ void pb_sb_commit(pb_scene_builder *b, uint64_t n, const unsigned char *keep)
         free(b->rgba);
         b->rgba = NULL;
     }
+    if (b->tan_pending && b->count == first) { /* the same for tangents */
+        free(b->tan);
+        b->tan = NULL;
+    }
     b->rgba_pending = 0;
+    b->tan_pending = 0;
 }
 
 int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, const float *uv, const float *rgba,
@@ -198,9 +225,9 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
         b->stats.dropped_nonfinite++;
         return 1;
     }
-    if (!pb_sb_reserve(b, 1, rgba != NULL))
+    if (!pb_sb_reserve(b, 1, rgba != NULL, 0))
         return 0;
-    pb_sb_put_triangle(b, b->count, p, n, uv, rgba, material);
+    pb_sb_put_triangle(b, b->count, p, n, uv, rgba, NULL, material);
     pb_sb_commit(b, 1, NULL);
     return 1;
 }
@@ -447,9 +474,9 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
      * triangle's floats over the front of its own 72 bytes, then down to
      * their place in order (kept <= i, and a float triangle is 36 bytes). */
     s->positions = (float *)(void *)b->pos, s->normals = b->nrm, s->texcoords = b->uv, s->material = b->mat;
-    s->colors = b->rgba;
+    s->colors = b->rgba, s->tangents = b->tan;
     const double *pos = b->pos;
-    b->pos = NULL, b->nrm = NULL, b->uv = NULL, b->mat = NULL, b->rgba = NULL;
+    b->pos = NULL, b->nrm = NULL, b->uv = NULL, b->mat = NULL, b->rgba = NULL, b->tan = NULL;
 
     /* rebase, round to float, then drop what became (or was) zero area:
      * each triangle in its own slot on all cores, then the kept ones moved
@@ -479,6 +506,8 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
             memmove(s->texcoords + 6 * (uint64_t)kept, s->texcoords + 6 * i, 6 * sizeof(float));
             if (s->colors)
                 memmove(s->colors + 12 * (uint64_t)kept, s->colors + 12 * i, 12 * sizeof(float));
+            if (s->tangents)
+                memmove(s->tangents + 12 * (uint64_t)kept, s->tangents + 12 * i, 12 * sizeof(float));
             s->material[kept] = s->material[i];
         }
         ++kept;
@@ -492,6 +521,8 @@ pb_result pb_sb_finish(pb_scene_builder *b, const char *path, pb_scene **out, pb
     shrink((void **)&s->material, kept, sizeof(uint32_t));
     if (s->colors)
         shrink((void **)&s->colors, kept, 12 * sizeof(float));
+    if (s->tangents)
+        shrink((void **)&s->tangents, kept, 12 * sizeof(float));
     for (int k = 0; k < 3; ++k) {
         s->origin[k] = origin[k];
         s->bounds_min[k] = kept ? flo[k] : 0.f;

@@ -21,6 +21,8 @@ typedef struct pb_scene_builder {
     float *uv;         /* 6 per triangle */
     float *rgba;       /* 12 per triangle once any triangle has vertex colours (NULL before) */
     int rgba_pending;  /* rgba made by the last pb_sb_reserve: freed if its batch keeps no triangle */
+    float *tan;        /* 12 per triangle once any triangle has tangents (NULL before; 0: none) */
+    int tan_pending;   /* tan made by the last pb_sb_reserve: freed as rgba is */
     uint32_t *mat;
     /* everything else */
     pb_material *materials;
@@ -55,13 +57,17 @@ int pb_sb_add_triangle(pb_scene_builder *b, const double p[9], const float *n, c
  * the n slots in order, dropping those put refused. The arrays and counts
  * come out as n pb_sb_add_triangle calls leave them. */
 /* Returns 0 when out of memory. colours: some triangle of the batch has
- * vertex colours (the triangles before it are then made white). */
-int pb_sb_reserve(pb_scene_builder *b, uint64_t n, int colours);
+ * vertex colours (the triangles before it are then made white); tangents:
+ * some has tangents (the triangles before it then have none). */
+int pb_sb_reserve(pb_scene_builder *b, uint64_t n, int colours, int tangents);
 /* Writes slot `slot` (at most count + n - 1 of the last reserve) as
  * pb_sb_add_triangle stores a triangle; touches no other slot and no
- * shared state. Returns 0, writing nothing, for a non-finite triangle. */
+ * shared state. tangent: 12 floats (x, y, z, w per corner, world space) or
+ * NULL for none; a corner whose tangent cannot be normalized, or whose w is
+ * not finite, has none. Returns 0, writing nothing, for a non-finite
+ * triangle. */
 int pb_sb_put_triangle(pb_scene_builder *b, uint64_t slot, const double p[9], const float *n, const float *uv,
-                       const float *rgba, uint32_t material);
+                       const float *rgba, const float *tangent, uint32_t material);
 /* keep[i]: what put returned for slot count + i (NULL: all 1). */
 void pb_sb_commit(pb_scene_builder *b, uint64_t n, const unsigned char *keep);
 
