@@ -1,6 +1,7 @@
 /* Normal maps (glTF normalTexture): the shading normal bent by a texel of
- * tangent-space normals, in a frame made from each triangle's texture
- * coordinates (docs/bake.md, "Normal maps"). The CPU reference of
+ * tangent-space normals, in the file's tangent frame (glTF TANGENT) where the
+ * triangle has one, else in a frame made from its texture coordinates
+ * (docs/bake.md, "Normal maps"). The CPU reference of
  * shaders/include/normal_map.glsl, the same arithmetic in the same order.
  * Only scenes with pb_scene_normal_mapped (scene.h) > 0 bend normals; the
  * others' kernels compile this out. */
