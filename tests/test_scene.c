@@ -1673,8 +1673,8 @@ static void normal_maps_read(void)
         "{\"normalTexture\":{\"index\":0}}",
         "{\"normalTexture\":{\"index\":0,\"scale\":0.5}}",
         "{\"normalTexture\":{\"index\":0,\"texCoord\":1}}",
-        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":1}},"
-        "\"normalTexture\":{\"index\":0,\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.5,0]}}}}",
+        ("{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":1}},"
+         "\"normalTexture\":{\"index\":0,\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.5,0]}}}}"),
         "{\"normalTexture\":{\"index\":0},\"extensions\":{\"KHR_materials_unlit\":{}}}",
         "{\"normalTexture\":{\"index\":0,\"extensions\":{\"KHR_texture_transform\":{\"offset\":[0.5,0.25]}}}}"};
     /* the file without normal maps: the same materials less their normalTexture */
