@@ -2015,6 +2015,27 @@ static void give_tau_texture(pb_scene *s, uint32_t mat, uint8_t a0, uint8_t a1, 
                                  s->texcoords[6 * (size_t)i + 2 * v + 1] = 0.5f;
 }
 
+/* Gives material `mat` of s (glass, alpha its coverage) a transmission
+ * texture read beside its colour texture (pb_material.transmission_texture,
+ * what the loader makes of a blended material's transmissionTexture): 2 x 1
+ * texels of red r0 and r1, appended to s's textures; the triangles' texture
+ * coordinates stay (give_tau_texture's, or 0: texel 0). */
+static void give_tau_map(pb_scene *s, uint32_t mat, uint8_t r0, uint8_t r1)
+{
+    pb_texture *tx = realloc(s->textures, (s->texture_count + 1) * sizeof *tx);
+    if (!tx)
+        return;
+    s->textures = tx;
+    uint32_t *texels = realloc(s->texels, (size_t)(s->texel_count + 2) * sizeof *texels);
+    if (!texels)
+        return;
+    s->texels = texels;
+    texels[s->texel_count] = 0xff000000u | r0, texels[s->texel_count + 1] = 0xff000000u | r1;
+    tx[s->texture_count] = (pb_texture){2, 1, s->texel_count, PB_WRAP_CLAMP, PB_WRAP_CLAMP, 0};
+    s->materials[mat].transmission_texture = (int32_t)s->texture_count;
+    s->texture_count++, s->texel_count += 2;
+}
+
 /* Thin glass tints what it lets through: a 20 km pane 1 m above a probe,
  * under a sky of radiance U (the map's upper half, per channel) and black
  * below. The pane lets through T = (1 - a) + a t c of the light on average
@@ -2023,7 +2044,10 @@ static void give_tau_texture(pb_scene *s, uint32_t mat, uint8_t a0, uint8_t a1, 
  * pane (a = t = 1) gives U c, a half-transmitting one U c / 2, a half-covering
  * one U (1/2 + c/4); sky seen by the probe's rays and sampled from the probe
  * (probe NEE) alike. Through the clear pane a directional light above is
- * the delta I c, exactly (the probe's own shadow ray, bake_sh). */
+ * the delta I c, exactly (the probe's own shadow ray, bake_sh). A
+ * half-covering pane whose transmission texture is read beside its colour
+ * (give_tau_map, red 200: t x 200 / 255) tints what its texture lets
+ * through too. */
 static void thin_glass_tints_light(void)
 {
     /* 20 km wide: rays under its edge (untinted sky, 6.7x the tinted blue) leave below 0.006 degrees */
@@ -2032,11 +2056,12 @@ static void thin_glass_tints_light(void)
     /* texture: 0 none, else the alpha of a transmission texture kept in the
      * colour texture (give_tau_texture), which scales t: 255 is t itself, 102
      * is 0.4 t, and what passes is tinted as without a texture */
-    struct { float a, t; uint8_t texture; } cases[5] = {
-        {1.f, 1.f, 0}, {1.f, 0.5f, 0}, {0.5f, 0.5f, 0}, {1.f, 0.5f, 255}, {1.f, 0.5f, 102}};
+    struct { float a, t; uint8_t texture, beside; } cases[6] = {
+        {1.f, 1.f, 0, 0}, {1.f, 0.5f, 0, 0}, {0.5f, 0.5f, 0, 0}, {1.f, 0.5f, 255, 0}, {1.f, 0.5f, 102, 0},
+        {0.5f, 0.8f, 200, 1}};
     pb_environment env;
     CHECK(make_env(&env, 128, 64, 1.f, 0.f, 0, 0, 0, 1.f, 0.f));
-    for (int i = 0; i < 5; ++i) {
+    for (int i = 0; i < 6; ++i) {
         pb_material m = glass_material(cases[i].a, cases[i].t);
         uint32_t ids[2] = {0, 0};
         pb_scene *s = NULL;
@@ -2044,8 +2069,10 @@ static void thin_glass_tints_light(void)
         CHECKF(pb_scene_from_triangles(pane, 2, ids, &m, 1, &s, &err) == PB_OK, "%s", err.message);
         if (!s)
             break;
-        if (cases[i].texture)
+        if (cases[i].texture && !cases[i].beside)
             give_tau_texture(s, 0, cases[i].texture, cases[i].texture, 1);
+        if (cases[i].texture && cases[i].beside)
+            give_tau_map(s, 0, cases[i].texture, cases[i].texture);
         float t = cases[i].texture ? cases[i].t * (float)cases[i].texture / 255.f : cases[i].t;
         pb_bake_desc d = {0};
         d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 1;
@@ -2072,7 +2099,7 @@ static void thin_glass_tints_light(void)
             float se = b.vol.probe_std_error[0], bound = cases[i].a * (1 - t) > 0.f ? 4.f * se : 0.01f;
             fprintf(stderr, "  a %.1f, t %.1f%s: irradiance from above %.4f %.4f %.4f (want %.4f %.4f %.4f), worst of "
                     "3 normals %.2f%% (bound %.2f%%; standard error %.2f%%)\n", cases[i].a, t,
-                    cases[i].texture ? " (texture)" : "", up[0], up[1], up[2], want[0], want[1], want[2], 100 * worst,
+                    cases[i].beside ? " (texture beside)" : cases[i].texture ? " (texture)" : "", up[0], up[1], up[2], want[0], want[1], want[2], 100 * worst,
                     100 * bound, 100 * se);
             CHECK(se > 0.f && worst < bound);
         }
@@ -2098,21 +2125,25 @@ static void thin_glass_tints_light(void)
 }
 
 /* A soup of grey and thin-glass triangles under one directional light: the
- * glass of coverage 0.8 and transmission 0.6, or of coverage 1 and 0.7 x a
- * transmission texture of 200 / 255 or 60 / 255 (give_tau_texture). */
+ * glass of coverage 0.8 and transmission 0.6, of coverage 1 and 0.7 x a
+ * transmission texture of 200 / 255 or 60 / 255 in its alpha
+ * (give_tau_texture), or of coverage 0.7 and 0.9 x one of 220 / 255 or
+ * 40 / 255 read beside its colour (give_tau_map). */
 static pb_scene *glass_soup(void)
 {
-    pb_material mats[3] = {grey_material(), glass_material(0.8f, 0.6f), glass_material(1.f, 0.7f)};
-    pb_scene *s = soup_of(12, mats, 3);
+    pb_material mats[4] = {grey_material(), glass_material(0.8f, 0.6f), glass_material(1.f, 0.7f),
+                           glass_material(0.7f, 0.9f)};
+    pb_scene *s = soup_of(12, mats, 4);
     if (!s)
         return NULL;
     give_tau_texture(s, 2, 200, 60, 3);
+    give_tau_map(s, 3, 220, 40);
     test_directional_light(s, 3.f, 0.3f, -0.9f, 0.3f);
     return s;
 }
 
 /* Thin glass through the kernels against bake_cpu.c: a soup of triangles,
- * two in three tinted glass (a 0.8, t 0.6; or t from a texture, glass_soup),
+ * three in four tinted glass (a 0.8, t 0.6; or t from a texture, glass_soup),
  * under an environment map with
  * a sun and a directional light, 2 bounces, probe NEE, shadow rays through
  * layer after layer nearest first. Whether a ray passes is a hash of the
@@ -2161,7 +2192,8 @@ static void glass_kernels_match_cpu(void)
         }
         mean_z /= compared ? compared : 1;
         double trav_diff = fabs((double)traversals - (double)b.vol.traversals) / (double)traversals;
-        s->materials[1].base_color[0] = s->materials[1].base_color[1] = s->materials[1].base_color[2] = 1.f;
+        for (uint32_t m = 1; m < s->material_count && m <= 3; ++m) /* every glass white */
+            s->materials[m].base_color[0] = s->materials[m].base_color[1] = s->materials[m].base_color[2] = 1.f;
         clear = bake(s, &d);
         double clear_dc = 0;
         for (uint32_t p = 0; clear.ok && p < P; ++p)

@@ -1805,9 +1805,10 @@ static void tangents_read(void)
  * copy is opaque). A transmissionTexture (red 200 and 100) under factor 0.5
  * on an opaque material goes into the colour texture's alpha as it stands
  * (200, 100), the scale of transmission 0.5 (transmission_in_alpha, tinted
- * as without a texture); on a blended one, whose alpha is coverage, it folds
- * into that as untinted coverage, 255 x (1 - 0.5 x red / 255) = 155 and 205;
- * read through another transform it is a warning and the factor stands. */
+ * as without a texture); on a blended one, whose alpha is coverage, it is
+ * read beside the colour texture as it stands (transmission_texture, its
+ * texels the file's), transmission 0.5; read through another transform it is
+ * a warning and the factor stands. */
 static void transmission_is_coverage(void)
 {
     unsigned char px[2 * 4] = {200, 200, 200, 0, 100, 100, 100, 0}; /* alpha 0: ignored while opaque */
@@ -1867,15 +1868,15 @@ static void transmission_is_coverage(void)
                    (s->texels[tx->offset] & 0xffffffu) == 0xffffffu,
                "transmission texture as alpha %u %u", s->texels[tx->offset] >> 24, s->texels[tx->offset + 1] >> 24);
     }
-    CHECK(m[7].alpha_mode == PB_ALPHA_BLEND && m[7].base_color[3] == 1.f && m[7].base_color_texture >= 1 &&
-          m[7].transmission == 0.f && m[7].transmission_in_alpha == 0);
-    if (m[7].base_color_texture >= 1) {
-        const pb_texture *tx = &s->textures[m[7].base_color_texture];
-        CHECKF(tx->width == 2 && (s->texels[tx->offset] >> 24) == 155 && (s->texels[tx->offset + 1] >> 24) == 205 &&
-                   (s->texels[tx->offset] & 0xffffffu) == 0xffffffu,
-               "transmission texture folded to alpha %u %u", s->texels[tx->offset] >> 24,
-               s->texels[tx->offset + 1] >> 24);
+    CHECK(m[7].alpha_mode == PB_ALPHA_BLEND && m[7].base_color[3] == 1.f && m[7].base_color_texture == -1 &&
+          m[7].transmission == 0.5f && m[7].transmission_in_alpha == 0 && m[7].transmission_texture >= 0);
+    if (m[7].transmission_texture >= 0) {
+        const pb_texture *tx = &s->textures[m[7].transmission_texture];
+        CHECKF(tx->width == 2 && (s->texels[tx->offset] & 0xffu) == 200 && (s->texels[tx->offset + 1] & 0xffu) == 100,
+               "transmission texture %u %u", s->texels[tx->offset] & 0xffu, s->texels[tx->offset + 1] & 0xffu);
     }
+    for (int i = 0; i < 7; ++i)
+        CHECK(m[i].transmission_texture == -1);
     CHECK(m[6].alpha_mode == PB_ALPHA_BLEND && m[6].base_color[3] == 1.f && m[6].transmission == 0.5f);
     CHECKF(warned.count == 2, "%d warnings", warned.count);
     /* material 0's triangle (the first) is glass: opaque to the traversal everywhere */

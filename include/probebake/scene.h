@@ -63,6 +63,11 @@ typedef struct pb_material {
      * so a scene without normal maps keeps its hash. */
     int32_t normal_texture;
     float normal_scale;
+    /* With transmission on a material whose alpha is its coverage: the
+     * texture whose red channel scales transmission per texel (glTF's
+     * transmissionTexture), -1 for none. Last, so a scene without one keeps
+     * its hash. */
+    int32_t transmission_texture;
 } pb_material;
 
 /* Decoded texture: RGBA8 texels at pb_scene.texels[offset ...], row-major,

@@ -29,7 +29,8 @@ struct ShadeMaterial {
     vec4 base_color;
     vec4 emissive_metallic; // rgb emission (strength applied), w metallic
     ivec4 tex;              // base colour texture, emissive texture, PB_MATERIAL_* bits, transmission (float bits)
-    // then (load_normal_map) the normal texture and its scale (float bits), and a word of padding
+    // then (load_normal_map) the normal texture and its scale (float bits), (load_tau_texture) the
+    // transmission texture and a word of padding
 };
 // ShadeMaterial.tex.z bits (src/bake/bake_types.h)
 #define PB_MATERIAL_DOUBLE_SIDED 1
@@ -71,6 +72,13 @@ NormalMap load_normal_map(pb_addr materials, uint index)
 {
     uvec2 wd = PB_WORD(Words64(materials), 8u * index + 6u);
     return NormalMap(int(wd.x), uintBitsToFloat(wd.y));
+}
+
+// Material `index`'s transmission texture (pb_material.transmission_texture;
+// -1: none): its red channel scales transmission per texel.
+int load_tau_texture(pb_addr materials, uint index)
+{
+    return int(PB_WORD(Words64(materials), 8u * index + 7u).x);
 }
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer LightBuf { Light l[]; };
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Vec4Buf { vec4 v[]; };
@@ -262,19 +270,27 @@ bool bake_glass(BakeParams P)
 
 // A glass material's tau at a colour texel of alpha `a`: scaled by it
 // where the material keeps its transmission texture there.
-float glass_tau(ShadeMaterial m, float a)
+// `r`: the transmission texture's red there (tau_red), 1 without one.
+float glass_tau(ShadeMaterial m, float a, float r)
 {
     float tau = intBitsToFloat(m.tex.w);
-    return (m.tex.z & PB_MATERIAL_TAU_IN_ALPHA) != 0 ? tau * a : tau;
+    return (m.tex.z & PB_MATERIAL_TAU_IN_ALPHA) != 0 ? tau * a : tau * r;
+}
+
+// The red of transmission texture `tt` at uv, 1 for none (tt < 0).
+float tau_red(SceneRefs s, int tt, vec2 uv)
+{
+    return tt >= 0 ? float(texture_texel(s, tt, uv) & 0xffu) * (1.0 / 255.0) : 1.0;
 }
 
 // The share of the light meeting a surface that it reflects diffusely, of
 // its base colour: 1 - metallic; for thin glass the dielectric part's
 // 1 - transmissionFactor over the share that does not pass,
-// ((1 - metallic) - tau) / (1 - tau). `a`: the colour texel's alpha.
-float diffuse_share(ShadeMaterial m, float a)
+// ((1 - metallic) - tau) / (1 - tau). `a`: the colour texel's alpha, `r`
+// the transmission texture's red (glass_tau).
+float diffuse_share(ShadeMaterial m, float a, float r)
 {
-    float keep = 1.0 - m.emissive_metallic.w, tau = glass_tau(m, a);
+    float keep = 1.0 - m.emissive_metallic.w, tau = glass_tau(m, a, r);
     return tau > 0.0 ? (tau < 1.0 ? max(0.0, keep - tau) / (1.0 - tau) : 0.0) : keep;
 }
 
@@ -298,8 +314,10 @@ GlassStep glass_step(BakeParams P, TraceResult tr, vec3 rd)
     ShadeMaterial m = load_shade_material(P.materials, mat);
     if (!(intBitsToFloat(m.tex.w) > 0.0))
         return g;
-    vec4 tx = m.tex.x >= 0 ? texture_rgba(s, m.tex.x, surface_uv(s, tr.tri, tr.u, tr.v)) : vec4(1.0);
-    float tau = glass_tau(m, tx.a);
+    int tt = load_tau_texture(P.materials, mat);
+    vec2 uv = m.tex.x >= 0 || tt >= 0 ? surface_uv(s, tr.tri, tr.u, tr.v) : vec2(0.0);
+    vec4 tx = m.tex.x >= 0 ? texture_rgba(s, m.tex.x, uv) : vec4(1.0);
+    float tau = glass_tau(m, tx.a, tau_red(s, tt, uv));
     if ((m.tex.z & PB_MATERIAL_TAU_IN_ALPHA) != 0)
         tx.a = 1.0; // transmission, not coverage
     vec4 c = m.base_color * tx;

@@ -399,10 +399,11 @@ bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, 
         NormalMap nm = NormalMap(-1, 0.0);
         if (bake_feature(PB_FEATURE_NORMAL_MAPS) && (s.flags & PB_SCENE_NORMAL_MAPS) != 0u)
             nm = load_normal_map(P.materials, t.flags & ~PB_FLAG_ALPHA_MASK);
+        int tt = glass ? load_tau_texture(P.materials, t.flags & ~PB_FLAG_ALPHA_MASK) : -1;
         // read once: the textures' coordinates, and the normal map's frame
         TriUV tuv = TriUV(vec2(0.0), vec2(0.0), vec2(0.0));
         vec2 uv = vec2(0.0);
-        if (m.tex.x >= 0 || m.tex.y >= 0 || nm.tex >= 0) {
+        if (m.tex.x >= 0 || m.tex.y >= 0 || nm.tex >= 0 || tt >= 0) {
             tuv = load_tri_uv(s, tr.tri);
             uv = interpolate_uv(tuv, tr.u, tr.v);
         }
@@ -424,7 +425,7 @@ bool path_step(BakeParams P, inout PathState ps, uint bounces, bool see_direct, 
         if (ps.bounce > bounces)
             return false; // the terminal ray: it only gathers emission (see below)
         vec4 base = texture_rgba(s, m.tex.x, uv);
-        ps.albedo = m.base_color.rgb * base.rgb * diffuse_share(m, base.a);
+        ps.albedo = m.base_color.rgb * base.rgb * diffuse_share(m, base.a, tau_red(s, tt, uv));
         if (bake_feature(PB_FEATURE_VERTEX_COLORS) && (s.flags & PB_SCENE_VERTEX_COLORS) != 0u)
             ps.albedo *= vertex_color(s, tr.tri, tr.u, tr.v).rgb;
         ps.x = offset_ray_origin(t.v0 + tr.u * e1 + tr.v * e2, ps.ng);

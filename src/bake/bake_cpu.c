@@ -76,6 +76,12 @@ static void texture_rgba(const pb_scene *s, int32_t tex, float u, float v, float
     rgba[3] = (float)(texel >> 24) * (1.f / 255.f);
 }
 
+/* tau_red of bake.glsl: the red of transmission texture tt, 1 for none */
+static float tau_red(const pb_scene *s, int32_t tt, float u, float v)
+{
+    return tt >= 0 ? (float)(pb_texture_texel(s, tt, u, v) & 0xffu) * (1.f / 255.f) : 1.f;
+}
+
 static void texture_rgb(const pb_scene *s, int32_t tex, float u, float v, float rgb[3])
 {
     float rgba[4];
@@ -133,11 +139,12 @@ static int glass_step(const pb_scene *s, hit h, const float rd[3], float w[3], f
     if (!(tau > 0.f))
         return 0;
     float c[4] = {m->base_color[0], m->base_color[1], m->base_color[2], m->base_color[3]};
+    const float *uv = s->texcoords + 6 * (size_t)h.tri;
+    float w0 = 1.f - h.u - h.v, tu = w0 * uv[0] + h.u * uv[2] + h.v * uv[4], tv = w0 * uv[1] + h.u * uv[3] + h.v * uv[5];
+    tau *= tau_red(s, m->transmission_texture, tu, tv);
     if (m->base_color_texture >= 0) {
-        const float *uv = s->texcoords + 6 * (size_t)h.tri;
-        float w0 = 1.f - h.u - h.v, tx[4];
-        texture_rgba(s, m->base_color_texture, w0 * uv[0] + h.u * uv[2] + h.v * uv[4],
-                     w0 * uv[1] + h.u * uv[3] + h.v * uv[5], tx);
+        float tx[4];
+        texture_rgba(s, m->base_color_texture, tu, tv, tx);
         if (m->transmission_in_alpha) /* transmission, not coverage (glass_tau) */
             tau *= tx[3], tx[3] = 1.f;
         for (int k = 0; k < 4; ++k)
@@ -428,13 +435,16 @@ static void env_nee(const pb_path_ctx *c, const float x[3], const float ng[3], c
         L[k] += thr[k] * albedo[k] * ((Le[k] * T[k]) * (cos_x / (PI_F * pe) * wl));
 }
 
-/* diffuse_share of bake.glsl; a: the colour texel's alpha (glass_tau) */
-static float diffuse_share(const gpu_shade_material *m, float a)
+/* diffuse_share of bake.glsl; a: the colour texel's alpha, r: the
+ * transmission texture's red (glass_tau) */
+static float diffuse_share(const gpu_shade_material *m, float a, float r)
 {
     float keep = 1.f - m->emissive_metallic[3], tau;
     memcpy(&tau, &m->tex[3], 4);
     if (m->tex[2] & PB_MATERIAL_TAU_IN_ALPHA)
         tau *= a;
+    else
+        tau *= r;
     return tau > 0.f ? (tau < 1.f ? fmaxf(0.f, keep - tau) / (1.f - tau) : 0.f) : keep;
 }
 
@@ -550,7 +560,7 @@ pb_path_result pb_path_radiance_cpu(const pb_path_ctx *c, const float o_in[3], c
         texture_rgba(s, m->tex[0], tu, tv, base);
         float albedo[3], xp[3], x[3], E[3] = {0, 0, 0};
         for (int k = 0; k < 3; ++k) {
-            albedo[k] = m->base_color[k] * base[k] * diffuse_share(m, base[3]);
+            albedo[k] = m->base_color[k] * base[k] * diffuse_share(m, base[3], tau_red(s, m->tau_texture, tu, tv));
             xp[k] = v0[k] + h.u * e1[k] + h.v * e2[k];
         }
         if (s->colors) {

@@ -42,7 +42,8 @@ void pb_bake_materials(const pb_scene *scene, gpu_shade_material *out)
         memcpy(&g->tex[3], &m->transmission, 4); /* float bits */
         g->normal_map[0] = m->normal_texture;
         memcpy(&g->normal_map[1], &m->normal_scale, 4);
-        g->pad[0] = g->pad[1] = 0;
+        g->tau_texture = m->transmission_texture;
+        g->pad = 0;
     }
 }
 

@@ -15,7 +15,8 @@ typedef struct gpu_shade_material {
     float emissive_metallic[4];
     int32_t tex[4]; /* base colour texture, emissive texture, PB_MATERIAL_* bits, transmission (float bits) */
     int32_t normal_map[2]; /* normal texture (-1: none), its scale (float bits): load_normal_map */
-    int32_t pad[2];
+    int32_t tau_texture;   /* pb_material.transmission_texture: load_tau_texture */
+    int32_t pad;
 } gpu_shade_material;
 _Static_assert(sizeof(gpu_shade_material) == 64, "ShadeMaterial layout");
 

@@ -188,9 +188,10 @@ void fold_metallic(reader &r, const tinygltf::TextureInfo &info, const std::arra
 // its alpha is its coverage (1 for an opaque one) and pm.transmission =
 // t (1 - metallic); the kernels let a ray through with probability
 // 1 - alpha (1 - transmission), tinted (docs/bake.md, "Thin glass"). A
-// transmission texture's red channel scales t per texel: folded into the
-// colour texture's alpha instead, as coverage, untinted. Not modelled: the
-// surface's specular reflection, refraction.
+// transmission texture's red channel scales t per texel: on an opaque
+// material it goes into the colour texture's alpha (coverage is 1 there), on
+// a blended one it is read as it stands (pm.transmission_texture). Not
+// modelled: the surface's specular reflection, refraction.
 void apply_transmission(reader &r, const tinygltf::Material &mt, const std::array<double, 6> &xf, pb_material &pm)
 {
     auto ext = mt.extensions.find("KHR_materials_transmission");
@@ -207,8 +208,8 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
                 "where the mask keeps it", r.path, pm.name);
         return;
     }
-    // the transmission texture's red channel scales the factor: folded into the
-    // colour texture's alpha where it is read with the colour texture's UVs
+    // the transmission texture's red channel scales the factor, where it is
+    // read with the colour texture's UVs
     const tinygltf::Value &tx = ext->second.Has("transmissionTexture") ? ext->second.Get("transmissionTexture")
                                                                        : tinygltf::Value();
     int32_t tt = tx.IsObject() && tx.Has("index") && tx.Get("index").IsInt()
@@ -241,13 +242,11 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
         return;
     }
     if (tt >= 0) {
-        // alpha is coverage already: the texture's share folds into it,
-        // and what passes there passes untinted
-        int32_t id = pb_sb_fold_transmission(r.b, pm.base_color_texture, tt, (float)pass);
-        if (id < 0)
-            return; // out of host memory: the builder reports it
-        pm.base_color_texture = id;
-        pm.alpha_mode = PB_ALPHA_BLEND;
+        // alpha is coverage already: the texture is read beside the colour
+        // one, its red scaling tau per texel (the light through tinted as
+        // without it)
+        pm.transmission = (float)pass;
+        pm.transmission_texture = tt;
         return;
     }
     if (pm.alpha_mode == PB_ALPHA_OPAQUE && pm.base_color_texture >= 0) {

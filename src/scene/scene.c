@@ -22,6 +22,7 @@ pb_material pb_material_default(void)
     m.emissive_texture = -1;
     m.normal_texture = -1;
     m.normal_scale = 1.f;
+    m.transmission_texture = -1;
     m.alpha_mode = PB_ALPHA_OPAQUE;
     return m;
 }
@@ -174,6 +175,8 @@ static uint64_t materials_hash(const pb_scene *scene)
         h = pb_hash64(&scene->materials[i].transmission, sizeof(float), h);
         if (scene->materials[i].transmission_in_alpha) /* else the hash it had before the flag */
             h = pb_hash64(&scene->materials[i].transmission_in_alpha, sizeof(uint32_t), h);
+        if (scene->materials[i].transmission_texture >= 0) /* else the hash it had before the texture */
+            h = pb_hash64(&scene->materials[i].transmission_texture, sizeof(int32_t), h);
     }
     /* normal maps, where a material has one (else the hash it had before) */
     for (uint32_t i = 0; pb_scene_normal_mapped(scene) && i < scene->material_count; ++i) {

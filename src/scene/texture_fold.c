@@ -8,11 +8,11 @@
 
 /* The walk both folds share: a texture at the finer of the two sizes, each
  * texel from the nearest texels of `base` (white and opaque when base < 0)
- * and of `scale` (at the texel's centre, as the kernels sample), where
- * keep = 1 - factor x channel `shift` of scale / 255, clamped to [0, 1],
- * multiplies the base's linear colour (into_alpha 0) or its alpha
- * (into_alpha 1); into_alpha 2: the alpha is the channel itself. Wrap modes and colour space the base's (scale's wraps
- * and sRGB when base < 0). */
+ * and of `scale` (at the texel's centre, as the kernels sample): keep = 1 -
+ * factor x channel `shift` of scale / 255, clamped to [0, 1], multiplies the
+ * base's linear colour (into_alpha 0), or the alpha is the channel itself
+ * (into_alpha 1). Wrap modes and colour space the base's (scale's wraps and
+ * sRGB when base < 0). */
 static int32_t fold(pb_scene_builder *b, int32_t base, int32_t scale, int shift, float factor, int into_alpha)
 {
     /* copies: adding the texture may move the builder's arrays */
@@ -64,13 +64,8 @@ static int32_t fold(pb_scene_builder *b, int32_t base, int32_t scale, int shift,
             uint32_t mb = (m >> shift) & 0xffu;
             uint32_t c = base >= 0 ? b->texels[bt.offset + brow[y] + bcol[x]] : 0xffffffffu;
             uint32_t texel;
-            if (into_alpha == 2) {
+            if (into_alpha) {
                 texel = (c & 0x00ffffffu) | mb << 24;
-            } else if (into_alpha) {
-                float keep = 1.f - factor * (float)mb / 255.f;
-                keep = keep < 0.f ? 0.f : (keep > 1.f ? 1.f : keep);
-                float a = (float)(c >> 24) / 255.f;
-                texel = (c & 0x00ffffffu) | (uint32_t)lrintf(a * keep * 255.f) << 24;
             } else {
                 texel = c & 0xff000000u;
                 for (int k = 0; k < 3; ++k)
@@ -90,14 +85,9 @@ int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_
     return fold(b, base, metallic_roughness, 16, factor, 0); /* blue: metalness */
 }
 
-int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int32_t transmission, float pass)
-{
-    return fold(b, base, transmission, 0, pass, 1); /* red: transmission */
-}
-
 int32_t pb_sb_fold_transmission_scale(pb_scene_builder *b, int32_t base, int32_t transmission)
 {
-    return fold(b, base, transmission, 0, 1.f, 2); /* red: transmission */
+    return fold(b, base, transmission, 0, 1.f, 1); /* red: transmission */
 }
 
 int32_t pb_sb_opaque_texture(pb_scene_builder *b, int32_t tex)

@@ -3,9 +3,9 @@
  * alpha the coverage), so textures that scale either are folded into it:
  * glTF's metallic (metallicFactor x the metallicRoughness texture's blue
  * channel, linear; a Lambertian bake reflects base colour x (1 - metallic))
- * into the colour, KHR_materials_transmission's texture (red) into the
- * alpha (as coverage, or for a material that was opaque as the scale of its
- * transmission). One walk does all (texture_fold.c). */
+ * into the colour, and for a material that was opaque
+ * KHR_materials_transmission's texture (red) into the alpha, as the scale of
+ * its transmission. One walk does both (texture_fold.c). */
 #ifndef PB_SCENE_TEXTURE_FOLD_H
 #define PB_SCENE_TEXTURE_FOLD_H
 
@@ -23,20 +23,15 @@ extern "C" {
  * texture's size and wrap modes. Returns its index, or -1 out of host memory. */
 int32_t pb_sb_fold_metallic(pb_scene_builder *b, int32_t base, int32_t metallic_roughness, float factor);
 
-/* Adds a texture whose alpha is the coverage KHR_materials_transmission
- * leaves on a material that was alpha-blended already (an opaque one keeps
- * its tint: pb_sb_fold_transmission_scale): base alpha x (1 - pass x the
- * transmission texture's red / 255), at
- * each texel of the finer of the two sizes (nearest texels, at texel
- * centres); colour, wrap modes and colour space the base's (white, sRGB,
- * with the transmission texture's wraps, when base < 0). -1 out of memory. */
-int32_t pb_sb_fold_transmission(pb_scene_builder *b, int32_t base, int32_t transmission, float pass);
-
 /* Adds a texture whose alpha is the transmission texture's red channel as it
  * stands, for a material that was opaque (pb_material.transmission_in_alpha:
- * the kernels scale its transmission by it per texel and take coverage 1);
- * colour, wraps and colour space as pb_sb_fold_transmission's. -1 out of
- * host memory. */
+ * the kernels scale its transmission by it per texel and take coverage 1),
+ * at each texel of the finer of the two sizes (nearest texels, at texel
+ * centres); colour, wrap modes and colour space the base's (white, sRGB,
+ * with the transmission texture's wraps, when base < 0). A material that was
+ * alpha-blended keeps its coverage in its alpha and reads the transmission
+ * texture beside it (pb_material.transmission_texture). -1 out of host
+ * memory. */
 int32_t pb_sb_fold_transmission_scale(pb_scene_builder *b, int32_t base, int32_t transmission);
 
 /* Texture `tex` as it reads under alpha mode OPAQUE, for a material that
