@@ -128,6 +128,8 @@ if [ -f "$helmet" ]; then # its occlusion map is counted, not decoded; its norma
 else
     echo "skip info-textures-unread: $helmet absent"
 fi
+# the bundled normal-mapped scene (scripts/make_normal_map_scene.py)
+expect info-bumps 0 '^materials   2 .*; 1 normal-mapped\)' -- "$pb" info "$src/tests/scenes/bumps.gltf"
 alphablend=$src/../shared/scenes/samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf
 if [ -f "$alphablend" ]; then # its normal-mapped box has TANGENT: read, counted; not under --normal-maps off
     expect info-tangents 0 '^shading     0 of 61 triangles smooth .*, 30 with the file.s tangents' -- \
