@@ -58,15 +58,16 @@ typedef struct pb_material {
     /* glTF normalTexture: the scene texture of tangent-space normals
      * (linear RGB, +X along increasing u, +Y against increasing v, as glTF
      * says), -1 for none; normal_scale multiplies the sampled normal's X and
-     * Y (normalTexture.scale, default 1). The tangent frame comes from each
-     * triangle's texture coordinates (docs/scene.md, "Normal maps"). Last,
-     * so a scene without normal maps keeps its hash. */
+     * Y (normalTexture.scale, default 1). The tangent frame is the file's
+     * (pb_scene.tangents) where given, else each triangle's from its
+     * texture coordinates (docs/bake.md, "Normal maps"). After the fields
+     * above, so a scene without normal maps keeps its hash. */
     int32_t normal_texture;
     float normal_scale;
     /* With transmission on a material whose alpha is its coverage: the
      * texture whose red channel scales transmission per texel (glTF's
-     * transmissionTexture), -1 for none. Last, so a scene without one keeps
-     * its hash. */
+     * transmissionTexture), -1 for none. After the fields above, so a scene
+     * without one keeps its hash. */
     int32_t transmission_texture;
 } pb_material;
 

@@ -47,8 +47,9 @@ struct Light {
 // words each, src/bake/bake_types.h), its first six words (scene.glsl's
 // PB_WORD): on lavapipe a divergent load is one masked load per SIMD lane
 // and component, so 64-bit components halve them (bench/RESULTS.md,
-// "Shading loads"). The normal map's word is read apart, only by scenes
-// that have one.
+// "Shading loads"). The seventh word (the normal map) and the eighth (the
+// transmission texture) are read apart, only by scenes with normal maps or
+// glass (load_normal_map, load_tau_texture).
 ShadeMaterial load_shade_material(pb_addr materials, uint index)
 {
     Words64 w = Words64(materials);

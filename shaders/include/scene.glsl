@@ -182,10 +182,6 @@ struct SceneRefs {
     uint flags;        // PB_SCENE_*
 };
 
-// Texture coordinates of leaf-ordered triangle `tri` at barycentrics (u, v),
-// in the CPU reference's order (bake_cpu.c, alpha.h), unfused. Shading and
-// the alpha test call it only where a texture reads them: on lavapipe each of
-// these six loads is a branch per SIMD lane, skipped when no lane needs it.
 // A triangle's texture coordinates, corner by corner.
 struct TriUV {
     vec2 c0, c1, c2;
@@ -206,6 +202,10 @@ vec2 interpolate_uv(TriUV c, float u, float v)
     return vec2(ts, tt);
 }
 
+// Texture coordinates of leaf-ordered triangle `tri` at barycentrics (u, v),
+// in the CPU reference's order (bake_cpu.c, alpha.h), unfused. Shading and
+// the alpha test call it only where a texture reads them: on lavapipe each of
+// these six loads is a branch per SIMD lane, skipped when no lane needs it.
 vec2 surface_uv(SceneRefs s, uint tri, float u, float v)
 {
     return interpolate_uv(load_tri_uv(s, tri), u, v);

@@ -275,11 +275,12 @@ bool only_normal_map(const tinygltf::Material &mt, const pb_material &pm)
 }
 
 // glTF normalTexture: tangent-space normals that bend the shading normal
-// (docs/scene.md, "Normal maps"). The kernels build each triangle's tangent
-// frame from its texture coordinates, so the map must be read with the UVs
-// the material's colour texture is read with (TEXCOORD_0 under the
-// material's one transform); else it is not applied, with a warning. Its
-// scale must be finite.
+// (docs/scene.md, "Normal maps"). The scene keeps one set of texture
+// coordinates per triangle, so the map must be read with the UVs the
+// material's colour texture is read with (TEXCOORD_0 under the material's one
+// transform); else it is not applied, with a warning (the frame where a
+// primitive has no TANGENT comes from those UVs too). Its scale must be
+// finite.
 void read_normal_map(reader &r, const tinygltf::NormalTextureInfo &info, const std::array<double, 6> &xf,
                      pb_material &pm)
 {

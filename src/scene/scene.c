@@ -179,7 +179,8 @@ static uint64_t materials_hash(const pb_scene *scene)
             h = pb_hash64(&scene->materials[i].transmission_texture, sizeof(int32_t), h);
     }
     /* normal maps, where a material has one (else the hash it had before) */
-    for (uint32_t i = 0; pb_scene_normal_mapped(scene) && i < scene->material_count; ++i) {
+    int mapped = pb_scene_normal_mapped(scene) != 0;
+    for (uint32_t i = 0; mapped && i < scene->material_count; ++i) {
         h = pb_hash64(&scene->materials[i].normal_texture, sizeof(int32_t), h);
         h = pb_hash64(&scene->materials[i].normal_scale, sizeof(float), h);
     }
