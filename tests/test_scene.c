@@ -7,6 +7,7 @@
 #include "compressed_variants.h"
 #include "exr_pattern.h"
 #include "io/environment_exr.h"
+#include "scene/ktx2_read.h"
 #include "test_util.h"
 
 #include <sys/sysmacros.h>
@@ -1111,8 +1112,8 @@ static void corrupt_texture_is_a_warning(void)
         ""));
     CHECK(s && s->triangle_count == 1 && s->materials[0].base_color_texture == -1);
     pb_scene_destroy(s);
-    /* KHR_texture_basisu used, not required: its KTX2 image is not decoded
-     * (no transcoder in Debian 12), quietly, and the core PNG is read */
+    /* KHR_texture_basisu used, not required, its image not a KTX2 file
+     * (the identifier's first byte wrong): the core PNG is read, quietly */
     const char *ktx2 = textured_triangle(
         "ktx2.gltf", "\"extensionsUsed\":[\"KHR_texture_basisu\"],",
         "\"textures\":[{\"source\":1,\"extensions\":{\"KHR_texture_basisu\":{\"source\":0}}}],"
@@ -1128,6 +1129,171 @@ static void corrupt_texture_is_a_warning(void)
     CHECK(s && s->materials[0].base_color_texture == 0 && s->texture_count == 1 && s->textures[0].width == 1 &&
           any.count == 0);
     pb_scene_destroy(s);
+}
+
+/* A whole file's bytes (NULL where it cannot be read). */
+static unsigned char *read_bytes(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *b = NULL;
+    long n = -1;
+    if (f && fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (b = malloc((size_t)n + 1)) && fread(b, 1, (size_t)n, f) != (size_t)n) {
+        free(b);
+        b = NULL;
+    }
+    if (f)
+        fclose(f);
+    *size = b ? (size_t)n : 0;
+    return b;
+}
+
+/* KHR_texture_basisu. The ETC1S files in tests/data/ktx2 were written by
+ * Basis Universal's own encoder (scripts/make_ktx2_fixtures.sh): an alpha
+ * slice, 8 mip levels, the encoder's lowest and highest quality (codebooks of
+ * a few entries and of hundreds), grey endpoints, one flat colour, sizes
+ * that are not multiples of 4. Each loads, as a glTF's only source for its
+ * texture, to the texels Binomial's transcoder decodes from it (the .rgba
+ * beside it) byte for byte, with no warning. A UASTC file is a warning that
+ * names it: without a core image the material keeps its factor, with one the
+ * core image is read. */
+static void ktx2_textures_decoded_as_basis_transcodes_them(void)
+{
+    static const char *const etc1s[] = {"etc1s_gradient_alpha", "etc1s_noise_mips", "etc1s_noise_low", "etc1s_grey", "etc1s_contrast",
+                                        "etc1s_flat"};
+    for (size_t i = 0; i < sizeof etc1s / sizeof etc1s[0]; ++i) {
+        char path[512], name[64], textures[256];
+        size_t n = 0, m = 0;
+        snprintf(path, sizeof path, "%s/%s.ktx2", source_path("tests/data/ktx2"), etc1s[i]);
+        unsigned char *ktx = read_bytes(path, &n);
+        snprintf(path, sizeof path, "%s/%s.rgba", source_path("tests/data/ktx2"), etc1s[i]);
+        unsigned char *ref = read_bytes(path, &m);
+        CHECKF(ktx && ref, "%s: missing", etc1s[i]);
+        if (!ktx || !ref) {
+            free(ktx);
+            free(ref);
+            continue;
+        }
+        snprintf(name, sizeof name, "%s.ktx2", etc1s[i]);
+        write_file(name, ktx, n);
+        snprintf(textures, sizeof textures,
+                 "\"textures\":[{\"extensions\":{\"KHR_texture_basisu\":{\"source\":0}}}],"
+                 "\"images\":[{\"uri\":\"%s\",\"mimeType\":\"image/ktx2\"}]",
+                 name);
+        snprintf(name, sizeof name, "%s.gltf", etc1s[i]);
+        warning_counter any = {{": ", NULL}, 0};
+        pb_scene_desc d = {{count_warnings, &any}, 0, 0, 0};
+        pb_scene *s = NULL;
+        pb_error err;
+        const char *gltf = textured_triangle(
+            name, "\"extensionsUsed\":[\"KHR_texture_basisu\"],\"extensionsRequired\":[\"KHR_texture_basisu\"],",
+            textures, "");
+        CHECKF(pb_scene_load(gltf, &d, &s, &err) == PB_OK, "%s", err.message);
+        if (s) {
+            const pb_texture *t = s->texture_count ? &s->textures[0] : NULL;
+            CHECKF(t && s->materials[0].base_color_texture == 0 && (size_t)t->width * t->height * 4 == m,
+                   "%s: %u textures", etc1s[i], s->texture_count);
+            size_t differ = 0;
+            for (size_t k = 0; t && (size_t)t->width * t->height * 4 == m && k < m; ++k)
+                differ += ((const unsigned char *)(s->texels + t->offset))[k] != ref[k];
+            CHECKF(differ == 0, "%s: %zu of %zu bytes differ from Basis Universal's transcoder", etc1s[i], differ, m);
+            CHECKF(any.count == 0, "%s: %d warnings", etc1s[i], any.count);
+            CHECK(strstr(s->stats.extensions_applied, "KHR_texture_basisu") != NULL);
+        }
+        pb_scene_destroy(s);
+        free(ktx);
+        free(ref);
+    }
+
+    /* UASTC: a warning naming the file, the image and the codec */
+    size_t n = 0;
+    char path[512];
+    snprintf(path, sizeof path, "%s/uastc_gradient.ktx2", source_path("tests/data/ktx2"));
+    unsigned char *uastc = read_bytes(path, &n);
+    CHECK(uastc != NULL);
+    if (!uastc)
+        return;
+    write_file("uastc.ktx2", uastc, n);
+    free(uastc);
+    static const char *const png1x1 =
+        "{\"uri\":\"data:image/png;base64,"
+        "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mP8z8BQDwAEhQGAhKmMIQAAAABJRU5ErkJggg==\"}";
+    for (int fallback = 0; fallback < 2; ++fallback) {
+        char textures[512];
+        snprintf(textures, sizeof textures,
+                 "\"textures\":[{%s\"extensions\":{\"KHR_texture_basisu\":{\"source\":0}}}],"
+                 "\"images\":[{\"uri\":\"uastc.ktx2\",\"mimeType\":\"image/ktx2\"}%s%s]",
+                 fallback ? "\"source\":1," : "", fallback ? "," : "", fallback ? png1x1 : "");
+        const char *gltf = textured_triangle(
+            fallback ? "uastc-fallback.gltf" : "uastc.gltf",
+            fallback ? "\"extensionsUsed\":[\"KHR_texture_basisu\"],"
+                     : "\"extensionsUsed\":[\"KHR_texture_basisu\"],\"extensionsRequired\":[\"KHR_texture_basisu\"],",
+            textures, "");
+        warning_counter named = {{"UASTC", NULL}, 0};
+        pb_scene_desc d = {{count_warnings, &named}, 0, 0, 0};
+        pb_scene *s = NULL;
+        pb_error err;
+        CHECKF(pb_scene_load(gltf, &d, &s, &err) == PB_OK, "%s", err.message);
+        CHECKF(s && s->materials[0].base_color_texture == (fallback ? 0 : -1) &&
+                   s->texture_count == (fallback ? 1u : 0u) && (!fallback || s->textures[0].width == 1),
+               "UASTC, fallback %d: texture %d", fallback, s ? s->materials[0].base_color_texture : -2);
+        CHECKF(named.count == 1, "UASTC, fallback %d: %d warnings naming UASTC", fallback, named.count);
+        pb_scene_destroy(s);
+    }
+}
+
+/* Every KTX2 fixture cut short at every length, and with every byte in turn
+ * flipped: each decode succeeds or fails with a reason, and never reads or
+ * writes outside its buffers (ASan in CI's sanitizer build). A corrupt
+ * stream is caught by the container's bounds, the prefix codes' checks or
+ * the codebook indices' ranges. */
+static void ktx2_corruption_is_an_error(void)
+{
+    static const char *const files[] = {"etc1s_gradient_alpha", "etc1s_noise_low", "etc1s_grey", "etc1s_contrast", "etc1s_flat",
+                                        "etc1s_noise_mips", "uastc_gradient"};
+    size_t variants = 0, decodes = 0, refused = 0;
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        char path[512];
+        size_t n = 0;
+        snprintf(path, sizeof path, "%s/%s.ktx2", source_path("tests/data/ktx2"), files[i]);
+        unsigned char *ktx = read_bytes(path, &n);
+        CHECK(ktx != NULL);
+        if (!ktx)
+            continue;
+        pb_ktx2_info info;
+        const char *why = NULL;
+        CHECKF(pb_ktx2_peek(ktx, n, &info, &why) == 0, "%s: %s", files[i], why);
+        size_t pixels = (size_t)info.width * info.height * 4;
+        size_t step = n > 2000 ? 7 : 1; /* the large file at every 7th byte */
+        for (size_t k = 0; k < 2 * n; k += step) {
+            unsigned char *copy = malloc(n);
+            memcpy(copy, ktx, n);
+            size_t size = n;
+            if (k < n)
+                size = k; /* cut short at k */
+            else
+                copy[k - n] ^= (unsigned char)(0x5a + k); /* byte k - n changed */
+            pb_ktx2_info ci;
+            why = NULL;
+            variants++;
+            if (pb_ktx2_peek(copy, size, &ci, &why) == 0 && (size_t)ci.width * ci.height * 4 <= 4 * pixels) {
+                /* an exactly sized buffer of its own, so ASan sees any write past it */
+                unsigned char *out = malloc((size_t)ci.width * ci.height * 4);
+                why = NULL;
+                int r = pb_ktx2_decode(copy, size, out, &why);
+                decodes++;
+                refused += r != 0;
+                CHECKF(r == 0 || (why && *why), "%s: a failure with no reason", files[i]);
+                free(out);
+            } else
+                refused++;
+            free(copy);
+        }
+        free(ktx);
+    }
+    fprintf(stderr, "  %zu corrupt KTX2 files: %zu refused, %zu decoded to some picture\n", variants, refused,
+            variants - refused);
+    CHECK(refused > 0);
 }
 
 /* An image in a bufferView that reaches past its buffer (4,000 bytes into a
@@ -2247,6 +2413,8 @@ int main(void)
     RUN(hostile_inputs_refused);
     RUN(corrupt_texture_is_a_warning);
     RUN(image_view_outside_its_buffer_is_a_warning);
+    RUN(ktx2_textures_decoded_as_basis_transcodes_them);
+    RUN(ktx2_corruption_is_an_error);
     RUN(oversized_texture_refused_unread);
     RUN(unread_maps_not_decoded);
     RUN(shared_scenes_load);

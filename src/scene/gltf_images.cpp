@@ -3,6 +3,7 @@
 
 extern "C" {
 #include "common/common.h"
+#include "scene/ktx2_read.h"
 }
 
 #include <avif/avif.h>
@@ -93,13 +94,32 @@ bool load_webp(tinygltf::Image *image, int index, const unsigned char *bytes, in
     return true;
 }
 
-// KTX2 (KHR_texture_basisu): not decoded, since Debian 12 packages no Basis
-// Universal transcoder. A file that requires the extension is refused; one
-// that merely uses it gives its textures a core PNG or JPEG, which is read.
-bool is_ktx2(const unsigned char *bytes, int size)
+// KTX2 (KHR_texture_basisu): Basis Universal's ETC1S decoded by
+// scene/ktx2_read.c, after the header's size is checked against the limits.
+// UASTC and malformed files are warned about and left undecoded, so a
+// texture reading one falls back to its core image or its factor.
+bool load_ktx2(tinygltf::Image *image, int index, const unsigned char *bytes, int size, image_ctx *ctx)
 {
-    static const unsigned char id[12] = {0xab, 'K', 'T', 'X', ' ', '2', '0', 0xbb, '\r', '\n', 0x1a, '\n'};
-    return size >= 12 && memcmp(bytes, id, 12) == 0;
+    pb_ktx2_info info;
+    const char *why = nullptr;
+    if (pb_ktx2_peek(bytes, (size_t)size, &info, &why) == 0) {
+        if (info.width > INT32_MAX / 4 || info.height > INT32_MAX / 4 ||
+            !image_fits(ctx, index, (int)info.width, (int)info.height))
+            return true;
+        image->image.resize((size_t)info.width * info.height * 4);
+        if (pb_ktx2_decode(bytes, (size_t)size, image->image.data(), &why) == 0) {
+            ctx->left_pixels -= (uint64_t)info.width * info.height;
+            image->width = (int)info.width;
+            image->height = (int)info.height;
+            return true;
+        }
+        image->image.clear();
+    }
+    pb_logf(&ctx->log, PB_LOG_WARN,
+            "%s: image %d (KTX2) could not be decoded: %s; a texture reading it falls back to its core image if it "
+            "has one, else to its material's factor",
+            ctx->path, index, why);
+    return true;
 }
 
 // AVIF (ISOBMFF with an AVIF brand), for EXT_texture_avif
@@ -169,12 +189,8 @@ bool decode(tinygltf::Image *image, int index, const unsigned char *bytes, int s
         return load_webp(image, index, bytes, size, ctx);
     if (is_avif(bytes, size))
         return load_avif(image, index, bytes, size, ctx);
-    if (is_ktx2(bytes, size)) {
-        pb_logf(&ctx->log, PB_LOG_INFO,
-                "%s: image %d is KTX2 (KHR_texture_basisu), which probebake does not decode; textures read their "
-                "core image", ctx->path, index);
-        return true;
-    }
+    if (pb_ktx2_is(bytes, (size_t)size))
+        return load_ktx2(image, index, bytes, size, ctx);
     // the header first: stb allocates what it claims before reading the data
     int w = 0, h = 0, c = 0;
     unsigned char *px = nullptr;

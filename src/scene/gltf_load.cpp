@@ -1102,7 +1102,7 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
                                             "KHR_draco_mesh_compression", "KHR_materials_transmission",
                                             "KHR_lights_punctual", "KHR_materials_emissive_strength",
                                             "KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit",
-                                            "KHR_mesh_quantization", "KHR_texture_transform"};
+                                            "KHR_mesh_quantization", "KHR_texture_basisu", "KHR_texture_transform"};
     for (const std::string &ext : model.extensionsRequired) {
         bool known = false;
         for (const char *s : supported)

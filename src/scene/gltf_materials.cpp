@@ -61,14 +61,14 @@ int base_texture_index(const tinygltf::Material &mt)
     return mt.pbrMetallicRoughness.baseColorTexture.index;
 }
 
-// The image a texture reads: the source of EXT_texture_avif or
-// EXT_texture_webp where it names an image that decoded, else the core source
-// (the extensions' fallback, or -1).
+// The image a texture reads: the source of EXT_texture_avif,
+// EXT_texture_webp or KHR_texture_basisu where it names an image that
+// decoded, else the core source (the extensions' fallback, or -1).
 int texture_source(reader &r, size_t i)
 {
     const tinygltf::Texture &t = r.m.textures[i];
     int unusable = -1;
-    for (const char *name : {"EXT_texture_avif", "EXT_texture_webp"}) {
+    for (const char *name : {"EXT_texture_avif", "EXT_texture_webp", "KHR_texture_basisu"}) {
         auto ext = t.extensions.find(name);
         if (ext == t.extensions.end() || !ext->second.IsObject() || !ext->second.Has("source") ||
             !ext->second.Get("source").IsInt())

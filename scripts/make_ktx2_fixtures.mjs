@@ -1,0 +1,78 @@
+// Writes tests/data/ktx2/: small KTX2 files made by Basis Universal's own
+// encoder (npm ktx2-encoder, which wraps it), and beside each ETC1S one the
+// RGBA8 pixels Binomial's transcoder (three.js's pinned basis_transcoder)
+// decodes from it: the reference test_scene holds probebake's decoder to,
+// byte for byte. Run by scripts/make_ktx2_fixtures.sh; the outputs are
+// committed, so the tests need neither package.
+//
+//   node scripts/make_ktx2_fixtures.mjs ENCODER_DIR TRANSCODER_JS OUT_DIR
+import fs from "fs";
+import path from "path";
+import { createRequire } from "module";
+
+const [encoderDir, transcoderJs, outDir] = process.argv.slice(2);
+const { encodeToKTX2 } = await import(path.resolve(encoderDir, "node_modules/ktx2-encoder/dist/node/index.js"));
+
+// Deterministic pictures: smooth gradients, value noise with hard edges (many
+// distinct blocks, so large codebooks and long prefix codes), blocks of every
+// contrast, grey, and flat.
+function rng(seed) {
+  let s = seed >>> 0;
+  return () => ((s = (Math.imul(s, 1664525) + 1013904223) >>> 0) / 4294967296);
+}
+function picture(w, h, kind) {
+  const px = new Uint8Array(w * h * 4), r = rng(w * 131 + h);
+  const lattice = Array.from({ length: 64 }, () => r());
+  const noise = (x, y) => lattice[((x >> 3) * 7 + (y >> 3) * 13) & 63];
+  for (let y = 0; y < h; y++)
+    for (let x = 0; x < w; x++) {
+      const i = (y * w + x) * 4;
+      if (kind === "gradient") {
+        px[i] = (x * 255) / (w - 1); px[i + 1] = (y * 255) / (h - 1); px[i + 2] = ((x ^ y) * 9) & 255;
+        px[i + 3] = 255 - (x * 200) / (w - 1);
+      } else if (kind === "noise") {
+        const n = noise(x, y), edge = (x + 2 * y) % 29 < 3 ? 90 : 0;
+        px[i] = Math.min(255, n * 220 + edge + r() * 30); px[i + 1] = Math.min(255, (1 - n) * 180 + r() * 60);
+        px[i + 2] = Math.min(255, ((x * y) & 127) + edge); px[i + 3] = 255;
+      } else if (kind === "contrast") { // per block a grey and a spread up to ETC1's widest tables
+        const b = lattice[((x >> 2) * 5 + (y >> 2) * 11) & 63], d = 8 + 175 * lattice[((x >> 2) * 3 + (y >> 2) * 17 + 1) & 63];
+        const t = [-1, -0.3, 0.3, 1][(x * 3 + y * 5 + (x >> 2)) & 3], v = Math.max(0, Math.min(255, 40 + 175 * b + t * d));
+        px[i] = v; px[i + 1] = Math.max(0, Math.min(255, v + ((x & 2) ? 12 : -12))); px[i + 2] = 255 - v; px[i + 3] = 255;
+      } else if (kind === "grey") {
+        px[i] = px[i + 1] = px[i + 2] = (noise(x, y) * 255 + y * 3) & 255; px[i + 3] = 255;
+      } else { px[i] = 200; px[i + 1] = 120; px[i + 2] = 40; px[i + 3] = 255; }
+    }
+  return px;
+}
+
+const require = createRequire(import.meta.url);
+const BASIS = new Function("require", "__filename", "__dirname", fs.readFileSync(transcoderJs, "utf8") + "\nreturn BASIS;")(
+  require, transcoderJs, path.dirname(transcoderJs));
+const M = await BASIS({ wasmBinary: fs.readFileSync(transcoderJs.replace(/\.js$/, ".wasm")) });
+M.initializeBasis();
+const RGBA32 = 13; // transcoder_texture_format::cTFRGBA32
+
+const fixtures = [
+  { name: "etc1s_gradient_alpha", w: 37, h: 21, kind: "gradient", opts: { isUASTC: false, generateMipmap: false } },
+  { name: "etc1s_noise_mips", w: 128, h: 96, kind: "noise", opts: { isUASTC: false, generateMipmap: true, qualityLevel: 255 } },
+  { name: "etc1s_noise_low", w: 64, h: 40, kind: "noise", opts: { isUASTC: false, generateMipmap: false, qualityLevel: 1 } },
+  { name: "etc1s_grey", w: 19, h: 33, kind: "grey", opts: { isUASTC: false, generateMipmap: false, isSetKTX2SRGBTransferFunc: false } },
+  { name: "etc1s_contrast", w: 48, h: 40, kind: "contrast", opts: { isUASTC: false, generateMipmap: false, qualityLevel: 255 } },
+  { name: "etc1s_flat", w: 8, h: 8, kind: "flat", opts: { isUASTC: false, generateMipmap: false } },
+  { name: "uastc_gradient", w: 16, h: 16, kind: "gradient", opts: { isUASTC: true, generateMipmap: false } },
+];
+fs.mkdirSync(outDir, { recursive: true });
+for (const f of fixtures) {
+  const src = picture(f.w, f.h, f.kind);
+  const ktx = await encodeToKTX2(src, { ...f.opts, imageDecoder: async (b) => ({ data: b, width: f.w, height: f.h }) });
+  fs.writeFileSync(path.join(outDir, f.name + ".ktx2"), ktx);
+  const file = new M.KTX2File(new Uint8Array(ktx));
+  if (!file.isValid() || !file.startTranscoding()) throw new Error(f.name + ": the transcoder refuses it");
+  const out = new Uint8Array(file.getImageTranscodedSizeInBytes(0, 0, 0, RGBA32));
+  if (!file.transcodeImage(out, 0, 0, 0, RGBA32, 0, -1, -1)) throw new Error(f.name + ": transcoding failed");
+  if (out.length !== f.w * f.h * 4) throw new Error(f.name + ": unexpected size");
+  fs.writeFileSync(path.join(outDir, f.name + ".rgba"), out);
+  console.log(`${f.name}: ${f.w} x ${f.h}, ${ktx.length} bytes, ${file.isETC1S() ? "ETC1S" : "UASTC"}` +
+              `${file.getHasAlpha() ? " with alpha" : ""}, ${file.getLevels()} level(s)`);
+  file.close(); file.delete();
+}
