@@ -116,6 +116,9 @@ RUNS=100000 each_allocation_fails info-no-material - -- "$pb" info "$tmp/in/noma
 printf '%s' '{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0,"TEXCOORD_0":1,"TANGENT":2},"material":0}]}],"materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0},"metallicFactor":0},"normalTexture":{"index":1,"scale":0.5}}],"textures":[{"source":0},{"source":0}],"images":[{"uri":"data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAABCAYAAAD0In+KAAAAEUlEQVR4nGNoOPH/P1fDr/8AGREFyoKwXaYAAAAASUVORK5CYII="}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"},{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"},{"bufferView":2,"componentType":5126,"count":3,"type":"VEC4"}],"bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":24},{"buffer":0,"byteOffset":60,"byteLength":48}],"buffers":[{"byteLength":108,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AACAPwAAAAAAAAAAAACAPwAAgD8AAAAAAAAAAAAAgD8AAIA/AAAAAAAAAAAAAIA/"}]}' \
     >"$tmp/in/normalmap.gltf"
 RUNS=100000 each_allocation_fails info-normal-map - -- "$pb" info "$tmp/in/normalmap.gltf"
+# an ETC1S KTX2 texture with an alpha slice (KHR_texture_basisu required, the image in a
+# bufferView): the container, the codebooks and the slices' allocations, every one
+RUNS=100000 each_allocation_fails info-ktx2 - -- "$pb" info "$src/tests/fuzz/corpus/ktx2-etc1s_gradient_alpha.glb"
 each_allocation_fails inspect - -- "$pb" inspect "$tmp/in/s.probes"
 each_allocation_fails inspect-json - -- "$pb" inspect "$tmp/in/g.probes" --json
 # the two debug images (PNG over zlib, which reports a failed allocation)
