@@ -12,6 +12,7 @@ import { createRequire } from "module";
 
 const [encoderDir, transcoderJs, outDir] = process.argv.slice(2);
 const { encodeToKTX2 } = await import(path.resolve(encoderDir, "node_modules/ktx2-encoder/dist/node/index.js"));
+const { PNG } = await import(path.resolve(encoderDir, "node_modules/pngjs/lib/png.js"));
 
 // Deterministic pictures: smooth gradients, value noise with hard edges (many
 // distinct blocks, so large codebooks and long prefix codes), blocks of every
@@ -59,11 +60,20 @@ const fixtures = [
   { name: "etc1s_grey", w: 19, h: 33, kind: "grey", opts: { isUASTC: false, generateMipmap: false, isSetKTX2SRGBTransferFunc: false } },
   { name: "etc1s_contrast", w: 48, h: 40, kind: "contrast", opts: { isUASTC: false, generateMipmap: false, qualityLevel: 255 } },
   { name: "etc1s_flat", w: 8, h: 8, kind: "flat", opts: { isUASTC: false, generateMipmap: false } },
+  // the demo scene's lattice texture, for the runtime's browser test (a KTX2 variant of the demo)
+  { name: "demo_lattice", png: "tests/scenes/demo.gltf", opts: { isUASTC: false, generateMipmap: true, qualityLevel: 255 } },
   { name: "uastc_gradient", w: 16, h: 16, kind: "gradient", opts: { isUASTC: true, generateMipmap: false } },
 ];
 fs.mkdirSync(outDir, { recursive: true });
+// the first image of a glTF, a PNG in a data URI
+function gltfPng(file) {
+  const uri = JSON.parse(fs.readFileSync(file, "utf8")).images[0].uri;
+  const png = PNG.sync.read(Buffer.from(uri.slice(uri.indexOf(",") + 1), "base64"));
+  return { w: png.width, h: png.height, px: new Uint8Array(png.data) };
+}
 for (const f of fixtures) {
-  const src = picture(f.w, f.h, f.kind);
+  if (f.png) Object.assign(f, (({ w, h, px }) => ({ w, h, src: px }))(gltfPng(f.png)));
+  const src = f.src || picture(f.w, f.h, f.kind);
   const ktx = await encodeToKTX2(src, { ...f.opts, imageDecoder: async (b) => ({ data: b, width: f.w, height: f.h }) });
   fs.writeFileSync(path.join(outDir, f.name + ".ktx2"), ktx);
   const file = new M.KTX2File(new Uint8Array(ktx));

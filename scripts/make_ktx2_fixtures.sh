@@ -9,5 +9,5 @@ transcoder=runtime/node_modules/three/examples/jsm/libs/basis/basis_transcoder.j
 [ -f "$transcoder" ] || { echo "make_ktx2_fixtures: $transcoder missing: install the runtime's packages first (bash scripts/install-deps.sh)" >&2; exit 1; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-npm install --silent --no-audit --no-fund --prefix "$tmp" ktx2-encoder@0.6.0 >/dev/null
+npm install --silent --no-audit --no-fund --prefix "$tmp" ktx2-encoder@0.6.0 pngjs@7.0.0 >/dev/null
 node scripts/make_ktx2_fixtures.mjs "$tmp" "$PWD/$transcoder" tests/data/ktx2

@@ -1159,8 +1159,8 @@ static unsigned char *read_bytes(const char *path, size_t *size)
  * core image is read. */
 static void ktx2_textures_decoded_as_basis_transcodes_them(void)
 {
-    static const char *const etc1s[] = {"etc1s_gradient_alpha", "etc1s_noise_mips", "etc1s_noise_low", "etc1s_grey", "etc1s_contrast",
-                                        "etc1s_flat"};
+    static const char *const etc1s[] = {"etc1s_gradient_alpha", "etc1s_noise_mips", "etc1s_noise_low", "etc1s_grey",
+                                        "etc1s_contrast",       "demo_lattice",     "etc1s_flat"};
     for (size_t i = 0; i < sizeof etc1s / sizeof etc1s[0]; ++i) {
         char path[512], name[64], textures[256];
         size_t n = 0, m = 0;

@@ -12,6 +12,9 @@
 //                        Chromium
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
+import { KTX2Loader } from 'three/addons/loaders/KTX2Loader.js';
+import { MeshoptDecoder } from 'three/addons/libs/meshopt_decoder.module.js';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { parseProbes } from '../js/probes.js';
 import { ProbeVolume } from '../js/three-probes.js';
@@ -27,6 +30,19 @@ async function fetchBytes(url) {
     const r = await fetch(url);
     if (!r.ok) throw new Error(`${url}: HTTP ${r.status} ${r.statusText}`);
     return r.arrayBuffer();
+}
+
+// A GLTFLoader for what the baker reads (README, "glTF extensions"): Draco and
+// meshopt geometry and KTX2 textures, through the decoders three.js ships
+// (Google's Draco and Binomial's Basis Universal transcoder as WebAssembly,
+// meshoptimizer's decoder). KTX2 is transcoded to a format the renderer's
+// device samples, so the loader asks the renderer first.
+function gltfLoader(renderer) {
+    const libs = new URL('../node_modules/three/examples/jsm/libs/', import.meta.url).href;
+    return new GLTFLoader()
+        .setDRACOLoader(new DRACOLoader().setDecoderPath(`${libs}draco/gltf/`))
+        .setKTX2Loader(new KTX2Loader().setTranscoderPath(`${libs}basis/`).detectSupport(renderer))
+        .setMeshoptDecoder(MeshoptDecoder);
 }
 
 function probeSpheres(v) {
@@ -83,12 +99,6 @@ function checkable(m) {
 async function main() {
     const sceneUrl = params.get('scene'), probesUrl = params.get('probes');
     if (!sceneUrl || !probesUrl) throw new Error('give ?scene=URL.gltf&probes=URL.probes');
-    // parseProbes throws, naming the problem, for a malformed or newer file:
-    // reported as soon as the volume arrives, not after the scene has loaded
-    const [gltf, v] = await Promise.all([new GLTFLoader().loadAsync(sceneUrl),
-        fetchBytes(probesUrl).then((bytes) => parseProbes(bytes, probesUrl))]);
-    const volume = new ProbeVolume(v);
-
     const width = testing ? Number(params.get('w') || 256) : innerWidth;
     const height = testing ? Number(params.get('h') || 192) : innerHeight;
     const renderer = new THREE.WebGLRenderer({ antialias: !testing, preserveDrawingBuffer: true });
@@ -96,6 +106,12 @@ async function main() {
     renderer.setSize(width, height);
     renderer.toneMapping = THREE.ACESFilmicToneMapping;
     document.body.appendChild(renderer.domElement);
+
+    // parseProbes throws, naming the problem, for a malformed or newer file:
+    // reported as soon as the volume arrives, not after the scene has loaded
+    const [gltf, v] = await Promise.all([gltfLoader(renderer).loadAsync(sceneUrl),
+        fetchBytes(probesUrl).then((bytes) => parseProbes(bytes, probesUrl))]);
+    const volume = new ProbeVolume(v);
 
     const scene = gltf.scene;
     scene.background = new THREE.Color(0, 0, 0);
@@ -197,8 +213,12 @@ async function main() {
         // which WebGL implementation drew it (the test logs it: software drivers differ)
         const gl = renderer.getContext(), info = gl.getExtension('WEBGL_debug_renderer_info');
         const glRenderer = info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER);
+        // the colour maps as the device holds them: a KTX2 texture's transcoded format (three.js's
+        // constant) is what the test needs to know how exactly its texels can match
+        const maps = [...emissive.keys()].map((m) => m.map).filter(Boolean);
+        const mapFormats = [...new Set(maps.map((t) => `${t.isCompressedTexture ? 'compressed ' : ''}${t.format}`))];
         document.getElementById('pb-result').textContent = JSON.stringify({ width, height, nan, rgb: b64,
-            misplaced: btoa(mbin), misplacedCount, glRenderer });
+            misplaced: btoa(mbin), misplacedCount, glRenderer, mapFormats });
         return;
     }
     // orbit about the point ahead of the camera, as far as the scene's centre

@@ -87,6 +87,7 @@ async function pageMatchesC(probes, pfm, scene = '/tests/scenes/demo.gltf', view
     assert.equal(r.width, W);
     assert.equal(r.height, H);
     assert.equal(r.nan, 0, 'NaN or infinite pixels');
+    if (r.mapFormats && r.mapFormats.length) console.log(`# colour maps held as ${r.mapFormats.join(', ')}`);
     const bytes = Buffer.from(r.rgb, 'base64');
     const js = new Float32Array(bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.length));
     const misplaced = Buffer.from(r.misplaced, 'base64');
@@ -193,6 +194,40 @@ test('the page shades the Duck with its vertex normals as the C renderer does', 
         'eye=1.6,1.4,1.6&target=0.1,0.8,0&fov=60', ['c-duck-face.pfm'], 0.1);
     console.log(`# against the C image with face normals: relative RMSE ${face.toExponential(2)}`);
     assert.ok(face > 10 * Math.max(same, 1e-4), `face normals ${face} vs vertex normals ${same}`);
+});
+
+// The viewer reads what the baker reads (README, "glTF extensions"): the demo
+// scene with its geometry as Draco and as meshopt (tests/gltf_compress) and its
+// lattice texture as KTX2 ETC1S (tests/data/ktx2/demo_lattice.ktx2, written by
+// Basis Universal's encoder; KHR_texture_basisu required, no PNG kept), each
+// baked, then drawn indirect-only by the C renderer and by the page (three.js's
+// Draco, meshopt and Basis Universal decoders) within the demo's bound. Before,
+// the page's plain GLTFLoader refused all three.
+test('the page reads Draco, meshopt and KTX2 files as the baker does', async () => {
+    const compress = process.env.PB_GLTF_COMPRESS;
+    assert.ok(compress, 'PB_GLTF_COMPRESS names tests/gltf_compress');
+    copyFileSync(join(root, 'tests/data/ktx2/demo_lattice.ktx2'), join(dir, 'demo_lattice.ktx2'));
+    for (const codec of ['draco', 'meshopt']) {
+        const file = join(dir, `demo-${codec}.gltf`);
+        execFileSync(compress, [codec, join(root, 'tests/scenes/demo.gltf'), file]);
+        const g = JSON.parse(readFileSync(file, 'utf8'));
+        g.images = [{ uri: 'demo_lattice.ktx2', mimeType: 'image/ktx2' }];
+        for (const tex of g.textures) {
+            delete tex.source;
+            tex.extensions = { ...tex.extensions, KHR_texture_basisu: { source: 0 } };
+        }
+        for (const list of ['extensionsUsed', 'extensionsRequired'])
+            g[list] = [...new Set([...(g[list] || []), 'KHR_texture_basisu'])];
+        writeFileSync(file, JSON.stringify(g));
+        const info = JSON.parse(execFileSync(probebake, ['info', file, '--json']).toString());
+        assert.ok(info.extensions_applied.includes('KHR_texture_basisu') && info.textures === 1,
+            `${codec}: ${JSON.stringify(info.extensions_applied)}, ${info.textures} textures`);
+        execFileSync(probebake, ['bake', file, '--spacing', '0.5', '--rays', '128', '--passes', '2', '--quiet',
+            '-o', join(dir, `demo-${codec}.probes`)]);
+        execFileSync(probebake, ['render', file, '--volume', join(dir, `demo-${codec}.probes`), '--mode', 'indirect',
+            '--size', `${W}x${H}`, '--spp', '1', ...camera, '--pfm', '--quiet', '-o', join(dir, `c-${codec}.png`)]);
+        await pageMatchesC(`demo-${codec}.probes`, `c-${codec}.pfm`, `/t/demo-${codec}.gltf`);
+    }
 });
 
 test('a malformed volume gives a visible error, not a blank canvas', async () => {
