@@ -186,7 +186,8 @@ int pb_ktx2_decode(const uint8_t *bytes, size_t size, uint8_t *rgba, const char 
     case PB_KTX2_ETC1S:
         return decode_etc1s(bytes, size, &c, rgba, why);
     case PB_KTX2_UASTC:
-        *why = "UASTC, which probebake does not decode (ETC1S is decoded)";
+        *why = "UASTC, which probebake does not decode (ETC1S is; scripts/ktx2_to_png.mjs rewrites a file's KTX2 "
+               "images as PNG)";
         return -1;
     default:
         *why = "neither ETC1S nor UASTC, the formats KHR_texture_basisu allows";
