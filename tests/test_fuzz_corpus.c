@@ -5,6 +5,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "test_util.h"
 #include "fuzz/scene_exercise.h"
+#include "fuzz/ktx2_exercise.h"
 #include "fuzz/volume_exercise.h"
 
 #include <dirent.h>
@@ -97,10 +98,51 @@ static void volume_corpus(void)
     CHECK(unnamed == 0 && sparse >= 2 && read >= 3);
 }
 
+/* The KTX2 decoder's inputs (tests/fuzz/ktx2_corpus: seed-* are the files of
+ * tests/data/ktx2, the rest what fuzz_ktx2_decode found): decoded as the
+ * harness does; the six seed-etc1s-* files must decode. */
+static void ktx2_corpus(void)
+{
+    const char *dir = source_path("tests/fuzz/ktx2_corpus");
+    DIR *d = opendir(dir);
+    if (!d) {
+        skip("tests/fuzz/ktx2_corpus absent");
+        return;
+    }
+    uint32_t files = 0, decoded = 0, unnamed = 0, seeds = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (e->d_name[0] == '.')
+            continue;
+        char path[2048];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        FILE *f = fopen(path, "rb");
+        uint8_t *data = NULL;
+        long n = -1;
+        if (f && fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+            (data = malloc((size_t)n + 1)) && fread(data, 1, (size_t)n, f) != (size_t)n)
+            n = -1;
+        if (f)
+            fclose(f);
+        if (data && n >= 0) {
+            ++files;
+            int r = pb_fuzz_ktx2_exercise(data, (size_t)n);
+            unnamed += r < 0;
+            decoded += r > 0;
+            seeds += r > 0 && !strncmp(e->d_name, "seed-etc1s", 10);
+        }
+        free(data);
+    }
+    closedir(d);
+    fprintf(stderr, "  %u KTX2 files, %u decoded, the rest refused with a reason\n", files, decoded);
+    CHECK(unnamed == 0 && seeds >= 6);
+}
+
 int main(void)
 {
     RUN(corpus);
     RUN(crashers);
     RUN(volume_corpus);
+    RUN(ktx2_corpus);
     return test_summary();
 }
