@@ -13,7 +13,7 @@
 // KHR_texture_basisu reads it as its core source (a texture that already has
 // a core source keeps it), and the extension leaves extensionsUsed and
 // extensionsRequired once no texture uses it. Other images and buffers are
-// kept; a .gltf's relative URIs are rewritten for OUT's folder. A bad input
+// kept; relative URIs are rewritten for OUT's folder. A bad input
 // is one error line naming the file, exit status 1, and no output written.
 import fs from 'node:fs';
 import path from 'node:path';
@@ -232,13 +232,13 @@ async function convert(input, output) {
             if (gltf[list].length === 0) delete gltf[list];
         }
 
-    // a .gltf's own relative URIs, from OUT's folder
+    // the file's relative URIs (a .gltf's buffers and images, a .glb's external ones), from OUT's folder
     const rebase = (o) => {
         if (typeof o.uri === 'string' && !o.uri.startsWith('data:') && !/^[a-z][a-z0-9+.-]*:/i.test(o.uri) &&
             !written.some(([f]) => path.basename(f) === decodeURIComponent(o.uri)))
             o.uri = path.relative(outDir, path.join(inDir, decodeURIComponent(o.uri))).split(path.sep).map(encodeURIComponent).join('/');
     };
-    if (!doc.glb) [...(gltf.buffers || []), ...(gltf.images || [])].forEach(rebase);
+    [...(gltf.buffers || []), ...(gltf.images || [])].forEach(rebase);
 
     let out;
     if (doc.glb) {
