@@ -1131,23 +1131,6 @@ static void corrupt_texture_is_a_warning(void)
     pb_scene_destroy(s);
 }
 
-/* A whole file's bytes (NULL where it cannot be read). */
-static unsigned char *read_bytes(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *b = NULL;
-    long n = -1;
-    if (f && fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (b = malloc((size_t)n + 1)) && fread(b, 1, (size_t)n, f) != (size_t)n) {
-        free(b);
-        b = NULL;
-    }
-    if (f)
-        fclose(f);
-    *size = b ? (size_t)n : 0;
-    return b;
-}
-
 /* KHR_texture_basisu. The ETC1S files in tests/data/ktx2 were written by
  * Basis Universal's own encoder (scripts/make_ktx2_fixtures.sh): an alpha
  * slice, 8 mip levels, the encoder's lowest and highest quality (codebooks of

@@ -137,23 +137,30 @@ static inline const char *write_file(const char *name, const void *data, size_t 
     return p;
 }
 
-static inline char *read_text(const char *path)
+/* A whole file's bytes, NUL-terminated past *size (NULL where it cannot be
+ * read); size may be NULL. */
+static inline unsigned char *read_bytes(const char *path, size_t *size)
 {
     FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *s = malloc((size_t)n + 1);
-    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) {
-        free(s);
-        s = NULL;
+    unsigned char *b = NULL;
+    long n = -1;
+    if (f && fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (b = malloc((size_t)n + 1)) && fread(b, 1, (size_t)n, f) != (size_t)n) {
+        free(b);
+        b = NULL;
     }
-    if (s)
-        s[n] = '\0';
-    fclose(f);
-    return s;
+    if (f)
+        fclose(f);
+    if (b)
+        b[n] = 0;
+    if (size)
+        *size = b ? (size_t)n : 0;
+    return b;
+}
+
+static inline char *read_text(const char *path)
+{
+    return (char *)read_bytes(path, NULL);
 }
 
 static inline char *base64(const void *data, size_t n)

@@ -1,5 +1,6 @@
 /* KTX 2.0 writer (ktx2.h). */
 #include "io/ktx2.h"
+#include "io/ktx2_layout.h"
 #include "common/common.h"
 #include "probebake/files.h"
 
@@ -24,7 +25,6 @@ pb_result pb_ktx2_stage(const char *path, uint32_t vk_format, uint32_t width, ui
                         void *user, pb_output **staged, pb_error *err)
 {
     *staged = NULL;
-    static const unsigned char id[12] = {0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, '\r', '\n', 0x1A, '\n'};
     uint32_t channels, bits;
     if (vk_format == PB_VK_FORMAT_R32G32B32A32_SFLOAT)
         channels = 4, bits = 32;
@@ -36,7 +36,7 @@ pb_result pb_ktx2_stage(const char *path, uint32_t vk_format, uint32_t width, ui
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%s: VkFormat %u is not one the texture export writes", path,
                        vk_format);
     uint32_t texel = channels * bits / 8, dfd_bytes = 4 + 24 + 16 * channels;
-    uint32_t dfd_at = 12 + 36 + 32 + 24; /* identifier, header, index, one level */
+    uint32_t dfd_at = PB_KTX2_LEVELS_AT + PB_KTX2_LEVEL_BYTES; /* identifier, header, index, one level */
     /* level data aligned to lcm(texel size, 4): 16 or 4 here */
     uint32_t data_at = (dfd_at + dfd_bytes + texel - 1) / texel * texel;
     uint64_t row_bytes = (uint64_t)width * texel, data_bytes = row_bytes * height;
@@ -44,13 +44,14 @@ pb_result pb_ktx2_stage(const char *path, uint32_t vk_format, uint32_t width, ui
     unsigned char head[256];
     memset(head, 0, sizeof head);
     unsigned char *b = head;
-    memcpy(b, id, 12);
+    memcpy(b, pb_ktx2_identifier, sizeof pb_ktx2_identifier);
     uint32_t header[9] = {vk_format, bits / 8, width, height, 0 /* 2D */, 0 /* not an array */,
                           1 /* faces */, 1 /* levels */, 0 /* no supercompression */};
     for (int k = 0; k < 9; ++k)
         put_u32(b + 12 + 4 * k, header[k]);
     put_u32(b + 48, dfd_at), put_u32(b + 52, dfd_bytes); /* DFD; no key/value data, no supercompression data */
-    put_u64(b + 80, data_at), put_u64(b + 88, data_bytes), put_u64(b + 96, data_bytes);
+    put_u64(b + PB_KTX2_LEVELS_AT, data_at), put_u64(b + PB_KTX2_LEVELS_AT + 8, data_bytes);
+    put_u64(b + PB_KTX2_LEVELS_AT + 16, data_bytes);
     /* Data Format Descriptor: one basic block (Khronos Data Format 1.3) */
     unsigned char *d = b + dfd_at;
     put_u32(d, dfd_bytes);

@@ -1,18 +1,16 @@
 /* The KTX 2.0 container around a Basis Universal image (ktx2_read.h). */
 #include "scene/ktx2_read.h"
 
+#include "io/ktx2_layout.h"
 #include "scene/basis_etc1s.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 enum {
-    HEADER_SIZE = 80,                 /* identifier, 9 words, the index's 4 words and 2 double words */
-    LEVEL_SIZE = 24,                  /* byteOffset, byteLength, uncompressedByteLength */
     SCHEME_BASISLZ = 1,               /* supercompressionScheme */
     MODEL_ETC1S = 163,                /* the descriptor's colorModel */
     MODEL_UASTC = 166,
-    TRANSFER_SRGB = 2,                /* its transferFunction */
     UASTC_RGBA = 3, UASTC_RRRG = 5,   /* UASTC channel ids with alpha */
     SGD_HEADER = 20, IMAGE_DESC = 20, /* BasisLZ global data */
     P_FRAME = 2,                      /* an image desc's flag: a video frame predicted from the one before */
@@ -39,8 +37,7 @@ static int inside(uint64_t offset, uint64_t length, uint64_t size)
 
 int pb_ktx2_is(const uint8_t *bytes, size_t size)
 {
-    static const uint8_t id[12] = {0xab, 'K', 'T', 'X', ' ', '2', '0', 0xbb, '\r', '\n', 0x1a, '\n'};
-    return size >= sizeof id && memcmp(bytes, id, sizeof id) == 0;
+    return size >= sizeof pb_ktx2_identifier && memcmp(bytes, pb_ktx2_identifier, sizeof pb_ktx2_identifier) == 0;
 }
 
 /* What decoding needs of the container besides the info. */
@@ -49,13 +46,12 @@ typedef struct container {
     uint32_t images;             /* in the file: layers x faces x levels */
     uint64_t level_off, level_len; /* the base level's bytes */
     uint64_t sgd_off, sgd_len;   /* supercompression global data */
-    uint32_t samples;            /* the descriptor's samples: ETC1S has 2 with an alpha slice */
 } container;
 
 static int parse(const uint8_t *p, size_t size, container *c, const char **why)
 {
     memset(c, 0, sizeof *c);
-    if (!pb_ktx2_is(p, size) || size < HEADER_SIZE) {
+    if (!pb_ktx2_is(p, size) || size < PB_KTX2_LEVELS_AT) {
         *why = "not a KTX2 file, or its header is cut short";
         return -1;
     }
@@ -80,12 +76,12 @@ static int parse(const uint8_t *p, size_t size, container *c, const char **why)
         *why = "more than 32 levels or 65,536 layers";
         return -1;
     }
-    if (!inside(HEADER_SIZE, (uint64_t)LEVEL_SIZE * (levels ? levels : 1), size)) {
+    if (!inside(PB_KTX2_LEVELS_AT, (uint64_t)PB_KTX2_LEVEL_BYTES * (levels ? levels : 1), size)) {
         *why = "its level index is cut short";
         return -1;
     }
-    c->level_off = u64(p + HEADER_SIZE);
-    c->level_len = u64(p + HEADER_SIZE + 8);
+    c->level_off = u64(p + PB_KTX2_LEVELS_AT);
+    c->level_len = u64(p + PB_KTX2_LEVELS_AT + 8);
     if (!inside(c->level_off, c->level_len, size)) {
         *why = "its base level lies outside the file";
         return -1;
@@ -99,25 +95,23 @@ static int parse(const uint8_t *p, size_t size, container *c, const char **why)
     }
     const uint8_t *block = p + dfd_off + 4;
     uint32_t block_size = u32(block + 4) >> 16, model = u32(block + 8) & 0xff;
-    uint32_t transfer = (u32(block + 8) >> 16) & 0xff;
     if ((u32(block) & 0x1ffffu) != 0 || block_size < 24 || block_size > dfd_len - 4 || (block_size - 24) % 16) {
         *why = "a data format descriptor that is not a basic one";
         return -1;
     }
-    c->samples = (block_size - 24) / 16;
+    uint32_t samples = (block_size - 24) / 16; /* ETC1S: 2 with an alpha slice */
     c->info.width = width;
     c->info.height = height;
-    c->info.srgb = transfer == TRANSFER_SRGB;
     if (vk_format == 0 && scheme == SCHEME_BASISLZ && model == MODEL_ETC1S) {
         c->info.codec = PB_KTX2_ETC1S;
-        if (c->samples < 1 || c->samples > 2) {
+        if (samples < 1 || samples > 2) {
             *why = "an ETC1S descriptor with other than 1 or 2 samples";
             return -1;
         }
-        c->info.has_alpha = c->samples == 2;
+        c->info.has_alpha = samples == 2;
     } else if (vk_format == 0 && model == MODEL_UASTC) {
         c->info.codec = PB_KTX2_UASTC;
-        uint32_t channel = c->samples ? (u32(block + 24) >> 24) & 0xf : 0;
+        uint32_t channel = samples ? (u32(block + 24) >> 24) & 0xf : 0;
         c->info.has_alpha = channel == UASTC_RGBA || channel == UASTC_RRRG;
     } else
         c->info.codec = PB_KTX2_OTHER;

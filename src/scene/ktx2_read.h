@@ -21,7 +21,6 @@ typedef struct pb_ktx2_info {
     uint32_t width, height; /* the base level's */
     pb_ktx2_codec codec;
     int has_alpha; /* an alpha slice (ETC1S) or channel (UASTC) */
-    int srgb;      /* the descriptor's transfer function is sRGB */
 } pb_ktx2_info;
 
 /* Whether the bytes start with KTX2's identifier. */
