@@ -18,11 +18,8 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import { createRequire } from 'node:module';
-import { fileURLToPath } from 'node:url';
+import { loadTranscoder, transcodeBaseLevel, TranscodeError } from './basis_transcoder.mjs';
 
-const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
-const transcoderJs = path.join(root, 'runtime/node_modules/three/examples/jsm/libs/basis/basis_transcoder.js');
 const KTX2_ID = Buffer.from([0xab, 0x4b, 0x54, 0x58, 0x20, 0x32, 0x30, 0xbb, 0x0d, 0x0a, 0x1a, 0x0a]);
 const GLB_MAGIC = 0x46546c67, CHUNK_JSON = 0x4e4f534a, CHUNK_BIN = 0x004e4942;
 
@@ -138,39 +135,6 @@ function png(width, height, rgba) {
         chunk('IDAT', zlib.deflateSync(raw)), chunk('IEND', Buffer.alloc(0))]);
 }
 
-// ---- the transcoder ----------------------------------------------------------------
-
-async function transcoder() {
-    if (!fs.existsSync(transcoderJs))
-        throw new Error(`${transcoderJs} is missing: scripts/install-deps.sh installs three.js into runtime/node_modules`);
-    const require = createRequire(import.meta.url);
-    // an Emscripten module for a CommonJS or browser global: given require and its paths
-    const factory = new Function('require', '__filename', '__dirname', `${fs.readFileSync(transcoderJs, 'utf8')}\nreturn BASIS;`);
-    const BASIS = factory(require, transcoderJs, path.dirname(transcoderJs));
-    const module = await BASIS({ wasmBinary: fs.readFileSync(transcoderJs.replace(/\.js$/, '.wasm')) });
-    module.initializeBasis();
-    return module;
-}
-
-const RGBA32 = 13; // transcoder_texture_format::cTFRGBA32
-
-function decodeKtx2(basis, bytes) {
-    const file = new basis.KTX2File(new Uint8Array(bytes));
-    try {
-        if (!file.isValid()) throw new InputError('not a KTX2 file the Basis Universal transcoder reads');
-        if (!file.isETC1S() && !file.isUASTC()) throw new InputError('a KTX2 image in neither ETC1S nor UASTC');
-        const width = file.getWidth(), height = file.getHeight();
-        if (!file.startTranscoding()) throw new InputError('the transcoder cannot start on it');
-        const rgba = new Uint8Array(file.getImageTranscodedSizeInBytes(0, 0, 0, RGBA32));
-        if (rgba.length !== width * height * 4 || !file.transcodeImage(rgba, 0, 0, 0, RGBA32, 0, -1, -1))
-            throw new InputError('its base level does not transcode');
-        return { width, height, rgba, codec: file.isUASTC() ? 'UASTC' : 'ETC1S' };
-    } finally {
-        file.close();
-        file.delete();
-    }
-}
-
 // ---- the rewrite -------------------------------------------------------------------
 
 const isKtx2 = (image, bytes) => image.mimeType === 'image/ktx2' || KTX2_ID.equals(bytes.subarray(0, 12));
@@ -188,12 +152,12 @@ async function convert(input, output) {
         if (image.uri === undefined && image.bufferView === undefined) continue;
         const bytes = imageBytes(doc, image, inDir);
         if (!isKtx2(image, bytes)) continue;
-        basis ??= await transcoder();
+        basis ??= await loadTranscoder();
         let decoded;
         try {
-            decoded = decodeKtx2(basis, bytes);
+            decoded = transcodeBaseLevel(basis, bytes);
         } catch (e) {
-            throw e instanceof InputError ? new InputError(`image ${i}: ${e.message}`) : e;
+            throw e instanceof TranscodeError ? new InputError(`image ${i}: ${e.message}`) : e;
         }
         const pngBytes = png(decoded.width, decoded.height, decoded.rgba);
         delete image.uri;
