@@ -5,7 +5,8 @@
 # test_fuzz_corpus). Usage: scripts/fuzz.sh [SECONDS] (default 1800).
 # scripts/fuzz.sh SECONDS volume: the volume reader instead (fuzz_volume_read,
 # tests/fuzz/volume_corpus, crashes saved there as crash-*); SECONDS ktx2: the
-# KTX2 reader and ETC1S decoder (fuzz_ktx2_decode, tests/fuzz/ktx2_corpus).
+# KTX2 reader and its ETC1S and UASTC decoders (fuzz_ktx2_decode,
+# tests/fuzz/ktx2_corpus).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-1800}

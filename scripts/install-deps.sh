@@ -24,7 +24,7 @@ pkgs=(
   glslang-tools spirv-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev zlib1g-dev
   libdraco-dev libmeshoptimizer-dev
-  libwebp-dev libavif-dev libopenexr-dev
+  libwebp-dev libavif-dev libopenexr-dev libzstd-dev
   clang
   slurm-wlm munge
   libvulkan-volk-dev

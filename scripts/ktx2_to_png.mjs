@@ -1,8 +1,8 @@
 // Rewrites a glTF file's KTX2 (KHR_texture_basisu) images as PNG, decoded by
 // Binomial's Basis Universal transcoder (three.js's pinned build, from
-// runtime/node_modules: scripts/install-deps.sh installs it). probebake
-// decodes ETC1S itself but not UASTC (docs/scene.md, "Textures"); this is the
-// way to bake a file whose textures are UASTC.
+// runtime/node_modules: scripts/install-deps.sh installs it), for tools that
+// read no KTX2 (probebake reads ETC1S and UASTC itself: docs/scene.md,
+// "Textures"), and as a second decoder to hold probebake's to.
 //
 //   node scripts/ktx2_to_png.mjs IN.gltf OUT.gltf
 //   node scripts/ktx2_to_png.mjs IN.glb OUT.glb

@@ -57,8 +57,33 @@ const fixtures = [
   { name: "etc1s_flat", w: 8, h: 8, kind: "flat", opts: { isUASTC: false, generateMipmap: false } },
   // the demo scene's lattice texture, for the runtime's browser test (a KTX2 variant of the demo)
   { name: "demo_lattice", png: "tests/scenes/demo.gltf", opts: { isUASTC: false, generateMipmap: true, qualityLevel: 255 } },
+  // UASTC: Zstandard supercompressed (the encoder's default) or stored as it is, plain or
+  // rate-distortion optimised, at the encoder's default and slower effort
   { name: "uastc_gradient", w: 16, h: 16, kind: "gradient", opts: { isUASTC: true, generateMipmap: false } },
+  { name: "uastc_noise_mips", w: 128, h: 96, kind: "noise", opts: { isUASTC: true, needSupercompression: false, generateMipmap: true } },
+  { name: "uastc_gradient_rdo", w: 37, h: 21, kind: "gradient", opts: { isUASTC: true, enableRDO: true, generateMipmap: false } },
+  { name: "uastc_contrast_slow", w: 48, h: 40, kind: "contrast", opts: { isUASTC: true, needSupercompression: false, uastcLDRQualityLevel: 3, generateMipmap: false } },
+  // every UASTC mode and partition pattern, and the trit and quint codes past their range
+  // (which decode modulo 3 or 5): 1,024 random blocks the transcoder accepts, in place of
+  // an encoded picture's
+  { name: "uastc_random_blocks", w: 128, h: 128, kind: "flat", random: true, opts: { isUASTC: true, needSupercompression: false, generateMipmap: false } },
 ];
+
+// Random 16-byte blocks, each kept if the transcoder decodes it alone (in a
+// 4 x 4 file): it refuses the reserved mode and pattern indices past their tables.
+async function validRandomBlocks(count) {
+  const one = Buffer.from(await encodeToKTX2(new Uint8Array(64).fill(128), {
+    isUASTC: true, needSupercompression: false, generateMipmap: false,
+    imageDecoder: async (b) => ({ data: b, width: 4, height: 4 }) }));
+  const at = Number(one.readBigUInt64LE(80)), r = rng(20261129), out = Buffer.alloc(16 * count);
+  for (let n = 0; n < count;) {
+    const block = Buffer.from(Array.from({ length: 16 }, () => Math.floor(r() * 256)));
+    block.copy(one, at);
+    try { transcodeBaseLevel(basis, one); } catch { continue; }
+    block.copy(out, 16 * n++);
+  }
+  return out;
+}
 fs.mkdirSync(outDir, { recursive: true });
 // the first image of a glTF, a PNG in a data URI
 function gltfPng(file) {
@@ -70,6 +95,12 @@ for (const f of fixtures) {
   if (f.png) Object.assign(f, (({ w, h, px }) => ({ w, h, src: px }))(gltfPng(f.png)));
   const src = f.src || picture(f.w, f.h, f.kind);
   const ktx = await encodeToKTX2(src, { ...f.opts, imageDecoder: async (b) => ({ data: b, width: f.w, height: f.h }) });
+  if (f.random) { // the base level's blocks replaced (stored as they are: no supercompression)
+    const blocks = await validRandomBlocks((f.w / 4) * (f.h / 4));
+    const at = Number(Buffer.from(ktx.buffer, ktx.byteOffset).readBigUInt64LE(80));
+    if (Number(Buffer.from(ktx.buffer, ktx.byteOffset).readBigUInt64LE(88)) !== blocks.length) throw new Error(f.name + ": level size");
+    blocks.copy(Buffer.from(ktx.buffer, ktx.byteOffset, ktx.length), at);
+  }
   fs.writeFileSync(path.join(outDir, f.name + ".ktx2"), ktx);
   const t = transcodeBaseLevel(basis, ktx);
   if (t.width !== f.w || t.height !== f.h) throw new Error(f.name + ": unexpected size");

@@ -1131,39 +1131,43 @@ static void corrupt_texture_is_a_warning(void)
     pb_scene_destroy(s);
 }
 
-/* KHR_texture_basisu. The ETC1S files in tests/data/ktx2 were written by
- * Basis Universal's own encoder (scripts/make_ktx2_fixtures.sh): an alpha
- * slice, 8 mip levels, the encoder's lowest and highest quality (codebooks of
- * a few entries and of hundreds), grey endpoints, one flat colour, sizes
- * that are not multiples of 4. Each loads, as a glTF's only source for its
- * texture, to the texels Binomial's transcoder decodes from it (the .rgba
- * beside it) byte for byte, with no warning. A UASTC file is a warning that
- * names it: without a core image the material keeps its factor, with one the
- * core image is read. */
+/* KHR_texture_basisu. The files in tests/data/ktx2 were written by Basis
+ * Universal's own encoder (scripts/make_ktx2_fixtures.sh). ETC1S: an alpha
+ * slice, 8 mip levels, the encoder's lowest and highest quality (codebooks
+ * of a few entries and of hundreds), grey endpoints, one flat colour, sizes
+ * that are not multiples of 4. UASTC: Zstandard supercompressed and stored
+ * as it is, with alpha, rate-distortion optimised, the slower effort's
+ * partitions, and 1,024 random blocks the transcoder accepts (every mode,
+ * every pattern table, trit and quint codes past their range). Each loads,
+ * as a glTF's only source for its texture, to the texels Binomial's
+ * transcoder decodes from it (the .rgba beside it) byte for byte, with no
+ * warning. */
 static void ktx2_textures_decoded_as_basis_transcodes_them(void)
 {
-    static const char *const etc1s[] = {"etc1s_gradient_alpha", "etc1s_noise_mips", "etc1s_noise_low", "etc1s_grey",
-                                        "etc1s_contrast",       "demo_lattice",     "etc1s_flat"};
-    for (size_t i = 0; i < sizeof etc1s / sizeof etc1s[0]; ++i) {
+    static const char *const files[] = {
+        "etc1s_gradient_alpha", "etc1s_noise_mips",   "etc1s_noise_low",    "etc1s_grey",
+        "etc1s_contrast",       "demo_lattice",       "etc1s_flat",         "uastc_gradient",
+        "uastc_noise_mips",     "uastc_gradient_rdo", "uastc_contrast_slow", "uastc_random_blocks"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
         char path[512], name[64], textures[256];
         size_t n = 0, m = 0;
-        snprintf(path, sizeof path, "%s/%s.ktx2", source_path("tests/data/ktx2"), etc1s[i]);
+        snprintf(path, sizeof path, "%s/%s.ktx2", source_path("tests/data/ktx2"), files[i]);
         unsigned char *ktx = read_bytes(path, &n);
-        snprintf(path, sizeof path, "%s/%s.rgba", source_path("tests/data/ktx2"), etc1s[i]);
+        snprintf(path, sizeof path, "%s/%s.rgba", source_path("tests/data/ktx2"), files[i]);
         unsigned char *ref = read_bytes(path, &m);
-        CHECKF(ktx && ref, "%s: missing", etc1s[i]);
+        CHECKF(ktx && ref, "%s: missing", files[i]);
         if (!ktx || !ref) {
             free(ktx);
             free(ref);
             continue;
         }
-        snprintf(name, sizeof name, "%s.ktx2", etc1s[i]);
+        snprintf(name, sizeof name, "%s.ktx2", files[i]);
         write_file(name, ktx, n);
         snprintf(textures, sizeof textures,
                  "\"textures\":[{\"extensions\":{\"KHR_texture_basisu\":{\"source\":0}}}],"
                  "\"images\":[{\"uri\":\"%s\",\"mimeType\":\"image/ktx2\"}]",
                  name);
-        snprintf(name, sizeof name, "%s.gltf", etc1s[i]);
+        snprintf(name, sizeof name, "%s.gltf", files[i]);
         warning_counter any = {{": ", NULL}, 0};
         pb_scene_desc d = {{count_warnings, &any}, 0, 0, 0};
         pb_scene *s = NULL;
@@ -1175,29 +1179,63 @@ static void ktx2_textures_decoded_as_basis_transcodes_them(void)
         if (s) {
             const pb_texture *t = s->texture_count ? &s->textures[0] : NULL;
             CHECKF(t && s->materials[0].base_color_texture == 0 && (size_t)t->width * t->height * 4 == m,
-                   "%s: %u textures", etc1s[i], s->texture_count);
+                   "%s: %u textures", files[i], s->texture_count);
             size_t differ = 0;
             for (size_t k = 0; t && (size_t)t->width * t->height * 4 == m && k < m; ++k)
                 differ += ((const unsigned char *)(s->texels + t->offset))[k] != ref[k];
-            CHECKF(differ == 0, "%s: %zu of %zu bytes differ from Basis Universal's transcoder", etc1s[i], differ, m);
-            CHECKF(any.count == 0, "%s: %d warnings", etc1s[i], any.count);
+            CHECKF(differ == 0, "%s: %zu of %zu bytes differ from Basis Universal's transcoder", files[i], differ, m);
+            CHECKF(any.count == 0, "%s: %d warnings", files[i], any.count);
             CHECK(strstr(s->stats.extensions_applied, "KHR_texture_basisu") != NULL);
         }
         pb_scene_destroy(s);
         free(ktx);
         free(ref);
     }
+}
 
-    /* UASTC: a warning naming the file, the image and the codec */
+/* A UASTC block no mode describes, as Binomial's transcoder refuses it: the
+ * reserved mode (prefix code 1000101), or a pattern index past its table
+ * (mode 2's, 5 bits at bit 20, of 30 patterns). The image does not decode,
+ * with that reason; in a glTF it is a warning naming the image, and the
+ * texture falls back to its core image, or without one the material keeps
+ * its factor. */
+static void invalid_uastc_blocks_are_refused(void)
+{
     size_t n = 0;
     char path[512];
-    snprintf(path, sizeof path, "%s/uastc_gradient.ktx2", source_path("tests/data/ktx2"));
-    unsigned char *uastc = read_bytes(path, &n);
-    CHECK(uastc != NULL);
-    if (!uastc)
+    snprintf(path, sizeof path, "%s/uastc_random_blocks.ktx2", source_path("tests/data/ktx2"));
+    unsigned char *ktx = read_bytes(path, &n);
+    CHECK(ktx != NULL);
+    if (!ktx)
         return;
-    write_file("uastc.ktx2", uastc, n);
-    free(uastc);
+    size_t block = (size_t)(ktx[80] | ktx[81] << 8 | ktx[82] << 16) + 16 * 77; /* the level's 78th block */
+    uint8_t *rgba = malloc(128 * 128 * 4);
+    const char *why = NULL;
+    CHECK(n > block + 16 && pb_ktx2_decode(ktx, n, rgba, &why) == 0);
+    uint8_t original[16];
+    memcpy(original, ktx + block, 16);
+
+    ktx[block] = (uint8_t)((ktx[block] & 0x80) | 0x45); /* the reserved mode */
+    why = NULL;
+    CHECKF(pb_ktx2_decode(ktx, n, rgba, &why) == -1 && why && strstr(why, "invalid UASTC block"), "reserved mode: %s",
+           why ? why : "decoded");
+    memcpy(ktx + block, original, 16);
+    ktx[block] = (uint8_t)((ktx[block] & 0xe0) | 0x1d); /* mode 2 ... */
+    ktx[block + 2] |= 0xf0;                             /* ... pattern 31 (bits 20-24) */
+    ktx[block + 3] |= 0x01;
+    why = NULL;
+    CHECKF(pb_ktx2_decode(ktx, n, rgba, &why) == -1 && why && strstr(why, "invalid UASTC block"), "pattern 31: %s",
+           why ? why : "decoded");
+    ktx[block + 2] = (uint8_t)((ktx[block + 2] & 0x0f) | 0xd0); /* pattern 29, the last: valid */
+    ktx[block + 3] &= 0xfe;
+    why = NULL;
+    CHECKF(pb_ktx2_decode(ktx, n, rgba, &why) == 0, "pattern 29: %s", why ? why : "");
+    ktx[block + 2] |= 0xf0; /* pattern 31 again, for the loader */
+    ktx[block + 3] |= 0x01;
+    write_file("uastc-invalid.ktx2", ktx, n);
+    free(rgba);
+    free(ktx);
+
     static const char *const png1x1 =
         "{\"uri\":\"data:image/png;base64,"
         "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mP8z8BQDwAEhQGAhKmMIQAAAABJRU5ErkJggg==\"}";
@@ -1205,22 +1243,22 @@ static void ktx2_textures_decoded_as_basis_transcodes_them(void)
         char textures[512];
         snprintf(textures, sizeof textures,
                  "\"textures\":[{%s\"extensions\":{\"KHR_texture_basisu\":{\"source\":0}}}],"
-                 "\"images\":[{\"uri\":\"uastc.ktx2\",\"mimeType\":\"image/ktx2\"}%s%s]",
+                 "\"images\":[{\"uri\":\"uastc-invalid.ktx2\",\"mimeType\":\"image/ktx2\"}%s%s]",
                  fallback ? "\"source\":1," : "", fallback ? "," : "", fallback ? png1x1 : "");
         const char *gltf = textured_triangle(
-            fallback ? "uastc-fallback.gltf" : "uastc.gltf",
+            fallback ? "uastc-invalid-fallback.gltf" : "uastc-invalid.gltf",
             fallback ? "\"extensionsUsed\":[\"KHR_texture_basisu\"],"
                      : "\"extensionsUsed\":[\"KHR_texture_basisu\"],\"extensionsRequired\":[\"KHR_texture_basisu\"],",
             textures, "");
-        warning_counter named = {{"UASTC", NULL}, 0};
+        warning_counter named = {{"image 0 (KTX2) could not be decoded: an invalid UASTC block", NULL}, 0};
         pb_scene_desc d = {{count_warnings, &named}, 0, 0, 0};
         pb_scene *s = NULL;
         pb_error err;
         CHECKF(pb_scene_load(gltf, &d, &s, &err) == PB_OK, "%s", err.message);
         CHECKF(s && s->materials[0].base_color_texture == (fallback ? 0 : -1) &&
                    s->texture_count == (fallback ? 1u : 0u) && (!fallback || s->textures[0].width == 1),
-               "UASTC, fallback %d: texture %d", fallback, s ? s->materials[0].base_color_texture : -2);
-        CHECKF(named.count == 1, "UASTC, fallback %d: %d warnings naming UASTC", fallback, named.count);
+               "invalid UASTC, fallback %d: texture %d", fallback, s ? s->materials[0].base_color_texture : -2);
+        CHECKF(named.count == 1, "invalid UASTC, fallback %d: %d warnings naming the block", fallback, named.count);
         pb_scene_destroy(s);
     }
 }
@@ -1232,8 +1270,9 @@ static void ktx2_textures_decoded_as_basis_transcodes_them(void)
  * the codebook indices' ranges. */
 static void ktx2_corruption_is_an_error(void)
 {
-    static const char *const files[] = {"etc1s_gradient_alpha", "etc1s_noise_low", "etc1s_grey", "etc1s_contrast", "etc1s_flat",
-                                        "etc1s_noise_mips", "uastc_gradient"};
+    static const char *const files[] = {"etc1s_gradient_alpha", "etc1s_noise_low",    "etc1s_grey",
+                                        "etc1s_contrast",       "etc1s_flat",         "etc1s_noise_mips",
+                                        "uastc_gradient",       "uastc_gradient_rdo", "uastc_contrast_slow"};
     size_t variants = 0, decodes = 0, refused = 0;
     for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
         char path[512];
@@ -2397,6 +2436,7 @@ int main(void)
     RUN(corrupt_texture_is_a_warning);
     RUN(image_view_outside_its_buffer_is_a_warning);
     RUN(ktx2_textures_decoded_as_basis_transcodes_them);
+    RUN(invalid_uastc_blocks_are_refused);
     RUN(ktx2_corruption_is_an_error);
     RUN(oversized_texture_refused_unread);
     RUN(unread_maps_not_decoded);

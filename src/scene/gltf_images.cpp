@@ -94,10 +94,10 @@ bool load_webp(tinygltf::Image *image, int index, const unsigned char *bytes, in
     return true;
 }
 
-// KTX2 (KHR_texture_basisu): Basis Universal's ETC1S decoded by
+// KTX2 (KHR_texture_basisu): Basis Universal's ETC1S or UASTC decoded by
 // scene/ktx2_read.c, after the header's size is checked against the limits.
-// UASTC and malformed files are warned about and left undecoded, so a
-// texture reading one falls back to its core image or its factor.
+// A malformed file is warned about and left undecoded, so a texture reading
+// it falls back to its core image or its factor.
 bool load_ktx2(tinygltf::Image *image, int index, const unsigned char *bytes, int size, image_ctx *ctx)
 {
     pb_ktx2_info info;

@@ -3,12 +3,15 @@
 
 #include "io/ktx2_layout.h"
 #include "scene/basis_etc1s.h"
+#include "scene/basis_uastc.h"
 
 #include <stdlib.h>
 #include <string.h>
+#include <zstd.h>
+#include <zstd_errors.h>
 
 enum {
-    SCHEME_BASISLZ = 1,               /* supercompressionScheme */
+    SCHEME_NONE = 0, SCHEME_BASISLZ = 1, SCHEME_ZSTD = 2, /* supercompressionScheme */
     MODEL_ETC1S = 163,                /* the descriptor's colorModel */
     MODEL_UASTC = 166,
     UASTC_RGBA = 3, UASTC_RRRG = 5,   /* UASTC channel ids with alpha */
@@ -44,7 +47,9 @@ int pb_ktx2_is(const uint8_t *bytes, size_t size)
 typedef struct container {
     pb_ktx2_info info;
     uint32_t images;             /* in the file: layers x faces x levels */
+    uint32_t scheme;             /* supercompression */
     uint64_t level_off, level_len; /* the base level's bytes */
+    uint64_t level_raw_len;      /* ... and their length uncompressed */
     uint64_t sgd_off, sgd_len;   /* supercompression global data */
 } container;
 
@@ -82,6 +87,8 @@ static int parse(const uint8_t *p, size_t size, container *c, const char **why)
     }
     c->level_off = u64(p + PB_KTX2_LEVELS_AT);
     c->level_len = u64(p + PB_KTX2_LEVELS_AT + 8);
+    c->level_raw_len = u64(p + PB_KTX2_LEVELS_AT + 16);
+    c->scheme = scheme;
     if (!inside(c->level_off, c->level_len, size)) {
         *why = "its base level lies outside the file";
         return -1;
@@ -111,6 +118,10 @@ static int parse(const uint8_t *p, size_t size, container *c, const char **why)
         c->info.has_alpha = samples == 2;
     } else if (vk_format == 0 && model == MODEL_UASTC) {
         c->info.codec = PB_KTX2_UASTC;
+        if (scheme != SCHEME_NONE && scheme != SCHEME_ZSTD) {
+            *why = "UASTC under a supercompression other than none or Zstandard";
+            return -1;
+        }
         uint32_t channel = samples ? (u32(block + 24) >> 24) & 0xf : 0;
         c->info.has_alpha = channel == UASTC_RGBA || channel == UASTC_RRRG;
     } else
@@ -171,6 +182,65 @@ static int decode_etc1s(const uint8_t *p, size_t size, const container *c, uint8
     return r;
 }
 
+/* The first n bytes a Zstandard frame of whole bytes decompresses to, into
+ * out: 0, or -1 where the frame is corrupt or ends sooner. Streamed, so only
+ * the bytes asked for are written whatever size the frame claims. */
+static int zstd_prefix(const uint8_t *in, size_t in_len, uint64_t whole, uint8_t *out, size_t n, const char **why)
+{
+    ZSTD_DCtx *z = ZSTD_createDCtx();
+    if (!z) {
+        *why = "out of memory";
+        return -1;
+    }
+    /* no window wider than the level's bytes: a frame claiming one is not
+     * the level's, and must not make the decoder allocate it */
+    int window_log = 10;
+    while (window_log < 27 && ((uint64_t)1 << window_log) < whole)
+        ++window_log;
+    ZSTD_DCtx_setParameter(z, ZSTD_d_windowLogMax, window_log);
+    ZSTD_inBuffer src = {in, in_len, 0};
+    ZSTD_outBuffer dst = {out, n, 0};
+    size_t r = 1;
+    while (dst.pos < n && r != 0) {
+        size_t before_in = src.pos, before_out = dst.pos;
+        r = ZSTD_decompressStream(z, &dst, &src);
+        if (ZSTD_isError(r) || (src.pos == before_in && dst.pos == before_out))
+            break; /* an error, or no progress: the input ends inside the frame */
+    }
+    ZSTD_freeDCtx(z);
+    if (dst.pos < n) {
+        *why = ZSTD_isError(r) && ZSTD_getErrorCode(r) == ZSTD_error_memory_allocation
+                   ? "out of memory"
+                   : "its Zstandard-compressed level is corrupt or cut short";
+        return -1;
+    }
+    return 0;
+}
+
+/* UASTC: the base level's first image is its first ceil(w/4) x ceil(h/4)
+ * blocks, stored as they are or in one Zstandard frame. */
+static int decode_uastc(const uint8_t *p, const container *c, uint8_t *rgba, const char **why)
+{
+    uint64_t need = 16 * (((uint64_t)c->info.width + 3) / 4) * (((uint64_t)c->info.height + 3) / 4);
+    const uint8_t *level = p + c->level_off;
+    if (c->scheme == SCHEME_NONE)
+        return pb_uastc_image_decode(level, (size_t)c->level_len, c->info.width, c->info.height, rgba, why);
+    if (c->level_raw_len < need) {
+        *why = "its base level uncompressed is smaller than its blocks";
+        return -1;
+    }
+    uint8_t *blocks = malloc((size_t)need);
+    if (!blocks) {
+        *why = "out of memory";
+        return -1;
+    }
+    int r = zstd_prefix(level, (size_t)c->level_len, c->level_raw_len, blocks, (size_t)need, why);
+    if (r == 0)
+        r = pb_uastc_image_decode(blocks, (size_t)need, c->info.width, c->info.height, rgba, why);
+    free(blocks);
+    return r;
+}
+
 int pb_ktx2_decode(const uint8_t *bytes, size_t size, uint8_t *rgba, const char **why)
 {
     container c;
@@ -180,9 +250,7 @@ int pb_ktx2_decode(const uint8_t *bytes, size_t size, uint8_t *rgba, const char 
     case PB_KTX2_ETC1S:
         return decode_etc1s(bytes, size, &c, rgba, why);
     case PB_KTX2_UASTC:
-        *why = "UASTC, which probebake does not decode (ETC1S is; scripts/ktx2_to_png.mjs rewrites a file's KTX2 "
-               "images as PNG)";
-        return -1;
+        return decode_uastc(bytes, &c, rgba, why);
     default:
         *why = "neither ETC1S nor UASTC, the formats KHR_texture_basisu allows";
         return -1;

@@ -2,9 +2,9 @@
  *
  * The container (Khronos KTX 2.0: header, level index, data format
  * descriptor, supercompression global data) is parsed here, bounds-checked
- * field by field; the base level's first image is decoded. ETC1S
- * (BasisLZ) is decoded (basis_etc1s.h); UASTC is recognised and reported,
- * not decoded. */
+ * field by field; the base level's first image is decoded: ETC1S
+ * (BasisLZ, basis_etc1s.h) or UASTC (stored as it is or Zstandard
+ * supercompressed, basis_uastc.h). */
 #ifndef PB_SCENE_KTX2_READ_H
 #define PB_SCENE_KTX2_READ_H
 
@@ -13,7 +13,7 @@
 
 typedef enum pb_ktx2_codec {
     PB_KTX2_ETC1S, /* Basis Universal ETC1S, BasisLZ supercompressed: decoded */
-    PB_KTX2_UASTC, /* Basis Universal UASTC: not decoded */
+    PB_KTX2_UASTC, /* Basis Universal UASTC, none or Zstandard supercompressed: decoded */
     PB_KTX2_OTHER, /* a Vulkan format or another model: not decoded */
 } pb_ktx2_codec;
 
@@ -31,8 +31,9 @@ int pb_ktx2_is(const uint8_t *bytes, size_t size);
 int pb_ktx2_peek(const uint8_t *bytes, size_t size, pb_ktx2_info *info, const char **why);
 
 /* Decodes the base level's first image into rgba (width x height x 4 bytes,
- * rows top-down as stored; alpha 255 without an alpha slice). 0, or -1 with
- * *why set: a malformed file, a codec not decoded, or out of memory. */
+ * rows top-down as stored; alpha 255 without an alpha slice or channel). 0,
+ * or -1 with *why set: a malformed file, a codec not decoded, or out of
+ * memory. */
 int pb_ktx2_decode(const uint8_t *bytes, size_t size, uint8_t *rgba, const char **why);
 
 #endif

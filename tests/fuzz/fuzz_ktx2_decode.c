@@ -1,5 +1,5 @@
-/* libFuzzer harness for the KTX2 reader and its ETC1S decoder
- * (src/scene/ktx2_read.c, basis_etc1s.c), straight at the bytes rather than
+/* libFuzzer harness for the KTX2 reader and its ETC1S and UASTC decoders
+ * (src/scene/ktx2_read.c, basis_etc1s.c, basis_uastc.c), straight at the bytes rather than
  * through a glTF: any result is fine, a crash, leak, sanitizer report or a
  * failure without a reason is not. Seeds: tests/fuzz/ktx2_corpus (the files
  * of tests/data/ktx2 and what the fuzzer found). */
