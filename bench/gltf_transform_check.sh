@@ -3,8 +3,9 @@
 # shared samples rewritten by the tool people use to compress glTF (npm
 # @gltf-transform/cli at a pinned version: meshopt geometry, quantized
 # attributes, simplified meshes, lossy WebP or AVIF textures; GPU instancing;
-# and KTX2 ETC1S textures from Basis Universal's encoder, npm ktx2-encoder
-# through bench/ktx2_encode.mjs, since the CLI's etc1s needs KTX-Software), each
+# and KTX2 ETC1S and UASTC (Zstandard) textures from Basis Universal's encoder,
+# npm ktx2-encoder through bench/ktx2_encode.mjs, since the CLI's etc1s and
+# uastc need KTX-Software), each
 # loaded by probebake and baked on the same grid as its original. The peer is
 # the original file; the error is the probes' irradiance (DC, mean of RGB)
 # relative to the original's: what compressing an asset costs the bake. Its
@@ -61,6 +62,10 @@ cases=(
     "duck-ktx2-etc1s|samples/Duck/Duck.gltf|ktx2 etc1s"
     "alpha-blend-ktx2-etc1s|samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf|ktx2 etc1s"
     "texture-transform-ktx2-etc1s|samples/TextureTransformTest/TextureTransformTest.gltf|ktx2 etc1s"
+    "helmet-ktx2-uastc|samples/DamagedHelmet/DamagedHelmet.gltf|ktx2 uastc"
+    "duck-ktx2-uastc|samples/Duck/Duck.gltf|ktx2 uastc"
+    "alpha-blend-ktx2-uastc|samples/AlphaBlendModeTest/AlphaBlendModeTest.gltf|ktx2 uastc"
+    "texture-transform-ktx2-uastc|samples/TextureTransformTest/TextureTransformTest.gltf|ktx2 uastc"
 )
 bake() { # scene bounds output [options]
     "$pb" bake "$1" --sky 1,1,1 --counts 8,8,8 --rays 512 --passes 4 --bounds "$2" --quiet -o "$3" "${@:4}" >/dev/null

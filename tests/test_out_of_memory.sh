@@ -119,6 +119,8 @@ RUNS=100000 each_allocation_fails info-normal-map - -- "$pb" info "$tmp/in/norma
 # an ETC1S KTX2 texture with an alpha slice (KHR_texture_basisu required, the image in a
 # bufferView): the container, the codebooks and the slices' allocations, every one
 RUNS=100000 each_allocation_fails info-ktx2 - -- "$pb" info "$src/tests/fuzz/corpus/ktx2-etc1s_gradient_alpha.glb"
+# a UASTC one, Zstandard supercompressed: the decompressor's context and its buffers, every one
+RUNS=100000 each_allocation_fails info-ktx2-uastc - -- "$pb" info "$src/tests/fuzz/corpus/ktx2-uastc_gradient.glb"
 each_allocation_fails inspect - -- "$pb" inspect "$tmp/in/s.probes"
 each_allocation_fails inspect-json - -- "$pb" inspect "$tmp/in/g.probes" --json
 # the two debug images (PNG over zlib, which reports a failed allocation)
