@@ -74,12 +74,26 @@ static const bise_range ranges[21] = {
     {5, 0, 0}, {3, 0, 1}, {4, 1, 0}, {6, 0, 0}, {4, 0, 1}, {5, 1, 0}, {7, 0, 0}, {5, 0, 1}, {6, 1, 0}, {8, 0, 0},
 };
 
-/* bits [at, at + n) of the block, least significant first; n <= 8 */
-static uint32_t bits_at(const uint8_t *b, uint32_t at, uint32_t n)
+/* The block's 128 bits, least significant first. */
+typedef struct block_bits {
+    uint64_t lo, hi;
+} block_bits;
+
+static block_bits load_bits(const uint8_t *b)
 {
-    uint32_t byte = at >> 3, shift = at & 7;
-    uint32_t v = b[byte] | (byte + 1 < 16 ? (uint32_t)b[byte + 1] << 8 : 0);
-    return (v >> shift) & ((1u << n) - 1);
+    block_bits v = {0, 0};
+    for (int i = 7; i >= 0; --i) {
+        v.lo = v.lo << 8 | b[i];
+        v.hi = v.hi << 8 | b[8 + i];
+    }
+    return v;
+}
+
+/* bits [at, at + n) of the block; n <= 8, at + n <= 128 */
+static uint32_t bits_at(const block_bits *b, uint32_t at, uint32_t n)
+{
+    uint64_t v = at >= 64 ? b->hi >> (at - 64) : at ? b->lo >> at | b->hi << (64 - at) : b->lo;
+    return (uint32_t)v & ((1u << n) - 1);
 }
 
 /* KDFS "Color endpoint unquantization": a BISE integer of the range to
@@ -151,7 +165,7 @@ static int mode_of(const uint8_t *block)
  * group's code t0 + 3 t1 + 9 t2 ... A code past its group's range is not an
  * error: every digit is taken modulo 3 or 5, as Binomial's transcoder reads
  * it (20,000 random blocks decode as it decodes them). */
-static void read_trits_quints(const uint8_t *block, uint32_t *at, uint32_t n, int trit, uint32_t *out)
+static void read_trits_quints(const block_bits *block, uint32_t *at, uint32_t n, int trit, uint32_t *out)
 {
     static const uint8_t trit_bits[6] = {0, 2, 4, 5, 7, 8}, quint_bits[4] = {0, 3, 5, 7};
     uint32_t per = trit ? 5 : 3, base = trit ? 3 : 5;
@@ -171,10 +185,12 @@ int pb_uastc_block_decode(const uint8_t block[16], uint8_t rgba[64])
     if (m == RESERVED)
         return -1;
     const uastc_mode *mode = &modes[m];
+    block_bits b = load_bits(block);
     if (m == SOLID) {
-        for (uint32_t i = 0; i < 16; ++i)
-            for (uint32_t c = 0; c < 4; ++c)
-                rgba[4 * i + c] = (uint8_t)bits_at(block, 5 + 8 * c, 8);
+        for (uint32_t c = 0; c < 4; ++c)
+            rgba[c] = (uint8_t)bits_at(&b, 5 + 8 * c, 8);
+        for (uint32_t i = 1; i < 16; ++i)
+            memcpy(rgba + 4 * i, rgba, 4);
         return 0;
     }
 
@@ -187,7 +203,7 @@ int pb_uastc_block_decode(const uint8_t block[16], uint8_t rgba[64])
     uint8_t subset[16] = {0}, anchor[3] = {0};
     if (mode->patterns != NO_PATTERN) {
         uint32_t count = mode->patterns == PATTERNS2 ? 30 : mode->patterns == PATTERNS3 ? 11 : 19;
-        uint32_t pat = bits_at(block, at, mode->patterns == PATTERNS3 ? 4 : 5);
+        uint32_t pat = bits_at(&b, at, mode->patterns == PATTERNS3 ? 4 : 5);
         at += mode->patterns == PATTERNS3 ? 4 : 5;
         if (pat >= count)
             return -1;
@@ -202,7 +218,7 @@ int pb_uastc_block_decode(const uint8_t block[16], uint8_t rgba[64])
      * weighs (mode 17, luminance-alpha, always alpha) */
     uint32_t ccs = 3;
     if (mode->compsel_bits) {
-        ccs = bits_at(block, at, 2);
+        ccs = bits_at(&b, at, 2);
         at += 2;
     }
 
@@ -210,9 +226,9 @@ int pb_uastc_block_decode(const uint8_t block[16], uint8_t rgba[64])
     bise_range r = ranges[mode->endpoint_range];
     uint32_t n = 2u * mode->comps * mode->subsets, e[18] = {0};
     if (r.trit || r.quint)
-        read_trits_quints(block, &at, n, r.trit, e);
+        read_trits_quints(&b, &at, n, r.trit, e);
     for (uint32_t i = 0; i < n; ++i) {
-        e[i] = e[i] << r.bits | bits_at(block, at, r.bits);
+        e[i] = e[i] << r.bits | bits_at(&b, at, r.bits);
         at += r.bits;
         e[i] = unquantize_endpoint(e[i], r);
     }
@@ -223,7 +239,7 @@ int pb_uastc_block_decode(const uint8_t block[16], uint8_t rgba[64])
     for (uint32_t i = 0, k = 0; i < 16; ++i)
         for (uint32_t p = 0; p < mode->planes; ++p, ++k) {
             uint32_t bits = mode->weight_bits - (anchor[subset[i]] == i);
-            w[k] = unquantize_weight(bits_at(block, at, bits), mode->weight_bits);
+            w[k] = unquantize_weight(bits_at(&b, at, bits), mode->weight_bits);
             at += bits;
         }
 
