@@ -7,6 +7,7 @@
 #include "compressed_variants.h"
 #include "exr_pattern.h"
 #include "io/environment_exr.h"
+#include "scene/basis_uastc.h"
 #include "scene/ktx2_read.h"
 #include "test_util.h"
 
@@ -1263,6 +1264,53 @@ static void invalid_uastc_blocks_are_refused(void)
     }
 }
 
+/* A UASTC image large enough to be split over the host's threads (1,000 x
+ * 520 texels: 32,500 blocks, the fixture's 1,024 random ones repeated, the
+ * last column and row of blocks cut) decodes to the bytes each block gives
+ * alone; and one invalid block anywhere fails it. */
+static void uastc_images_decode_on_all_cores_as_block_by_block(void)
+{
+    size_t n = 0;
+    char path[512];
+    snprintf(path, sizeof path, "%s/uastc_random_blocks.ktx2", source_path("tests/data/ktx2"));
+    unsigned char *ktx = read_bytes(path, &n);
+    CHECK(ktx != NULL && n > 80 + 16 * 1024);
+    if (!ktx)
+        return;
+    const uint8_t *random = ktx + (ktx[80] | ktx[81] << 8 | ktx[82] << 16);
+    enum { W = 1000, H = 520, BW = (W + 3) / 4, BH = (H + 3) / 4 };
+    uint8_t *blocks = malloc((size_t)BW * BH * 16), *rgba = malloc((size_t)W * H * 4), *ref = malloc((size_t)W * H * 4);
+    for (size_t b = 0; b < (size_t)BW * BH; ++b)
+        memcpy(blocks + 16 * b, random + 16 * ((b * 7) % 1024), 16);
+    for (size_t by = 0; by < BH; ++by)
+        for (size_t bx = 0; bx < BW; ++bx) {
+            uint8_t texels[64];
+            CHECK(pb_uastc_block_decode(blocks + 16 * (by * BW + bx), texels) == 0);
+            for (size_t y = 0; y < 4 && by * 4 + y < H; ++y)
+                for (size_t x = 0; x < 4 && bx * 4 + x < W; ++x)
+                    memcpy(ref + 4 * ((by * 4 + y) * W + bx * 4 + x), texels + 4 * (4 * y + x), 4);
+        }
+    const char *why = NULL;
+    memset(rgba, 0, (size_t)W * H * 4);
+    CHECKF(pb_uastc_image_decode(blocks, (size_t)BW * BH * 16, W, H, rgba, &why) == 0, "%s", why ? why : "");
+    CHECK(memcmp(rgba, ref, (size_t)W * H * 4) == 0);
+    for (size_t at = 0; at < (size_t)BW * BH; at += 4093) { /* the reserved mode in one block at a time */
+        uint8_t keep = blocks[16 * at];
+        blocks[16 * at] = (uint8_t)((keep & 0x80) | 0x45);
+        why = NULL;
+        CHECKF(pb_uastc_image_decode(blocks, (size_t)BW * BH * 16, W, H, rgba, &why) == -1 && why &&
+                   strstr(why, "invalid UASTC block"),
+               "block %zu: %s", at, why ? why : "decoded");
+        blocks[16 * at] = keep;
+    }
+    why = NULL;
+    CHECK(pb_uastc_image_decode(blocks, (size_t)BW * BH * 16 - 1, W, H, rgba, &why) == -1 && why);
+    free(blocks);
+    free(rgba);
+    free(ref);
+    free(ktx);
+}
+
 /* Every KTX2 fixture cut short at every length, and with every byte in turn
  * flipped: each decode succeeds or fails with a reason, and never reads or
  * writes outside its buffers (ASan in CI's sanitizer build). A corrupt
@@ -2437,6 +2485,7 @@ int main(void)
     RUN(image_view_outside_its_buffer_is_a_warning);
     RUN(ktx2_textures_decoded_as_basis_transcodes_them);
     RUN(invalid_uastc_blocks_are_refused);
+    RUN(uastc_images_decode_on_all_cores_as_block_by_block);
     RUN(ktx2_corruption_is_an_error);
     RUN(oversized_texture_refused_unread);
     RUN(unread_maps_not_decoded);

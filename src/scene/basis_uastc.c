@@ -3,6 +3,9 @@
  * chapter. */
 #include "scene/basis_uastc.h"
 
+#include "common/common.h"
+
+#include <stdatomic.h>
 #include <string.h>
 
 enum { MODES = 19, SOLID = 8, RESERVED = 19 };
@@ -256,6 +259,31 @@ int pb_uastc_block_decode(const uint8_t block[16], uint8_t rgba[64])
     return 0;
 }
 
+/* A range of block rows decoded by one of the host's threads. */
+typedef struct image_job {
+    const uint8_t *blocks;
+    uint64_t blocks_x;
+    uint32_t width, height;
+    uint8_t *rgba;
+    atomic_int invalid; /* a block of some row was invalid */
+} image_job;
+
+static void decode_rows(void *user, uint64_t begin, uint64_t end)
+{
+    image_job *job = user;
+    for (uint64_t by = begin; by < end; ++by)
+        for (uint64_t bx = 0; bx < job->blocks_x; ++bx) {
+            uint8_t texels[64];
+            if (pb_uastc_block_decode(job->blocks + 16 * (by * job->blocks_x + bx), texels)) {
+                atomic_store(&job->invalid, 1);
+                return;
+            }
+            for (uint32_t y = 0; y < 4 && by * 4 + y < job->height; ++y)
+                for (uint32_t x = 0; x < 4 && bx * 4 + x < job->width; ++x)
+                    memcpy(job->rgba + 4 * ((by * 4 + y) * job->width + bx * 4 + x), texels + 4 * (4 * y + x), 4);
+        }
+}
+
 int pb_uastc_image_decode(const uint8_t *blocks, size_t size, uint32_t width, uint32_t height, uint8_t *rgba,
                           const char **why)
 {
@@ -264,16 +292,14 @@ int pb_uastc_image_decode(const uint8_t *blocks, size_t size, uint32_t width, ui
         *why = "fewer UASTC blocks than its size needs";
         return -1;
     }
-    for (uint64_t by = 0; by < bh; ++by)
-        for (uint64_t bx = 0; bx < bw; ++bx) {
-            uint8_t texels[64];
-            if (pb_uastc_block_decode(blocks + 16 * (by * bw + bx), texels)) {
-                *why = "an invalid UASTC block";
-                return -1;
-            }
-            for (uint32_t y = 0; y < 4 && by * 4 + y < height; ++y)
-                for (uint32_t x = 0; x < 4 && bx * 4 + x < width; ++x)
-                    memcpy(rgba + 4 * ((by * 4 + y) * width + bx * 4 + x), texels + 4 * (4 * y + x), 4);
-        }
+    /* blocks are independent: rows of them on all host cores, in groups of
+     * at least 4,096 blocks so that a small image stays on one */
+    image_job job = {blocks, bw, width, height, rgba, 0};
+    uint64_t grain = bw ? (4096 + bw - 1) / bw : 1;
+    pb_parallel_for(bh, grain, 0, decode_rows, &job);
+    if (atomic_load(&job.invalid)) {
+        *why = "an invalid UASTC block";
+        return -1;
+    }
     return 0;
 }

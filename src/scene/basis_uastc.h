@@ -20,8 +20,9 @@
 int pb_uastc_block_decode(const uint8_t block[16], uint8_t rgba[64]);
 
 /* Decodes an image's blocks (ceil(width / 4) x ceil(height / 4) of them,
- * row by row, 16 bytes each, in size bytes) into width x height x 4 bytes.
- * 0, or -1 with *why set (a static string). */
+ * row by row, 16 bytes each, in size bytes) into width x height x 4 bytes,
+ * rows of blocks on all host cores (the same bytes as on one). 0, or -1
+ * with *why set (a static string). */
 int pb_uastc_image_decode(const uint8_t *blocks, size_t size, uint32_t width, uint32_t height, uint8_t *rgba,
                           const char **why);
 
