@@ -57,6 +57,7 @@ const fixtures = [
   { name: "etc1s_flat", w: 8, h: 8, kind: "flat", opts: { isUASTC: false, generateMipmap: false } },
   // the demo scene's lattice texture, for the runtime's browser test (a KTX2 variant of the demo)
   { name: "demo_lattice", png: "tests/scenes/demo.gltf", opts: { isUASTC: false, generateMipmap: true, qualityLevel: 255 } },
+  { name: "demo_lattice_uastc", png: "tests/scenes/demo.gltf", opts: { isUASTC: true, generateMipmap: true } },
   // UASTC: Zstandard supercompressed (the encoder's default) or stored as it is, plain or
   // rate-distortion optimised, at the encoder's default and slower effort
   { name: "uastc_gradient", w: 16, h: 16, kind: "gradient", opts: { isUASTC: true, generateMipmap: false } },

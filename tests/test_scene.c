@@ -1148,7 +1148,8 @@ static void ktx2_textures_decoded_as_basis_transcodes_them(void)
     static const char *const files[] = {
         "etc1s_gradient_alpha", "etc1s_noise_mips",   "etc1s_noise_low",    "etc1s_grey",
         "etc1s_contrast",       "demo_lattice",       "etc1s_flat",         "uastc_gradient",
-        "uastc_noise_mips",     "uastc_gradient_rdo", "uastc_contrast_slow", "uastc_random_blocks"};
+        "uastc_noise_mips",     "uastc_gradient_rdo", "uastc_contrast_slow", "uastc_random_blocks",
+        "demo_lattice_uastc"};
     for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
         char path[512], name[64], textures[256];
         size_t n = 0, m = 0;

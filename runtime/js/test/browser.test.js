@@ -198,20 +198,21 @@ test('the page shades the Duck with its vertex normals as the C renderer does', 
 
 // The viewer reads what the baker reads (README, "glTF extensions"): the demo
 // scene with its geometry as Draco and as meshopt (tests/gltf_compress) and its
-// lattice texture as KTX2 ETC1S (tests/data/ktx2/demo_lattice.ktx2, written by
-// Basis Universal's encoder; KHR_texture_basisu required, no PNG kept), each
+// lattice texture as KTX2, ETC1S with Draco and UASTC (Zstandard) with meshopt
+// (tests/data/ktx2/demo_lattice*.ktx2, written by Basis Universal's encoder;
+// KHR_texture_basisu required, no PNG kept), each
 // baked, then drawn indirect-only by the C renderer and by the page (three.js's
 // Draco, meshopt and Basis Universal decoders) within the demo's bound. Before,
 // the page's plain GLTFLoader refused all three.
 test('the page reads Draco, meshopt and KTX2 files as the baker does', async () => {
     const compress = process.env.PB_GLTF_COMPRESS;
     assert.ok(compress, 'PB_GLTF_COMPRESS names tests/gltf_compress');
-    copyFileSync(join(root, 'tests/data/ktx2/demo_lattice.ktx2'), join(dir, 'demo_lattice.ktx2'));
-    for (const codec of ['draco', 'meshopt']) {
+    for (const [codec, lattice] of [['draco', 'demo_lattice'], ['meshopt', 'demo_lattice_uastc']]) {
+        copyFileSync(join(root, `tests/data/ktx2/${lattice}.ktx2`), join(dir, `${lattice}.ktx2`));
         const file = join(dir, `demo-${codec}.gltf`);
         execFileSync(compress, [codec, join(root, 'tests/scenes/demo.gltf'), file]);
         const g = JSON.parse(readFileSync(file, 'utf8'));
-        g.images = [{ uri: 'demo_lattice.ktx2', mimeType: 'image/ktx2' }];
+        g.images = [{ uri: `${lattice}.ktx2`, mimeType: 'image/ktx2' }];
         for (const tex of g.textures) {
             delete tex.source;
             tex.extensions = { ...tex.extensions, KHR_texture_basisu: { source: 0 } };
