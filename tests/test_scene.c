@@ -2,6 +2,7 @@
  * encodings, dropped triangles, and every malformed-file error; and the
  * environment maps a scene is lit by (.hdr and OpenEXR). CPU only. */
 #define _DEFAULT_SOURCE /* mknod, makedev */
+#define _GNU_SOURCE     /* sched_setaffinity */
 #include "bake/shading_normals.h"
 #include "bvh/alpha.h"
 #include "compressed_variants.h"
@@ -11,6 +12,7 @@
 #include "scene/ktx2_read.h"
 #include "test_util.h"
 
+#include <sched.h>
 #include <sys/sysmacros.h>
 
 #include <stb_image_write.h>
@@ -1312,6 +1314,137 @@ static void uastc_images_decode_on_all_cores_as_block_by_block(void)
     free(ktx);
 }
 
+/* Every message of a load, in order. */
+typedef struct message_log {
+    char text[8192];
+    size_t used;
+} message_log;
+
+static void keep_messages(pb_log_level level, const char *msg, void *user)
+{
+    message_log *l = user;
+    int n = snprintf(l->text + l->used, sizeof l->text - l->used, "%d %s\n", (int)level, msg);
+    if (n > 0)
+        l->used += (size_t)n < sizeof l->text - l->used ? (size_t)n : sizeof l->text - l->used - 1;
+}
+
+/* Images decoded ahead of the material pass on the host's threads
+ * (prefetch_images) make the scene and the messages that decoding each in
+ * turn makes: the same textures, texels and material indices, the same
+ * warnings in the same order. Eight PNG images of four sizes behind six
+ * materials (base colour, emissive, metallic and normal textures; one image
+ * read by two textures, one unlit material, one whose metallic factor is 0),
+ * with a corrupt image, one past the per-image limit, and a file budget that
+ * the fifth decoded image exceeds. Loaded with the process on all cores and
+ * then on one (where nothing is decoded ahead). */
+static void images_decoded_ahead_load_as_in_turn(void)
+{
+    static const int sizes[8][2] = {{8, 4}, {16, 16}, {4, 4}, {0, 0}, {64, 32}, {2, 2}, {32, 32}, {8, 8}};
+    for (int i = 0; i < 8; ++i) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/ahead%d.png", temp_dir(), i);
+        if (sizes[i][0] == 0) { /* not a PNG */
+            write_file("ahead3.png", "\x89PNG\r\n\x1a\n-not-really", 19);
+            continue;
+        }
+        size_t n = (size_t)sizes[i][0] * sizes[i][1];
+        unsigned char *px = malloc(4 * n);
+        for (size_t k = 0; k < 4 * n; ++k)
+            px[k] = (unsigned char)(k * 37 + i * 11);
+        CHECK(stbi_write_png(path, sizes[i][0], sizes[i][1], 4, px, 4 * sizes[i][0]) != 0);
+        free(px);
+    }
+    unsigned char bin[36 + 24];
+    memcpy(bin, tri_pos, 36);
+    float uv[6] = {0, 0, 1, 0, 0, 1};
+    memcpy(bin + 36, uv, 24);
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1,2,3,4,5]}],"
+        "\"nodes\":[{\"mesh\":0},{\"mesh\":1},{\"mesh\":2},{\"mesh\":3},{\"mesh\":4},{\"mesh\":5}],"
+        "\"extensionsUsed\":[\"KHR_materials_unlit\"],"
+        "\"materials\":["
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1}},"
+        "\"normalTexture\":{\"index\":2}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":3}},\"emissiveTexture\":{\"index\":4},"
+        "\"emissiveFactor\":[1,1,1]},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":5},\"metallicRoughnessTexture\":{\"index\":6},"
+        "\"metallicFactor\":0}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":7}},\"normalTexture\":{\"index\":2},"
+        "\"extensions\":{\"KHR_materials_unlit\":{}}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":8}},\"normalTexture\":{\"index\":9}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}},\"emissiveTexture\":{\"index\":10}}],"
+        "\"textures\":[{\"source\":0},{\"source\":1},{\"source\":2},{\"source\":3},{\"source\":4},{\"source\":5},"
+        "{\"source\":6},{\"source\":7},{\"source\":1},{\"source\":6},{\"source\":5}],"
+        "\"images\":[{\"uri\":\"ahead0.png\"},{\"uri\":\"ahead1.png\"},{\"uri\":\"ahead2.png\"},{\"uri\":\"ahead3.png\"},"
+        "{\"uri\":\"ahead4.png\"},{\"uri\":\"ahead5.png\"},{\"uri\":\"ahead6.png\"},{\"uri\":\"ahead7.png\"}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":0}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":1}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":2}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":3}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":4}]},"
+        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":5}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":24}],"
+        "\"buffers\":[{\"byteLength\":60,\"uri\":\"@BUF@\"}]}";
+    const char *path = write_gltf("ahead.gltf", json, bin, sizeof bin);
+    cpu_set_t all, one;
+    CHECK(sched_getaffinity(0, sizeof all, &all) == 0);
+    if (CPU_COUNT(&all) < 2) {
+        fprintf(stderr, "  skipped: one core, so nothing is decoded ahead\n");
+        return;
+    }
+    CPU_ZERO(&one);
+    for (int c = 0; c < CPU_SETSIZE; ++c)
+        if (CPU_ISSET(c, &all)) {
+            CPU_SET(c, &one);
+            break;
+        }
+    pb_scene *s[2] = {NULL, NULL};
+    static message_log logs[2];
+    for (int run = 0; run < 2; ++run) {
+        memset(&logs[run], 0, sizeof logs[run]);
+        /* 32 x 32 pixels an image; 1,300 for the file: ahead4 (64 x 32) is
+         * past the first, and ahead6 (32 x 32), the last to decode (after
+         * 372 pixels), past the second */
+        pb_scene_desc d = {{keep_messages, &logs[run]}, 0, 32 * 32, 1300, 0, 0};
+        if (run == 1)
+            CHECK(sched_setaffinity(0, sizeof one, &one) == 0);
+        pb_error err;
+        CHECKF(pb_scene_load(path, &d, &s[run], &err) == PB_OK, "%s", err.message);
+        if (run == 1)
+            CHECK(sched_setaffinity(0, sizeof all, &all) == 0);
+    }
+    CHECKF(strcmp(logs[0].text, logs[1].text) == 0, "messages differ:\n%s---\n%s", logs[0].text, logs[1].text);
+    CHECKF(strstr(logs[0].text, "image 3 could not be decoded") &&
+               strstr(logs[0].text, "image 4 is 64 x 32 pixels") && strstr(logs[0].text, "image 6 is 32 x 32 pixels"),
+           "%s", logs[0].text);
+    if (s[0] && s[1]) {
+        CHECKF(s[0]->texture_count == s[1]->texture_count && s[0]->material_count == s[1]->material_count &&
+                   s[0]->texture_count >= 4,
+               "%u / %u textures", s[0]->texture_count, s[1]->texture_count);
+        for (uint32_t t = 0; t < s[0]->texture_count && t < s[1]->texture_count; ++t)
+            CHECKF(s[0]->textures[t].width == s[1]->textures[t].width &&
+                       s[0]->textures[t].height == s[1]->textures[t].height &&
+                       s[0]->textures[t].offset == s[1]->textures[t].offset &&
+                       s[0]->textures[t].srgb == s[1]->textures[t].srgb &&
+                       !memcmp(s[0]->texels + s[0]->textures[t].offset, s[1]->texels + s[1]->textures[t].offset,
+                               4 * (size_t)s[0]->textures[t].width * s[0]->textures[t].height),
+                   "texture %u", t);
+        for (uint32_t m = 0; m < s[0]->material_count && m < s[1]->material_count; ++m) {
+            const pb_material *a = &s[0]->materials[m], *b = &s[1]->materials[m];
+            CHECKF(a->base_color_texture == b->base_color_texture && a->emissive_texture == b->emissive_texture &&
+                       a->normal_texture == b->normal_texture && a->metallic == b->metallic &&
+                       !memcmp(a->base_color, b->base_color, sizeof a->base_color) &&
+                       !memcmp(a->emissive, b->emissive, sizeof a->emissive),
+                   "material %u", m);
+        }
+        CHECK(s[0]->stats.textures_unread == s[1]->stats.textures_unread);
+    }
+    pb_scene_destroy(s[0]);
+    pb_scene_destroy(s[1]);
+}
+
 /* Every KTX2 fixture cut short at every length, and with every byte in turn
  * flipped: each decode succeeds or fails with a reason, and never reads or
  * writes outside its buffers (ASan in CI's sanitizer build). A corrupt
@@ -2487,6 +2620,7 @@ int main(void)
     RUN(ktx2_textures_decoded_as_basis_transcodes_them);
     RUN(invalid_uastc_blocks_are_refused);
     RUN(uastc_images_decode_on_all_cores_as_block_by_block);
+    RUN(images_decoded_ahead_load_as_in_turn);
     RUN(ktx2_corruption_is_an_error);
     RUN(oversized_texture_refused_unread);
     RUN(unread_maps_not_decoded);

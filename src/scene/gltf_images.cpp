@@ -245,9 +245,88 @@ bool decode_image(image_ctx *ctx, int index)
         ctx->encoded[(size_t)index] = 0;
         std::vector<unsigned char> bytes;
         bytes.swap(image.image);
-        decode(&image, index, bytes.data(), (int)bytes.size(), ctx);
+        early_image *e = (size_t)index < ctx->early.size() ? &ctx->early[(size_t)index] : nullptr;
+        if (e && e->width > 0) {
+            // decoded ahead: the header's check and the charge, as decode makes them
+            if (image_fits(ctx, index, e->width, e->height)) {
+                ctx->left_pixels -= (uint64_t)e->width * (uint64_t)e->height;
+                image.width = e->width;
+                image.height = e->height;
+                image.image.swap(e->rgba);
+            }
+            *e = early_image();
+        } else
+            decode(&image, index, bytes.data(), (int)bytes.size(), ctx);
     }
     return image.width > 0 && image.height > 0 && image.image.size() == (size_t)image.width * image.height * 4;
+}
+
+namespace {
+
+// One batch of prefetch_images: each image decoded on a thread of its own
+// into its early_image, with a context whose log only counts (a decode that
+// says anything is not kept) and whose budget is not charged yet.
+struct prefetch_job {
+    image_ctx *ctx;
+    const int *batch;
+};
+
+void count_messages(pb_log_level, const char *, void *user)
+{
+    ++*static_cast<int *>(user);
+}
+
+void prefetch_range(void *user, uint64_t begin, uint64_t end)
+{
+    const prefetch_job *job = static_cast<const prefetch_job *>(user);
+    for (uint64_t i = begin; i < end; ++i) {
+        int index = job->batch[i], said = 0;
+        const std::vector<unsigned char> &bytes = job->ctx->model->images[(size_t)index].image;
+        // no exception may leave a thread (nor cross pb_parallel_for's C frames): an
+        // allocation that fails here fails again in turn, where the loader reports it
+        try {
+            image_ctx quiet = {job->ctx->path, {count_messages, &said}, 0, job->ctx->max_pixels, UINT64_MAX,
+                               job->ctx->model, {}, {}};
+            tinygltf::Image out;
+            decode(&out, index, bytes.data(), (int)bytes.size(), &quiet);
+            if (said == 0 && out.width > 0 && out.height > 0 &&
+                out.image.size() == (size_t)out.width * (size_t)out.height * 4) {
+                early_image &e = job->ctx->early[(size_t)index];
+                e.width = out.width;
+                e.height = out.height;
+                e.rgba.swap(out.image);
+            }
+        } catch (...) {
+        }
+    }
+}
+
+} // namespace
+
+void prefetch_images(image_ctx *ctx, const std::vector<int> &order)
+{
+    if (!ctx->model || ctx->skip)
+        return;
+    std::vector<int> todo; // once each, those still holding their file bytes
+    std::vector<char> seen(ctx->model->images.size(), 0);
+    for (int index : order)
+        if (index >= 0 && (size_t)index < seen.size() && !seen[(size_t)index] && (size_t)index < ctx->encoded.size() &&
+            ctx->encoded[(size_t)index]) {
+            seen[(size_t)index] = 1;
+            todo.push_back(index);
+        }
+    uint32_t threads = pb_host_threads();
+    if (todo.size() < 2 || threads < 2)
+        return; // nothing to overlap: decoded in turn
+    ctx->early.resize(ctx->model->images.size());
+    uint64_t decoded = 0;
+    for (size_t first = 0; first < todo.size() && decoded <= ctx->left_pixels; first += threads) {
+        size_t count = todo.size() - first < threads ? todo.size() - first : threads;
+        prefetch_job job = {ctx, todo.data() + first};
+        pb_parallel_for(count, 1, threads, prefetch_range, &job);
+        for (size_t i = first; i < first + count; ++i)
+            decoded += (uint64_t)ctx->early[(size_t)todo[i]].width * (uint64_t)ctx->early[(size_t)todo[i]].height;
+    }
 }
 
 void release_images(image_ctx *ctx)
@@ -257,6 +336,7 @@ void release_images(image_ctx *ctx)
     for (tinygltf::Image &image : ctx->model->images)
         std::vector<unsigned char>().swap(image.image);
     ctx->encoded.assign(ctx->encoded.size(), 0);
+    std::vector<early_image>().swap(ctx->early);
 }
 
 } // namespace pb_gltf

@@ -84,6 +84,43 @@ int texture_source(reader &r, size_t i)
     return t.source >= 0 || unusable < 0 ? t.source : unusable; // a missing or undecoded image is warned about
 }
 
+// The image texture i reads first: the first of its extensions' sources
+// (texture_source's order), else its core source.
+int first_source(const tinygltf::Texture &t)
+{
+    for (const char *name : {"EXT_texture_avif", "EXT_texture_webp", "KHR_texture_basisu"}) {
+        auto ext = t.extensions.find(name);
+        if (ext != t.extensions.end() && ext->second.IsObject() && ext->second.Has("source") &&
+            ext->second.Get("source").IsInt())
+            return ext->second.Get("source").GetNumberAsInt();
+    }
+    return t.source;
+}
+
+// The images read_materials will ask for, in the order it asks: each
+// material's base colour and emissive textures (always read), its normal map
+// and metallic texture where nothing rules them out before their UVs are
+// looked at. For prefetch_images, which only decodes them early.
+std::vector<int> images_materials_read(const reader &r)
+{
+    const tinygltf::Model &m = r.m;
+    std::vector<int> order;
+    auto add = [&](int texture) {
+        if (texture >= 0 && (size_t)texture < m.textures.size())
+            order.push_back(first_source(m.textures[(size_t)texture]));
+    };
+    for (const tinygltf::Material &mt : m.materials) {
+        bool unlit = mt.extensions.find("KHR_materials_unlit") != mt.extensions.end();
+        add(base_texture_index(mt));
+        add(mt.emissiveTexture.index);
+        if (!unlit && !spec_gloss(mt) && mt.pbrMetallicRoughness.metallicFactor > 0)
+            add(mt.pbrMetallicRoughness.metallicRoughnessTexture.index);
+        if (!unlit && !r.no_normal_maps)
+            add(mt.normalTexture.index);
+    }
+    return order;
+}
+
 // glTF texture i as a scene texture, its image decoded now; -1 (warned)
 // where it names no image or its image does not decode.
 int32_t make_texture(reader &r, size_t i)
@@ -328,6 +365,8 @@ pb_result read_textures(reader &r, int skip)
 
 void read_materials(reader &r)
 {
+    if (!r.skip_textures)
+        prefetch_images(r.images, images_materials_read(r));
     for (const tinygltf::Material &mt : r.m.materials) {
         pb_material pm = pb_material_default();
         snprintf(pm.name, sizeof pm.name, "%s", mt.name.c_str());
