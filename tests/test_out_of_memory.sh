@@ -116,12 +116,28 @@ RUNS=100000 each_allocation_fails info-no-material - -- "$pb" info "$tmp/in/noma
 printf '%s' '{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0,"TEXCOORD_0":1,"TANGENT":2},"material":0}]}],"materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0},"metallicFactor":0},"normalTexture":{"index":1,"scale":0.5}}],"textures":[{"source":0},{"source":0}],"images":[{"uri":"data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAABCAYAAAD0In+KAAAAEUlEQVR4nGNoOPH/P1fDr/8AGREFyoKwXaYAAAAASUVORK5CYII="}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"},{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"},{"bufferView":2,"componentType":5126,"count":3,"type":"VEC4"}],"bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":24},{"buffer":0,"byteOffset":60,"byteLength":48}],"buffers":[{"byteLength":108,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/AACAPwAAAAAAAAAAAACAPwAAgD8AAAAAAAAAAAAAgD8AAIA/AAAAAAAAAAAAAIA/"}]}' \
     >"$tmp/in/normalmap.gltf"
 RUNS=100000 each_allocation_fails info-normal-map - -- "$pb" info "$tmp/in/normalmap.gltf"
-# the same material with its normal map read from an image of its own: two images, decoded
-# ahead on the host's threads (prefetch_images) where there are two cores, so an allocation
-# fails on a worker as often as on the loader's thread
-sed 's/"textures":\[{"source":0},{"source":0}\]/"textures":[{"source":0},{"source":1}]/; s/"images":\[{"uri":"\([^"]*\)"}\]/"images":[{"uri":"\1"},{"uri":"\1"}]/' \
+# the same material with its colour and normal map read from two PNG files of noise (1.3 MB:
+# past the 1 MiB under which nothing is decoded ahead), decoded ahead on the host's threads
+# (prefetch_images) where there are two cores, so allocations fail on a worker as well as on
+# the loader's thread
+python3 - "$tmp/in" <<'EOF_PNG'
+import struct, sys, zlib
+def png(path, w, h, seed):
+    raw, x = bytearray(), seed
+    for _ in range(h):
+        raw.append(0)
+        for _ in range(4 * w):
+            x = (x * 1664525 + 1013904223) & 0xffffffff
+            raw.append(x >> 24)
+    chunk = lambda t, d: struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
+    open(path, "wb").write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0)) +
+                           chunk(b"IDAT", zlib.compress(bytes(raw), 1)) + chunk(b"IEND", b""))
+png(sys.argv[1] + "/noise0.png", 400, 400, 1)
+png(sys.argv[1] + "/noise1.png", 400, 400, 2)
+EOF_PNG
+sed 's/"textures":\[{"source":0},{"source":0}\]/"textures":[{"source":0},{"source":1}]/; s/"images":\[{"uri":"[^"]*"}\]/"images":[{"uri":"noise0.png"},{"uri":"noise1.png"}]/' \
     "$tmp/in/normalmap.gltf" >"$tmp/in/twoimages.gltf"
-grep -q '"source":1' "$tmp/in/twoimages.gltf" || { echo "[ FAIL ] could not write twoimages.gltf"; failed=$((failed + 1)); }
+grep -q 'noise1.png' "$tmp/in/twoimages.gltf" || { echo "[ FAIL ] could not write twoimages.gltf"; failed=$((failed + 1)); }
 RUNS=100000 each_allocation_fails info-two-images - -- "$pb" info "$tmp/in/twoimages.gltf"
 # an ETC1S KTX2 texture with an alpha slice (KHR_texture_basisu required, the image in a
 # bufferView): the container, the codebooks and the slices' allocations, every one

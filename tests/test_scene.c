@@ -1331,15 +1331,17 @@ static void keep_messages(pb_log_level level, const char *msg, void *user)
 /* Images decoded ahead of the material pass on the host's threads
  * (prefetch_images) make the scene and the messages that decoding each in
  * turn makes: the same textures, texels and material indices, the same
- * warnings in the same order. Eight PNG images of four sizes behind six
- * materials (base colour, emissive, metallic and normal textures; one image
- * read by two textures, one unlit material, one whose metallic factor is 0),
- * with a corrupt image, one past the per-image limit, and a file budget that
- * the fifth decoded image exceeds. Loaded with the process on all cores and
+ * warnings in the same order. Eight PNG images of noise (4 MB of them: more
+ * than the 1 MiB under which nothing is decoded ahead) behind six materials
+ * (base colour, emissive, metallic and normal textures; one image read by
+ * two textures, one unlit material, one whose metallic factor is 0), with a
+ * corrupt image, one past the per-image limit, and a file budget that the
+ * last image to decode exceeds. Loaded with the process on all cores and
  * then on one (where nothing is decoded ahead). */
 static void images_decoded_ahead_load_as_in_turn(void)
 {
-    static const int sizes[8][2] = {{8, 4}, {16, 16}, {4, 4}, {0, 0}, {64, 32}, {2, 2}, {32, 32}, {8, 8}};
+    static const int sizes[8][2] = {{512, 256}, {256, 256}, {64, 64}, {0, 0}, {1024, 512}, {32, 32}, {512, 512}, {128, 128}};
+    uint32_t noise = 12345;
     for (int i = 0; i < 8; ++i) {
         char path[600];
         snprintf(path, sizeof path, "%s/ahead%d.png", temp_dir(), i);
@@ -1350,7 +1352,7 @@ static void images_decoded_ahead_load_as_in_turn(void)
         size_t n = (size_t)sizes[i][0] * sizes[i][1];
         unsigned char *px = malloc(4 * n);
         for (size_t k = 0; k < 4 * n; ++k)
-            px[k] = (unsigned char)(k * 37 + i * 11);
+            px[k] = (unsigned char)((noise = noise * 1664525u + 1013904223u) >> 24);
         CHECK(stbi_write_png(path, sizes[i][0], sizes[i][1], 4, px, 4 * sizes[i][0]) != 0);
         free(px);
     }
@@ -1404,10 +1406,10 @@ static void images_decoded_ahead_load_as_in_turn(void)
     static message_log logs[2];
     for (int run = 0; run < 2; ++run) {
         memset(&logs[run], 0, sizeof logs[run]);
-        /* 32 x 32 pixels an image; 1,300 for the file: ahead4 (64 x 32) is
-         * past the first, and ahead6 (32 x 32), the last to decode (after
-         * 372 pixels), past the second */
-        pb_scene_desc d = {{keep_messages, &logs[run]}, 0, 32 * 32, 1300, 0, 0};
+        /* 512 x 512 pixels an image; 400,000 for the file: ahead4 (1024 x 512)
+         * is past the first, and ahead6 (512 x 512), the last to decode (after
+         * 218,112 pixels), past the second */
+        pb_scene_desc d = {{keep_messages, &logs[run]}, 0, 512 * 512, 400000, 0, 0};
         if (run == 1)
             CHECK(sched_setaffinity(0, sizeof one, &one) == 0);
         pb_error err;
@@ -1417,7 +1419,7 @@ static void images_decoded_ahead_load_as_in_turn(void)
     }
     CHECKF(strcmp(logs[0].text, logs[1].text) == 0, "messages differ:\n%s---\n%s", logs[0].text, logs[1].text);
     CHECKF(strstr(logs[0].text, "image 3 could not be decoded") &&
-               strstr(logs[0].text, "image 4 is 64 x 32 pixels") && strstr(logs[0].text, "image 6 is 32 x 32 pixels"),
+               strstr(logs[0].text, "image 4 is 1024 x 512 pixels") && strstr(logs[0].text, "image 6 is 512 x 512 pixels"),
            "%s", logs[0].text);
     if (s[0] && s[1]) {
         CHECKF(s[0]->texture_count == s[1]->texture_count && s[0]->material_count == s[1]->material_count &&
