@@ -141,6 +141,35 @@ static const char *textured_triangle(const char *name, const char *extensions, c
     return write_gltf(name, json, tri_pos, 36);
 }
 
+/* `count` triangles with TEXCOORD_0, the i-th drawn with material i, and
+ * `parts` in the file: its materials, textures and images (and any
+ * extensionsUsed), each followed by a comma. */
+static const char *uv_triangles(const char *name, int count, const char *parts)
+{
+    unsigned char bin[36 + 24];
+    const float uv[6] = {0, 0, 1, 0, 0, 1};
+    memcpy(bin, tri_pos, 36);
+    memcpy(bin + 36, uv, 24);
+    char ids[256] = "", nodes[512] = "", meshes[2048] = "";
+    size_t a = 0, b = 0, c = 0;
+    for (int i = 0; i < count; ++i) {
+        a += (size_t)snprintf(ids + a, sizeof ids - a, "%s%d", i ? "," : "", i);
+        b += (size_t)snprintf(nodes + b, sizeof nodes - b, "%s{\"mesh\":%d}", i ? "," : "", i);
+        c += (size_t)snprintf(meshes + c, sizeof meshes - c,
+                              "%s{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":%d}]}",
+                              i ? "," : "", i);
+    }
+    char json[8192];
+    snprintf(json, sizeof json,
+             "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[%s]}],\"nodes\":[%s],%s\"meshes\":[%s],"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+             "{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":24}],"
+             "\"buffers\":[{\"byteLength\":60,\"uri\":\"@BUF@\"}]}",
+             ids, nodes, parts, meshes);
+    return write_gltf(name, json, bin, sizeof bin);
+}
+
 /* ------------------------------------------------------------ tests */
 
 /* glTF cameras of both kinds, on nodes that move and turn them: an
@@ -1356,13 +1385,7 @@ static void images_decoded_ahead_load_as_in_turn(void)
         CHECK(stbi_write_png(path, sizes[i][0], sizes[i][1], 4, px, 4 * sizes[i][0]) != 0);
         free(px);
     }
-    unsigned char bin[36 + 24];
-    memcpy(bin, tri_pos, 36);
-    float uv[6] = {0, 0, 1, 0, 0, 1};
-    memcpy(bin + 36, uv, 24);
-    const char *json =
-        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1,2,3,4,5]}],"
-        "\"nodes\":[{\"mesh\":0},{\"mesh\":1},{\"mesh\":2},{\"mesh\":3},{\"mesh\":4},{\"mesh\":5}],"
+    const char *path = uv_triangles("ahead.gltf", 6,
         "\"extensionsUsed\":[\"KHR_materials_unlit\"],"
         "\"materials\":["
         "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1}},"
@@ -1378,18 +1401,7 @@ static void images_decoded_ahead_load_as_in_turn(void)
         "\"textures\":[{\"source\":0},{\"source\":1},{\"source\":2},{\"source\":3},{\"source\":4},{\"source\":5},"
         "{\"source\":6},{\"source\":7},{\"source\":1},{\"source\":6},{\"source\":5}],"
         "\"images\":[{\"uri\":\"ahead0.png\"},{\"uri\":\"ahead1.png\"},{\"uri\":\"ahead2.png\"},{\"uri\":\"ahead3.png\"},"
-        "{\"uri\":\"ahead4.png\"},{\"uri\":\"ahead5.png\"},{\"uri\":\"ahead6.png\"},{\"uri\":\"ahead7.png\"}],"
-        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":0}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":1}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":2}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":3}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":4}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":5}]}],"
-        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
-        "{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"}],"
-        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":24}],"
-        "\"buffers\":[{\"byteLength\":60,\"uri\":\"@BUF@\"}]}";
-    const char *path = write_gltf("ahead.gltf", json, bin, sizeof bin);
+        "{\"uri\":\"ahead4.png\"},{\"uri\":\"ahead5.png\"},{\"uri\":\"ahead6.png\"},{\"uri\":\"ahead7.png\"}],");
     cpu_set_t all, one;
     CHECK(sched_getaffinity(0, sizeof all, &all) == 0);
     if (CPU_COUNT(&all) < 2) {
@@ -2299,13 +2311,7 @@ static void metallic_texture_folded_into_the_colour(void)
     CHECK(stbi_write_png(path, 2, 1, 4, base, 8) != 0);
     snprintf(path, sizeof path, "%s/fold-mr.png", temp_dir());
     CHECK(stbi_write_png(path, 4, 2, 4, mr, 16) != 0);
-    unsigned char bin[36 + 24];
-    memcpy(bin, tri_pos, 36);
-    float uv[6] = {0, 0, 1, 0, 0, 1};
-    memcpy(bin + 36, uv, 24);
-    const char *json =
-        "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1,2,3,4,5]}],"
-        "\"nodes\":[{\"mesh\":0},{\"mesh\":1},{\"mesh\":2},{\"mesh\":3},{\"mesh\":4},{\"mesh\":5}],"
+    pb_scene *s = load_ok(uv_triangles("metallic-fold.gltf", 6,
         "\"extensionsUsed\":[\"KHR_texture_transform\"],"
         "\"materials\":["
         "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1}}},"
@@ -2318,18 +2324,7 @@ static void metallic_texture_folded_into_the_colour(void)
         "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1},"
         "\"metallicFactor\":0}}],"
         "\"textures\":[{\"source\":0},{\"source\":1}],"
-        "\"images\":[{\"uri\":\"fold-base.png\"},{\"uri\":\"fold-mr.png\"}],"
-        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":0}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":1}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":2}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":3}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":4}]},"
-        "{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":1},\"material\":5}]}],"
-        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
-        "{\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"}],"
-        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},{\"buffer\":0,\"byteOffset\":36,\"byteLength\":24}],"
-        "\"buffers\":[{\"byteLength\":60,\"uri\":\"@BUF@\"}]}";
-    pb_scene *s = load_ok(write_gltf("metallic-fold.gltf", json, bin, sizeof bin));
+        "\"images\":[{\"uri\":\"fold-base.png\"},{\"uri\":\"fold-mr.png\"}],"));
     if (!s)
         return;
     const pb_material *m = s->materials;
