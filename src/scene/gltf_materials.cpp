@@ -61,6 +61,21 @@ int base_texture_index(const tinygltf::Material &mt)
     return mt.pbrMetallicRoughness.baseColorTexture.index;
 }
 
+// The extensions that give a texture another image than its core source, in
+// the order they are tried.
+const char *const image_extensions[] = {"EXT_texture_avif", "EXT_texture_webp", "KHR_texture_basisu"};
+
+// Whether texture t has extension `name` with an integer source, in *source.
+bool extension_source(const tinygltf::Texture &t, const char *name, int *source)
+{
+    auto ext = t.extensions.find(name);
+    if (ext == t.extensions.end() || !ext->second.IsObject() || !ext->second.Has("source") ||
+        !ext->second.Get("source").IsInt())
+        return false;
+    *source = ext->second.Get("source").GetNumberAsInt();
+    return true;
+}
+
 // The image a texture reads: the source of EXT_texture_avif,
 // EXT_texture_webp or KHR_texture_basisu where it names an image that
 // decoded, else the core source (the extensions' fallback, or -1).
@@ -68,12 +83,10 @@ int texture_source(reader &r, size_t i)
 {
     const tinygltf::Texture &t = r.m.textures[i];
     int unusable = -1;
-    for (const char *name : {"EXT_texture_avif", "EXT_texture_webp", "KHR_texture_basisu"}) {
-        auto ext = t.extensions.find(name);
-        if (ext == t.extensions.end() || !ext->second.IsObject() || !ext->second.Has("source") ||
-            !ext->second.Get("source").IsInt())
+    for (const char *name : image_extensions) {
+        int s;
+        if (!extension_source(t, name, &s))
             continue;
-        int s = ext->second.Get("source").GetNumberAsInt();
         if (decode_image(r.images, s))
             return s;
         if (t.source >= 0)
@@ -88,12 +101,10 @@ int texture_source(reader &r, size_t i)
 // (texture_source's order), else its core source.
 int first_source(const tinygltf::Texture &t)
 {
-    for (const char *name : {"EXT_texture_avif", "EXT_texture_webp", "KHR_texture_basisu"}) {
-        auto ext = t.extensions.find(name);
-        if (ext != t.extensions.end() && ext->second.IsObject() && ext->second.Has("source") &&
-            ext->second.Get("source").IsInt())
-            return ext->second.Get("source").GetNumberAsInt();
-    }
+    int s;
+    for (const char *name : image_extensions)
+        if (extension_source(t, name, &s))
+            return s;
     return t.source;
 }
 
