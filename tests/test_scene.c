@@ -1360,18 +1360,20 @@ static void keep_messages(pb_log_level level, const char *msg, void *user)
 /* Images decoded ahead of the material pass on the host's threads
  * (prefetch_images) make the scene and the messages that decoding each in
  * turn makes: the same textures, texels and material indices, the same
- * warnings in the same order. Eight PNG images of noise (4 MB of them: more
- * than the 1 MiB under which nothing is decoded ahead) behind six materials
- * (base colour, emissive, metallic and normal textures; one image read by
- * two textures, one unlit material, one whose metallic factor is 0), with a
+ * warnings in the same order. Nine PNG images of noise (4 MB of them: more
+ * than the 1 MiB under which nothing is decoded ahead) behind seven materials
+ * (base colour, emissive, transmission, metallic and normal textures; one
+ * image read by two textures, one unlit material, one whose metallic factor
+ * is 0), with a
  * corrupt image, one past the per-image limit, and a file budget that the
- * last image to decode exceeds. Loaded with the process on all cores and
+ * sixth image to decode exceeds. Loaded with the process on all cores and
  * then on one (where nothing is decoded ahead). */
 static void images_decoded_ahead_load_as_in_turn(void)
 {
-    static const int sizes[8][2] = {{512, 256}, {256, 256}, {64, 64}, {0, 0}, {1024, 512}, {32, 32}, {512, 512}, {128, 128}};
+    static const int sizes[9][2] = {{512, 256}, {256, 256}, {64, 64},   {0, 0},    {1024, 512},
+                                    {32, 32},   {512, 512}, {128, 128}, {128, 64}};
     uint32_t noise = 12345;
-    for (int i = 0; i < 8; ++i) {
+    for (int i = 0; i < 9; ++i) {
         char path[600];
         snprintf(path, sizeof path, "%s/ahead%d.png", temp_dir(), i);
         if (sizes[i][0] == 0) { /* not a PNG */
@@ -1385,8 +1387,8 @@ static void images_decoded_ahead_load_as_in_turn(void)
         CHECK(stbi_write_png(path, sizes[i][0], sizes[i][1], 4, px, 4 * sizes[i][0]) != 0);
         free(px);
     }
-    const char *path = uv_triangles("ahead.gltf", 6,
-        "\"extensionsUsed\":[\"KHR_materials_unlit\"],"
+    const char *path = uv_triangles("ahead.gltf", 7,
+        "\"extensionsUsed\":[\"KHR_materials_unlit\",\"KHR_materials_transmission\"],"
         "\"materials\":["
         "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicRoughnessTexture\":{\"index\":1}},"
         "\"normalTexture\":{\"index\":2}},"
@@ -1397,11 +1399,15 @@ static void images_decoded_ahead_load_as_in_turn(void)
         "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":7}},\"normalTexture\":{\"index\":2},"
         "\"extensions\":{\"KHR_materials_unlit\":{}}},"
         "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":8}},\"normalTexture\":{\"index\":9}},"
-        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}},\"emissiveTexture\":{\"index\":10}}],"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0}},\"emissiveTexture\":{\"index\":10}},"
+        "{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicFactor\":0},"
+        "\"extensions\":{\"KHR_materials_transmission\":{\"transmissionFactor\":0.5,"
+        "\"transmissionTexture\":{\"index\":11}}}}],"
         "\"textures\":[{\"source\":0},{\"source\":1},{\"source\":2},{\"source\":3},{\"source\":4},{\"source\":5},"
-        "{\"source\":6},{\"source\":7},{\"source\":1},{\"source\":6},{\"source\":5}],"
+        "{\"source\":6},{\"source\":7},{\"source\":1},{\"source\":6},{\"source\":5},{\"source\":8}],"
         "\"images\":[{\"uri\":\"ahead0.png\"},{\"uri\":\"ahead1.png\"},{\"uri\":\"ahead2.png\"},{\"uri\":\"ahead3.png\"},"
-        "{\"uri\":\"ahead4.png\"},{\"uri\":\"ahead5.png\"},{\"uri\":\"ahead6.png\"},{\"uri\":\"ahead7.png\"}],");
+        "{\"uri\":\"ahead4.png\"},{\"uri\":\"ahead5.png\"},{\"uri\":\"ahead6.png\"},{\"uri\":\"ahead7.png\"},"
+        "{\"uri\":\"ahead8.png\"}],");
     cpu_set_t all, one;
     CHECK(sched_getaffinity(0, sizeof all, &all) == 0);
     if (CPU_COUNT(&all) < 2) {
@@ -1419,8 +1425,8 @@ static void images_decoded_ahead_load_as_in_turn(void)
     for (int run = 0; run < 2; ++run) {
         memset(&logs[run], 0, sizeof logs[run]);
         /* 512 x 512 pixels an image; 400,000 for the file: ahead4 (1024 x 512)
-         * is past the first, and ahead6 (512 x 512), the last to decode (after
-         * 218,112 pixels), past the second */
+         * is past the first, and ahead6 (512 x 512, after 218,112 pixels) past
+         * the second; ahead8, read last (transmission), fits */
         pb_scene_desc d = {{keep_messages, &logs[run]}, 0, 512 * 512, 400000, 0, 0};
         if (run == 1)
             CHECK(sched_setaffinity(0, sizeof one, &one) == 0);
@@ -1449,11 +1455,14 @@ static void images_decoded_ahead_load_as_in_turn(void)
             const pb_material *a = &s[0]->materials[m], *b = &s[1]->materials[m];
             CHECKF(a->base_color_texture == b->base_color_texture && a->emissive_texture == b->emissive_texture &&
                        a->normal_texture == b->normal_texture && a->metallic == b->metallic &&
+                       a->transmission == b->transmission && a->transmission_in_alpha == b->transmission_in_alpha &&
                        !memcmp(a->base_color, b->base_color, sizeof a->base_color) &&
                        !memcmp(a->emissive, b->emissive, sizeof a->emissive),
                    "material %u", m);
         }
         CHECK(s[0]->stats.textures_unread == s[1]->stats.textures_unread);
+        CHECKF(s[0]->material_count > 6 && s[0]->materials[6].transmission_in_alpha == 1,
+               "the transmission texture was not read");
     }
     pb_scene_destroy(s[0]);
     pb_scene_destroy(s[1]);

@@ -109,9 +109,10 @@ int first_source(const tinygltf::Texture &t)
 }
 
 // The images read_materials will ask for, in the order it asks: each
-// material's base colour and emissive textures (always read), its normal map
-// and metallic texture where nothing rules them out before their UVs are
-// looked at. For prefetch_images, which only decodes them early.
+// material's base colour and emissive textures (always read), its
+// transmission texture, metallic texture and normal map where nothing rules
+// them out before their factors and UVs are looked at. For prefetch_images,
+// which only decodes them early.
 std::vector<int> images_materials_read(const reader &r)
 {
     const tinygltf::Model &m = r.m;
@@ -124,6 +125,12 @@ std::vector<int> images_materials_read(const reader &r)
         bool unlit = mt.extensions.find("KHR_materials_unlit") != mt.extensions.end();
         add(base_texture_index(mt));
         add(mt.emissiveTexture.index);
+        auto tr = mt.extensions.find("KHR_materials_transmission");
+        if (!unlit && tr != mt.extensions.end() && tr->second.IsObject() && tr->second.Has("transmissionFactor") &&
+            tr->second.Get("transmissionFactor").GetNumberAsDouble() > 0 && tr->second.Has("transmissionTexture") &&
+            tr->second.Get("transmissionTexture").Has("index") &&
+            tr->second.Get("transmissionTexture").Get("index").IsInt())
+            add(tr->second.Get("transmissionTexture").Get("index").GetNumberAsInt());
         if (!unlit && !spec_gloss(mt) && mt.pbrMetallicRoughness.metallicFactor > 0)
             add(mt.pbrMetallicRoughness.metallicRoughnessTexture.index);
         if (!unlit && !r.no_normal_maps)
