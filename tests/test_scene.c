@@ -8,6 +8,7 @@
 #include "compressed_variants.h"
 #include "exr_pattern.h"
 #include "io/environment_exr.h"
+#include "io/ktx2_layout.h"
 #include "scene/basis_uastc.h"
 #include "scene/ktx2_read.h"
 #include "test_util.h"
@@ -1226,6 +1227,26 @@ static void ktx2_textures_decoded_as_basis_transcodes_them(void)
     }
 }
 
+/* tests/data/ktx2/uastc_random_blocks.ktx2 (128 x 128 texels: 1,024 blocks
+ * stored as they are), and where its base level's blocks start; NULL (a
+ * failed check) where it cannot be read. */
+static unsigned char *random_uastc_file(size_t *size, size_t *blocks_at)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/uastc_random_blocks.ktx2", source_path("tests/data/ktx2"));
+    unsigned char *ktx = read_bytes(path, size);
+    uint64_t at = 0;
+    for (int i = 7; ktx && *size >= PB_KTX2_LEVELS_AT + 8 && i >= 0; --i)
+        at = at << 8 | ktx[PB_KTX2_LEVELS_AT + i];
+    CHECKF(ktx && at <= *size && *size - at >= 16 * 1024, "%s: missing or cut short", path);
+    if (ktx && !(at <= *size && *size - at >= 16 * 1024)) {
+        free(ktx);
+        ktx = NULL;
+    }
+    *blocks_at = (size_t)at;
+    return ktx;
+}
+
 /* A UASTC block no mode describes, as Binomial's transcoder refuses it: the
  * reserved mode (prefix code 1000101), or a pattern index past its table
  * (mode 2's, 5 bits at bit 20, of 30 patterns). The image does not decode,
@@ -1234,14 +1255,11 @@ static void ktx2_textures_decoded_as_basis_transcodes_them(void)
  * its factor. */
 static void invalid_uastc_blocks_are_refused(void)
 {
-    size_t n = 0;
-    char path[512];
-    snprintf(path, sizeof path, "%s/uastc_random_blocks.ktx2", source_path("tests/data/ktx2"));
-    unsigned char *ktx = read_bytes(path, &n);
-    CHECK(ktx != NULL);
+    size_t n = 0, blocks_at = 0;
+    unsigned char *ktx = random_uastc_file(&n, &blocks_at);
     if (!ktx)
         return;
-    size_t block = (size_t)(ktx[80] | ktx[81] << 8 | ktx[82] << 16) + 16 * 77; /* the level's 78th block */
+    size_t block = blocks_at + 16 * 77; /* the level's 78th block */
     uint8_t *rgba = malloc(128 * 128 * 4);
     const char *why = NULL;
     CHECK(n > block + 16 && pb_ktx2_decode(ktx, n, rgba, &why) == 0);
@@ -1302,14 +1320,11 @@ static void invalid_uastc_blocks_are_refused(void)
  * alone; and one invalid block anywhere fails it. */
 static void uastc_images_decode_on_all_cores_as_block_by_block(void)
 {
-    size_t n = 0;
-    char path[512];
-    snprintf(path, sizeof path, "%s/uastc_random_blocks.ktx2", source_path("tests/data/ktx2"));
-    unsigned char *ktx = read_bytes(path, &n);
-    CHECK(ktx != NULL && n > 80 + 16 * 1024);
+    size_t n = 0, blocks_at = 0;
+    unsigned char *ktx = random_uastc_file(&n, &blocks_at);
     if (!ktx)
         return;
-    const uint8_t *random = ktx + (ktx[80] | ktx[81] << 8 | ktx[82] << 16);
+    const uint8_t *random = ktx + blocks_at;
     enum { W = 1000, H = 520, BW = (W + 3) / 4, BH = (H + 3) / 4 };
     uint8_t *blocks = malloc((size_t)BW * BH * 16), *rgba = malloc((size_t)W * H * 4), *ref = malloc((size_t)W * H * 4);
     for (size_t b = 0; b < (size_t)BW * BH; ++b)
