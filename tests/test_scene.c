@@ -1450,8 +1450,9 @@ static void keep_messages(pb_log_level level, const char *msg, void *user)
  * image read by two textures, one unlit material, one whose metallic factor
  * is 0), with a
  * corrupt image, one past the per-image limit, and a file budget that the
- * sixth image to decode exceeds. Loaded with the process on all cores and
- * then on one (where nothing is decoded ahead). */
+ * sixth image to decode exceeds. Loaded with the process on all cores, then
+ * on one (where nothing is decoded ahead), then on one with decode_ahead
+ * PB_DECODE_AHEAD_ALWAYS (the same cache, no threads). */
 static void images_decoded_ahead_load_as_in_turn(void)
 {
     static const int sizes[9][2] = {{512, 256}, {256, 256}, {64, 64},   {0, 0},    {1024, 512},
@@ -1504,52 +1505,65 @@ static void images_decoded_ahead_load_as_in_turn(void)
             CPU_SET(c, &one);
             break;
         }
-    pb_scene *s[2] = {NULL, NULL};
-    static message_log logs[2];
-    for (int run = 0; run < 2; ++run) {
+    /* 0: all cores, decoded ahead; 1: one core, nothing ahead (the
+     * reference); 2: one core, decoded ahead all the same (PB_DECODE_AHEAD_ALWAYS,
+     * on the calling thread) */
+    pb_scene *s[3] = {NULL, NULL, NULL};
+    static message_log logs[3];
+    for (int run = 0; run < 3; ++run) {
         memset(&logs[run], 0, sizeof logs[run]);
         /* 512 x 512 pixels an image; 400,000 for the file: ahead4 (1024 x 512)
          * is past the first, and ahead6 (512 x 512, after 218,112 pixels) past
          * the second; ahead8, read last (transmission), fits */
         pb_scene_desc d = {{keep_messages, &logs[run]}, 0, 512 * 512, 400000, 0, 0};
+        d.decode_ahead = run == 2 ? PB_DECODE_AHEAD_ALWAYS : PB_DECODE_AHEAD_AUTO;
         if (run == 1)
             CHECK(sched_setaffinity(0, sizeof one, &one) == 0);
         pb_error err;
         CHECKF(pb_scene_load(path, &d, &s[run], &err) == PB_OK, "%s", err.message);
-        if (run == 1)
+        if (run == 2)
             CHECK(sched_setaffinity(0, sizeof all, &all) == 0);
     }
-    CHECKF(strcmp(logs[0].text, logs[1].text) == 0, "messages differ:\n%s---\n%s", logs[0].text, logs[1].text);
-    CHECKF(strstr(logs[0].text, "image 3 could not be decoded") &&
-               strstr(logs[0].text, "image 4 is 1024 x 512 pixels") && strstr(logs[0].text, "image 6 is 512 x 512 pixels"),
-           "%s", logs[0].text);
-    if (s[0] && s[1]) {
-        CHECKF(s[0]->texture_count == s[1]->texture_count && s[0]->material_count == s[1]->material_count &&
-                   s[0]->texture_count >= 4,
-               "%u / %u textures", s[0]->texture_count, s[1]->texture_count);
-        for (uint32_t t = 0; t < s[0]->texture_count && t < s[1]->texture_count; ++t)
-            CHECKF(s[0]->textures[t].width == s[1]->textures[t].width &&
-                       s[0]->textures[t].height == s[1]->textures[t].height &&
-                       s[0]->textures[t].offset == s[1]->textures[t].offset &&
-                       s[0]->textures[t].srgb == s[1]->textures[t].srgb &&
-                       !memcmp(s[0]->texels + s[0]->textures[t].offset, s[1]->texels + s[1]->textures[t].offset,
-                               4 * (size_t)s[0]->textures[t].width * s[0]->textures[t].height),
-                   "texture %u", t);
-        for (uint32_t m = 0; m < s[0]->material_count && m < s[1]->material_count; ++m) {
-            const pb_material *a = &s[0]->materials[m], *b = &s[1]->materials[m];
+    CHECKF(strstr(logs[1].text, "image 3 could not be decoded") &&
+               strstr(logs[1].text, "image 4 is 1024 x 512 pixels") && strstr(logs[1].text, "image 6 is 512 x 512 pixels"),
+           "%s", logs[1].text);
+    for (int run = 0; run < 3; run += 2) {
+        const pb_scene *x = s[run], *y = s[1];
+        CHECKF(strcmp(logs[run].text, logs[1].text) == 0, "run %d: messages differ:\n%s---\n%s", run, logs[run].text,
+               logs[1].text);
+        if (!x || !y)
+            continue;
+        CHECKF(x->texture_count == y->texture_count && x->material_count == y->material_count && x->texture_count >= 4,
+               "run %d: %u / %u textures", run, x->texture_count, y->texture_count);
+        for (uint32_t t = 0; t < x->texture_count && t < y->texture_count; ++t)
+            CHECKF(x->textures[t].width == y->textures[t].width && x->textures[t].height == y->textures[t].height &&
+                       x->textures[t].offset == y->textures[t].offset && x->textures[t].srgb == y->textures[t].srgb &&
+                       !memcmp(x->texels + x->textures[t].offset, y->texels + y->textures[t].offset,
+                               4 * (size_t)x->textures[t].width * x->textures[t].height),
+                   "run %d: texture %u", run, t);
+        for (uint32_t m = 0; m < x->material_count && m < y->material_count; ++m) {
+            const pb_material *a = &x->materials[m], *b = &y->materials[m];
             CHECKF(a->base_color_texture == b->base_color_texture && a->emissive_texture == b->emissive_texture &&
                        a->normal_texture == b->normal_texture && a->metallic == b->metallic &&
                        a->transmission == b->transmission && a->transmission_in_alpha == b->transmission_in_alpha &&
                        !memcmp(a->base_color, b->base_color, sizeof a->base_color) &&
                        !memcmp(a->emissive, b->emissive, sizeof a->emissive),
-                   "material %u", m);
+                   "run %d: material %u", run, m);
         }
-        CHECK(s[0]->stats.textures_unread == s[1]->stats.textures_unread);
-        CHECKF(s[0]->material_count > 6 && s[0]->materials[6].transmission_in_alpha == 1,
-               "the transmission texture was not read");
+        CHECK(x->stats.textures_unread == y->stats.textures_unread);
+        CHECKF(x->material_count > 6 && x->materials[6].transmission_in_alpha == 1,
+               "run %d: the transmission texture was not read", run);
     }
-    pb_scene_destroy(s[0]);
-    pb_scene_destroy(s[1]);
+    for (int run = 0; run < 3; ++run)
+        pb_scene_destroy(s[run]);
+    /* a value the option does not have is refused, naming it */
+    pb_scene_desc bad = {{0}, 0};
+    bad.decode_ahead = 3;
+    pb_scene *none = NULL;
+    pb_error err;
+    CHECKF(pb_scene_load(path, &bad, &none, &err) == PB_ERROR_INVALID_ARGUMENT && !none &&
+               strstr(err.message, "decode_ahead 3"),
+           "%s", err.message);
 }
 
 /* Every KTX2 fixture cut short at every length, and with every byte in turn

@@ -178,7 +178,15 @@ typedef struct pb_scene_desc {
     uint32_t face_normals;    /* 1: every triangle keeps its face normal, whatever NORMAL says (flat
                                  shading: `--shading-normals face`); default 0, the file's vertex normals */
     uint32_t no_normal_maps;  /* 1: normalTexture is not read (`--normal-maps off`); default 0, read */
+    /* Images decoded ahead of the material pass on the host's threads (the
+     * scene and the messages are the same either way): PB_DECODE_AHEAD_AUTO
+     * (0) where there is something to overlap (two or more images, 1 MiB of
+     * them, two or more cores), _ALWAYS whatever their size and the cores
+     * (tests and the fuzzer compare it with _NEVER), _NEVER (no threads). */
+    uint32_t decode_ahead;
 } pb_scene_desc;
+
+enum { PB_DECODE_AHEAD_AUTO = 0, PB_DECODE_AHEAD_ALWAYS = 1, PB_DECODE_AHEAD_NEVER = 2 };
 
 /* 8192 x 8192 (256 MiB as RGBA8) per image, and 16 such images per file
  * (4 GiB): an 8K texture loads; a header claiming more is refused unread. */

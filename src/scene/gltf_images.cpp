@@ -286,7 +286,7 @@ void prefetch_range(void *user, uint64_t begin, uint64_t end)
         // allocation that fails here fails again in turn, where the loader reports it
         try {
             image_ctx quiet = {job->ctx->path, {count_messages, &said}, 0, job->ctx->max_pixels, UINT64_MAX,
-                               job->ctx->model, {}, {}};
+                               job->ctx->model, {}, {}, PB_DECODE_AHEAD_NEVER};
             tinygltf::Image out;
             decode(&out, index, bytes.data(), (int)bytes.size(), &quiet);
             if (said == 0 && out.width > 0 && out.height > 0 &&
@@ -305,7 +305,7 @@ void prefetch_range(void *user, uint64_t begin, uint64_t end)
 
 void prefetch_images(image_ctx *ctx, const std::vector<int> &order)
 {
-    if (!ctx->model || ctx->skip)
+    if (!ctx->model || ctx->skip || ctx->ahead == PB_DECODE_AHEAD_NEVER)
         return;
     std::vector<int> todo; // once each, those still holding their file bytes
     std::vector<char> seen(ctx->model->images.size(), 0);
@@ -321,7 +321,9 @@ void prefetch_images(image_ctx *ctx, const std::vector<int> &order)
     // nothing to overlap, or less to decode than starting threads costs (a
     // millisecond's worth: TextureTransformTest's five small PNGs load 1 ms
     // slower decoded ahead)
-    if (todo.size() < 2 || threads < 2 || bytes < ((size_t)1 << 20))
+    if (ctx->ahead == PB_DECODE_AHEAD_AUTO && (todo.size() < 2 || threads < 2 || bytes < ((size_t)1 << 20)))
+        return;
+    if (todo.empty())
         return;
     ctx->early.resize(ctx->model->images.size());
     uint64_t decoded = 0;

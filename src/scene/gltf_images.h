@@ -34,6 +34,7 @@ struct image_ctx {
     tinygltf::Model *model; // being filled: its buffers and views are read before images in views
     std::vector<char> encoded;  // per image: image.image holds its file bytes, not decoded yet
     std::vector<early_image> early; // per image: decoded by prefetch_images, not yet asked for
+    uint32_t ahead;                 // pb_scene_desc::decode_ahead
 };
 
 // tinygltf::LoadImageDataFunction; `user` is an image_ctx. Keeps the image's
@@ -49,7 +50,7 @@ bool decode_image(image_ctx *ctx, int index);
 // decoded without a word is kept; decode_image then charges the budget and
 // warns as if it decoded it at that moment, so the scene and the messages
 // are the same as decoding in turn (what failed is decoded again in turn, to
-// say why). A cache: the order need not be exact.
+// say why). A cache: the order need not be exact. ctx->ahead chooses when.
 void prefetch_images(image_ctx *ctx, const std::vector<int> &order);
 // Frees every image's bytes and pixels once the scene holds its textures.
 void release_images(image_ctx *ctx);

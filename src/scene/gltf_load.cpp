@@ -1049,7 +1049,7 @@ pb_result gltf_read(const char *path, const pb_scene_desc *desc, pb_scene_builde
     tinygltf::TinyGLTF loader;
     tinygltf::Model model;
     pb_gltf::image_ctx ictx = {path, b->log, desc->skip_textures ? 1 : 0, desc->max_texture_pixels,
-                      desc->max_texture_total_pixels, &model};
+                      desc->max_texture_total_pixels, &model, {}, {}, desc->decode_ahead};
     loader.SetImageLoader(pb_gltf::load_image, &ictx);
     tinygltf::FsCallbacks fs = {fs_exists, fs_expand, fs_read, fs_write, nullptr};
     loader.SetFsCallbacks(fs);

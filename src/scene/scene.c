@@ -43,6 +43,9 @@ pb_result pb_scene_load(const char *path, const pb_scene_desc *desc, pb_scene **
         d.max_texture_pixels = PB_MAX_TEXTURE_PIXELS;
     if (!d.max_texture_total_pixels)
         d.max_texture_total_pixels = PB_MAX_TEXTURE_TOTAL_PIXELS;
+    if (d.decode_ahead > PB_DECODE_AHEAD_NEVER)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "pb_scene_load: decode_ahead %u is not 0, 1 or 2",
+                       d.decode_ahead);
     pb_scene_builder b;
     pb_sb_init(&b, d.log);
     pb_result r = pb_gltf_read(path, &d, &b, err);
