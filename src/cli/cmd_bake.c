@@ -289,14 +289,14 @@ static void print_report(FILE *report, const options *o, const pb_bake_desc *d, 
         fprintf(report, "wrote %s: %u probes (%u valid, %u relocated, %u inside geometry dropped for one empty probe, "
                 "%u outside", o->output, vol->probe_count, valid, relocated, vol->probes_dropped, outside);
     else
-        fprintf(report, "wrote %s: %llu probes (%u valid, %u relocated, %u invalid of which %u dilated and %u inside "
-                "geometry, not traced, %u outside", o->output, (unsigned long long)probes, valid, relocated,
-                vol->probe_count - valid, dilated, inside, outside);
+        fprintf(report, "wrote %s: %llu probe%s (%u valid, %u relocated, %u invalid of which %u dilated and %u inside "
+                "geometry, not traced, %u outside", o->output, (unsigned long long)probes, probes == 1 ? "" : "s",
+                valid, relocated, vol->probe_count - valid, dilated, inside, outside);
     if (d->target_error > 0.f)
         fprintf(report, ", %u converged before the last pass", converged);
     double rays = (double)vol->rays_traced;
-    fprintf(report, "), %.3g probe rays in %s%u passes\n", rays, d->target_error > 0.f ? "up to " : "",
-            vol->settings.passes);
+    fprintf(report, "), %.3g probe rays in %s%u pass%s\n", rays, d->target_error > 0.f ? "up to " : "",
+            vol->settings.passes, vol->settings.passes == 1 ? "" : "es");
     cli_print_error_summary(report, vol);
     const pb_volume_timings *t = &vol->timings;
     fprintf(report, "time: load %.0f ms, bvh %.1f ms, upload %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M "

@@ -32,8 +32,8 @@ void cli_print_error_summary(FILE *out, const pb_volume *v)
         /* p95 by nearest rank, the smallest error at least 95 % of the probes
          * reach (of 5 probes, the worst); never below the median */
         uint32_t p95 = (uint32_t)ceil(0.95 * known) - 1;
-        fprintf(out, "std error   irradiance, relative: median %.3g %%, p95 %.3g %%, worst %.3g %% (%u probes)\n",
-               100.0 * e[known / 2], 100.0 * e[p95], 100.0 * e[known - 1], known);
+        fprintf(out, "std error   irradiance, relative: median %.3g %%, p95 %.3g %%, worst %.3g %% (%u probe%s)\n",
+               100.0 * e[known / 2], 100.0 * e[p95], 100.0 * e[known - 1], known, known == 1 ? "" : "s");
     } else {
         fprintf(out, "std error   unknown (%s)\n", v->file_version && v->file_version < 3 ? "file older than version 3" : "one pass per probe");
     }
