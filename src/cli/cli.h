@@ -108,6 +108,12 @@ void json_string(const char *s);
 json_num J(double x);
 json_num J17(double x);
 
+/* "s" after a count other than one: "1 probe", "2 probes" in messages */
+static inline const char *cli_plural(uint64_t n)
+{
+    return n == 1 ? "" : "s";
+}
+
 /* Paths and relative standard errors over a volume's probes (median, p95,
  * worst), where known (volume_report.c). */
 void cli_print_error_summary(FILE *out, const pb_volume *v);

@@ -205,8 +205,9 @@ static void print_banner(const options *o, const pb_bake_quality *q, const pb_ba
                  d->grid.spacing[0], o->has_max_level ? o->max_level : PB_SPARSE_MAX_LEVELS - 1,
                  o->refine_error > 0.f ? o->refine_error : 0.1);
     else
-        snprintf(where, sizeof where, "%u x %u x %u = %llu probes, spacing %.3g m", d->grid.counts[0],
-                 d->grid.counts[1], d->grid.counts[2], (unsigned long long)probes, d->grid.spacing[0]);
+        snprintf(where, sizeof where, "%u x %u x %u = %llu probe%s, spacing %.3g m", d->grid.counts[0],
+                 d->grid.counts[1], d->grid.counts[2], (unsigned long long)probes, cli_plural(probes),
+                 d->grid.spacing[0]);
     if (o->shard_count && o->sparse)
         snprintf(part, sizeof part, ", part %u of %u (a range of coarsest bricks)", o->shard_index, o->shard_count);
     else if (o->shard_count) /* dealt (shard.h) */
@@ -214,11 +215,12 @@ static void print_banner(const options *o, const pb_bake_quality *q, const pb_ba
                  o->shard_count, o->shard_index, o->shard_index + o->shard_count, o->shard_count,
                  pb_shard_dealt_count((uint32_t)probes, o->shard_index, o->shard_count));
     fprintf(stderr,
-            "probebake: baking %s%s%s%s: %s, %u rays x %s%u passes%s, %u bounces, "
+            "probebake: baking %s%s%s%s: %s, %u ray%s x %s%u pass%s%s, %u bounce%s, "
             "%s, octmap %u, direct %s, indirect %s, probe NEE %s, guiding %s, light cells %s, emitters by %s, seed %u\n",
             o->scene, q ? " at quality " : "", q ? q->name : "", part, where, d->rays_per_probe,
-            d->target_error > 0.f ? "up to " : "", d->passes, d->target_error > 0.f ? " (until converged)" : "",
-            d->bounces, light, d->octmap_res, d->exclude_direct ? "excluded" : "included",
+            cli_plural(d->rays_per_probe), d->target_error > 0.f ? "up to " : "", d->passes,
+            d->passes == 1 ? "" : "es", d->target_error > 0.f ? " (until converged)" : "", d->bounces,
+            cli_plural(d->bounces), light, d->octmap_res, d->exclude_direct ? "excluded" : "included",
             d->indirect_volume ? "volume" : "path", d->probe_nee ? "on" : "off",
             /* --indirect volume bakes one bounce at a time: no bounce rays to guide */
             d->guide_paths && d->bounces && !d->indirect_volume ? "on" : "off", d->light_cells ? "on" : "off",
@@ -290,13 +292,13 @@ static void print_report(FILE *report, const options *o, const pb_bake_desc *d, 
                 "%u outside", o->output, vol->probe_count, valid, relocated, vol->probes_dropped, outside);
     else
         fprintf(report, "wrote %s: %llu probe%s (%u valid, %u relocated, %u invalid of which %u dilated and %u inside "
-                "geometry, not traced, %u outside", o->output, (unsigned long long)probes, probes == 1 ? "" : "s",
+                "geometry, not traced, %u outside", o->output, (unsigned long long)probes, cli_plural(probes),
                 valid, relocated, vol->probe_count - valid, dilated, inside, outside);
     if (d->target_error > 0.f)
         fprintf(report, ", %u converged before the last pass", converged);
     double rays = (double)vol->rays_traced;
     fprintf(report, "), %.3g probe rays in %s%u pass%s\n", rays, d->target_error > 0.f ? "up to " : "",
-            vol->settings.passes, vol->settings.passes == 1 ? "" : "es");
+            vol->settings.passes, vol->settings.passes == 1 ? "" : "es"); /* pass, passes */
     cli_print_error_summary(report, vol);
     const pb_volume_timings *t = &vol->timings;
     fprintf(report, "time: load %.0f ms, bvh %.1f ms, upload %.1f ms; GPU trace %.0f ms (%.2f M probe rays/s, %.2f M "

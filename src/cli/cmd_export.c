@@ -19,12 +19,13 @@ int cmd_export(const options *o)
         return cli_fail(&err);
     pb_result r = pb_volume_export_textures(&v, o->textures, &err);
     if (r == PB_OK && !o->log.quiet && (v.flags & PB_VOLUME_SPARSE))
-        printf("wrote %s/manifest.json, probes.ktx2, sh.ktx2, depth.ktx2, sparse.ktx2: %u probes in %u bricks (%u "
-               "levels), %ux%u depth texels per probe\n", o->textures, v.probe_count, v.sparse->brick_count,
+        printf("wrote %s/manifest.json, probes.ktx2, sh.ktx2, depth.ktx2, sparse.ktx2: %u probe%s in %u brick%s (%u "
+               "levels), %ux%u depth texels per probe\n", o->textures, v.probe_count, cli_plural(v.probe_count),
+               v.sparse->brick_count, cli_plural(v.sparse->brick_count),
                v.sparse->levels, v.octmap_res + 2, v.octmap_res + 2);
     else if (r == PB_OK && !o->log.quiet)
-        printf("wrote %s/manifest.json, probes.ktx2, sh.ktx2, depth.ktx2: %u probes (%u x %u x %u), %ux%u depth "
-               "texels per probe\n", o->textures, v.probe_count, v.counts[0], v.counts[1], v.counts[2],
+        printf("wrote %s/manifest.json, probes.ktx2, sh.ktx2, depth.ktx2: %u probe%s (%u x %u x %u), %ux%u depth "
+               "texels per probe\n", o->textures, v.probe_count, cli_plural(v.probe_count), v.counts[0], v.counts[1], v.counts[2],
                v.octmap_res + 2, v.octmap_res + 2);
     pb_volume_free(&v);
     return r == PB_OK ? 0 : cli_fail(&err);

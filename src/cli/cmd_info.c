@@ -114,7 +114,7 @@ int cmd_info(const options *o)
                (unsigned long long)st->triangles_in, (unsigned long long)st->dropped_degenerate,
                (unsigned long long)st->dropped_nonfinite);
         printf("primitives  %u (%u points/lines skipped, %u without normals: flat normals generated), %u node%s\n",
-               st->primitives, st->primitives_skipped, st->normals_generated, st->nodes, st->nodes == 1 ? "" : "s");
+               st->primitives, st->primitives_skipped, st->normals_generated, st->nodes, cli_plural(st->nodes));
         printf("shading     %llu of %u triangles smooth (vertex normals bent from the face), %llu with the file's "
                "tangents for a normal map\n", (unsigned long long)smooth, s->triangle_count,
                (unsigned long long)tangent_tris);

@@ -115,8 +115,8 @@ static pb_result write_views(const options *o, const pb_volume *v, pb_error *err
         return r;
     for (int k = 0; k < 2 && !o->json; ++k)
         if (views[k])
-            printf("wrote %s: %ux%u, %s of %u probes%s\n", views[k], w[k], h[k],
-                   k == 0 ? "depth atlas" : "SH irradiance view", v->probe_count,
+            printf("wrote %s: %ux%u, %s of %u probe%s%s\n", views[k], w[k], h[k],
+                   k == 0 ? "depth atlas" : "SH irradiance view", v->probe_count, cli_plural(v->probe_count),
                    v->sparse ? "; tile frames by finest level (0 blue, 1 green, 2 red), dim on odd bricks" : "");
     return PB_OK;
 }
@@ -285,8 +285,8 @@ int cmd_inspect(const options *o)
     if (pb_volume_read(o->scene, &v, &err) != PB_OK)
         return cli_fail(&err);
     if (o->has_probe && o->probe >= v.probe_count) {
-        fprintf(stderr, "probebake: error: %s: probe %u does not exist (%u probes)\n", o->scene, o->probe,
-                v.probe_count);
+        fprintf(stderr, "probebake: error: %s: probe %u does not exist (%u probe%s)\n", o->scene, o->probe,
+                v.probe_count, cli_plural(v.probe_count));
         pb_volume_free(&v);
         return 1;
     }

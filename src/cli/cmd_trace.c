@@ -63,8 +63,9 @@ int cmd_trace(const options *o)
            bvh->stats.leaves, bvh->stats.depth, bvh->stats.sah_cost, bvh->stats.build_ms, bvh->stats.threads);
     printf("device     %s: %.1f MiB uploaded, %.1f bytes/triangle for traversal\n", pb_context_device(ctx)->name,
            total / 1048576.0, s->triangle_count ? (double)traversal / s->triangle_count : 0.0);
-    printf("trace      %u probes x %u rays = %u rays in %u submits: kernel %.1f ms (%.2f Mrays/s), wall %.1f ms "
-           "(%.2f Mrays/s)\n", probes, o->rays, n, ts.submits, ts.kernel_ms,
+    printf("trace      %u probe%s x %u ray%s = %u ray%s in %u submit%s: kernel %.1f ms (%.2f Mrays/s), wall %.1f ms "
+           "(%.2f Mrays/s)\n", probes, cli_plural(probes), o->rays, cli_plural(o->rays), n, cli_plural(n), ts.submits,
+           cli_plural(ts.submits), ts.kernel_ms,
            ts.kernel_ms > 0 ? n / (ts.kernel_ms * 1e3) : 0.0, ts.wall_ms, n / (ts.wall_ms * 1e3));
     printf("hits       %.1f%% hit, %.1f%% of hits on back faces\n", 100.0 * (n - missed) / n,
            n - missed ? 100.0 * back / (n - missed) : 0.0);
@@ -85,7 +86,8 @@ int cmd_trace(const options *o)
                 same = fabsf(hits[i].t - ref[i].t) <= tol;
             mismatches += !same;
         }
-        printf("verify     GPU vs CPU reference: %u mismatches of %u rays\n", mismatches, n);
+        printf("verify     GPU vs CPU reference: %u mismatch%s of %u ray%s\n", mismatches, mismatches == 1 ? "" : "es", n,
+               cli_plural(n));
         if (mismatches) {
             snprintf(err.message, sizeof err.message, "%s: GPU and CPU traces differ on %u rays", o->scene,
                      mismatches);

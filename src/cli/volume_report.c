@@ -33,7 +33,7 @@ void cli_print_error_summary(FILE *out, const pb_volume *v)
          * reach (of 5 probes, the worst); never below the median */
         uint32_t p95 = (uint32_t)ceil(0.95 * known) - 1;
         fprintf(out, "std error   irradiance, relative: median %.3g %%, p95 %.3g %%, worst %.3g %% (%u probe%s)\n",
-               100.0 * e[known / 2], 100.0 * e[p95], 100.0 * e[known - 1], known, known == 1 ? "" : "s");
+               100.0 * e[known / 2], 100.0 * e[p95], 100.0 * e[known - 1], known, cli_plural(known));
     } else {
         fprintf(out, "std error   unknown (%s)\n", v->file_version && v->file_version < 3 ? "file older than version 3" : "one pass per probe");
     }
