@@ -208,6 +208,9 @@ static void merge_refuses_foreign_missing_duplicated_parts(void)
     pb_bake_desc foreign = d;
     foreign.seed = d.seed + 1;
     ok &= bake_part(&su, &foreign, 2, 3, &other);
+    /* the same part as if baked with --passes 3 (only headers are compared) */
+    pb_volume more_passes = parts[2];
+    more_passes.settings.passes = d.passes + 1;
     if (ok) {
         pb_volume out;
         pb_error err;
@@ -220,6 +223,7 @@ static void merge_refuses_foreign_missing_duplicated_parts(void)
             {"missing", {parts[0], parts[1]}, 2, "part 2/3 is missing"},
             {"duplicated", {parts[0], parts[1], parts[1]}, 3, "given twice"},
             {"foreign", {parts[0], parts[1], other}, 3, "seed differs"},
+            {"more passes", {parts[0], parts[1], more_passes}, 3, "its pass count (--passes) differs"},
         };
         const char *names[3] = {"a.probes", "b.probes", "c.probes"};
         for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {

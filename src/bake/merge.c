@@ -37,6 +37,11 @@ static const char *differs(const pb_volume *a, const pb_volume *b)
         x->sh_window_width != y->sh_window_width || x->indirect_clamp != y->indirect_clamp ||
         x->techniques != y->techniques)
         return "bake settings (rays, bounces, target error, SH window, clamp or estimators)";
+    /* under a target error each part records the most passes its probes
+     * took, and the whole the most of all; without one every probe takes
+     * --passes */
+    if (x->target_error == 0.f && x->passes != y->passes)
+        return "pass count (--passes)";
     if (x->relocation_rays != y->relocation_rays)
         return "relocation ray count (--relocation-rays)";
     if (x->refine_error != y->refine_error)
