@@ -38,9 +38,10 @@ static const char *differs(const pb_volume *a, const pb_volume *b)
         x->techniques != y->techniques)
         return "bake settings (rays, bounces, target error, SH window, clamp or estimators)";
     /* under a target error each part records the most passes its probes
-     * took, and the whole the most of all; without one every probe takes
-     * --passes */
-    if (x->target_error == 0.f && x->passes != y->passes)
+     * took, and the whole the most of all; without one every traced probe
+     * takes --passes (a part whose probes all lie inside geometry traced
+     * none and records 0) */
+    if (x->target_error == 0.f && x->passes && y->passes && x->passes != y->passes)
         return "pass count (--passes)";
     if (x->relocation_rays != y->relocation_rays)
         return "relocation ray count (--relocation-rays)";
