@@ -565,6 +565,8 @@ print("same view" if len(a) == len(b) and worst < 1e-3 else "differs by %g" % wo
         --passes 2 --octmap-res 4 -o '$tmp/two.probes' 2>&1 | awk '/std error/ { m = \$0; sub(/.*median /, \"\", m);
         p = \$0; sub(/.*p95 /, \"\", p); w = \$0; sub(/.*worst /, \"\", w);
         print (m + 0 <= p + 0 && p + 0 == w + 0) ? \"ordered\" : \"not ordered: \" \$0 }'"
+    expect bake-target-error-few-passes 0 'warning: --target-error stops a probe after 4 passes at the earliest; with --passes 3 every probe takes all 3' -- \
+        "$pb" bake "$demo" --counts 2,2,2 --rays 16 --passes 3 --target-error 0.05 --octmap-res 4 -o "$tmp/x.probes"
     expect points-with-grid 2 '--points replaces the grid' -- "$pb" bake "$demo" --points "$tmp/p.json" --spacing 1 -o "$tmp/x.probes"
     expect bake-env 0 "environment $tmp/sky.hdr \(4x2, x2, turned 30 deg\)" -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --env "$tmp/sky.hdr" --env-intensity 2 \

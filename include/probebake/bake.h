@@ -79,6 +79,12 @@ typedef enum pb_bake_schedule {
     PB_SCHEDULE_WAVEFRONT = 1
 } pb_bake_schedule;
 
+/* Passes every probe takes under a target error before it may stop: its
+ * standard error is estimated from the passes' spread, and the floor of
+ * the stopping rule from their first 4 (docs/bake.md). With --passes at or
+ * below it a target error stops nothing. */
+#define PB_TARGET_ERROR_MIN_PASSES 4u
+
 /* Zero fields mean the defaults listed on each line. */
 typedef struct pb_bake_desc {
     pb_probe_grid grid;           /* counts >= 1 (pb_probe_grid_fit helps), unless points is set */
@@ -87,8 +93,8 @@ typedef struct pb_bake_desc {
     uint32_t passes;              /* default 4; with target_error, the most passes (default 64) */
     float target_error;           /* 0: fixed passes; else a probe stops once, along each axis, the standard
                                      error of its irradiance is below target_error x its mean (or x 5 % of
-                                     the mean over all probes, if larger), after at least 4 passes; the
-                                     bake stops when all have */
+                                     the mean over all probes, if larger), after at least
+                                     PB_TARGET_ERROR_MIN_PASSES passes; the bake stops when all have */
     uint32_t bounces;             /* reflections after the first hit (0 is direct light only; the CLI defaults to 2) */
     uint32_t octmap_res;          /* default 16 */
     uint32_t seed;                /* default 0 is a valid seed */

@@ -413,6 +413,9 @@ int cmd_bake(const options *o)
     }
     if (!o->log.quiet)
         print_banner(o, q, &d, &env, &pts, probes);
+    if (d.target_error > 0.f && d.passes <= PB_TARGET_ERROR_MIN_PASSES)
+        fprintf(stderr, "probebake: warning: --target-error stops a probe after %u passes at the earliest; with --passes "
+                        "%u every probe takes all %u\n", PB_TARGET_ERROR_MIN_PASSES, d.passes, d.passes);
     if (pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     log_slow_step(o, bvh->stats.build_ms, "BVH of %u triangles built on %u thread%s", s->triangle_count,

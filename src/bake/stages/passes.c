@@ -25,10 +25,10 @@ pb_result pb_bake_stage_passes(bake_job *j, pb_error *err)
     pb_result r = PB_OK;
     for (uint32_t pass = 0; r == PB_OK && pass < d->passes && active_count > 0; ++pass) {
         r = pb_bake_run_pass(&j->run, pass, 0, listed ? j->active : NULL, active_count, err);
-        if (r != PB_OK || !(d->target_error > 0.f) || pass + 1 < 4)
+        if (r != PB_OK || !(d->target_error > 0.f) || pass + 1 < PB_TARGET_ERROR_MIN_PASSES)
             continue;
         uint32_t keep = 0;
-        if (pass + 1 == 4) {
+        if (pass + 1 == PB_TARGET_ERROR_MIN_PASSES) {
             floor = pb_convergence_floor(&j->conv, j->floor_list, j->floor_count);
             for (uint32_t i = 0; i < active_count; ++i)
                 if (j->active[i] < j->own)
