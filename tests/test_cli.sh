@@ -678,8 +678,12 @@ print("same view" if len(a) == len(b) and worst < 1e-3 else "differs by %g" % wo
     expect bake-millimetres 0 "wrote $tmp/mm.probes: 27 probes" -- \
         "$pb" bake "$tmp/demo-mm.gltf" --counts 3,3,3 --rays 64 --passes 1 --octmap-res 4 -o "$tmp/mm.probes"
     expect bake-millimetres-unit 0 '"depth_unit": 64,' -- "$pb" inspect "$tmp/mm.probes" --json
-    expect trace-bad-device 1 "no Vulkan device matches --device 'no-such-gpu'" -- \
+    expect trace-bad-device 1 "--device: no Vulkan device matches 'no-such-gpu'" -- \
         "$pb" trace "$demo" --device no-such-gpu
+    expect bake-bad-devices-entry 1 "^probebake: error: --devices '0,no-such-gpu': no Vulkan device matches 'no-such-gpu'" -- \
+        "$pb" bake "$demo" --counts 2,2,2 --devices 0,no-such-gpu --quiet -o "$tmp/x.probes"
+    expect bake-devices-all-in-list 1 "^probebake: error: --devices 'all,0': 'all' stands alone, not in a list" -- \
+        "$pb" bake "$demo" --counts 2,2,2 --devices all,0 --quiet -o "$tmp/x.probes"
     # sharded bakes (issue 16): 3 parts, merged in any order, are the whole
     # bake's file outside the timings block (header bytes 184..247); so is a
     # bake on two logical devices of the one driver

@@ -138,6 +138,10 @@ int cli_interrupted(void *user);
  * (tests of the error paths): the Nth device allocation or submission fails
  * as out of memory / device lost. */
 pb_context_desc cli_context_desc(const options *o, const char *device, pb_log log);
+/* pb_context_create, with a device that matches nothing (or cannot run the
+ * kernels) named by the option that asked for it: "--device: no Vulkan
+ * device matches 'x'". */
+pb_result cli_context_create(const pb_context_desc *cd, const char *option, pb_context **ctx, pb_error *err);
 
 /* --sky / --env: refuses both at once; loads the map when --env is given
  * (env zeroed otherwise). */

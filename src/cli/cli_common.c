@@ -75,6 +75,19 @@ pb_context_desc cli_context_desc(const options *o, const char *device, pb_log lo
     return cd;
 }
 
+pb_result cli_context_create(const pb_context_desc *cd, const char *option, pb_context **ctx, pb_error *err)
+{
+    pb_result r = pb_context_create(cd, ctx, err);
+    if (r == PB_ERROR_NO_DEVICE && cd->device && cd->device[0] && option) {
+        char was[sizeof err->message];
+        memcpy(was, err->message, sizeof was);
+        /* the option first; a message too long for both loses its end */
+        size_t at = (size_t)snprintf(err->message, sizeof err->message, "%.100s: ", option);
+        snprintf(err->message + at, sizeof err->message - at, "%.*s", (int)(sizeof err->message - at - 1), was);
+    }
+    return r;
+}
+
 pb_result cli_environment(const options *o, pb_environment *env, pb_error *err)
 {
     memset(env, 0, sizeof *env);

@@ -44,6 +44,10 @@ static uint32_t device_list(const char *spec, char names[][64], uint32_t capacit
             snprintf(err->message, sizeof err->message, "--devices '%s': an empty or overlong entry", spec);
             return 0;
         }
+        if (len == 3 && !strncmp(c, "all", 3)) {
+            snprintf(err->message, sizeof err->message, "--devices '%s': 'all' stands alone, not in a list", spec);
+            return 0;
+        }
         memcpy(names[n], c, len);
         names[n++][len] = '\0';
         c += len + (c[len] == ',');
@@ -67,7 +71,9 @@ static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_b
     /* contexts one after another (instance set-up is not for threads) */
     for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
         pb_context_desc cd = cli_context_desc(o, names[i], log);
-        r = pb_context_create(&cd, &ctxs[i], err);
+        char option[96];
+        snprintf(option, sizeof option, "--devices '%.80s'", o->devices);
+        r = cli_context_create(&cd, option, &ctxs[i], err);
         double t0 = cli_now_ms();
         if (r == PB_OK)
             r = pb_gpu_scene_create(ctxs[i], s, bvh, &scenes[i], err);
@@ -314,7 +320,7 @@ static pb_result bake_on_device(const options *o, const pb_scene *s, const pb_bv
     pb_context *ctx = NULL;
     pb_gpu_scene *gs = NULL;
     pb_context_desc cd = cli_context_desc(o, o->device, log);
-    pb_result r = pb_context_create(&cd, &ctx, err);
+    pb_result r = cli_context_create(&cd, "--device", &ctx, err);
     double upload_ms = cli_now_ms();
     if (r == PB_OK)
         r = pb_gpu_scene_create(ctx, s, bvh, &gs, err);

@@ -349,7 +349,7 @@ int cmd_render(const options *o)
                     d.camera.forward[1], d.camera.forward[2]);
     }
     pb_context_desc cd = cli_context_desc(o, o->device, log);
-    if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+    if (cli_context_create(&cd, "--device", &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
     /* the volume on the device once for every render below; the host keeps
      * only what the seam metric reads (the layout), not its SH and depth */

@@ -25,7 +25,7 @@ int cmd_trace(const options *o)
     if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
         goto out;
     pb_context_desc cd = cli_context_desc(o, o->device, log);
-    if (pb_context_create(&cd, &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+    if (cli_context_create(&cd, "--device", &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
     pb_probe_grid grid;
     pb_probe_grid_fit(s->bounds_min, s->bounds_max, o->probes, &grid);

@@ -294,7 +294,7 @@ static pb_result pick_device(pb_context *ctx, pb_error *err)
             best = (int)i;
     }
     if (best < 0) {
-        pb_result r = want && *want ? pb_fail(err, PB_ERROR_NO_DEVICE, "no Vulkan device matches --device '%s' "
+        pb_result r = want && *want ? pb_fail(err, PB_ERROR_NO_DEVICE, "no Vulkan device matches '%s' "
                                                                         "(see `probebake devices`)", want)
                                     : pb_fail(err, PB_ERROR_NO_DEVICE, "no usable Vulkan device (need Vulkan 1.2 with "
                                                                         "bufferDeviceAddress and a compute queue)");
