@@ -365,7 +365,7 @@ expect render-bad-mode 2 "--mode 'pretty': use probes, reference" -- "$pb" rende
 expect render-probes-needs-volume 2 '--mode probes needs --volume' -- "$pb" render "$demo" --mode probes -o "$tmp/r.png"
 expect render-missing-volume 1 "error: $tmp/none.probes: cannot open" -- \
     "$pb" render "$demo" --volume "$tmp/none.probes" -o "$tmp/r.png"
-expect render-no-such-camera 1 "camera 5 does not exist \(1 cameras\)" -- "$pb" render "$demo" --camera 5 -o "$tmp/r.png"
+expect render-no-such-camera 1 "camera 5 does not exist \(1 camera\)" -- "$pb" render "$demo" --camera 5 -o "$tmp/r.png"
 expect render-eye-without-target 2 '--eye and --target go together' -- "$pb" render "$demo" --eye 0,1,2 -o "$tmp/r.png"
 expect render-needs-scene 2 'render needs a SCENE' -- "$pb" render -o "$tmp/r.png"
 expect render-camera-and-eye 2 'give --camera or --eye/--target, not both' -- \
@@ -373,7 +373,9 @@ expect render-camera-and-eye 2 'give --camera or --eye/--target, not both' -- \
 expect render-scene-without-cameras 1 "^probebake: error: $src/tests/scenes/doorway.gltf: the scene has no cameras" -- \
     "$pb" render "$src/tests/scenes/doorway.gltf" --camera 0 -o "$tmp/r.png"
 expect render-up-parallel 1 'up vector is parallel' -- \
-    "$pb" render "$demo" --eye 0,1,0 --target 0,2,0 -o "$tmp/r.png"
+    "$pb" render "$demo" --eye 0,1,0 --target 0,2,0 --up 0,-1,0 -o "$tmp/r.png"
+expect render-eye-is-target 1 '^probebake: error: --eye and --target are the same point' -- \
+    "$pb" render "$demo" --eye 0,1,0 --target 0,1,0 -o "$tmp/r.png"
 expect render-bad-eye 2 "--eye '1,2' is not three" -- "$pb" render "$demo" --eye 1,2 --target 0,0,0 -o "$tmp/r.png"
 expect render-spheres-need-volume 2 '--show-probes needs --volume' -- "$pb" render "$demo" --show-probes -o "$tmp/r.png"
 expect render-no-partial-file 0 '^absent$' -- bash -c "[ -e '$tmp/r.png' ] && echo present || echo absent"
@@ -419,6 +421,11 @@ def pfm(path):
 a, b = pfm(sys.argv[1]), pfm(sys.argv[2])
 worst = max(abs(x - y) / max(1.0, abs(y)) for x, y in zip(a, b))
 print("same view" if len(a) == len(b) and worst < 1e-3 else "differs by %g" % worst)' "$tmp/near-eye.pfm" "$tmp/far-eye.pfm"
+    # straight down without --up: a plan view, -Z at the top of the image (as --up 0,0,-1 gives)
+    expect render-plan-view 0 '^same$' -- bash -c "'$pb' render '$demo' --mode direct --size 32x24 --eye 0,2.9,0 \
+        --target 0,0,0 --pfm --quiet -o '$tmp/plan.png' >/dev/null && '$pb' render '$demo' --mode direct --size 32x24 \
+        --eye 0,2.9,0 --target 0,0,0 --up 0,0,-1 --pfm --quiet -o '$tmp/plan-up.png' >/dev/null &&
+        cmp -s '$tmp/plan.pfm' '$tmp/plan-up.pfm' && echo same"
     expect devices-json 0 '"subgroup_size": [0-9]+.*"kernels": "(native64|portable)"' -- "$pb" devices --json
     expect trace-verify 0 'verify +GPU vs CPU reference: 0 mismatches' -- \
         "$pb" trace "$demo" --verify --validation --probes 64 --rays 128

@@ -91,16 +91,26 @@ static pb_result camera_from_options(const options *o, const pb_scene *s, pb_cam
     *chosen_later = 0;
     float yfov = (o->fov_deg > 0.f ? o->fov_deg : 50.f) * 0.017453293f;
     if (o->has_eye) {
+        double len2 = 0.0;
         for (int k = 0; k < 3; ++k) {
             cam->eye[k] = (float)(o->eye[k] - s->origin[k]);
             cam->forward[k] = (float)(o->target[k] - o->eye[k]);
             cam->up[k] = o->has_up ? (float)o->up[k] : (k == 1 ? 1.f : 0.f);
+            len2 += (o->target[k] - o->eye[k]) * (o->target[k] - o->eye[k]);
         }
+        if (!(len2 > 0.0)) {
+            snprintf(err->message, sizeof err->message, "--eye and --target are the same point: no view direction");
+            return err->code = PB_ERROR_INVALID_ARGUMENT;
+        }
+        /* straight down or up with no --up: +Y cannot be the image's up, so
+         * -Z is (a plan view with the scene's far side at the top) */
+        if (!o->has_up && fabs(o->target[1] - o->eye[1]) > 0.9999 * sqrt(len2))
+            cam->up[0] = 0.f, cam->up[1] = 0.f, cam->up[2] = -1.f;
         cam->yfov = yfov;
     } else if (s->camera_count > 0) {
         if (o->camera >= s->camera_count) {
-            snprintf(err->message, sizeof err->message, "%s: camera %u does not exist (%u cameras)", o->scene,
-                     o->camera, s->camera_count);
+            snprintf(err->message, sizeof err->message, "%s: camera %u does not exist (%u camera%s)", o->scene,
+                     o->camera, s->camera_count, cli_plural(s->camera_count));
             return err->code = PB_ERROR_INVALID_ARGUMENT;
         }
         pb_camera_from_scene(&s->cameras[o->camera], cam);
