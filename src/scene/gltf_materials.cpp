@@ -97,6 +97,22 @@ int texture_source(reader &r, size_t i)
     return t.source >= 0 || unusable < 0 ? t.source : unusable; // a missing or undecoded image is warned about
 }
 
+// Material mt's KHR_materials_transmission object, or nullptr.
+const tinygltf::Value *transmission_of(const tinygltf::Material &mt)
+{
+    auto ext = mt.extensions.find("KHR_materials_transmission");
+    return ext != mt.extensions.end() && ext->second.IsObject() ? &ext->second : nullptr;
+}
+
+// Whether a textureInfo value names a texture by an integer index, in *index.
+bool texture_info_index(const tinygltf::Value &info, int *index)
+{
+    if (!info.IsObject() || !info.Has("index") || !info.Get("index").IsInt())
+        return false;
+    *index = info.Get("index").GetNumberAsInt();
+    return true;
+}
+
 // The image texture i reads first: the first of its extensions' sources
 // (texture_source's order), else its core source.
 int first_source(const tinygltf::Texture &t)
@@ -125,12 +141,11 @@ std::vector<int> images_materials_read(const reader &r)
         bool unlit = mt.extensions.find("KHR_materials_unlit") != mt.extensions.end();
         add(base_texture_index(mt));
         add(mt.emissiveTexture.index);
-        auto tr = mt.extensions.find("KHR_materials_transmission");
-        if (!unlit && tr != mt.extensions.end() && tr->second.IsObject() && tr->second.Has("transmissionFactor") &&
-            tr->second.Get("transmissionFactor").GetNumberAsDouble() > 0 && tr->second.Has("transmissionTexture") &&
-            tr->second.Get("transmissionTexture").Has("index") &&
-            tr->second.Get("transmissionTexture").Get("index").IsInt())
-            add(tr->second.Get("transmissionTexture").Get("index").GetNumberAsInt());
+        const tinygltf::Value *tr = transmission_of(mt);
+        int tt;
+        if (!unlit && tr && tr->Has("transmissionFactor") && tr->Get("transmissionFactor").GetNumberAsDouble() > 0 &&
+            tr->Has("transmissionTexture") && texture_info_index(tr->Get("transmissionTexture"), &tt))
+            add(tt);
         if (!unlit && !spec_gloss(mt) && mt.pbrMetallicRoughness.metallicFactor > 0)
             add(mt.pbrMetallicRoughness.metallicRoughnessTexture.index);
         if (!unlit && !r.no_normal_maps)
@@ -249,10 +264,10 @@ void fold_metallic(reader &r, const tinygltf::TextureInfo &info, const std::arra
 // modelled: the surface's specular reflection, refraction.
 void apply_transmission(reader &r, const tinygltf::Material &mt, const std::array<double, 6> &xf, pb_material &pm)
 {
-    auto ext = mt.extensions.find("KHR_materials_transmission");
-    if (ext == mt.extensions.end() || !ext->second.IsObject() || !ext->second.Has("transmissionFactor"))
+    const tinygltf::Value *ext = transmission_of(mt);
+    if (!ext || !ext->Has("transmissionFactor"))
         return;
-    double t = ext->second.Get("transmissionFactor").GetNumberAsDouble();
+    double t = ext->Get("transmissionFactor").GetNumberAsDouble();
     t = t < 1.0 ? t : 1.0;
     double pass = t * (1.0 - pm.metallic);
     if (!(pass > 0.0))
@@ -265,11 +280,9 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
     }
     // the transmission texture's red channel scales the factor, where it is
     // read with the colour texture's UVs
-    const tinygltf::Value &tx = ext->second.Has("transmissionTexture") ? ext->second.Get("transmissionTexture")
-                                                                       : tinygltf::Value();
-    int32_t tt = tx.IsObject() && tx.Has("index") && tx.Get("index").IsInt()
-                     ? texture_of(r, tx.Get("index").GetNumberAsInt(), pm.name)
-                     : -1;
+    const tinygltf::Value &tx = ext->Has("transmissionTexture") ? ext->Get("transmissionTexture") : tinygltf::Value();
+    int ti;
+    int32_t tt = texture_info_index(tx, &ti) ? texture_of(r, ti, pm.name) : -1;
     if (tt >= 0) {
         int tc = tx.Has("texCoord") && tx.Get("texCoord").IsInt() ? tx.Get("texCoord").GetNumberAsInt() : 0;
         const tinygltf::Value *tm = tx.Has("extensions") && tx.Get("extensions").Has("KHR_texture_transform")
@@ -321,9 +334,8 @@ void apply_transmission(reader &r, const tinygltf::Material &mt, const std::arra
 // read so far): then the material's UVs may take its transform.
 bool only_normal_map(const tinygltf::Material &mt, const pb_material &pm)
 {
-    auto ext = mt.extensions.find("KHR_materials_transmission");
-    bool transmission_texture = ext != mt.extensions.end() && ext->second.IsObject() &&
-                                ext->second.Has("transmissionTexture");
+    const tinygltf::Value *tr = transmission_of(mt);
+    bool transmission_texture = tr && tr->Has("transmissionTexture");
     return pm.base_color_texture < 0 && pm.emissive_texture < 0 &&
            mt.pbrMetallicRoughness.metallicRoughnessTexture.index < 0 && !transmission_texture &&
            mt.normalTexture.index >= 0;
