@@ -282,6 +282,18 @@ static void solid_angle_of_known_triangles(void)
     }
     CHECKF(worst < 3e-7, "atan_nonneg %.2e from atan2", worst);
     CHECK(pb_atan_nonneg(0.f, 0.f) == 0.f && pb_atan_nonneg(0.f, -1.f) > 3.14159f);
+    /* the sampler's sin and cos (its half solid angle lies in [0, pi]): to float's
+     * rounding of the result, relative too (also where either nears 0) */
+    double worst_abs = 0, worst_rel = 0;
+    for (int i = 0; i <= 400000; ++i) {
+        float h = (float)(i * (3.141592653589793 / 400000)), s, c;
+        pb_sincos_0_pi(h, &s, &c);
+        double ws = sin((double)h), wc = cos((double)h);
+        worst_abs = fmax(worst_abs, fmax(fabs(s - ws), fabs(c - wc)));
+        if (i > 0 && i < 400000)
+            worst_rel = fmax(worst_rel, fmax(fabs(s - ws) / fabs(ws), fabs(wc) > 1e-6 ? fabs(c - wc) / fabs(wc) : 0));
+    }
+    CHECKF(worst_abs < 1.2e-7 && worst_rel < 2e-7, "sincos_0_pi %.2e absolute, %.2e relative", worst_abs, worst_rel);
 }
 
 /* pb_spherical_triangle_sample draws every direction toward the triangle

@@ -36,6 +36,23 @@ float atan_nonneg(float y, float x)
     return x < 0.0 ? 3.1415927 - r : r;
 }
 
+// sin h and cos h for h in [0, pi] (clamped into it), to float's rounding
+// (1e-7) alike on every device and the host: GLSL allows sin and cos an
+// absolute error of 2^-11 and drivers differ. Least-squares polynomials on
+// [-pi/4, pi/4] for r = h - q pi/2, where h - q (pi/2's float) is exact
+// (Sterbenz) before q times its low part; the quadrant q then picks.
+vec2 sincos_0_pi(float h)
+{
+    h = min(max(h, 0.0), 3.14159274);
+    float q = h > 2.35619449 ? 2.0 : (h > 0.785398163 ? 1.0 : 0.0);
+    precise float r = (h - q * 1.57079637) - q * -4.37113883e-8;
+    precise float w = r * r;
+    precise float ps = (-1.953543542e-04 * w + 8.332310244e-03) * w - 1.666665673e-01;
+    precise float pc = (2.444946222e-05 * w - 1.388745848e-03) * w + 4.166664928e-02;
+    precise float sr = r + r * w * ps, cr = (1.0 - 0.5 * w) + w * w * pc;
+    return q == 0.0 ? vec2(sr, cr) : (q == 1.0 ? vec2(cr, -sr) : vec2(-sr, -cr));
+}
+
 // Solid angle of the triangle (v0, v1, v2) seen from x: Van Oosterom and
 // Strackee's formula for the corners p_i = v_i - x of lengths l_i,
 // tan(area / 2) = |p0.(p1 x p2)| / (l0 l1 l2 + (p0.p1) l2 + (p1.p2) l0 + (p2.p0) l1),
@@ -74,7 +91,8 @@ vec3 spherical_triangle_sample(vec3 x, vec3 v0, vec3 v1, vec3 v2, float area, fl
     vec3 P = normalize(C - dot(C, A) * A);
     float k = abs(dot(A, cross(B, P))), bp = dot(B, P);
     float h = 0.5 * u1 * area;
-    float sh = sin(h), ch = cos(h);
+    vec2 sc = sincos_0_pi(h);
+    float sh = sc.x, ch = sc.y;
     float den = k * ch - bp * sh;
     float tau_c = length(C - A) / length(C + A); // C' = C at u1 = 1
     float tau = (1.0 + dot(A, B)) * sh / den;

@@ -30,6 +30,21 @@ float pb_atan_nonneg(float y, float x)
     return x < 0.f ? 3.1415927f - r : r;
 }
 
+void pb_sincos_0_pi(float h, float *s, float *c)
+{
+    h = fminf(fmaxf(h, 0.f), 3.14159274f);
+    /* r = h - q pi/2 in [-pi/4, pi/4]: h - q (pi/2's float) is exact (Sterbenz),
+     * then q times its low part; sin and cos of h from r's by the quadrant */
+    int q = h > 2.35619449f ? 2 : h > 0.785398163f;
+    float r = (h - (float)q * 1.57079637f) - (float)q * -4.37113883e-8f;
+    float w = r * r;
+    float ps = (-1.953543542e-04f * w + 8.332310244e-03f) * w - 1.666665673e-01f;
+    float pc = (2.444946222e-05f * w - 1.388745848e-03f) * w + 4.166664928e-02f;
+    float sr = r + r * w * ps, cr = (1.f - 0.5f * w) + w * w * pc;
+    *s = q == 0 ? sr : q == 1 ? cr : -sr;
+    *c = q == 0 ? cr : q == 1 ? -sr : -cr;
+}
+
 float pb_spherical_triangle_area(const float x[3], const float v0[3], const float v1[3], const float v2[3])
 {
     float p0[3], p1[3], p2[3], e1[3], e2[3], n[3];
@@ -64,7 +79,8 @@ void pb_spherical_triangle_sample(const float x[3], const float v0[3], const flo
     pb_cross3(B, P, bP);
     float k = fabsf(pb_dot3(A, bP)), bp = pb_dot3(B, P);
     float h = 0.5f * u1 * area;
-    float sh = sinf(h), ch = cosf(h);
+    float sh, ch;
+    pb_sincos_0_pi(h, &sh, &ch);
     float den = k * ch - bp * sh;
     for (int j = 0; j < 3; ++j)
         cm[j] = C[j] - A[j], cp[j] = C[j] + A[j];

@@ -22,6 +22,11 @@
  * by the same polynomial as the kernels' (GLSL's atan may be 4096 ulp off). */
 float pb_atan_nonneg(float y, float x);
 
+/* sin h and cos h for h in [0, pi] (clamped into it), to float's rounding
+ * (1e-7 relative), by the same polynomials as the kernels': GLSL allows sin
+ * and cos an absolute error of 2^-11, and drivers differ. */
+void pb_sincos_0_pi(float h, float *s, float *c);
+
 /* The solid angle of triangle (v0, v1, v2) seen from x (Van Oosterom and
  * Strackee's formula: any size, either orientation). */
 float pb_spherical_triangle_area(const float x[3], const float v0[3], const float v1[3], const float v2[3]);
