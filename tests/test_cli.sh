@@ -689,6 +689,16 @@ print("same view" if len(a) == len(b) and worst < 1e-3 else "differs by %g" % wo
         "$pb" trace "$demo" --device no-such-gpu
     expect bake-bad-devices-entry 1 "^probebake: error: --devices '0,no-such-gpu': no Vulkan device matches 'no-such-gpu'" -- \
         "$pb" bake "$demo" --counts 2,2,2 --devices 0,no-such-gpu --quiet -o "$tmp/x.probes"
+    # a device that matches nothing is said before the scene (or a volume) is read, so
+    # before a missing scene's error (and a large scene's user waits for no load, no BVH)
+    expect bake-bad-device-first 1 "^probebake: error: --device: no Vulkan device matches 'no-such-gpu'" -- \
+        "$pb" bake "$tmp/absent.gltf" --counts 2,2,2 --device no-such-gpu -o "$tmp/x.probes"
+    expect bake-bad-devices-first 1 "^probebake: error: --devices '0,no-such-gpu': no Vulkan device matches" -- \
+        "$pb" bake "$tmp/absent.gltf" --counts 2,2,2 --devices 0,no-such-gpu --quiet -o "$tmp/x.probes"
+    expect render-bad-device-first 1 "^probebake: error: --device: no Vulkan device matches 'no-such-gpu'" -- \
+        "$pb" render "$tmp/absent.gltf" --volume "$tmp/absent.probes" --device no-such-gpu -o "$tmp/x.png"
+    expect trace-bad-device-first 1 "^probebake: error: --device: no Vulkan device matches 'no-such-gpu'" -- \
+        "$pb" trace "$tmp/absent.gltf" --device no-such-gpu
     expect bake-devices-all-in-list 1 "^probebake: error: --devices 'all,0': 'all' stands alone, not in a list" -- \
         "$pb" bake "$demo" --counts 2,2,2 --devices all,0 --quiet -o "$tmp/x.probes"
     # sharded bakes (issue 16): 3 parts, merged in any order, are the whole

@@ -57,51 +57,92 @@ static uint32_t device_list(const char *spec, char names[][64], uint32_t capacit
     return n < capacity ? n : 0;
 }
 
-/* The bake on every device of --devices, merged (pb_bake_devices). */
-static pb_result bake_on_devices(const options *o, const pb_scene *s, const pb_bvh *bvh, pb_bake_desc *d, pb_log log,
-                                 pb_volume *vol, pb_error *err)
-{
-    enum { MAX_DEVICES = 33 };
+/* The devices a bake runs on, opened before the scene is read: a device
+ * that matches nothing (or none at all) is said before a large scene's load
+ * and BVH, not after. One for --device (or the default pick), one per entry
+ * of --devices. */
+enum { MAX_DEVICES = 33 };
+typedef struct bake_devices {
+    uint32_t count;
     char names[MAX_DEVICES][64];
-    pb_context *ctxs[MAX_DEVICES] = {0};
+    pb_context *ctxs[MAX_DEVICES];
+} bake_devices;
+
+static pb_result open_devices(const options *o, pb_log log, bake_devices *dv, pb_error *err)
+{
+    memset(dv, 0, sizeof *dv);
+    if (!o->devices) {
+        pb_context_desc cd = cli_context_desc(o, o->device, log);
+        pb_result r = cli_context_create(&cd, "--device", &dv->ctxs[0], err);
+        dv->count = r == PB_OK;
+        return r;
+    }
+    uint32_t n = device_list(o->devices, dv->names, MAX_DEVICES, err);
+    if (!n)
+        return err->code = PB_ERROR_INVALID_ARGUMENT;
+    char option[96];
+    snprintf(option, sizeof option, "--devices '%.80s'", o->devices);
+    /* one after another (instance set-up is not for threads) */
+    for (; dv->count < n; ++dv->count) {
+        pb_context_desc cd = cli_context_desc(o, dv->names[dv->count], log);
+        pb_result r = cli_context_create(&cd, option, &dv->ctxs[dv->count], err);
+        if (r != PB_OK)
+            return r;
+    }
+    return PB_OK;
+}
+
+static void close_devices(bake_devices *dv)
+{
+    for (uint32_t i = 0; i < dv->count; ++i)
+        pb_context_destroy(dv->ctxs[i]);
+    dv->count = 0;
+}
+
+/* Validation messages on any device fail the bake (--validation). */
+static pb_result check_validation(const options *o, const bake_devices *dv, pb_error *err)
+{
+    for (uint32_t i = 0; o->validation && i < dv->count; ++i)
+        if (pb_context_validation_messages(dv->ctxs[i])) {
+            if (o->devices)
+                snprintf(err->message, sizeof err->message, "%u Vulkan validation messages on device %s",
+                         pb_context_validation_messages(dv->ctxs[i]), dv->names[i]);
+            else
+                snprintf(err->message, sizeof err->message, "%u Vulkan validation messages",
+                         pb_context_validation_messages(dv->ctxs[i]));
+            return err->code = PB_ERROR_VULKAN;
+        }
+    return PB_OK;
+}
+
+/* The bake on every device of --devices, merged (pb_bake_devices). */
+static pb_result bake_on_devices(const options *o, const bake_devices *dv, const pb_scene *s, const pb_bvh *bvh,
+                                 pb_bake_desc *d, pb_volume *vol, pb_error *err)
+{
+    uint32_t n = dv->count;
     pb_gpu_scene *scenes[MAX_DEVICES] = {0};
-    uint32_t n = device_list(o->devices, names, MAX_DEVICES, err);
-    pb_result r = n ? PB_OK : PB_ERROR_INVALID_ARGUMENT;
+    pb_result r = PB_OK;
     double upload_ms = 0.0; /* summed over the devices, as the parts' other timings are */
-    /* contexts one after another (instance set-up is not for threads) */
     for (uint32_t i = 0; i < n && r == PB_OK; ++i) {
-        pb_context_desc cd = cli_context_desc(o, names[i], log);
-        char option[96];
-        snprintf(option, sizeof option, "--devices '%.80s'", o->devices);
-        r = cli_context_create(&cd, option, &ctxs[i], err);
         double t0 = cli_now_ms();
-        if (r == PB_OK)
-            r = pb_gpu_scene_create(ctxs[i], s, bvh, &scenes[i], err);
+        r = pb_gpu_scene_create(dv->ctxs[i], s, bvh, &scenes[i], err);
         upload_ms += cli_now_ms() - t0;
     }
     if (r == PB_OK && !o->log.quiet)
         fprintf(stderr, "probebake: %u devices, one part each:", n);
     for (uint32_t i = 0; r == PB_OK && !o->log.quiet && i < n; ++i)
-        fprintf(stderr, "%s %s", i ? "," : "", pb_context_device(ctxs[i])->name);
+        fprintf(stderr, "%s %s", i ? "," : "", pb_context_device(dv->ctxs[i])->name);
     if (r == PB_OK && !o->log.quiet)
         fprintf(stderr, "\n");
     if (r == PB_OK) {
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
         pb_sparse_desc sd = sparse_desc_from_options(o);
-        r = pb_bake_devices(ctxs, scenes, n, s, d, o->sparse ? &sd : NULL, vol, err);
+        r = pb_bake_devices(dv->ctxs, scenes, n, s, d, o->sparse ? &sd : NULL, vol, err);
     }
     if (r == PB_OK)
         vol->timings.upload = upload_ms;
-    for (uint32_t i = 0; r == PB_OK && o->validation && i < n; ++i)
-        if (pb_context_validation_messages(ctxs[i])) {
-            snprintf(err->message, sizeof err->message, "%u Vulkan validation messages on device %s",
-                     pb_context_validation_messages(ctxs[i]), names[i]);
-            r = err->code = PB_ERROR_VULKAN;
-        }
-    for (uint32_t i = 0; i < n; ++i) {
+    for (uint32_t i = 0; i < n; ++i)
         pb_gpu_scene_destroy(scenes[i]);
-        pb_context_destroy(ctxs[i]);
-    }
     return r;
 }
 
@@ -314,16 +355,12 @@ static void print_report(FILE *report, const options *o, const pb_bake_desc *d, 
 }
 
 /* The bake on one device (--device, or the default pick). */
-static pb_result bake_on_device(const options *o, const pb_scene *s, const pb_bvh *bvh, const pb_bake_desc *d,
-                                pb_log log, pb_volume *vol, pb_sparse_stats *stats, pb_error *err)
+static pb_result bake_on_device(const options *o, pb_context *ctx, const pb_scene *s, const pb_bvh *bvh,
+                                const pb_bake_desc *d, pb_volume *vol, pb_sparse_stats *stats, pb_error *err)
 {
-    pb_context *ctx = NULL;
     pb_gpu_scene *gs = NULL;
-    pb_context_desc cd = cli_context_desc(o, o->device, log);
-    pb_result r = cli_context_create(&cd, "--device", &ctx, err);
     double upload_ms = cli_now_ms();
-    if (r == PB_OK)
-        r = pb_gpu_scene_create(ctx, s, bvh, &gs, err);
+    pb_result r = pb_gpu_scene_create(ctx, s, bvh, &gs, err);
     upload_ms = cli_now_ms() - upload_ms;
     if (r == PB_OK) {
         cli_defer_signals(); /* from here a signal cancels the bake or the write */
@@ -336,13 +373,7 @@ static pb_result bake_on_device(const options *o, const pb_scene *s, const pb_bv
     }
     if (r == PB_OK)
         vol->timings.upload = upload_ms; /* the caller's, as load and bvh are */
-    if (r == PB_OK && o->validation && pb_context_validation_messages(ctx)) {
-        snprintf(err->message, sizeof err->message, "%u Vulkan validation messages",
-                 pb_context_validation_messages(ctx));
-        r = err->code = PB_ERROR_VULKAN;
-    }
     pb_gpu_scene_destroy(gs);
-    pb_context_destroy(ctx);
     return r;
 }
 
@@ -376,6 +407,7 @@ int cmd_bake(const options *o)
     pb_points pts = {0};
     pb_environment env = {0};
     pb_bake_desc d = {0};
+    bake_devices dv = {0};
     pb_error err = {0};
     int rc = 1;
     double t0 = cli_now_ms();
@@ -398,6 +430,8 @@ int cmd_bake(const options *o)
     if (o->devices && strchr(o->devices, ','))
         split.shard_index = 0, split.shard_count = 2;
     if (pb_bake_check_settings(&split, o->sparse ? &sd : NULL, &err) != PB_OK)
+        goto out;
+    if (open_devices(o, log, &dv, &err) != PB_OK)
         goto out;
     double load_ms = cli_now_ms();
     if (pb_scene_load(o->scene, &scd, &s, &err) != PB_OK ||
@@ -429,12 +463,13 @@ int cmd_bake(const options *o)
     cli_progress_state ps = {isatty(2) && !o->log.quiet, cli_now_ms(), probes * d.rays_per_probe * d.passes};
     d.progress = cli_progress;
     d.progress_user = &ps;
-    pb_result r = o->devices ? bake_on_devices(o, s, bvh, &d, log, &vol, &err)
-                             : bake_on_device(o, s, bvh, &d, log, &vol, &stats, &err);
+    pb_result r = o->devices ? bake_on_devices(o, &dv, s, bvh, &d, &vol, &err)
+                             : bake_on_device(o, dv.ctxs[0], s, bvh, &d, &vol, &stats, &err);
     if (ps.show)
         fprintf(stderr, "\n");
-    if (r != PB_OK)
+    if (r != PB_OK || check_validation(o, &dv, &err) != PB_OK)
         goto out;
+    close_devices(&dv); /* before the write, which needs none */
     if (o->sparse)
         probes = vol.probe_count;
     vol.timings.load = load_ms;
@@ -454,5 +489,6 @@ out:
     pb_environment_free(&env);
     pb_bvh_destroy(bvh);
     pb_scene_destroy(s);
+    close_devices(&dv);
     return rc ? cli_fail(&err) : 0;
 }

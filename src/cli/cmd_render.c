@@ -293,6 +293,10 @@ int cmd_render(const options *o)
     const char *inputs[5] = {o->scene, o->env, o->volume, o->reference, o->seams_of};
     if (pb_output_check(o->output, inputs, 5, &err) != PB_OK || (o->pfm && pb_output_check(pfm, inputs, 5, &err) != PB_OK))
         goto out;
+    /* the device next: one that matches nothing is said before large files are read */
+    pb_context_desc cd = cli_context_desc(o, o->device, log);
+    if (cli_context_create(&cd, "--device", &ctx, &err) != PB_OK)
+        goto out;
     if (o->volume && pb_volume_read(o->volume, &vol, &err) != PB_OK)
         goto out;
     if (o->seams_of && pb_volume_read(o->seams_of, &seams_vol, &err) != PB_OK)
@@ -358,8 +362,7 @@ int cmd_render(const options *o)
                     d.camera.eye[1] + s->origin[1], d.camera.eye[2] + s->origin[2], d.camera.forward[0],
                     d.camera.forward[1], d.camera.forward[2]);
     }
-    pb_context_desc cd = cli_context_desc(o, o->device, log);
-    if (cli_context_create(&cd, "--device", &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+    if (pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
     /* the volume on the device once for every render below; the host keeps
      * only what the seam metric reads (the layout), not its SH and depth */

@@ -22,10 +22,12 @@ int cmd_trace(const options *o)
     pb_hit *hits = NULL, *ref = NULL;
     pb_error err;
     int rc = 1;
-    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK)
-        goto out;
+    /* the device first: one that matches nothing is said before a large scene's load */
     pb_context_desc cd = cli_context_desc(o, o->device, log);
-    if (cli_context_create(&cd, "--device", &ctx, &err) != PB_OK || pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
+    if (cli_context_create(&cd, "--device", &ctx, &err) != PB_OK)
+        goto out;
+    if (pb_scene_load(o->scene, &sd, &s, &err) != PB_OK || pb_bvh_build(s, NULL, &bvh, &err) != PB_OK ||
+        pb_gpu_scene_create(ctx, s, bvh, &gs, &err) != PB_OK)
         goto out;
     pb_probe_grid grid;
     pb_probe_grid_fit(s->bounds_min, s->bounds_max, o->probes, &grid);
