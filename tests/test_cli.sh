@@ -108,6 +108,16 @@ expect info-json-triangles 0 '"triangles": 40,' -- "$pb" info "$demo" --json
 expect info-json-lights 0 '"lights": \[\{"type": "point"' -- "$pb" info "$demo" --json
 expect info-json-bounds 0 '"bounds_min": \[-2, 0, -2.5\]' -- "$pb" info "$demo" --json
 expect info-extensions 0 '^extensions  used: KHR_lights_punctual, KHR_materials_emissive_strength; applied: KHR_lights_punctual, KHR_materials_emissive_strength$' -- "$pb" info "$demo"
+# names from the file reach the terminal printable: a light named with an escape
+# sequence and a line break, an unsupported required extension's name in the error
+sed '0,/"name": "lamp"/s//"name": "lamp\\u001b[2J\\nline"/' "$demo" >"$tmp/escapes.gltf"
+expect info-name-printable 0 "^lights +1: point 'lamp\\\\x1b\\[2J\\\\x0aline' " -- "$pb" info "$tmp/escapes.gltf"
+expect info-no-raw-escape 0 '^0$' -- bash -c "'$pb' info '$tmp/escapes.gltf' 2>&1 | tr -dc '\\033' | wc -c"
+sed 's/"extensionsUsed": \[/"extensionsRequired": ["EXT_\\u001b[31mred"], "extensionsUsed": ["EXT_\\u001b[31mred", /' \
+    "$demo" >"$tmp/escapes-required.gltf"
+expect error-name-printable 1 '^probebake: error: .*requires extension EXT_\\x1b\[31mred, which' -- \
+    "$pb" info "$tmp/escapes-required.gltf"
+one_error_line error-name-one-line -- "$pb" info "$tmp/escapes-required.gltf"
 expect info-json-extensions 0 '"extensions_applied": \["KHR_lights_punctual", "KHR_materials_emissive_strength"\],' -- "$pb" info "$demo" --json
 expect info-json-bounds-max 0 '"bounds_max": \[2, 3, 2.5\]' -- "$pb" info "$demo" --json
 expect info-shading-flat 0 '^shading     0 of 40 triangles smooth' -- "$pb" info "$demo"

@@ -73,6 +73,11 @@ typedef struct options {
 /* "probebake: error: MESSAGE" on stderr; returns the exit code (1, or 130
  * for a cancelled run). */
 int cli_fail(const pb_error *err);
+
+/* fputs, with control characters written as \xNN: names and messages that
+ * come from a file (a light's name, an extension, a volume's device) may
+ * hold escape sequences or line breaks, which a terminal would act on. */
+void cli_fputs_printable(const char *s, FILE *f);
 /* A usage error: exit code 2. */
 int cli_usage_error(const char *fmt, const char *arg);
 void cli_log_to_stderr(pb_log_level level, const char *msg, void *user);

@@ -20,7 +20,20 @@ void cli_log_to_stderr(pb_log_level level, const char *msg, void *user)
     if (level <= PB_LOG_INFO && l->quiet)
         return;
     static const char *const names[] = {"debug", "info", "warning", "error"};
-    fprintf(stderr, "probebake: %s: %s\n", names[level], msg);
+    fprintf(stderr, "probebake: %s: ", names[level]);
+    cli_fputs_printable(msg, stderr);
+    fputc('\n', stderr);
+}
+
+void cli_fputs_printable(const char *s, FILE *f)
+{
+    for (; *s; ++s) {
+        unsigned char c = (unsigned char)*s;
+        if (c < 0x20 || c == 0x7f)
+            fprintf(f, "\\x%02x", c);
+        else
+            fputc(c, f);
+    }
 }
 
 double cli_now_ms(void)
@@ -34,7 +47,9 @@ static volatile sig_atomic_t interrupted, deferring; /* see on_signal */
 
 int cli_fail(const pb_error *err)
 {
-    fprintf(stderr, "probebake: error: %s\n", err->message[0] ? err->message : pb_result_name(err->code));
+    fputs("probebake: error: ", stderr);
+    cli_fputs_printable(err->message[0] ? err->message : pb_result_name(err->code), stderr);
+    fputc('\n', stderr);
     /* 128 + the signal, as shells report it (SIGINT 130, SIGTERM 143) */
     return err->code == PB_ERROR_CANCELLED ? 128 + (interrupted ? (int)interrupted : SIGINT) : 1;
 }

@@ -126,13 +126,19 @@ int cmd_info(const options *o)
                    st->textures_in, st->textures_unread);
         printf("\n");
         printf("lights      %u", s->light_count);
-        for (uint32_t i = 0; i < s->light_count; ++i)
-            printf("%s%s '%s' %g", i ? ", " : ": ", light_type(s->lights[i].type), s->lights[i].name,
-                   s->lights[i].intensity);
+        for (uint32_t i = 0; i < s->light_count; ++i) { /* names and extensions as the file spells them: printable */
+            printf("%s%s '", i ? ", " : ": ", light_type(s->lights[i].type));
+            cli_fputs_printable(s->lights[i].name, stdout);
+            printf("' %g", s->lights[i].intensity);
+        }
         printf("\ncameras     %u\n", s->camera_count);
-        if (st->extensions_used[0])
-            printf("extensions  used: %s; applied: %s\n", st->extensions_used,
-                   st->extensions_applied[0] ? st->extensions_applied : "none");
+        if (st->extensions_used[0]) {
+            printf("extensions  used: ");
+            cli_fputs_printable(st->extensions_used, stdout);
+            printf("; applied: ");
+            cli_fputs_printable(st->extensions_applied[0] ? st->extensions_applied : "none", stdout);
+            printf("\n");
+        }
         printf("bounds      (%s, %s, %s) .. (%s, %s, %s) m\n", mm(lo[0]).s, mm(lo[1]).s, mm(lo[2]).s, mm(hi[0]).s,
                mm(hi[1]).s, mm(hi[2]).s);
     }

@@ -260,12 +260,13 @@ static void print_summary(const options *o, const pb_volume *v)
     printf("content     %s SH L2, direct light %s; depth %ux%u (+1 border) per probe, misses at %g m\n", kind,
            v->flags & PB_VOLUME_DIRECT ? "included" : "excluded", v->octmap_res, v->octmap_res, s->max_distance);
     printf("bake        %u rays x %u passes, %u bounces (indirect %s), probe NEE %s, guiding %s, light cells %s, "
-           "emitters by %s, seed %llu, device %s\n", s->rays_per_probe, s->passes, s->bounces,
+           "emitters by %s, seed %llu, device ", s->rays_per_probe, s->passes, s->bounces,
            s->indirect_mode ? "volume" : "path", s->techniques & PB_TECHNIQUE_PROBE_NEE ? "on" : "off",
            s->techniques & PB_TECHNIQUE_GUIDING ? "on" : "off",
            s->techniques & PB_TECHNIQUE_LIGHT_CELLS ? "on" : "off",
-           s->techniques & PB_TECHNIQUE_SOLID_ANGLE ? "solid angle" : "area, if any", (unsigned long long)s->seed,
-           v->device[0] ? v->device : "?");
+           s->techniques & PB_TECHNIQUE_SOLID_ANGLE ? "solid angle" : "area, if any", (unsigned long long)s->seed);
+    cli_fputs_printable(v->device[0] ? v->device : "?", stdout); /* the file's: printable */
+    printf("\n");
     if (s->sh_window || s->indirect_clamp > 0.f)
         printf("biased      SH window %s (W %g), indirect clamp %g\n", window_name(s->sh_window),
                s->sh_window_width > 0.f ? s->sh_window_width : 3.f, s->indirect_clamp);
