@@ -6,7 +6,7 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bakeab blocks bench clocks large lavapipe loads peer sweep test_bake test_trace traceab tests
+# STEPS: any of compile bake bakeab blocks bench clocks decode large lavapipe loads peer sweep test_bake test_trace traceab tests
 # vsbake wavefront (default: compile bake wavefront vsbake peer bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
 # each test program in the tests step (default 300).
 set -u
@@ -82,6 +82,15 @@ for s in $steps; do
                 --json /tmp/trace-leaf$1-tc$2.json $crypt
             keep /tmp/trace-leaf$1-tc$2.json
         done ;;
+    decode) # the loader's images decoded ahead on the host's 16 cores against decoded in turn, alternately
+        # (bench/decode_bench), on eight instances of two samples, each with its own image files
+        # (scripts/make_many_images_scene.py: 32 and 40 large textures read) and on the samples alone
+        sm=../shared/scenes/samples
+        run 60 python3 scripts/make_many_images_scene.py $sm/DamagedHelmet/DamagedHelmet.gltf 8 /tmp/helmet8
+        run 60 python3 scripts/make_many_images_scene.py $sm/AlphaBlendModeTest/AlphaBlendModeTest.gltf 8 /tmp/alpha8
+        run 180 build/bench/decode_bench --runs 7 --json /tmp/decode.json /tmp/helmet8/helmet8.gltf \
+            /tmp/alpha8/alpha8.gltf $sm/DamagedHelmet/DamagedHelmet.gltf $sm/AlphaBlendModeTest/AlphaBlendModeTest.gltf
+        keep /tmp/decode.json ;;
     large) # the host's share of a large scene's bake on a workstation's cores (bench/RESULTS.md,
         # "The BVH build, and a large scene's load"): the 4.2M-triangle terrain (75 MB, made
         # here: too big to carry), its BVH build against Embree's on all host cores, then the
