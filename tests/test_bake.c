@@ -2649,11 +2649,17 @@ static double dc_luminance(const float *sh)
  * is 4e-5 from the exact value (the H200's 1e-5), a near-hemisphere's
  * direction 1.4e-5 rad (its arc from B nearly reaches -B). So the solid angle
  * is held within 4 times the distance one-ulp changes of the inputs move the
- * exact value (each input's, summed), on both sides; the
- * direction, drawn at each side's own solid angle, within twice the host's
- * worst for each kind of shape, and the host's within 3e-5 rad (Arvo's
- * cos(A, C') gave 7.5e-4). The driver's sin and cos drew directions 1.9e-5
- * rad off on the H200, 15x the host: the kernel now has its own. */
+ * exact value (each input's, summed), on both sides (1.33 here, 2.4 for the
+ * host's with its square roots and divisions up to 3 ulp off); the direction, drawn
+ * at each side's own solid angle, within 8 times the host's worst for each
+ * kind of shape, and the host's within 3e-5 rad (Arvo's cos(A, C') gave
+ * 7.5e-4). 8x: Vulkan lets a device round sqrt and division a few ulp off
+ * (the H200's and lavapipe's are within one: 1.5x and 1x here), and the
+ * host's sampler with each of those results moved at random by up to 1 ulp
+ * lands up to 2.7x its own worst, by up to 2 or 3 ulp 5.8x
+ * (bench/results/spherical_triangle_jitter/). The driver's sin and
+ * cos drew directions 15x the host's worst on the H200 (the kernel now has
+ * its own), and a 1e-5 relative error in the half-angle 9-15x. */
 static void spherical_triangle_kernel_matches_cpu(void)
 {
     uint32_t n = 1u << 16;
@@ -2740,7 +2746,7 @@ static void spherical_triangle_kernel_matches_cpu(void)
     CHECK(mismatched <= 2);
     CHECK(area_ulps[0] < 4 && area_ulps[1] < 4);
     for (int k = 0; k < 3; ++k) {
-        CHECKF(angle[k][0] < 2 * fmax(angle[k][1], 1.2e-7), "%s", kinds[k]); /* 1.2e-7: a unit vector's rounding */
+        CHECKF(angle[k][0] < 8 * fmax(angle[k][1], 1.2e-7), "%s", kinds[k]); /* 1.2e-7: a unit vector's rounding */
         CHECKF(angle[k][1] < 3e-5, "%s", kinds[k]);
     }
     free(in), free(out);
