@@ -74,7 +74,8 @@ typedef struct options {
  * for a cancelled run). */
 int cli_fail(const pb_error *err);
 
-/* fputs, with control characters written as \xNN: names and messages that
+/* fputs, with control characters written as \xNN (C1 controls, UTF-8's
+ * U+0080..U+009F, as \uNNNN): names and messages that
  * come from a file (a light's name, an extension, a volume's device) may
  * hold escape sequences or line breaks, which a terminal would act on. */
 void cli_fputs_printable(const char *s, FILE *f);

@@ -28,9 +28,11 @@ void cli_log_to_stderr(pb_log_level level, const char *msg, void *user)
 void cli_fputs_printable(const char *s, FILE *f)
 {
     for (; *s; ++s) {
-        unsigned char c = (unsigned char)*s;
+        unsigned char c = (unsigned char)*s, next = (unsigned char)s[1];
         if (c < 0x20 || c == 0x7f)
             fprintf(f, "\\x%02x", c);
+        else if (c == 0xc2 && next >= 0x80 && next <= 0x9f) /* U+0080..U+009F: C1 controls (CSI is U+009B) */
+            fprintf(f, "\\u%04x", next), ++s;
         else
             fputc(c, f);
     }
