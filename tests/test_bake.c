@@ -1802,7 +1802,7 @@ static void light_cells_match_cpu_reference(void)
         pb_bake_pass tmpl = multi_bounce_template(s, &b, &em, d.seed);
         pb_light_cells lc;
         pb_error err;
-        CHECKF(pb_light_cells_build(&tmpl, &lc, &err) == PB_OK, "%s", err.message);
+        CHECKF(pb_light_cells_build(&tmpl, NULL, NULL, &lc, &err) == PB_OK, "%s", err.message);
         double worst_norm = 0;
         for (uint32_t sl = 0; sl < lc.learned; ++sl) {
             double sum = 0;
@@ -1835,6 +1835,71 @@ static void light_cells_match_cpu_reference(void)
     release(&b);
     release(&again);
     pb_scene_destroy(s);
+}
+
+/* Whether two sets of light cells are the same bytes: grid, slots, clusters,
+ * members, tables. */
+static int light_cells_identical(const pb_light_cells *a, const pb_light_cells *b, uint32_t triangles,
+                                 uint32_t emitters)
+{
+    uint32_t cells = pb_cell_grid_cells(&a->grid);
+    return !memcmp(&a->grid, &b->grid, sizeof a->grid) && a->learned == b->learned && a->clusters == b->clusters &&
+           (!a->table) == (!b->table) &&
+           (!a->table || (!memcmp(a->slot, b->slot, cells * sizeof *a->slot) &&
+                          !memcmp(a->table, b->table, (size_t)a->learned * a->clusters * 4 * sizeof *a->table) &&
+                          !memcmp(a->cluster_range, b->cluster_range, 2 * (size_t)a->clusters * sizeof(uint32_t)) &&
+                          !memcmp(a->member_tri, b->member_tri, emitters * sizeof *a->member_tri) &&
+                          !memcmp(a->member_keep, b->member_keep, emitters * sizeof *a->member_keep) &&
+                          !memcmp(a->member_alias, b->member_alias, emitters * sizeof *a->member_alias) &&
+                          !memcmp(a->cluster_of, b->cluster_of, triangles * sizeof *a->cluster_of)));
+}
+
+/* Light cells learned for a GPU scene trace their shadow rays on the device
+ * (light_cells_gpu.c): its any-hit answers are the host walker's, so the
+ * cells are the bytes the host's own tracing makes, on the lamps scene (three
+ * small panels in two rooms, mostly hidden from one another: occlusion
+ * decides the tables) and on The Crypt (5,256 emitters) when present. */
+static void light_cells_learned_on_the_device_are_the_hosts(void)
+{
+    const char *paths[2] = {source_path("tests/scenes/lamps.gltf"),
+                            source_path("../shared/scenes/openarena/oacmpdm1.glb")};
+    for (int i = 0; i < 2; ++i) {
+        if (!file_exists(paths[i])) {
+            skip("%s absent", paths[i]);
+            continue;
+        }
+        pb_scene *s = NULL;
+        pb_bvh *bvh = NULL;
+        pb_gpu_scene *gs = NULL;
+        pb_bake_emitters em = {0};
+        pb_error err = {0};
+        int opened = pb_scene_load(paths[i], NULL, &s, &err) == PB_OK && pb_bvh_build(s, NULL, &bvh, &err) == PB_OK &&
+                     pb_gpu_scene_create(ctx, s, bvh, &gs, &err) == PB_OK &&
+                     pb_bake_emitters_build(s, &em, &err) == PB_OK;
+        CHECKF(opened, "%s: %s", paths[i], err.message);
+        pb_bake_pass tp;
+        memset(&tp, 0, sizeof tp);
+        tp.scene = s, tp.bvh = bvh, tp.seed = 3, tp.emitters = &em;
+        pb_light_cells host = {0};
+        const pb_light_cells_gpu *dev = NULL;
+        if (opened) {
+            CHECKF(pb_light_cells_build(&tp, NULL, NULL, &host, &err) == PB_OK, "%s", err.message);
+            CHECKF(pb_light_cells_gpu_get(ctx, s, gs, 3, &em, &dev, NULL, &err) == PB_OK, "%s", err.message);
+        }
+        if (dev) {
+            fprintf(stderr, "  %s: %u emitters in %u clusters, %u cells learned: %s\n", strrchr(paths[i], '/') + 1,
+                    em.count, host.clusters, host.learned,
+                    light_cells_identical(&host, &dev->host, s->triangle_count, em.count) ? "the same bytes"
+                                                                                         : "DIFFERENT");
+            CHECK(host.clusters >= 2 && host.learned > 0);
+            CHECK(light_cells_identical(&host, &dev->host, s->triangle_count, em.count));
+        }
+        pb_light_cells_free(&host);
+        pb_bake_emitters_free(&em);
+        pb_gpu_scene_destroy(gs);
+        pb_bvh_destroy(bvh);
+        pb_scene_destroy(s);
+    }
 }
 
 /* --indirect volume against the CPU reference: the demo scene's bounce-1
@@ -3812,6 +3877,7 @@ int main(void)
     RUN(multi_bounce_matches_cpu_reference);
     RUN(cpu_reference_casts_through_the_given_tracer);
     RUN(light_cells_match_cpu_reference);
+    RUN(light_cells_learned_on_the_device_are_the_hosts);
     RUN(vertex_colours_are_albedo);
     RUN(normal_maps_match_cpu_reference);
     RUN(dilation_kernel_matches_cpu_reference);

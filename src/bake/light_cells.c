@@ -127,6 +127,8 @@ typedef struct cells_build {
     uint32_t *order;        /* points by cell */
     uint32_t *slot_cell;    /* per slot (cell with enough points): its cell */
     double *light;          /* per slot and cluster: measured unblocked light */
+    pb_shadow_batch_fn trace; /* the shadow rays' tracer, NULL: pb_trace_cpu */
+    void *trace_user;
 } cells_build;
 
 static void cells_build_free(cells_build *b)
@@ -272,7 +274,7 @@ static int bucket_points(cells_build *b)
 /* 3. Per slot: the candidate clusters by power over distance squared from
  * the mean of its points, measured with shadow rays from its points, in
  * batches of slots (b->light). */
-static int measure_cells(cells_build *b)
+static pb_result measure_cells(cells_build *b, pb_error *err)
 {
     const pb_scene *s = b->s;
     uint32_t C = b->C, K = C < PB_LIGHT_CELL_CANDIDATES ? C : PB_LIGHT_CELL_CANDIDATES, R = PB_LIGHT_CELL_RAYS;
@@ -285,9 +287,12 @@ static int measure_cells(cells_build *b)
     probe_ray *meta = malloc(batch_rays * sizeof *meta);
     uint32_t *pair_slot = malloc((size_t)batch_cells * K * sizeof *pair_slot);
     uint32_t *pair_cluster = malloc((size_t)batch_cells * K * sizeof *pair_cluster);
-    int ok = b->light && U && rays && hits && meta && pair_slot && pair_cluster;
+    pb_result r = b->light && U && rays && hits && meta && pair_slot && pair_cluster
+                      ? PB_OK
+                      : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for light cells (%u emitters)",
+                                b->E);
     float near2 = 0.25f * b->cell * b->cell, min_d2 = 0.0625f * b->cell * b->cell;
-    for (uint32_t s0 = 0; ok && s0 < b->slots; s0 += batch_cells) {
+    for (uint32_t s0 = 0; r == PB_OK && s0 < b->slots; s0 += batch_cells) {
         uint32_t s1 = s0 + batch_cells < b->slots ? s0 + batch_cells : b->slots, npairs = 0;
         for (uint32_t sl = s0; sl < s1; ++sl) {
             uint32_t c = b->slot_cell[sl], f = b->first[c], np = b->first[c + 1] - f;
@@ -317,13 +322,16 @@ static int measure_cells(cells_build *b)
         ray_batch rb = {s, b->out, pair_slot, pair_cluster, b->slot_cell, b->first, b->order, b->points,
                         b->pass->seed, R, min_d2, rays, meta};
         pb_parallel_for(nr, 1024, 0, make_shadow_rays, &rb);
-        pb_trace_cpu(s, b->pass->bvh, rays, (uint32_t)nr, PB_TRACE_ANY, hits, 0);
-        for (size_t i = 0; i < nr; ++i) /* in ray order: sums independent of the threads */
+        if (b->trace)
+            r = b->trace(b->trace_user, rays, (uint32_t)nr, hits, err);
+        else
+            pb_trace_cpu(s, b->pass->bvh, rays, (uint32_t)nr, PB_TRACE_ANY, hits, 0);
+        for (size_t i = 0; r == PB_OK && i < nr; ++i) /* in ray order: sums independent of the threads */
             if (hits[i].triangle == PB_NO_HIT)
                 b->light[(size_t)meta[i].slot * C + meta[i].cluster] += b->share[meta[i].cluster] * meta[i].weight / R;
     }
     free(U), free(rays), free(hits), free(meta), free(pair_slot), free(pair_cluster);
-    return ok;
+    return r;
 }
 
 /* 4. Per slot: q = a share + (1 - a) measured / total, as an alias table
@@ -368,7 +376,8 @@ static int make_tables(cells_build *b)
     return ok;
 }
 
-pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb_error *err)
+pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_shadow_batch_fn trace, void *trace_user,
+                               pb_light_cells *out, pb_error *err)
 {
     memset(out, 0, sizeof *out);
     const pb_scene *s = pass->scene;
@@ -377,7 +386,7 @@ pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb
         return PB_OK;
     uint32_t E = em->count, T = s->triangle_count;
     cells_build b = {0};
-    b.pass = pass, b.s = s, b.out = out, b.E = E;
+    b.pass = pass, b.s = s, b.out = out, b.E = E, b.trace = trace, b.trace_user = trace_user;
     b.p = malloc(E * sizeof *b.p);
     b.centroid = malloc(3 * (size_t)E * sizeof *b.centroid);
     b.k = malloc(E * sizeof *b.k);
@@ -388,11 +397,15 @@ pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb
     int ok = b.p && b.centroid && b.k && out->cluster_of && out->member_tri && out->member_keep &&
              out->member_alias && pb_surface_sampler_init(s, &b.surface);
     ok = ok && make_clusters(&b);
-    if (ok && b.C >= 2) /* one cluster: every cell would draw by power */
-        ok = bucket_points(&b) && measure_cells(&b) && make_tables(&b);
+    pb_result r = ok ? PB_OK : PB_ERROR_OUT_OF_HOST_MEMORY;
+    if (ok && b.C >= 2) { /* one cluster: every cell would draw by power */
+        r = bucket_points(&b) ? measure_cells(&b, err) : PB_ERROR_OUT_OF_HOST_MEMORY;
+        if (r == PB_OK && !make_tables(&b))
+            r = PB_ERROR_OUT_OF_HOST_MEMORY;
+    }
     cells_build_free(&b);
-    pb_result r = ok ? PB_OK
-                     : pb_fail(err, PB_ERROR_OUT_OF_HOST_MEMORY, "out of host memory for light cells (%u emitters)", E);
+    if (r == PB_ERROR_OUT_OF_HOST_MEMORY)
+        pb_fail(err, r, "out of host memory for light cells (%u emitters)", E);
     if (r != PB_OK || !out->learned)
         pb_light_cells_free(out);
     return r;

@@ -46,9 +46,18 @@ typedef struct pb_light_cells {
                                      (uint bits), ratio q(c) / share(c), 0 */
 } pb_light_cells;
 
-/* Measures the cells for the scene, BVH, emitters and seed of `pass`.
- * Leaves *out empty (slot NULL) when the scene has no emitters. */
-pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_light_cells *out, pb_error *err);
+/* Traces a batch of shadow rays (any hit): as pb_trace_cpu over the pass's
+ * BVH, or on a device (pb_trace: its hits are the host's, so the tables are
+ * the same bytes); an error stops the build. */
+typedef pb_result (*pb_shadow_batch_fn)(void *user, const pb_ray *rays, uint32_t count, pb_hit *hits,
+                                        pb_error *err);
+
+/* Measures the cells for the scene, BVH, emitters and seed of `pass`, its
+ * shadow rays traced by `trace` (NULL: pb_trace_cpu over pass->bvh on all
+ * host threads). Leaves *out empty (slot NULL) when the scene has no
+ * emitters. */
+pb_result pb_light_cells_build(const pb_bake_pass *pass, pb_shadow_batch_fn trace, void *trace_user,
+                               pb_light_cells *out, pb_error *err);
 void pb_light_cells_free(pb_light_cells *lc);
 
 /* The kernel's functions, for the CPU reference: the table slot of the cell
