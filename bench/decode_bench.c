@@ -21,16 +21,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 enum { MAX_RUNS = 64 };
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
-}
 
 /* What a load made, decoding or not: pb_scene_hash (geometry, materials),
  * then every texture's fields and every texel */
@@ -52,12 +44,12 @@ static int load_once(const char *path, uint32_t mode, double *ms, uint64_t *hash
     sd.decode_ahead = mode;
     pb_scene *s = NULL;
     pb_error err;
-    double t0 = now_ms();
+    double t0 = pb_now_ms();
     if (pb_scene_load(path, &sd, &s, &err) != PB_OK) {
         fprintf(stderr, "decode_bench: %s\n", err.message);
         return 0;
     }
-    *ms = now_ms() - t0;
+    *ms = pb_now_ms() - t0;
     *hash = scene_hash(s);
     *textures = s->texture_count;
     pb_scene_destroy(s);
