@@ -43,16 +43,6 @@
 #include <string.h>
 #include <sys/stat.h>
 
-/* The trace kernel's Mrays/s in one timed run; 0 when it fails. */
-static double trace_rate(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, uint32_t n, pb_hit *hits)
-{
-    pb_error err;
-    pb_trace_stats st;
-    if (!n || pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err) != PB_OK || !(st.kernel_ms > 0))
-        return 0.0;
-    return n / (st.kernel_ms * 1e3);
-}
-
 /* The bake's own probe rays: of the grid's rays (`per_probe` per probe), those
  * of each probe v traced (not flagged inside geometry), moved to where it
  * traced them (its relocated position, in the scene's local frame). Returns
@@ -193,8 +183,8 @@ int main(int argc, char **argv)
                 double vs_trace[16], vs_bounce[16], vs_own[16];
                 uint32_t done = 0;
                 for (; done < repeat; ++done) {
-                    double tr = trace_rate(ctx, gs, rays, n, hits), br = trace_rate(ctx, gs, brays, nb, hits);
-                    double orate = trace_rate(ctx, gs, orays, no, hits);
+                    double tr = bench_trace_rate(ctx, gs, rays, n, hits), br = bench_trace_rate(ctx, gs, brays, nb, hits);
+                    double orate = bench_trace_rate(ctx, gs, orays, no, hits);
                     if (nall < 48)
                         all_trace[nall] = tr, all_bounce[nall] = br, all_own[nall++] = orate;
                     pb_volume v;

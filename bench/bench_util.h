@@ -27,6 +27,18 @@ static inline double bench_median(const double *v, uint32_t n)
     return t[n / 2];
 }
 
+/* The trace kernel's Mrays/s (closest hits, kernel time) in one timed run of
+ * n rays; 0 when it fails or n is 0. hits: n entries of scratch. */
+static inline double bench_trace_rate(pb_context *ctx, pb_gpu_scene *gs, const pb_ray *rays, uint32_t n,
+                                      pb_hit *hits)
+{
+    pb_error err;
+    pb_trace_stats st;
+    if (!n || pb_trace(ctx, gs, rays, n, PB_TRACE_CLOSEST, hits, &st, &err) != PB_OK || !(st.kernel_ms > 0))
+        return 0.0;
+    return n / (st.kernel_ms * 1e3);
+}
+
 /* Relative RMSE of irradiance luminance of volume a against ref, over ref's
  * valid probes and 64 spherical-Fibonacci directions:
  * sqrt(mean (E - E_ref)^2) / mean(E_ref). */

@@ -110,6 +110,29 @@ void embree_peer_cast(void *user, const pb_ray *r, pb_trace_mode mode, pb_hit *h
         hit->triangle = rh.hit.primID, hit->t = rh.ray.tfar, hit->u = rh.hit.u, hit->v = rh.hit.v;
 }
 
+typedef struct cast_job {
+    const embree_peer *peer;
+    const pb_ray *rays;
+    pb_trace_mode mode;
+} cast_job;
+
+static void cast_range(void *user, uint64_t b, uint64_t e)
+{
+    const cast_job *j = user;
+    for (uint64_t i = b; i < e; ++i) {
+        pb_hit h;
+        embree_peer_cast((void *)j->peer, &j->rays[i], j->mode, &h);
+    }
+}
+
+double embree_peer_cast_all(const embree_peer *p, const pb_ray *rays, uint64_t n, pb_trace_mode mode)
+{
+    cast_job job = {p, rays, mode};
+    double t0 = pb_now_ms();
+    pb_parallel_for(n, 1024, 0, cast_range, &job);
+    return pb_now_ms() - t0;
+}
+
 void embree_peer_release(embree_peer *p)
 {
     rtcReleaseScene(p->scene);

@@ -20,6 +20,9 @@ double embree_peer_trace(const embree_peer *p, const pb_ray *rays, uint32_t n, f
 /* One ray, closest or any hit (pb_ray_cast_fn; user: the embree_peer):
  * triangle, t, u, v; backface is not set (the path tracer reads none). */
 void embree_peer_cast(void *user, const pb_ray *ray, pb_trace_mode mode, pb_hit *hit);
+/* n rays cast one by one as embree_peer_cast casts them, on all host
+ * threads, hits dropped. Returns wall ms. */
+double embree_peer_cast_all(const embree_peer *p, const pb_ray *rays, uint64_t n, pb_trace_mode mode);
 void embree_peer_release(embree_peer *p);
 
 #endif

@@ -15,7 +15,18 @@
  *          ray), and of all three kernels (trace + SH + depth);
  *   peer   wall time of the same paths on the host (Embree's rays);
  *   own    the same C path tracer over the bake's BVH (pb_trace_cpu);
- * and "agree": the relative RMSE of the peer's irradiance against the
+ * the issue-11 ratio for both tracers ("trc"): traversals (probe, bounce and
+ * shadow rays, as the kernel counts them) per second of path tracing, over
+ * the same tracer's rate on plain probe rays (256 per probe of the grid,
+ * timed in each round): the bake's on all its GPU time (trace + SH + depth)
+ * against the trace kernel, bake_bench's "vs trc"; the peer's on its wall
+ * time against Embree's rtcIntersect1 on all threads. Beside them each
+ * tracer's rate on those probe rays' bounce rays over its probe-ray rate
+ * ("b/t", bounce_rays.h): the ceiling of "trc" for paths made of bounce rays.
+ * "em own": Embree alone on the rays the peer cast (recorded once, replayed
+ * with its calls), per second over its probe-ray rate: the "trc" of a path
+ * tracer on Embree whose shading costs nothing.
+ * And "agree": the relative RMSE of the peer's irradiance against the
  * bake's (64 directions per valid probe), which is noise-sized only where
  * a hit decides differently (a blended surface's hashed threshold, a
  * Russian roulette draw), else ~1e-7. The run fails where the C path
@@ -35,11 +46,14 @@
 #include "bake/light_cells_gpu.h"
 #include "bake/shading.h"
 #include "bench_util.h"
+#include "bounce_rays.h"
+#include "ray_log.h"
 #include "common/common.h"
 #include "embree_peer.h"
 #include "probebake/probebake.h"
 
 #include <errno.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -56,6 +70,8 @@ static const method methods[] = {
 };
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 #define MAX_REPEAT 15
+#define LAYOUTS 3 /* ray_log_layout's */
+#define RAY_LOG_MAX_BYTES ((uint64_t)1 << 30) /* the peer's rays kept for "em own" / "krn own" */
 #define AGREE_OWN_MAX 1e-3 /* a rare Russian roulette draw flipped by rounding moves ~1e-4 */
 
 typedef struct row {
@@ -63,6 +79,9 @@ typedef struct row {
     uint64_t paths;
     double bake_trace_ms, bake_gpu_ms, peer_ms, own_ms; /* medians of the rounds */
     double agree_peer, agree_own;                        /* relative RMSE against the bake */
+    uint64_t bake_trav, peer_trav;                       /* traversals of one bake, of the peer's paths */
+    double bake_trc, peer_trc, kernel_bt, embree_bt;     /* medians of the rounds' ratios */
+    double embree_own, kernel_own[LAYOUTS]; /* alone on the peer's rays over the probe-ray rate; 0: none */
 } row;
 
 /* The CPU tracer's inputs that pb_bake learned on the device side and keeps
@@ -75,10 +94,13 @@ typedef struct peer_inputs {
 } peer_inputs;
 
 /* Runs the CPU path tracer of tmpl over every pass of d, as pb_bake places,
- * turns and lights its probes; sh: 27 irradiance coefficients per probe.
+ * turns and lights its probes; sh: 27 irradiance coefficients per probe
+ * (NULL: paths only, not the SH projection, whose punctual lights' shadow
+ * rays are no path's).
  * Returns the wall ms of the path tracing (pb_bake_trace_cpu) alone, or a
- * negative number when out of memory. */
-static double cpu_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P, float *sh)
+ * negative number when out of memory; *trav: the traversals it made. */
+static double cpu_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P, float *sh,
+                       uint64_t *trav)
 {
     uint32_t rpp = d->rays_per_probe, n = d->octmap_res ? d->octmap_res : 16;
     float *probes = calloc((size_t)P * 4, sizeof(float)), *rot = malloc((size_t)P * 48);
@@ -86,6 +108,7 @@ static double cpu_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tm
     float *red = calloc((size_t)P * (40 + 2 * n * n), sizeof(float));
     float *nee = d->probe_nee ? malloc((size_t)P * rpp * 32) : NULL;
     double *sum = calloc((size_t)P * 27, sizeof(double)), ms = 0.0;
+    *trav = 0;
     if (!probes || !rot || !dirs || !rays || !red || !sum || (d->probe_nee && !nee)) {
         ms = -1.0;
         goto out;
@@ -97,14 +120,16 @@ static double cpu_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tm
         pp.first_probe = 0, pp.probe_count = P, pp.rays_per_probe = rpp, pp.pass_index = pass;
         pp.octmap_res = n, pp.nee = nee;
         double t0 = pb_now_ms();
-        pb_bake_trace_cpu(&pp, rays);
+        *trav += pb_bake_trace_cpu(&pp, rays);
         ms += pb_now_ms() - t0;
+        if (!sh)
+            continue;
         pb_bake_sh_cpu(&pp, rays, red);
         for (uint32_t p = 0; p < P; ++p)
             for (int k = 0; k < 27; ++k)
                 sum[27 * (size_t)p + k] += red[40 * (size_t)p + k] / (double)d->passes;
     }
-    for (uint32_t p = 0; p < P; ++p) {
+    for (uint32_t p = 0; sh && p < P; ++p) {
         for (int k = 0; k < 27; ++k)
             sh[27 * (size_t)p + k] = (float)sum[27 * (size_t)p + k];
         pb_sh_radiance_to_irradiance(sh + 27 * (size_t)p);
@@ -112,6 +137,84 @@ static double cpu_bake(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tm
 out:
     free(probes), free(rot), free(dirs), free(rays), free(red), free(nee), free(sum);
     return ms;
+}
+
+/* The rays the peer cast, in the bake's lane-group order, in each of
+ * ray_log.h's layouts (packed; in lane groups, kinds apart; in lane groups,
+ * kinds together). real: how many rays. */
+typedef struct own_rays {
+    pb_ray *closest[LAYOUTS], *any[LAYOUTS];
+    uint64_t closest_count[LAYOUTS], any_count[LAYOUTS], real;
+    pb_hit *hits; /* room for the longest list */
+} own_rays;
+
+static void own_rays_free(own_rays *o)
+{
+    for (int k = 0; k < LAYOUTS; ++k)
+        free(o->closest[k]), free(o->any[k]);
+    free(o->hits);
+    memset(o, 0, sizeof *o);
+}
+
+/* The trace kernel's Mrays/s on the rays of layout k (closest-hit and
+ * any-hit rays in one call each; idle lanes not counted); 0 when it fails. */
+static double kernel_rate_own(pb_context *ctx, pb_gpu_scene *gs, const own_rays *o, int k)
+{
+    pb_error err;
+    pb_trace_stats sc = {0}, sa = {0};
+    if ((o->closest_count[k] && pb_trace(ctx, gs, o->closest[k], (uint32_t)o->closest_count[k], PB_TRACE_CLOSEST,
+                                         o->hits, &sc, &err) != PB_OK) ||
+        (o->any_count[k] &&
+         pb_trace(ctx, gs, o->any[k], (uint32_t)o->any_count[k], PB_TRACE_ANY, o->hits, &sa, &err) != PB_OK))
+        return 0.0;
+    double ms = sc.kernel_ms + sa.kernel_ms;
+    return ms > 0 ? o->real / (ms * 1e3) : 0.0;
+}
+
+/* The peer's rays, from one untimed run of the peer's paths (trav: the
+ * traversals of a timed run). Returns 1; 0 and no rays when they do not fit
+ * in RAY_LOG_MAX_BYTES or host memory; -1 when the record is not the peer's
+ * paths (another count of rays, rays before a path's first, lists that lose
+ * or add rays): the bench is wrong. */
+static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P,
+                       const embree_peer *peer, uint64_t trav, own_rays *o)
+{
+    memset(o, 0, sizeof *o);
+    if (trav * sizeof(pb_ray) > RAY_LOG_MAX_BYTES)
+        return 0;
+    ray_log *log = malloc(sizeof *log);
+    float *pos = malloc((size_t)P * 4 * sizeof *pos);
+    uint64_t logged = 0;
+    int ok = log && pos, wrong = 0;
+    for (uint32_t p = 0; ok && p < P; ++p) {
+        uint32_t id;
+        pb_bake_probe_position(s, d, p, pos + 4 * (size_t)p, &id);
+    }
+    if (ok) {
+        ray_log_init(log, embree_peer_cast, (void *)peer);
+        tmpl.cast = ray_log_cast, tmpl.cast_user = log;
+        ok = cpu_bake(s, d, tmpl, P, NULL, &logged) >= 0 && ray_log_count(log) > 0;
+        wrong = ok && (logged != trav || ray_log_count(log) != trav);
+        for (int k = 0; ok && !wrong && k < LAYOUTS; ++k) {
+            int laid = ray_log_lockstep(log, pos, P, (ray_log_layout)k, &o->closest[k], &o->closest_count[k],
+                                        &o->any[k], &o->any_count[k]);
+            ok = laid > 0, wrong = laid < 0;
+        }
+        wrong |= ok && o->closest_count[RAY_LOG_PACKED] + o->any_count[RAY_LOG_PACKED] != trav;
+        ray_log_free(log);
+    }
+    uint64_t longest = 0;
+    for (int k = 0; ok && k < LAYOUTS; ++k) {
+        longest = o->closest_count[k] > longest ? o->closest_count[k] : longest;
+        longest = o->any_count[k] > longest ? o->any_count[k] : longest;
+    }
+    o->real = trav;
+    if (ok)
+        ok = (o->hits = malloc(longest * sizeof *o->hits)) != NULL;
+    free(log), free(pos);
+    if (!ok || wrong)
+        own_rays_free(o);
+    return wrong ? -1 : ok;
 }
 
 /* Relative RMSE of the irradiance of sh (27 per probe) against the volume's,
@@ -185,9 +288,13 @@ int main(int argc, char **argv)
            "%u passes, %u bounces, median of %u rounds\n",
            pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
            probes, rays, passes, bounces, repeat);
-    printf("%-12s %-6s %9s %10s %10s %10s %10s %8s %8s %10s %10s\n", "scene", "method", "paths", "bake ms", "all GPU",
-           "peer ms", "own ms", "vs peer", "vs own", "agree peer", "agree own");
-    fprintf(csv, "scene,method,paths,bake_trace_ms,bake_gpu_ms,peer_ms,own_ms,vs_peer,vs_own,agree_peer,agree_own\n");
+    printf("%-12s %-6s %9s %10s %10s %10s %10s %8s %8s %10s %10s %6s %6s %6s %6s %6s %6s %6s %6s %6s\n", "scene", "method", "paths",
+           "bake ms", "all GPU", "peer ms", "own ms", "vs peer", "vs own", "agree peer", "agree own", "trv/pa", "bk trc",
+           "krn bt", "kr own", "kr grp", "kr mix", "pr trc", "emb bt", "em own");
+    fprintf(csv, "scene,method,paths,bake_trace_ms,bake_gpu_ms,peer_ms,own_ms,vs_peer,vs_own,agree_peer,agree_own,"
+                 "bake_traversals,peer_traversals,bake_trc,kernel_bounce_over_probe,kernel_own_rays_over_probe,"
+                 "kernel_own_groups_over_probe,kernel_own_mixed_groups_over_probe,peer_trc,"
+                 "embree_bounce_over_probe,embree_own_rays_over_probe\n");
     fprintf(json, "{\"device\": \"%s\", \"peer\": \"Embree %d.%d.%d\", \"host_threads\": %u, \"probes\": %u, "
                   "\"rays\": %u, \"passes\": %u, \"bounces\": %u, \"repeat\": %u, \"rows\": [",
             pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
@@ -203,6 +310,9 @@ int main(int argc, char **argv)
         }
         embree_peer peer;
         peer_inputs in;
+        pb_ray *prays = NULL, *brays = NULL;
+        pb_hit *hits = NULL;
+        float *dist = NULL;
         memset(&peer, 0, sizeof peer);
         memset(&in, 0, sizeof in);
         float zero[3] = {0, 0, 0};
@@ -215,6 +325,22 @@ int main(int argc, char **argv)
             goto next_scene;
         }
         const char *name = strrchr(scenes[si], '/') ? strrchr(scenes[si], '/') + 1 : scenes[si];
+        /* 256 probe rays per probe of the bakes' grid and their bounce rays,
+         * each tracer's reference rates ("trc", "b/t"), timed in every round */
+        pb_probe_grid grid;
+        pb_probe_grid_fit(s->bounds_min, s->bounds_max, probes, &grid);
+        uint32_t n = pb_probe_grid_count(&grid) * 256, nb = 0;
+        prays = malloc((size_t)n * sizeof *prays), brays = malloc((size_t)n * sizeof *brays);
+        hits = malloc((size_t)n * sizeof *hits), dist = malloc((size_t)n * sizeof *dist);
+        if (!prays || !brays || !hits || !dist || pb_probe_rays(&grid, 0, n / 256, 256, 1, prays) != PB_OK ||
+            pb_trace(ctx, gs, prays, n, PB_TRACE_CLOSEST, hits, NULL, &err) != PB_OK) {
+            fprintf(stderr, "peer_paths: %s: the reference rays: %s\n", scenes[si],
+                    prays && brays && hits && dist ? err.message : "out of host memory");
+            failed = 1;
+            goto next_scene;
+        }
+        memcpy(brays, prays, (size_t)n * sizeof *prays);
+        nb = bench_bounce_rays(s, brays, hits, n, 0);
         int blended = 0; /* hits there pass by hashed hit bits, which float rounding changes */
         for (uint32_t k = 0; k < s->material_count; ++k)
             blended |= s->materials[k].alpha_mode == PB_ALPHA_BLEND;
@@ -234,12 +360,20 @@ int main(int argc, char **argv)
             d.max_distance = fmaxf(1e-3f, sqrtf(dx * dx + dy * dy + dz * dz));
             uint32_t P = d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
             double bake_ms[MAX_REPEAT], gpu_ms[MAX_REPEAT], peer_ms[MAX_REPEAT], own_ms[MAX_REPEAT];
+            double bake_trc[MAX_REPEAT], peer_trc[MAX_REPEAT], kernel_bt[MAX_REPEAT], embree_bt[MAX_REPEAT];
+            double embree_own[MAX_REPEAT], kernel_own[LAYOUTS][MAX_REPEAT];
+            own_rays own;
+            memset(&own, 0, sizeof own);
+            uint64_t bake_trav = 0, peer_trav = 0, own_trav = 0;
             double agree_peer = 0, agree_own = 0;
             float *sh = malloc((size_t)P * 27 * sizeof *sh);
             int ok = sh != NULL && bench_warm_bake(ctx, s, gs, &d, &err);
             if (sh && !ok)
                 fprintf(stderr, "peer_paths: %s, %s: %s\n", name, m->name, err.message);
             for (uint32_t r = 0; ok && r < repeat; ++r) {
+                double kt = bench_trace_rate(ctx, gs, prays, n, hits), kb = bench_trace_rate(ctx, gs, brays, nb, hits);
+                double et = n / (embree_peer_trace(&peer, prays, n, dist) * 1e3);
+                double eb = nb ? nb / (embree_peer_trace(&peer, brays, nb, dist) * 1e3) : 0.0;
                 pb_volume v;
                 if (pb_bake(ctx, s, gs, &d, &v, &err) != PB_OK) {
                     fprintf(stderr, "peer_paths: %s, %s: %s\n", name, m->name, err.message);
@@ -248,6 +382,7 @@ int main(int argc, char **argv)
                 }
                 bake_ms[r] = v.timings.trace;
                 gpu_ms[r] = v.timings.trace + v.timings.sh + v.timings.octmap;
+                bake_trav = v.traversals;
                 /* what pb_bake learned for this bake, kept with the GPU scene */
                 pb_bake_pass tmpl;
                 memset(&tmpl, 0, sizeof tmpl);
@@ -261,18 +396,38 @@ int main(int argc, char **argv)
                 tmpl.guide = m->guide_paths && gs->guide_cache && gs->guide_cache->valid ? &gs->guide_cache->guide
                                                                                           : NULL;
                 tmpl.cast = embree_peer_cast, tmpl.cast_user = &peer;
-                peer_ms[r] = cpu_bake(s, &d, tmpl, P, sh);
+                peer_ms[r] = cpu_bake(s, &d, tmpl, P, sh, &peer_trav);
                 agree_peer = agreement(&v, sh);
                 tmpl.cast = NULL;
-                own_ms[r] = cpu_bake(s, &d, tmpl, P, sh);
+                own_ms[r] = cpu_bake(s, &d, tmpl, P, sh, &own_trav);
+                /* the peer's rays once (untimed), then each tracer alone on them in each round */
+                if (r == 0 && peer_ms[0] >= 0 && record_rays(s, &d, tmpl, P, &peer, peer_trav, &own) < 0) {
+                    fprintf(stderr, "peer_paths: %s, %s: the peer's recorded rays are not its %llu traversals in "
+                            "whole paths\n", name, m->name, (unsigned long long)peer_trav);
+                    ok = 0;
+                }
+                embree_own[r] = kernel_own[0][r] = kernel_own[1][r] = kernel_own[2][r] = 0.0;
+                if (own.real) {
+                    double ems = embree_peer_cast_all(&peer, own.closest[0], own.closest_count[0], PB_TRACE_CLOSEST) +
+                                 embree_peer_cast_all(&peer, own.any[0], own.any_count[0], PB_TRACE_ANY);
+                    embree_own[r] = ems > 0 && et > 0 ? own.real / (ems * 1e3) / et : 0.0;
+                    for (int k = 0; k < LAYOUTS; ++k)
+                        kernel_own[k][r] = kt > 0 ? kernel_rate_own(ctx, gs, &own, k) / kt : 0.0;
+                }
                 agree_own = agreement(&v, sh);
                 pb_volume_free(&v);
                 if (peer_ms[r] < 0 || own_ms[r] < 0) {
                     fprintf(stderr, "peer_paths: %s, %s: out of host memory\n", name, m->name);
                     ok = 0;
                 }
+                /* traversals per ms over Mrays/s: both per microsecond */
+                bake_trc[r] = kt > 0 ? bake_trav / (gpu_ms[r] * 1e3) / kt : 0.0;
+                peer_trc[r] = et > 0 ? peer_trav / (peer_ms[r] * 1e3) / et : 0.0;
+                kernel_bt[r] = kt > 0 ? kb / kt : 0.0;
+                embree_bt[r] = et > 0 ? eb / et : 0.0;
             }
             free(sh);
+            own_rays_free(&own);
             if (!ok) {
                 failed = 1;
                 continue;
@@ -283,25 +438,47 @@ int main(int argc, char **argv)
                         AGREE_OWN_MAX);
                 failed = 1;
             }
+            if (!blended && (own_trav > bake_trav + bake_trav / 1000 || bake_trav > own_trav + own_trav / 1000)) {
+                fprintf(stderr, "peer_paths: %s, %s: the C path tracer on the bake's BVH made %llu traversals, the "
+                        "bake %llu: they do not count the same rays\n", name, m->name, (unsigned long long)own_trav,
+                        (unsigned long long)bake_trav);
+                failed = 1;
+            }
             row w = {name, m->name, (uint64_t)P * rays * passes, bench_median(bake_ms, repeat),
                      bench_median(gpu_ms, repeat), bench_median(peer_ms, repeat), bench_median(own_ms, repeat),
-                     agree_peer, agree_own};
+                     agree_peer, agree_own, bake_trav, peer_trav, bench_median(bake_trc, repeat),
+                     bench_median(peer_trc, repeat), bench_median(kernel_bt, repeat), bench_median(embree_bt, repeat),
+                     bench_median(embree_own, repeat),
+                     {bench_median(kernel_own[0], repeat), bench_median(kernel_own[1], repeat),
+                      bench_median(kernel_own[2], repeat)}};
             double vs_peer = w.peer_ms / w.bake_trace_ms, vs_own = w.own_ms / w.bake_trace_ms;
-            printf("%-12.12s %-6s %9llu %10.1f %10.1f %10.1f %10.1f %7.3fx %7.3fx %10.2e %10.2e\n", w.scene, w.method,
-                   (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own,
-                   w.agree_peer, w.agree_own);
-            fprintf(csv, "%s,%s,%llu,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.3e,%.3e\n", w.scene, w.method,
-                    (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own,
-                    w.agree_peer, w.agree_own);
+            printf("%-12.12s %-6s %9llu %10.1f %10.1f %10.1f %10.1f %7.3fx %7.3fx %10.2e %10.2e %6.2f %6.2f %6.2f %6.2f "
+                   "%6.2f %6.2f %6.2f %6.2f %6.2f\n", w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms,
+                   w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own, (double)w.bake_trav / w.paths, w.bake_trc,
+                   w.kernel_bt, w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.peer_trc, w.embree_bt,
+                   w.embree_own);
+            fprintf(csv, "%s,%s,%llu,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.3e,%.3e,%llu,%llu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", w.scene,
+                    w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer,
+                    vs_own, w.agree_peer, w.agree_own, (unsigned long long)w.bake_trav, (unsigned long long)w.peer_trav,
+                    w.bake_trc, w.kernel_bt, w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.peer_trc,
+                    w.embree_bt, w.embree_own);
             fprintf(json,
                     "%s\n  {\"scene\": \"%s\", \"method\": \"%s\", \"paths\": %llu, \"bake_trace_ms\": %.3f, "
                     "\"bake_gpu_ms\": %.3f, \"peer_ms\": %.3f, \"own_ms\": %.3f, \"vs_peer\": %.4f, \"vs_own\": %.4f, "
-                    "\"agree_peer\": %.3e, \"agree_own\": %.3e}",
+                    "\"agree_peer\": %.3e, \"agree_own\": %.3e, \"bake_traversals\": %llu, \"peer_traversals\": %llu, "
+                    "\"bake_trc\": %.4f, \"kernel_bounce_over_probe\": %.4f, \"peer_trc\": %.4f, "
+                    "\"kernel_own_rays_over_probe\": %.4f, \"kernel_own_groups_over_probe\": %.4f, "
+                    "\"kernel_own_mixed_groups_over_probe\": %.4f, "
+                    "\"embree_bounce_over_probe\": %.4f, "
+                    "\"embree_own_rays_over_probe\": %.4f}",
                     first_row ? "" : ",", w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms,
-                    w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own);
+                    w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own,
+                    (unsigned long long)w.bake_trav, (unsigned long long)w.peer_trav, w.bake_trc, w.kernel_bt,
+                    w.peer_trc, w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.embree_bt, w.embree_own);
             first_row = 0;
         }
     next_scene:
+        free(prays), free(brays), free(hits), free(dist);
         if (peer.scene)
             embree_peer_release(&peer);
         pb_bake_emitters_free(&in.emit);
@@ -315,7 +492,15 @@ int main(int argc, char **argv)
     fprintf(json, "\n]}\n");
     fclose(csv), fclose(json);
     printf("vs peer / vs own: the bake's paths per second of trace-kernel GPU time over the CPU path tracer's per "
-           "second of wall time (Embree's rays / the bake's BVH on the host); > 1: the bake is faster\n");
+           "second of wall time (Embree's rays / the bake's BVH on the host); > 1: the bake is faster\n"
+           "trv/pa: the bake's traversals per path; bk trc / pr trc: the bake's traversals per second of all its GPU "
+           "time over the trace kernel's probe rays per second (bake_bench's \"vs trc\", issue 11's >= 0.7), the "
+           "peer's per second of its wall time over Embree's; krn bt / emb bt: each tracer's bounce rays per second "
+           "over its probe rays per second; kr own / em own: each tracer alone on the rays the peer cast "
+           "(recorded; packed in the bake's lane-group order) over its probe rays per second: a path tracer's \"trc\" "
+           "on it with no shading cost; kr grp: the same rays in the bake's very lane groups, a lane whose path has "
+           "ended or casts the other kind idle; kr mix: the same with both kinds in one lane group as the bake's one "
+           "trace loop runs them, all traced to their closest hit\n");
     printf("wrote %s\nwrote %s\n", csv_path, json_path);
     rtcReleaseDevice(edev);
     pb_context_destroy(ctx);

@@ -1,0 +1,60 @@
+/* The rays a CPU path tracer casts, recorded as it casts them and put back
+ * in the order the bake's lane groups trace them: what a tracer alone pays
+ * for exactly the bake's rays (peer_paths' "em own" and "krn own").
+ *
+ * pb_bake_trace_cpu traces each path whole on one thread (its probe ray,
+ * then shadow and bounce rays in turn), so each thread's record is a run of
+ * whole paths; a path starts with a closest-hit ray from a probe's position.
+ * The bake's kernel runs 8 consecutive paths of a probe in lockstep, their
+ * k-th rays together: ray_log_lockstep lists the rays that way. */
+#ifndef PB_BENCH_RAY_LOG_H
+#define PB_BENCH_RAY_LOG_H
+
+#include "probebake/probebake.h"
+
+#include <stdatomic.h>
+
+#define RAY_LOG_THREADS 256
+#define RAY_LOG_LANES 8 /* paths per lane group, as llvmpipe and bake.comp run them */
+
+typedef struct ray_log_thread {
+    pb_ray *rays;
+    uint8_t *any;
+    uint64_t count, capacity;
+    int failed; /* out of host memory */
+} ray_log_thread;
+
+typedef struct ray_log {
+    pb_ray_cast_fn cast; /* the tracer that answers the rays */
+    void *cast_user;
+    uint64_t generation; /* tells a worker thread's slot of an earlier log from this one's */
+    _Atomic uint32_t threads;
+    ray_log_thread thread[RAY_LOG_THREADS];
+} ray_log;
+
+/* An empty log in front of cast (cast_user). */
+void ray_log_init(ray_log *log, pb_ray_cast_fn cast, void *cast_user);
+/* pb_ray_cast_fn: records the ray in the calling thread's record, then casts it. */
+void ray_log_cast(void *user, const pb_ray *ray, pb_trace_mode mode, pb_hit *hit);
+/* Total rays recorded; 0 when a thread ran out of memory or out of slots. */
+uint64_t ray_log_count(const ray_log *log);
+/* How ray_log_lockstep lays the rays out. */
+typedef enum ray_log_layout {
+    RAY_LOG_PACKED, /* lane-group order, only rays */
+    RAY_LOG_GROUPS, /* each 8 entries of a list are one lane group's k-th rays of that kind; a lane whose
+                       path has none (it ended or casts the other kind) holds an idle ray (tmax -1: it ends
+                       at the first box), as the bake's lane waits */
+    RAY_LOG_MIXED,  /* as GROUPS, but both kinds in one list (closest): a lane group's k-th rays together,
+                       as the bake's one trace loop runs them; its shadow rays then pay a closest hit */
+} ray_log_layout;
+
+/* The recorded rays in lane-group order, closest-hit and any-hit ones apart
+ * (each list keeps that order; MIXED: all in closest, any empty). probes: the
+ * P probe positions (4 floats each; the first 3 read). Returns 1; 0 when out
+ * of memory or nothing was recorded; -1 when a record does not start with a
+ * path. The lists are malloc'ed, the caller's. */
+int ray_log_lockstep(const ray_log *log, const float *probes, uint32_t P, ray_log_layout layout, pb_ray **closest,
+                     uint64_t *closest_count, pb_ray **any, uint64_t *any_count);
+void ray_log_free(ray_log *log);
+
+#endif
