@@ -58,6 +58,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 typedef struct method {
     const char *name;
@@ -71,7 +72,6 @@ static const method methods[] = {
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 #define MAX_REPEAT 15
 #define LAYOUTS 3 /* ray_log_layout's */
-#define RAY_LOG_MAX_BYTES ((uint64_t)1 << 30) /* the peer's rays kept for "em own" / "krn own" */
 #define AGREE_OWN_MAX 1e-3 /* a rare Russian roulette draw flipped by rounding moves ~1e-4 */
 
 typedef struct row {
@@ -173,14 +173,16 @@ static double kernel_rate_own(pb_context *ctx, pb_gpu_scene *gs, const own_rays 
 
 /* The peer's rays, from one untimed run of the peer's paths (trav: the
  * traversals of a timed run). Returns 1; 0 and no rays when they do not fit
- * in RAY_LOG_MAX_BYTES or host memory; -1 when the record is not the peer's
+ * in host memory (the record and its layouts take about 5 copies of the
+ * rays: they are kept to a tenth of the machine's memory); -1 when the record is not the peer's
  * paths (another count of rays, rays before a path's first, lists that lose
  * or add rays): the bench is wrong. */
 static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P,
                        const embree_peer *peer, uint64_t trav, own_rays *o)
 {
     memset(o, 0, sizeof *o);
-    if (trav * sizeof(pb_ray) > RAY_LOG_MAX_BYTES)
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || page <= 0 || 5 * trav * sizeof(pb_ray) > (uint64_t)pages * (uint64_t)page / 10)
         return 0;
     ray_log *log = malloc(sizeof *log);
     float *pos = malloc((size_t)P * 4 * sizeof *pos);
@@ -500,7 +502,8 @@ int main(int argc, char **argv)
            "(recorded; packed in the bake's lane-group order) over its probe rays per second: a path tracer's \"trc\" "
            "on it with no shading cost; kr grp: the same rays in the bake's very lane groups, a lane whose path has "
            "ended or casts the other kind idle; kr mix: the same with both kinds in one lane group as the bake's one "
-           "trace loop runs them, all traced to their closest hit\n");
+           "trace loop runs them, all traced to their closest hit; 0.00: not measured (the recorded rays would take "
+           "more than a tenth of host memory)\n");
     printf("wrote %s\nwrote %s\n", csv_path, json_path);
     rtcReleaseDevice(edev);
     pb_context_destroy(ctx);
