@@ -23,9 +23,15 @@
  * time against Embree's rtcIntersect1 on all threads. Beside them each
  * tracer's rate on those probe rays' bounce rays over its probe-ray rate
  * ("b/t", bounce_rays.h): the ceiling of "trc" for paths made of bounce rays.
- * "em own": Embree alone on the rays the peer cast (recorded once, replayed
- * with its calls), per second over its probe-ray rate: the "trc" of a path
- * tracer on Embree whose shading costs nothing.
+ * Then each tracer alone on exactly the rays the peer cast (recorded once,
+ * bench/ray_log.h), per second over its probe-ray rate: "em own", Embree
+ * (the "trc" of a path tracer on Embree whose shading cost nothing);
+ * "kr own", the trace kernel with the rays packed in the bake's lane-group
+ * order (8 paths of a probe, their k-th rays together); "kr grp" and "kr
+ * mix", the kernel with the rays in the bake's very lane groups, a lane
+ * whose path has ended idle (kinds of ray apart, or together as the bake's
+ * one trace loop runs them). Between "kr own" and the bake's "trc" lie the
+ * lanes its schedule leaves idle, its shading and its SH and depth kernels.
  * And "agree": the relative RMSE of the peer's irradiance against the
  * bake's (64 directions per valid probe), which is noise-sized only where
  * a hit decides differently (a blended surface's hashed threshold, a
@@ -53,7 +59,6 @@
 #include "probebake/probebake.h"
 
 #include <errno.h>
-#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -174,9 +179,9 @@ static double kernel_rate_own(pb_context *ctx, pb_gpu_scene *gs, const own_rays 
 /* The peer's rays, from one untimed run of the peer's paths (trav: the
  * traversals of a timed run). Returns 1; 0 and no rays when they do not fit
  * in host memory (the record and its layouts take about 5 copies of the
- * rays: they are kept to a tenth of the machine's memory); -1 when the record is not the peer's
- * paths (another count of rays, rays before a path's first, lists that lose
- * or add rays): the bench is wrong. */
+ * rays: they are kept to a tenth of the machine's memory); -1 when the
+ * record is not the peer's paths (another count of rays, rays before a
+ * path's first, lists that lose or add rays): the bench is wrong. */
 static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P,
                        const embree_peer *peer, uint64_t trav, own_rays *o)
 {
@@ -290,9 +295,9 @@ int main(int argc, char **argv)
            "%u passes, %u bounces, median of %u rounds\n",
            pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
            probes, rays, passes, bounces, repeat);
-    printf("%-12s %-6s %9s %10s %10s %10s %10s %8s %8s %10s %10s %6s %6s %6s %6s %6s %6s %6s %6s %6s\n", "scene", "method", "paths",
-           "bake ms", "all GPU", "peer ms", "own ms", "vs peer", "vs own", "agree peer", "agree own", "trv/pa", "bk trc",
-           "krn bt", "kr own", "kr grp", "kr mix", "pr trc", "emb bt", "em own");
+    printf("%-12s %-6s %9s %10s %10s %10s %10s %8s %8s %10s %10s %6s %6s %6s %6s %6s %6s %6s %6s %6s\n", "scene",
+           "method", "paths", "bake ms", "all GPU", "peer ms", "own ms", "vs peer", "vs own", "agree peer", "agree own",
+           "trv/pa", "bk trc", "krn bt", "kr own", "kr grp", "kr mix", "pr trc", "emb bt", "em own");
     fprintf(csv, "scene,method,paths,bake_trace_ms,bake_gpu_ms,peer_ms,own_ms,vs_peer,vs_own,agree_peer,agree_own,"
                  "bake_traversals,peer_traversals,bake_trc,kernel_bounce_over_probe,kernel_own_rays_over_probe,"
                  "kernel_own_groups_over_probe,kernel_own_mixed_groups_over_probe,peer_trc,"
@@ -455,12 +460,13 @@ int main(int argc, char **argv)
                       bench_median(kernel_own[2], repeat)}};
             double vs_peer = w.peer_ms / w.bake_trace_ms, vs_own = w.own_ms / w.bake_trace_ms;
             printf("%-12.12s %-6s %9llu %10.1f %10.1f %10.1f %10.1f %7.3fx %7.3fx %10.2e %10.2e %6.2f %6.2f %6.2f %6.2f "
-                   "%6.2f %6.2f %6.2f %6.2f %6.2f\n", w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms,
-                   w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own, (double)w.bake_trav / w.paths, w.bake_trc,
+                   "%6.2f %6.2f %6.2f %6.2f %6.2f\n",
+                   w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own, (double)w.bake_trav / w.paths, w.bake_trc,
                    w.kernel_bt, w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.peer_trc, w.embree_bt,
                    w.embree_own);
-            fprintf(csv, "%s,%s,%llu,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.3e,%.3e,%llu,%llu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", w.scene,
-                    w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer,
+            fprintf(csv,
+                    "%s,%s,%llu,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.3e,%.3e,%llu,%llu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+                    w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer,
                     vs_own, w.agree_peer, w.agree_own, (unsigned long long)w.bake_trav, (unsigned long long)w.peer_trav,
                     w.bake_trc, w.kernel_bt, w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.peer_trc,
                     w.embree_bt, w.embree_own);

@@ -111,8 +111,8 @@ static uint64_t append_kind(const ray_log_thread *t, const uint64_t *start, uint
 /* Lays out every record's rays in lane groups into c and a (NULL: counts
  * only); start: room for each record's path starts. Returns 0 when a record
  * does not start with a path (rays before it: not a path tracer's record). */
-static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_layout layout, uint64_t *start, pb_ray *c,
-                   uint64_t *nc, pb_ray *a, uint64_t *na)
+static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_layout layout, uint64_t *start,
+                   pb_ray *c, uint64_t *nc, pb_ray *a, uint64_t *na)
 {
     uint32_t threads = atomic_load(&log->threads);
     *nc = *na = 0;
