@@ -459,13 +459,14 @@ int main(int argc, char **argv)
                      {bench_median(kernel_own[0], repeat), bench_median(kernel_own[1], repeat),
                       bench_median(kernel_own[2], repeat)}};
             double vs_peer = w.peer_ms / w.bake_trace_ms, vs_own = w.own_ms / w.bake_trace_ms;
-            printf("%-12.12s %-6s %9llu %10.1f %10.1f %10.1f %10.1f %7.3fx %7.3fx %10.2e %10.2e %6.2f %6.2f %6.2f %6.2f "
-                   "%6.2f %6.2f %6.2f %6.2f %6.2f\n",
+            printf("%-12.12s %-6s %9llu %10.1f %10.1f %10.1f %10.1f %7.3fx %7.3fx %10.2e %10.2e "
+                   "%6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f\n",
                    w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms,
                    vs_peer, vs_own, w.agree_peer, w.agree_own, (double)w.bake_trav / w.paths, w.bake_trc, w.kernel_bt,
                    w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.peer_trc, w.embree_bt, w.embree_own);
             fprintf(csv,
-                    "%s,%s,%llu,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.3e,%.3e,%llu,%llu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+                    "%s,%s,%llu,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.3e,%.3e,%llu,%llu,"
+                    "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
                     w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms,
                     w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own, (unsigned long long)w.bake_trav,
                     (unsigned long long)w.peer_trav, w.bake_trc, w.kernel_bt, w.kernel_own[0], w.kernel_own[1],
