@@ -2,7 +2,7 @@
  * path tracer on this host's cores, path for path.
  *
  *   peer_paths [--probes N] [--rays N] [--passes N] [--bounces N] [--methods plain,all]
- *              [--repeat N] [--out DIR] [--validation] [SCENE ...]
+ *              [--repeat N] [--restart K[:M]] [--out DIR] [--validation] [SCENE ...]
  *
  * The peer is the bake's own CPU reference path tracer (src/bake/bake_cpu.c:
  * the kernels' estimators line by line, the same random numbers) casting its
@@ -30,8 +30,13 @@
  * order (8 paths of a probe, their k-th rays together); "kr grp" and "kr
  * mix", the kernel with the rays in the bake's very lane groups, a lane
  * whose path has ended idle (kinds of ray apart, or together as the bake's
- * one trace loop runs them). Between "kr own" and the bake's "trc" lie the
- * lanes its schedule leaves idle, its shading and its SH and depth kernels.
+ * one trace loop runs them); "kr pmx", packed with both kinds together (as
+ * a schedule that restarts paths in idle lanes would trace them); with
+ * --restart K:M, "kr rst", the rays as lanes that each trace K paths, an
+ * idle lane beginning its next one every M loop iterations, would trace
+ * them (ray_log_restart: a schedule measured before it is built). Between
+ * "kr own" and the bake's "trc" lie the lanes its schedule leaves idle, its
+ * shading and its SH and depth kernels.
  * And "agree": the relative RMSE of the peer's irradiance against the
  * bake's (64 directions per valid probe), which is noise-sized only where
  * a hit decides differently (a blended surface's hashed threshold, a
@@ -46,7 +51,7 @@
  * after an untimed bake that has the driver compile the kernels
  * (bench_warm_bake).
  * Writes DIR/peer_paths.csv and DIR/peer_paths.json (default bench/out). */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE /* sched_setaffinity */
 #include "bake/gpu_scene.h"
 #include "bake/guide_cache.h"
 #include "bake/light_cells_gpu.h"
@@ -59,6 +64,7 @@
 #include "probebake/probebake.h"
 
 #include <errno.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -76,7 +82,8 @@ static const method methods[] = {
 };
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 #define MAX_REPEAT 15
-#define LAYOUTS 3 /* ray_log_layout's */
+#define LAYOUTS 4 /* ray_log_layout's */
+#define RESTART LAYOUTS /* own_rays' slot for --restart's schedule */
 #define AGREE_OWN_MAX 1e-3 /* a rare Russian roulette draw flipped by rounding moves ~1e-4 */
 
 typedef struct row {
@@ -86,7 +93,7 @@ typedef struct row {
     double agree_peer, agree_own;                        /* relative RMSE against the bake */
     uint64_t bake_trav, peer_trav;                       /* traversals of one bake, of the peer's paths */
     double bake_trc, peer_trc, kernel_bt, embree_bt;     /* medians of the rounds' ratios */
-    double embree_own, kernel_own[LAYOUTS]; /* alone on the peer's rays over the probe-ray rate; 0: none */
+    double embree_own, kernel_own[LAYOUTS + 1]; /* alone on the peer's rays over the probe-ray rate; 0: none */
 } row;
 
 /* The CPU tracer's inputs that pb_bake learned on the device side and keeps
@@ -148,14 +155,14 @@ out:
  * ray_log.h's layouts (packed; in lane groups, kinds apart; in lane groups,
  * kinds together). real: how many rays. */
 typedef struct own_rays {
-    pb_ray *closest[LAYOUTS], *any[LAYOUTS];
-    uint64_t closest_count[LAYOUTS], any_count[LAYOUTS], real;
+    pb_ray *closest[LAYOUTS + 1], *any[LAYOUTS + 1]; /* [RESTART]: ray_log_restart's list, if asked */
+    uint64_t closest_count[LAYOUTS + 1], any_count[LAYOUTS + 1], real;
     pb_hit *hits; /* room for the longest list */
 } own_rays;
 
 static void own_rays_free(own_rays *o)
 {
-    for (int k = 0; k < LAYOUTS; ++k)
+    for (int k = 0; k <= LAYOUTS; ++k)
         free(o->closest[k]), free(o->any[k]);
     free(o->hits);
     memset(o, 0, sizeof *o);
@@ -183,7 +190,7 @@ static double kernel_rate_own(pb_context *ctx, pb_gpu_scene *gs, const own_rays 
  * record is not the peer's paths (another count of rays, rays before a
  * path's first, lists that lose or add rays): the bench is wrong. */
 static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P,
-                       const embree_peer *peer, uint64_t trav, own_rays *o)
+                       const embree_peer *peer, uint64_t trav, uint32_t restart_k, uint32_t restart_m, own_rays *o)
 {
     memset(o, 0, sizeof *o);
     long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
@@ -200,18 +207,37 @@ static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tm
     if (ok) {
         ray_log_init(log, embree_peer_cast, (void *)peer);
         tmpl.cast = ray_log_cast, tmpl.cast_user = log;
+        /* on one CPU, so that pb_bake_trace_cpu runs on one thread and the
+         * record holds the paths in order (ray_log_restart's lane groups span
+         * more paths than one of its parallel ranges) */
+        cpu_set_t saved, one;
+        int pinned = sched_getaffinity(0, sizeof saved, &saved) == 0;
+        CPU_ZERO(&one);
+        for (int c = 0; pinned && c < CPU_SETSIZE; ++c)
+            if (CPU_ISSET(c, &saved)) {
+                CPU_SET(c, &one);
+                break;
+            }
+        pinned = pinned && sched_setaffinity(0, sizeof one, &one) == 0;
         ok = cpu_bake(s, d, tmpl, P, NULL, &logged) >= 0 && ray_log_count(log) > 0;
+        if (pinned)
+            sched_setaffinity(0, sizeof saved, &saved);
         wrong = ok && (logged != trav || ray_log_count(log) != trav);
         for (int k = 0; ok && !wrong && k < LAYOUTS; ++k) {
             int laid = ray_log_lockstep(log, pos, P, (ray_log_layout)k, &o->closest[k], &o->closest_count[k],
                                         &o->any[k], &o->any_count[k]);
             ok = laid > 0, wrong = laid < 0;
         }
+        if (ok && !wrong && restart_k) {
+            int laid = ray_log_restart(log, pos, P, restart_k, restart_m, &o->closest[RESTART],
+                                       &o->closest_count[RESTART]);
+            ok = laid > 0, wrong = laid < 0;
+        }
         wrong |= ok && o->closest_count[RAY_LOG_PACKED] + o->any_count[RAY_LOG_PACKED] != trav;
         ray_log_free(log);
     }
     uint64_t longest = 0;
-    for (int k = 0; ok && k < LAYOUTS; ++k) {
+    for (int k = 0; ok && k <= LAYOUTS; ++k) {
         longest = o->closest_count[k] > longest ? o->closest_count[k] : longest;
         longest = o->any_count[k] > longest ? o->any_count[k] : longest;
     }
@@ -235,7 +261,7 @@ static double agreement(const pb_volume *v, const float *sh)
 
 int main(int argc, char **argv)
 {
-    uint32_t probes = 256, rays = 256, passes = 2, bounces = 3, repeat = 3;
+    uint32_t probes = 256, rays = 256, passes = 2, bounces = 3, repeat = 3, restart_k = 0, restart_m = 1;
     const char *out_dir = "bench/out", *scenes[16];
     int nscenes = 0, validation = 0, use[METHOD_COUNT] = {1, 1};
     for (int i = 1; i < argc; ++i) {
@@ -252,7 +278,14 @@ int main(int argc, char **argv)
             repeat = (uint32_t)strtoul(argv[++i], NULL, 10);
         else if (!strcmp(a, "--out") && v)
             out_dir = argv[++i];
-        else if (!strcmp(a, "--validation"))
+        else if (!strcmp(a, "--restart") && v) {
+            if (sscanf(argv[++i], "%u:%u", &restart_k, &restart_m) < 1 || !restart_k || !restart_m ||
+                restart_k > 1024) {
+                fprintf(stderr, "peer_paths: --restart K[:M]: paths per lane K (1 to 1024), restart every M "
+                        "iterations (at least 1; default 1)\n");
+                return 2;
+            }
+        } else if (!strcmp(a, "--validation"))
             validation = 1;
         else if (!strcmp(a, "--methods") && v) {
             const char *list = argv[++i];
@@ -295,17 +328,22 @@ int main(int argc, char **argv)
            "%u passes, %u bounces, median of %u rounds\n",
            pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
            probes, rays, passes, bounces, repeat);
-    printf("%-12s %-6s %9s %10s %10s %10s %10s %8s %8s %10s %10s %6s %6s %6s %6s %6s %6s %6s %6s %6s\n", "scene",
+    printf("%-12s %-6s %9s %10s %10s %10s %10s %8s %8s %10s %10s "
+           "%6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s\n", "scene",
            "method", "paths", "bake ms", "all GPU", "peer ms", "own ms", "vs peer", "vs own", "agree peer", "agree own",
-           "trv/pa", "bk trc", "krn bt", "kr own", "kr grp", "kr mix", "pr trc", "emb bt", "em own");
+           "trv/pa", "bk trc", "krn bt", "kr own", "kr grp", "kr mix", "kr pmx", "kr rst", "pr trc", "emb bt",
+           "em own");
     fprintf(csv, "scene,method,paths,bake_trace_ms,bake_gpu_ms,peer_ms,own_ms,vs_peer,vs_own,agree_peer,agree_own,"
                  "bake_traversals,peer_traversals,bake_trc,kernel_bounce_over_probe,kernel_own_rays_over_probe,"
-                 "kernel_own_groups_over_probe,kernel_own_mixed_groups_over_probe,peer_trc,"
+                 "kernel_own_groups_over_probe,kernel_own_mixed_groups_over_probe,kernel_own_packed_mixed_over_probe,"
+                 "kernel_own_restart_over_probe,"
+                 "peer_trc,"
                  "embree_bounce_over_probe,embree_own_rays_over_probe\n");
     fprintf(json, "{\"device\": \"%s\", \"peer\": \"Embree %d.%d.%d\", \"host_threads\": %u, \"probes\": %u, "
-                  "\"rays\": %u, \"passes\": %u, \"bounces\": %u, \"repeat\": %u, \"rows\": [",
+                  "\"rays\": %u, \"passes\": %u, \"bounces\": %u, \"repeat\": %u, \"restart_k\": %u, "
+                  "\"restart_m\": %u, \"rows\": [",
             pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
-            probes, rays, passes, bounces, repeat);
+            probes, rays, passes, bounces, repeat, restart_k, restart_m);
     int failed = 0, first_row = 1;
     for (int si = 0; si < nscenes; ++si) {
         pb_scene *s;
@@ -368,7 +406,7 @@ int main(int argc, char **argv)
             uint32_t P = d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
             double bake_ms[MAX_REPEAT], gpu_ms[MAX_REPEAT], peer_ms[MAX_REPEAT], own_ms[MAX_REPEAT];
             double bake_trc[MAX_REPEAT], peer_trc[MAX_REPEAT], kernel_bt[MAX_REPEAT], embree_bt[MAX_REPEAT];
-            double embree_own[MAX_REPEAT], kernel_own[LAYOUTS][MAX_REPEAT];
+            double embree_own[MAX_REPEAT], kernel_own[LAYOUTS + 1][MAX_REPEAT];
             own_rays own;
             memset(&own, 0, sizeof own);
             uint64_t bake_trav = 0, peer_trav = 0, own_trav = 0;
@@ -408,17 +446,20 @@ int main(int argc, char **argv)
                 tmpl.cast = NULL;
                 own_ms[r] = cpu_bake(s, &d, tmpl, P, sh, &own_trav);
                 /* the peer's rays once (untimed), then each tracer alone on them in each round */
-                if (r == 0 && peer_ms[0] >= 0 && record_rays(s, &d, tmpl, P, &peer, peer_trav, &own) < 0) {
+                if (r == 0 && peer_ms[0] >= 0 &&
+                    record_rays(s, &d, tmpl, P, &peer, peer_trav, restart_k, restart_m, &own) < 0) {
                     fprintf(stderr, "peer_paths: %s, %s: the peer's recorded rays are not its %llu traversals in "
                             "whole paths\n", name, m->name, (unsigned long long)peer_trav);
                     ok = 0;
                 }
-                embree_own[r] = kernel_own[0][r] = kernel_own[1][r] = kernel_own[2][r] = 0.0;
+                embree_own[r] = 0.0;
+                for (int k = 0; k <= LAYOUTS; ++k)
+                    kernel_own[k][r] = 0.0;
                 if (own.real) {
                     double ems = embree_peer_cast_all(&peer, own.closest[0], own.closest_count[0], PB_TRACE_CLOSEST) +
                                  embree_peer_cast_all(&peer, own.any[0], own.any_count[0], PB_TRACE_ANY);
                     embree_own[r] = ems > 0 && et > 0 ? own.real / (ems * 1e3) / et : 0.0;
-                    for (int k = 0; k < LAYOUTS; ++k)
+                    for (int k = 0; k <= LAYOUTS; ++k)
                         kernel_own[k][r] = kt > 0 ? kernel_rate_own(ctx, gs, &own, k) / kt : 0.0;
                 }
                 agree_own = agreement(&v, sh);
@@ -457,33 +498,37 @@ int main(int argc, char **argv)
                      bench_median(peer_trc, repeat), bench_median(kernel_bt, repeat), bench_median(embree_bt, repeat),
                      bench_median(embree_own, repeat),
                      {bench_median(kernel_own[0], repeat), bench_median(kernel_own[1], repeat),
-                      bench_median(kernel_own[2], repeat)}};
+                      bench_median(kernel_own[2], repeat), bench_median(kernel_own[3], repeat),
+                      bench_median(kernel_own[RESTART], repeat)}};
             double vs_peer = w.peer_ms / w.bake_trace_ms, vs_own = w.own_ms / w.bake_trace_ms;
             printf("%-12.12s %-6s %9llu %10.1f %10.1f %10.1f %10.1f %7.3fx %7.3fx %10.2e %10.2e "
-                   "%6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f\n",
+                   "%6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f\n",
                    w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms,
                    vs_peer, vs_own, w.agree_peer, w.agree_own, (double)w.bake_trav / w.paths, w.bake_trc, w.kernel_bt,
-                   w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.peer_trc, w.embree_bt, w.embree_own);
+                   w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.kernel_own[3], w.kernel_own[RESTART],
+                   w.peer_trc, w.embree_bt, w.embree_own);
             fprintf(csv,
                     "%s,%s,%llu,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.3e,%.3e,%llu,%llu,"
-                    "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+                    "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
                     w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms,
                     w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own, (unsigned long long)w.bake_trav,
                     (unsigned long long)w.peer_trav, w.bake_trc, w.kernel_bt, w.kernel_own[0], w.kernel_own[1],
-                    w.kernel_own[2], w.peer_trc, w.embree_bt, w.embree_own);
+                    w.kernel_own[2], w.kernel_own[3], w.kernel_own[RESTART], w.peer_trc, w.embree_bt, w.embree_own);
             fprintf(json,
                     "%s\n  {\"scene\": \"%s\", \"method\": \"%s\", \"paths\": %llu, \"bake_trace_ms\": %.3f, "
                     "\"bake_gpu_ms\": %.3f, \"peer_ms\": %.3f, \"own_ms\": %.3f, \"vs_peer\": %.4f, \"vs_own\": %.4f, "
                     "\"agree_peer\": %.3e, \"agree_own\": %.3e, \"bake_traversals\": %llu, \"peer_traversals\": %llu, "
                     "\"bake_trc\": %.4f, \"kernel_bounce_over_probe\": %.4f, \"peer_trc\": %.4f, "
                     "\"kernel_own_rays_over_probe\": %.4f, \"kernel_own_groups_over_probe\": %.4f, "
-                    "\"kernel_own_mixed_groups_over_probe\": %.4f, "
+                    "\"kernel_own_mixed_groups_over_probe\": %.4f, \"kernel_own_packed_mixed_over_probe\": %.4f, "
+                    "\"kernel_own_restart_over_probe\": %.4f, "
                     "\"embree_bounce_over_probe\": %.4f, "
                     "\"embree_own_rays_over_probe\": %.4f}",
                     first_row ? "" : ",", w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms,
                     w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own,
                     (unsigned long long)w.bake_trav, (unsigned long long)w.peer_trav, w.bake_trc, w.kernel_bt,
-                    w.peer_trc, w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.embree_bt, w.embree_own);
+                    w.peer_trc, w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.kernel_own[3],
+                    w.kernel_own[RESTART], w.embree_bt, w.embree_own);
             first_row = 0;
         }
     next_scene:
@@ -509,8 +554,11 @@ int main(int argc, char **argv)
            "(recorded; packed in the bake's lane-group order) over its probe rays per second: a path tracer's \"trc\" "
            "on it with no shading cost; kr grp: the same rays in the bake's very lane groups, a lane whose path has "
            "ended or casts the other kind idle; kr mix: the same with both kinds in one lane group as the bake's one "
-           "trace loop runs them, all traced to their closest hit; 0.00: not measured (the recorded rays would take "
-           "more than a tenth of host memory)\n");
+           "trace loop runs them, all traced to their closest hit; kr pmx: packed, both kinds in one list (closest "
+           "hits), as a schedule restarting paths in idle lanes would trace them; kr rst: --restart K:M's schedule "
+           "(K paths per lane, an idle lane begins its next path every M iterations; ray_log.h); 0.00: not "
+           "measured (the recorded "
+           "rays would take more than a tenth of host memory)\n");
     printf("wrote %s\nwrote %s\n", csv_path, json_path);
     rtcReleaseDevice(edev);
     pb_context_destroy(ctx);

@@ -108,6 +108,21 @@ static uint64_t append_kind(const ray_log_thread *t, const uint64_t *start, uint
     return n;
 }
 
+/* Where each path of record t begins (start[0..paths], start[paths] = the
+ * record's end); sorted: the probe positions. Returns the number of paths;
+ * 0 when the record does not begin with a path. */
+static uint64_t path_starts(const ray_log_thread *t, const float *sorted, uint32_t P, uint64_t *start)
+{
+    uint64_t paths = 0;
+    for (uint64_t i = 0; i < t->count; ++i)
+        if (!t->any[i] && at_probe(sorted, P, t->rays[i].origin))
+            start[paths++] = i;
+    if (!paths || start[0] != 0)
+        return 0;
+    start[paths] = t->count;
+    return paths;
+}
+
 /* Lays out every record's rays in lane groups into c and a (NULL: counts
  * only); start: room for each record's path starts. Returns 0 when a record
  * does not start with a path (rays before it: not a path tracer's record). */
@@ -118,13 +133,9 @@ static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_
     *nc = *na = 0;
     for (uint32_t ti = 0; ti < threads; ++ti) {
         const ray_log_thread *t = &log->thread[ti];
-        uint64_t paths = 0;
-        for (uint64_t i = 0; i < t->count; ++i)
-            if (!t->any[i] && at_probe(sorted, P, t->rays[i].origin))
-                start[paths++] = i;
-        if (t->count && (!paths || start[0] != 0))
+        uint64_t paths = path_starts(t, sorted, P, start);
+        if (t->count && !paths)
             return 0;
-        start[paths] = t->count;
         for (uint64_t g = 0; g < paths; g += RAY_LOG_LANES) {
             uint64_t lanes = paths - g < RAY_LOG_LANES ? paths - g : RAY_LOG_LANES, longest = 0;
             for (uint64_t l = 0; l < lanes; ++l) {
@@ -132,8 +143,8 @@ static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_
                 longest = len > longest ? len : longest;
             }
             for (uint64_t k = 0; k < longest; ++k) {
-                if (layout == RAY_LOG_MIXED) {
-                    *nc = append_kind(t, start + g, lanes, k, -1, 1, c, *nc);
+                if (layout == RAY_LOG_MIXED || layout == RAY_LOG_PACKED_MIXED) {
+                    *nc = append_kind(t, start + g, lanes, k, -1, layout == RAY_LOG_MIXED, c, *nc);
                     continue;
                 }
                 *nc = append_kind(t, start + g, lanes, k, 0, layout == RAY_LOG_GROUPS, c, *nc);
@@ -168,6 +179,90 @@ int ray_log_lockstep(const ray_log *log, const float *probes, uint32_t P, ray_lo
         return paths ? 0 : -1;
     }
     *closest = c, *closest_count = nc, *any = a, *any_count = na;
+    return 1;
+}
+
+/* A path's place in the restart schedule's lane: which of its rays is next. */
+typedef struct lane_state {
+    uint64_t next, end; /* the current path's next ray and its end; next == end: none in flight */
+    uint32_t paths_done;
+} lane_state;
+
+/* Lays out one record's paths as lanes that restart: see ray_log_restart.
+ * out NULL: counts only. Returns the new count. */
+static uint64_t lay_out_restart(const ray_log_thread *t, const uint64_t *start, uint64_t paths, uint32_t K,
+                                uint32_t M, pb_ray *out, uint64_t n)
+{
+    uint64_t span = (uint64_t)RAY_LOG_LANES * K; /* paths per lane group */
+    for (uint64_t g = 0; g < paths; g += span) {
+        lane_state lane[RAY_LOG_LANES] = {{0}};
+        for (uint64_t it = 0;; ++it) {
+            int live = 0;
+            const pb_ray *model = NULL;
+            const pb_ray *ray[RAY_LOG_LANES] = {NULL};
+            for (uint32_t l = 0; l < RAY_LOG_LANES; ++l) {
+                lane_state *s = &lane[l];
+                uint64_t path = g + l + (uint64_t)RAY_LOG_LANES * s->paths_done;
+                if (s->next == s->end && s->paths_done < K && path < paths && it % M == 0) {
+                    s->next = start[path], s->end = start[path + 1]; /* the lane's next path begins */
+                    ++s->paths_done;
+                }
+                if (s->next < s->end) {
+                    ray[l] = model = &t->rays[s->next++];
+                    live = 1;
+                } else if (s->paths_done < K && g + l + (uint64_t)RAY_LOG_LANES * s->paths_done < paths) {
+                    live = 1; /* waiting for the next restart */
+                }
+            }
+            if (!live)
+                break;
+            if (!model)
+                continue; /* every lane waits: an iteration that traces nothing */
+            for (uint32_t l = 0; l < RAY_LOG_LANES; ++l, ++n) {
+                if (!out)
+                    continue;
+                out[n] = ray[l] ? *ray[l] : *model;
+                if (!ray[l])
+                    out[n].tmin = 0.f, out[n].tmax = -1.f; /* idle: misses every box */
+            }
+        }
+    }
+    return n;
+}
+
+int ray_log_restart(const ray_log *log, const float *probes, uint32_t P, uint32_t K, uint32_t M, pb_ray **rays,
+                    uint64_t *count)
+{
+    uint64_t total = ray_log_count(log), n = 0;
+    uint32_t threads = atomic_load(&log->threads);
+    float *sorted = malloc((size_t)P * 3 * sizeof *sorted);
+    uint64_t *start = malloc((total + 1) * sizeof *start);
+    pb_ray *out = NULL;
+    int ok = total && K && M && sorted && start, paths_ok = 1;
+    for (uint32_t p = 0; ok && p < P; ++p)
+        memcpy(sorted + 3 * (size_t)p, probes + 4 * (size_t)p, 3 * sizeof(float));
+    if (ok)
+        qsort(sorted, P, 3 * sizeof(float), cmp_position);
+    for (int pass = 0; ok && pass < 2; ++pass) { /* count, then lay out */
+        n = 0;
+        for (uint32_t ti = 0; ok && ti < threads; ++ti) {
+            const ray_log_thread *t = &log->thread[ti];
+            uint64_t paths = path_starts(t, sorted, P, start);
+            if (t->count && !paths) {
+                ok = paths_ok = 0;
+                break;
+            }
+            n = lay_out_restart(t, start, paths, K, M, out, n);
+        }
+        if (ok && pass == 0)
+            ok = (out = malloc((n ? n : 1) * sizeof *out)) != NULL;
+    }
+    free(sorted), free(start);
+    if (!ok) {
+        free(out);
+        return paths_ok ? 0 : -1;
+    }
+    *rays = out, *count = n;
     return 1;
 }
 

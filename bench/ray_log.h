@@ -46,15 +46,31 @@ typedef enum ray_log_layout {
                        at the first box), as the bake's lane waits */
     RAY_LOG_MIXED,  /* as GROUPS, but both kinds in one list (closest): a lane group's k-th rays together,
                        as the bake's one trace loop runs them; its shadow rays then pay a closest hit */
+    RAY_LOG_PACKED_MIXED, /* as PACKED, both kinds in one list (closest): no idle lane, kinds not kept apart,
+                             as a schedule that starts a new path in a lane whose path ended would run them */
 } ray_log_layout;
 
 /* The recorded rays in lane-group order, closest-hit and any-hit ones apart
- * (each list keeps that order; MIXED: all in closest, any empty). probes: the
+ * (each list keeps that order; MIXED, PACKED_MIXED: all in closest, any
+ * empty). probes: the
  * P probe positions (4 floats each; the first 3 read). Returns 1; 0 when out
  * of memory or nothing was recorded; -1 when a record does not start with a
  * path. The lists are malloc'ed, the caller's. */
 int ray_log_lockstep(const ray_log *log, const float *probes, uint32_t P, ray_log_layout layout, pb_ray **closest,
                      uint64_t *closest_count, pb_ray **any, uint64_t *any_count);
+/* The recorded rays as lanes that restart paths would trace them: a lane
+ * group of 8 lanes holds 8 K consecutive paths, lane l paths l, l + 8, ...,
+ * l + 8 (K - 1); each loop iteration every lane casts its path's next ray,
+ * and a lane whose path has ended begins its next path at the next
+ * iteration t with t % M == 0 (M 1: at once), idle until then. One list,
+ * each 8 entries one iteration's rays (both kinds; idle lanes' rays end at
+ * the first box), to be traced to their closest hits. K 1 is
+ * RAY_LOG_MIXED. A lane group spans 8 K paths of one record, so with
+ * 8 K above a parallel range of paths (pb_bake_trace_cpu's 64) the record
+ * must come from one thread (peer_paths pins its recording run to one
+ * CPU). Returns as ray_log_lockstep. */
+int ray_log_restart(const ray_log *log, const float *probes, uint32_t P, uint32_t K, uint32_t M, pb_ray **rays,
+                    uint64_t *count);
 void ray_log_free(ray_log *log);
 
 #endif
