@@ -207,11 +207,11 @@ static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tm
     if (ok) {
         ray_log_init(log, embree_peer_cast, (void *)peer);
         tmpl.cast = ray_log_cast, tmpl.cast_user = log;
-        /* on one CPU, so that pb_bake_trace_cpu runs on one thread and the
-         * record holds the paths in order (ray_log_restart's lane groups span
-         * more paths than one of its parallel ranges) */
+        /* where a restart schedule's lane group spans more paths than one of
+         * pb_bake_trace_cpu's parallel ranges (64, aligned), on one CPU, so
+         * that it runs on one thread and the record holds the paths in order */
         cpu_set_t saved, one;
-        int pinned = sched_getaffinity(0, sizeof saved, &saved) == 0;
+        int pinned = restart_k * RAY_LOG_LANES > 64 && sched_getaffinity(0, sizeof saved, &saved) == 0;
         CPU_ZERO(&one);
         for (int c = 0; pinned && c < CPU_SETSIZE; ++c)
             if (CPU_ISSET(c, &saved)) {

@@ -67,8 +67,8 @@ int ray_log_lockstep(const ray_log *log, const float *probes, uint32_t P, ray_lo
  * the first box), to be traced to their closest hits. K 1 is
  * RAY_LOG_MIXED. A lane group spans 8 K paths of one record, so with
  * 8 K above a parallel range of paths (pb_bake_trace_cpu's 64) the record
- * must come from one thread (peer_paths pins its recording run to one
- * CPU). Returns as ray_log_lockstep. */
+ * must come from one thread (peer_paths then pins its recording run to
+ * one CPU). Returns as ray_log_lockstep. */
 int ray_log_restart(const ray_log *log, const float *probes, uint32_t P, uint32_t K, uint32_t M, pb_ray **rays,
                     uint64_t *count);
 void ray_log_free(ray_log *log);
