@@ -31,7 +31,8 @@
  * mix", the kernel with the rays in the bake's very lane groups, a lane
  * whose path has ended idle (kinds of ray apart, or together as the bake's
  * one trace loop runs them); "kr pmx", packed with both kinds together (as
- * a schedule that restarts paths in idle lanes would trace them); with
+ * a compaction that moves paths between lanes, keeping the groups' order,
+ * would trace them); with
  * --restart K:M, "kr rst", the rays as lanes that each trace K paths, an
  * idle lane beginning its next one every M loop iterations, would trace
  * them (ray_log_restart: a schedule measured before it is built). Between
@@ -555,10 +556,10 @@ int main(int argc, char **argv)
            "on it with no shading cost; kr grp: the same rays in the bake's very lane groups, a lane whose path has "
            "ended or casts the other kind idle; kr mix: the same with both kinds in one lane group as the bake's one "
            "trace loop runs them, all traced to their closest hit; kr pmx: packed, both kinds in one list (closest "
-           "hits), as a schedule restarting paths in idle lanes would trace them; kr rst: --restart K:M's schedule "
-           "(K paths per lane, an idle lane begins its next path every M iterations; ray_log.h); 0.00: not "
-           "measured (the recorded "
-           "rays would take more than a tenth of host memory)\n");
+           "hits), as a compaction that moves paths between lanes and keeps the groups' order would trace them; "
+           "kr rst: --restart K:M's schedule (K paths per lane, an idle lane begins its next path every M "
+           "iterations; ray_log.h); 0.00: not measured (no --restart, or the recorded rays would take more than a "
+           "tenth of host memory)\n");
     printf("wrote %s\nwrote %s\n", csv_path, json_path);
     rtcReleaseDevice(edev);
     pb_context_destroy(ctx);

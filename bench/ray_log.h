@@ -47,7 +47,9 @@ typedef enum ray_log_layout {
     RAY_LOG_MIXED,  /* as GROUPS, but both kinds in one list (closest): a lane group's k-th rays together,
                        as the bake's one trace loop runs them; its shadow rays then pay a closest hit */
     RAY_LOG_PACKED_MIXED, /* as PACKED, both kinds in one list (closest): no idle lane, kinds not kept apart,
-                             as a schedule that starts a new path in a lane whose path ended would run them */
+                             as a compaction that moves paths between lanes and keeps the groups' order
+                             would run them (a lane that restarts paths falls out of step instead:
+                             ray_log_restart) */
 } ray_log_layout;
 
 /* The recorded rays in lane-group order, closest-hit and any-hit ones apart
