@@ -69,6 +69,19 @@ static int cmp_position(const void *a, const void *b)
     return memcmp(a, b, 3 * sizeof(float));
 }
 
+/* The P probe positions (4 floats each, 3 read) sorted for at_probe;
+ * malloc'ed, NULL when out of memory. */
+static float *sorted_positions(const float *probes, uint32_t P)
+{
+    float *sorted = malloc((size_t)(P ? P : 1) * 3 * sizeof *sorted);
+    if (!sorted)
+        return NULL;
+    for (uint32_t p = 0; p < P; ++p)
+        memcpy(sorted + 3 * (size_t)p, probes + 4 * (size_t)p, 3 * sizeof(float));
+    qsort(sorted, P, 3 * sizeof(float), cmp_position);
+    return sorted;
+}
+
 /* 1 when o is one of the sorted probe positions (compared bit for bit: a
  * path's first ray leaves from the probe's position itself) */
 static int at_probe(const float *sorted, uint32_t P, const float o[3])
@@ -159,16 +172,12 @@ int ray_log_lockstep(const ray_log *log, const float *probes, uint32_t P, ray_lo
                      uint64_t *closest_count, pb_ray **any, uint64_t *any_count)
 {
     uint64_t total = ray_log_count(log), nc = 0, na = 0;
-    float *sorted = malloc((size_t)P * 3 * sizeof *sorted);
+    float *sorted = sorted_positions(probes, P);
     uint64_t *start = malloc((total + 1) * sizeof *start);
     pb_ray *c = NULL, *a = NULL;
     int ok = total && sorted && start, paths = 1;
-    for (uint32_t p = 0; ok && p < P; ++p)
-        memcpy(sorted + 3 * (size_t)p, probes + 4 * (size_t)p, 3 * sizeof(float));
-    if (ok) {
-        qsort(sorted, P, 3 * sizeof(float), cmp_position);
+    if (ok)
         ok = paths = lay_out(log, sorted, P, layout, start, NULL, &nc, NULL, &na);
-    }
     if (ok) {
         c = malloc((nc ? nc : 1) * sizeof *c), a = malloc((na ? na : 1) * sizeof *a);
         ok = c && a && lay_out(log, sorted, P, layout, start, c, &nc, a, &na);
@@ -235,14 +244,10 @@ int ray_log_restart(const ray_log *log, const float *probes, uint32_t P, uint32_
 {
     uint64_t total = ray_log_count(log), n = 0;
     uint32_t threads = atomic_load(&log->threads);
-    float *sorted = malloc((size_t)P * 3 * sizeof *sorted);
+    float *sorted = sorted_positions(probes, P);
     uint64_t *start = malloc((total + 1) * sizeof *start);
     pb_ray *out = NULL;
     int ok = total && K && M && sorted && start, paths_ok = 1;
-    for (uint32_t p = 0; ok && p < P; ++p)
-        memcpy(sorted + 3 * (size_t)p, probes + 4 * (size_t)p, 3 * sizeof(float));
-    if (ok)
-        qsort(sorted, P, 3 * sizeof(float), cmp_position);
     for (int pass = 0; ok && pass < 2; ++pass) { /* count, then lay out */
         n = 0;
         for (uint32_t ti = 0; ok && ti < threads; ++ti) {
