@@ -136,6 +136,47 @@ static uint64_t path_starts(const ray_log_thread *t, const float *sorted, uint32
     return paths;
 }
 
+/* RAY_LOG_FIRST_COMPACTED for one record (paths bounded by start): every
+ * path's first ray in groups of 8, then the paths that go on, 8 consecutive
+ * ones to a group, their later rays in step (both kinds, idle lanes).
+ * out NULL: counts only. Returns the new count. */
+static uint64_t lay_out_first_compacted(const ray_log_thread *t, const uint64_t *start, uint64_t paths, pb_ray *out,
+                                        uint64_t n)
+{
+    for (uint64_t g = 0; g < paths; g += RAY_LOG_LANES) /* the probe rays, as the bake's groups trace them */
+        n = append_kind(t, start + g, paths - g < RAY_LOG_LANES ? paths - g : RAY_LOG_LANES, 0, -1, 1, out, n);
+    uint64_t lane_begin[RAY_LOG_LANES], lane_end[RAY_LOG_LANES];
+    uint32_t lanes = 0;
+    for (uint64_t p = 0; p <= paths; ++p) {
+        if (p < paths && start[p + 1] - start[p] > 1) { /* goes on: a lane of the current group */
+            lane_begin[lanes] = start[p] + 1, lane_end[lanes++] = start[p + 1];
+            if (lanes < RAY_LOG_LANES)
+                continue;
+        }
+        if (lanes == 0 || (p < paths && lanes < RAY_LOG_LANES))
+            continue;
+        uint64_t longest = 0;
+        for (uint32_t l = 0; l < lanes; ++l)
+            longest = lane_end[l] - lane_begin[l] > longest ? lane_end[l] - lane_begin[l] : longest;
+        for (uint64_t k = 0; k < longest; ++k) {
+            const pb_ray *model = NULL;
+            for (uint32_t l = 0; l < lanes && !model; ++l)
+                if (lane_begin[l] + k < lane_end[l])
+                    model = &t->rays[lane_begin[l] + k];
+            for (uint32_t l = 0; l < RAY_LOG_LANES; ++l, ++n) {
+                if (!out)
+                    continue;
+                int has = l < lanes && lane_begin[l] + k < lane_end[l];
+                out[n] = has ? t->rays[lane_begin[l] + k] : *model;
+                if (!has)
+                    out[n].tmin = 0.f, out[n].tmax = -1.f; /* idle: misses every box */
+            }
+        }
+        lanes = 0;
+    }
+    return n;
+}
+
 /* Lays out every record's rays in lane groups into c and a (NULL: counts
  * only); start: room for each record's path starts. Returns 0 when a record
  * does not start with a path (rays before it: not a path tracer's record). */
@@ -149,6 +190,10 @@ static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_
         uint64_t paths = path_starts(t, sorted, P, start);
         if (t->count && !paths)
             return 0;
+        if (layout == RAY_LOG_FIRST_COMPACTED) {
+            *nc = lay_out_first_compacted(t, start, paths, c, *nc);
+            continue;
+        }
         for (uint64_t g = 0; g < paths; g += RAY_LOG_LANES) {
             uint64_t lanes = paths - g < RAY_LOG_LANES ? paths - g : RAY_LOG_LANES, longest = 0;
             for (uint64_t l = 0; l < lanes; ++l) {

@@ -50,11 +50,14 @@ typedef enum ray_log_layout {
                              as a compaction that moves paths between lanes and keeps the groups' order
                              would run them (a lane that restarts paths falls out of step instead:
                              ray_log_restart) */
+    RAY_LOG_FIRST_COMPACTED, /* the probe rays in the bake's groups, then the paths that go on packed 8 to a
+                                group, their later rays as MIXED: a schedule that compacts once, after the
+                                first hit (one list, closest) */
 } ray_log_layout;
 
 /* The recorded rays in lane-group order, closest-hit and any-hit ones apart
- * (each list keeps that order; MIXED, PACKED_MIXED: all in closest, any
- * empty). probes: the
+ * (each list keeps that order; MIXED, PACKED_MIXED, FIRST_COMPACTED: all in
+ * closest, any empty). probes: the
  * P probe positions (4 floats each; the first 3 read). Returns 1; 0 when out
  * of memory or nothing was recorded; -1 when a record does not start with a
  * path. The lists are malloc'ed, the caller's. */

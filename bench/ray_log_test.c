@@ -95,6 +95,30 @@ static uint32_t expected(int kind, int groups, float *want)
     return n;
 }
 
+/* The expected RAY_LOG_FIRST_COMPACTED list: each probe's 8 probe rays, then
+ * the paths longer than one ray (both probes', in order), 8 to a group,
+ * their rays 1.. in step, idle lanes -1. */
+static uint32_t expected_first_compacted(float *want)
+{
+    uint32_t n = 0, q_of[PROBES * PATHS], p_of[PROBES * PATHS], on = 0;
+    for (uint32_t q = 0; q < PROBES; ++q)
+        for (uint32_t p = 0; p < PATHS; ++p) {
+            want[n++] = ident(q, p, 0);
+            if (lengths[q][p] > 1)
+                q_of[on] = q, p_of[on++] = p;
+        }
+    for (uint32_t g = 0; g < on; g += RAY_LOG_LANES) {
+        uint32_t lanes = on - g < RAY_LOG_LANES ? on - g : RAY_LOG_LANES, longest = 0;
+        for (uint32_t l = 0; l < lanes; ++l)
+            longest = lengths[q_of[g + l]][p_of[g + l]] > longest ? lengths[q_of[g + l]][p_of[g + l]] : longest;
+        for (uint32_t k = 1; k < longest; ++k)
+            for (uint32_t l = 0; l < RAY_LOG_LANES; ++l)
+                want[n++] = l < lanes && k < lengths[q_of[g + l]][p_of[g + l]] ? ident(q_of[g + l], p_of[g + l], k)
+                                                                                 : -1.f;
+    }
+    return n;
+}
+
 static void check_list(const char *what, const pb_ray *got, uint64_t n, const float *want, uint32_t m)
 {
     CHECK(n == m, "%s: %llu rays, expected %u", what, (unsigned long long)n, m);
@@ -114,9 +138,9 @@ int main(void)
     CHECK(ray_log_count(log) == n, "count %llu, cast %llu", (unsigned long long)ray_log_count(log),
           (unsigned long long)n);
 
-    pb_ray *c[RAY_LOG_PACKED_MIXED + 1], *a[RAY_LOG_PACKED_MIXED + 1];
-    uint64_t nc[RAY_LOG_PACKED_MIXED + 1], na[RAY_LOG_PACKED_MIXED + 1];
-    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_PACKED_MIXED; ++L)
+    pb_ray *c[RAY_LOG_FIRST_COMPACTED + 1], *a[RAY_LOG_FIRST_COMPACTED + 1];
+    uint64_t nc[RAY_LOG_FIRST_COMPACTED + 1], na[RAY_LOG_FIRST_COMPACTED + 1];
+    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_FIRST_COMPACTED; ++L)
         CHECK(ray_log_lockstep(log, &probe_at[0][0], PROBES, (ray_log_layout)L, &c[L], &nc[L], &a[L], &na[L]) == 1,
               "layout %d refused", L);
     if (failures)
@@ -129,7 +153,10 @@ int main(void)
     check_list("groups, any", a[RAY_LOG_GROUPS], na[RAY_LOG_GROUPS], want, expected(1, 1, want));
     check_list("mixed", c[RAY_LOG_MIXED], nc[RAY_LOG_MIXED], want, expected(-1, 1, want));
     check_list("packed mixed", c[RAY_LOG_PACKED_MIXED], nc[RAY_LOG_PACKED_MIXED], want, expected(-1, 0, want));
-    CHECK(na[RAY_LOG_MIXED] == 0 && na[RAY_LOG_PACKED_MIXED] == 0, "mixed layouts left rays in the any list");
+    check_list("first compacted", c[RAY_LOG_FIRST_COMPACTED], nc[RAY_LOG_FIRST_COMPACTED], want,
+               expected_first_compacted(want));
+    CHECK(na[RAY_LOG_MIXED] == 0 && na[RAY_LOG_PACKED_MIXED] == 0 && na[RAY_LOG_FIRST_COMPACTED] == 0,
+          "one-list layouts left rays in the any list");
 
     /* K 1: the bake's own groups, byte for byte */
     pb_ray *r;
@@ -187,7 +214,7 @@ int main(void)
           "a record without a path's first ray was laid out as a restart schedule");
     ray_log_free(&bad);
 
-    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_PACKED_MIXED; ++L)
+    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_FIRST_COMPACTED; ++L)
         free(c[L]), free(a[L]);
     ray_log_free(log);
     free(log);
