@@ -193,7 +193,8 @@ static double kernel_rate_own(pb_context *ctx, pb_gpu_scene *gs, const own_rays 
  * record is not the peer's paths (another count of rays, rays before a
  * path's first, lists that lose or add rays): the bench is wrong. */
 static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P,
-                       const embree_peer *peer, uint64_t trav, uint32_t restart_k, uint32_t restart_m, own_rays *o)
+                       const embree_peer *peer, uint64_t trav, uint32_t lanes, uint32_t restart_k, uint32_t restart_m,
+                       own_rays *o)
 {
     memset(o, 0, sizeof *o);
     long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
@@ -208,13 +209,13 @@ static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tm
         pb_bake_probe_position(s, d, p, pos + 4 * (size_t)p, &id);
     }
     if (ok) {
-        ray_log_init(log, embree_peer_cast, (void *)peer);
+        ray_log_init(log, lanes, embree_peer_cast, (void *)peer);
         tmpl.cast = ray_log_cast, tmpl.cast_user = log;
         /* where a restart schedule's lane group spans more paths than one of
          * pb_bake_trace_cpu's parallel ranges (64, aligned), on one CPU, so
          * that it runs on one thread and the record holds the paths in order */
         cpu_set_t saved, one;
-        int pinned = restart_k * RAY_LOG_LANES > 64 && sched_getaffinity(0, sizeof saved, &saved) == 0;
+        int pinned = restart_k * log->lanes > 64 && sched_getaffinity(0, sizeof saved, &saved) == 0;
         CPU_ZERO(&one);
         for (int c = 0; pinned && c < CPU_SETSIZE; ++c)
             if (CPU_ISSET(c, &saved)) {
@@ -327,10 +328,12 @@ int main(int argc, char **argv)
         return 1;
     }
     RTCDevice edev = rtcNewDevice(NULL);
+    /* the bake's lane groups: a subgroup of consecutive paths (8 on llvmpipe's 256-bit vectors) */
+    uint32_t lanes = pb_context_device(ctx)->subgroup_size ? pb_context_device(ctx)->subgroup_size : 8;
     printf("device: %s; peer: the bake's CPU path tracer on Embree %d.%d.%d, %u host threads; %u probes x %u rays x "
-           "%u passes, %u bounces, median of %u rounds\n",
+           "%u passes, %u bounces, median of %u rounds; lane groups of %u paths in the replays\n",
            pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
-           probes, rays, passes, bounces, repeat);
+           probes, rays, passes, bounces, repeat, lanes);
     printf("%-12s %-6s %9s %10s %10s %10s %10s %8s %8s %10s %10s "
            "%6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s\n", "scene",
            "method", "paths", "bake ms", "all GPU", "peer ms", "own ms", "vs peer", "vs own", "agree peer", "agree own",
@@ -344,9 +347,9 @@ int main(int argc, char **argv)
                  "embree_bounce_over_probe,embree_own_rays_over_probe\n");
     fprintf(json, "{\"device\": \"%s\", \"peer\": \"Embree %d.%d.%d\", \"host_threads\": %u, \"probes\": %u, "
                   "\"rays\": %u, \"passes\": %u, \"bounces\": %u, \"repeat\": %u, \"restart_k\": %u, "
-                  "\"restart_m\": %u, \"rows\": [",
+                  "\"restart_m\": %u, \"lanes\": %u, \"rows\": [",
             pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
-            probes, rays, passes, bounces, repeat, restart_k, restart_m);
+            probes, rays, passes, bounces, repeat, restart_k, restart_m, lanes);
     int failed = 0, first_row = 1;
     for (int si = 0; si < nscenes; ++si) {
         pb_scene *s;
@@ -450,7 +453,7 @@ int main(int argc, char **argv)
                 own_ms[r] = cpu_bake(s, &d, tmpl, P, sh, &own_trav);
                 /* the peer's rays once (untimed), then each tracer alone on them in each round */
                 if (r == 0 && peer_ms[0] >= 0 &&
-                    record_rays(s, &d, tmpl, P, &peer, peer_trav, restart_k, restart_m, &own) < 0) {
+                    record_rays(s, &d, tmpl, P, &peer, peer_trav, lanes, restart_k, restart_m, &own) < 0) {
                     fprintf(stderr, "peer_paths: %s, %s: the peer's recorded rays are not its %llu traversals in "
                             "whole paths\n", name, m->name, (unsigned long long)peer_trav);
                     ok = 0;

@@ -12,9 +12,10 @@ static _Thread_local struct {
 } this_thread;
 static _Atomic uint64_t generations = 1;
 
-void ray_log_init(ray_log *log, pb_ray_cast_fn cast, void *cast_user)
+void ray_log_init(ray_log *log, uint32_t lanes, pb_ray_cast_fn cast, void *cast_user)
 {
     memset(log, 0, sizeof *log);
+    log->lanes = lanes < 1 ? 1 : (lanes > RAY_LOG_MAX_LANES ? RAY_LOG_MAX_LANES : lanes);
     log->cast = cast, log->cast_user = cast_user;
     log->generation = atomic_fetch_add(&generations, 1);
 }
@@ -94,8 +95,8 @@ static int at_probe(const float *sorted, uint32_t P, const float o[3])
  * with no such ray gets an idle ray (one that ends at once) so that the
  * list's lane groups are the bake's. list NULL: counts only. Returns the
  * new count. */
-static uint64_t append_kind(const ray_log_thread *t, const uint64_t *start, uint64_t lanes, uint64_t k, int any,
-                            int idle, pb_ray *list, uint64_t n)
+static uint64_t append_kind(const ray_log_thread *t, const uint64_t *start, uint64_t lanes, uint32_t w, uint64_t k,
+                            int any, int idle, pb_ray *list, uint64_t n)
 {
     int some = 0;
     const pb_ray *model = NULL;
@@ -106,7 +107,7 @@ static uint64_t append_kind(const ray_log_thread *t, const uint64_t *start, uint
     }
     if (!some)
         return n;
-    for (uint64_t l = 0; l < (idle ? RAY_LOG_LANES : lanes); ++l) {
+    for (uint64_t l = 0; l < (idle ? w : lanes); ++l) {
         uint64_t i = start[l] + k;
         if (l < lanes && i < start[l + 1] && (any < 0 || t->any[i] == any)) {
             if (list)
@@ -137,23 +138,23 @@ static uint64_t path_starts(const ray_log_thread *t, const float *sorted, uint32
 }
 
 /* RAY_LOG_FIRST_COMPACTED for one record (paths bounded by start): every
- * path's first ray in groups of 8, then the paths that go on, 8 consecutive
+ * path's first ray in groups of w, then the paths that go on, w consecutive
  * ones to a group, their later rays in step (both kinds, idle lanes).
  * out NULL: counts only. Returns the new count. */
-static uint64_t lay_out_first_compacted(const ray_log_thread *t, const uint64_t *start, uint64_t paths, pb_ray *out,
-                                        uint64_t n)
+static uint64_t lay_out_first_compacted(const ray_log_thread *t, const uint64_t *start, uint64_t paths, uint32_t w,
+                                        pb_ray *out, uint64_t n)
 {
-    for (uint64_t g = 0; g < paths; g += RAY_LOG_LANES) /* the probe rays, as the bake's groups trace them */
-        n = append_kind(t, start + g, paths - g < RAY_LOG_LANES ? paths - g : RAY_LOG_LANES, 0, -1, 1, out, n);
-    uint64_t lane_begin[RAY_LOG_LANES], lane_end[RAY_LOG_LANES];
+    for (uint64_t g = 0; g < paths; g += w) /* the probe rays, as the bake's groups trace them */
+        n = append_kind(t, start + g, paths - g < w ? paths - g : w, w, 0, -1, 1, out, n);
+    uint64_t lane_begin[RAY_LOG_MAX_LANES], lane_end[RAY_LOG_MAX_LANES];
     uint32_t lanes = 0;
     for (uint64_t p = 0; p <= paths; ++p) {
         if (p < paths && start[p + 1] - start[p] > 1) { /* goes on: a lane of the current group */
             lane_begin[lanes] = start[p] + 1, lane_end[lanes++] = start[p + 1];
-            if (lanes < RAY_LOG_LANES)
+            if (lanes < w)
                 continue;
         }
-        if (lanes == 0 || (p < paths && lanes < RAY_LOG_LANES))
+        if (lanes == 0 || (p < paths && lanes < w))
             continue;
         uint64_t longest = 0;
         for (uint32_t l = 0; l < lanes; ++l)
@@ -163,7 +164,7 @@ static uint64_t lay_out_first_compacted(const ray_log_thread *t, const uint64_t 
             for (uint32_t l = 0; l < lanes && !model; ++l)
                 if (lane_begin[l] + k < lane_end[l])
                     model = &t->rays[lane_begin[l] + k];
-            for (uint32_t l = 0; l < RAY_LOG_LANES; ++l, ++n) {
+            for (uint32_t l = 0; l < w; ++l, ++n) {
                 if (!out)
                     continue;
                 int has = l < lanes && lane_begin[l] + k < lane_end[l];
@@ -183,7 +184,7 @@ static uint64_t lay_out_first_compacted(const ray_log_thread *t, const uint64_t 
 static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_layout layout, uint64_t *start,
                    pb_ray *c, uint64_t *nc, pb_ray *a, uint64_t *na)
 {
-    uint32_t threads = atomic_load(&log->threads);
+    uint32_t threads = atomic_load(&log->threads), w = log->lanes;
     *nc = *na = 0;
     for (uint32_t ti = 0; ti < threads; ++ti) {
         const ray_log_thread *t = &log->thread[ti];
@@ -191,22 +192,22 @@ static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_
         if (t->count && !paths)
             return 0;
         if (layout == RAY_LOG_FIRST_COMPACTED) {
-            *nc = lay_out_first_compacted(t, start, paths, c, *nc);
+            *nc = lay_out_first_compacted(t, start, paths, w, c, *nc);
             continue;
         }
-        for (uint64_t g = 0; g < paths; g += RAY_LOG_LANES) {
-            uint64_t lanes = paths - g < RAY_LOG_LANES ? paths - g : RAY_LOG_LANES, longest = 0;
+        for (uint64_t g = 0; g < paths; g += w) {
+            uint64_t lanes = paths - g < w ? paths - g : w, longest = 0;
             for (uint64_t l = 0; l < lanes; ++l) {
                 uint64_t len = start[g + l + 1] - start[g + l];
                 longest = len > longest ? len : longest;
             }
             for (uint64_t k = 0; k < longest; ++k) {
                 if (layout == RAY_LOG_MIXED || layout == RAY_LOG_PACKED_MIXED) {
-                    *nc = append_kind(t, start + g, lanes, k, -1, layout == RAY_LOG_MIXED, c, *nc);
+                    *nc = append_kind(t, start + g, lanes, w, k, -1, layout == RAY_LOG_MIXED, c, *nc);
                     continue;
                 }
-                *nc = append_kind(t, start + g, lanes, k, 0, layout == RAY_LOG_GROUPS, c, *nc);
-                *na = append_kind(t, start + g, lanes, k, 1, layout == RAY_LOG_GROUPS, a, *na);
+                *nc = append_kind(t, start + g, lanes, w, k, 0, layout == RAY_LOG_GROUPS, c, *nc);
+                *na = append_kind(t, start + g, lanes, w, k, 1, layout == RAY_LOG_GROUPS, a, *na);
             }
         }
     }
@@ -244,19 +245,19 @@ typedef struct lane_state {
 
 /* Lays out one record's paths as lanes that restart: see ray_log_restart.
  * out NULL: counts only. Returns the new count. */
-static uint64_t lay_out_restart(const ray_log_thread *t, const uint64_t *start, uint64_t paths, uint32_t K,
-                                uint32_t M, pb_ray *out, uint64_t n)
+static uint64_t lay_out_restart(const ray_log_thread *t, const uint64_t *start, uint64_t paths, uint32_t w,
+                                uint32_t K, uint32_t M, pb_ray *out, uint64_t n)
 {
-    uint64_t span = (uint64_t)RAY_LOG_LANES * K; /* paths per lane group */
+    uint64_t span = (uint64_t)w * K; /* paths per lane group */
     for (uint64_t g = 0; g < paths; g += span) {
-        lane_state lane[RAY_LOG_LANES] = {{0}};
+        lane_state lane[RAY_LOG_MAX_LANES] = {{0}};
         for (uint64_t it = 0;; ++it) {
             int live = 0;
             const pb_ray *model = NULL;
-            const pb_ray *ray[RAY_LOG_LANES] = {NULL};
-            for (uint32_t l = 0; l < RAY_LOG_LANES; ++l) {
+            const pb_ray *ray[RAY_LOG_MAX_LANES] = {NULL};
+            for (uint32_t l = 0; l < w; ++l) {
                 lane_state *s = &lane[l];
-                uint64_t path = g + l + (uint64_t)RAY_LOG_LANES * s->paths_done;
+                uint64_t path = g + l + (uint64_t)w * s->paths_done;
                 if (s->next == s->end && s->paths_done < K && path < paths && it % M == 0) {
                     s->next = start[path], s->end = start[path + 1]; /* the lane's next path begins */
                     ++s->paths_done;
@@ -264,7 +265,7 @@ static uint64_t lay_out_restart(const ray_log_thread *t, const uint64_t *start, 
                 if (s->next < s->end) {
                     ray[l] = model = &t->rays[s->next++];
                     live = 1;
-                } else if (s->paths_done < K && g + l + (uint64_t)RAY_LOG_LANES * s->paths_done < paths) {
+                } else if (s->paths_done < K && g + l + (uint64_t)w * s->paths_done < paths) {
                     live = 1; /* waiting for the next restart */
                 }
             }
@@ -272,7 +273,7 @@ static uint64_t lay_out_restart(const ray_log_thread *t, const uint64_t *start, 
                 break;
             if (!model)
                 continue; /* every lane waits: an iteration that traces nothing */
-            for (uint32_t l = 0; l < RAY_LOG_LANES; ++l, ++n) {
+            for (uint32_t l = 0; l < w; ++l, ++n) {
                 if (!out)
                     continue;
                 out[n] = ray[l] ? *ray[l] : *model;
@@ -302,7 +303,7 @@ int ray_log_restart(const ray_log *log, const float *probes, uint32_t P, uint32_
                 ok = paths_ok = 0;
                 break;
             }
-            n = lay_out_restart(t, start, paths, K, M, out, n);
+            n = lay_out_restart(t, start, paths, log->lanes, K, M, out, n);
         }
         if (ok && pass == 0)
             ok = (out = malloc((n ? n : 1) * sizeof *out)) != NULL;

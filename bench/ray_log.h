@@ -5,8 +5,9 @@
  * pb_bake_trace_cpu traces each path whole on one thread (its probe ray,
  * then shadow and bounce rays in turn), so each thread's record is a run of
  * whole paths; a path starts with a closest-hit ray from a probe's position.
- * The bake's kernel runs 8 consecutive paths of a probe in lockstep, their
- * k-th rays together: ray_log_lockstep lists the rays that way. */
+ * The bake's kernel runs a subgroup's W consecutive paths of a probe in
+ * lockstep (W = 8 on llvmpipe's 256-bit vectors, 32 on NVIDIA), their k-th
+ * rays together: ray_log_lockstep lists the rays that way. */
 #ifndef PB_BENCH_RAY_LOG_H
 #define PB_BENCH_RAY_LOG_H
 
@@ -15,7 +16,7 @@
 #include <stdatomic.h>
 
 #define RAY_LOG_THREADS 256
-#define RAY_LOG_LANES 8 /* paths per lane group, as llvmpipe and bake.comp run them */
+#define RAY_LOG_MAX_LANES 128 /* a subgroup's lanes at most */
 
 typedef struct ray_log_thread {
     pb_ray *rays;
@@ -25,6 +26,7 @@ typedef struct ray_log_thread {
 } ray_log_thread;
 
 typedef struct ray_log {
+    uint32_t lanes;      /* paths per lane group: the device's subgroup size (llvmpipe 8 on 256-bit vectors) */
     pb_ray_cast_fn cast; /* the tracer that answers the rays */
     void *cast_user;
     uint64_t generation; /* tells a worker thread's slot of an earlier log from this one's */
@@ -32,8 +34,9 @@ typedef struct ray_log {
     ray_log_thread thread[RAY_LOG_THREADS];
 } ray_log;
 
-/* An empty log in front of cast (cast_user). */
-void ray_log_init(ray_log *log, pb_ray_cast_fn cast, void *cast_user);
+/* An empty log in front of cast (cast_user), laid out for lane groups of
+ * `lanes` paths (clamped to 1..RAY_LOG_MAX_LANES). */
+void ray_log_init(ray_log *log, uint32_t lanes, pb_ray_cast_fn cast, void *cast_user);
 /* pb_ray_cast_fn: records the ray in the calling thread's record, then casts it. */
 void ray_log_cast(void *user, const pb_ray *ray, pb_trace_mode mode, pb_hit *hit);
 /* Total rays recorded; 0 when a thread ran out of memory or out of slots. */
@@ -41,7 +44,7 @@ uint64_t ray_log_count(const ray_log *log);
 /* How ray_log_lockstep lays the rays out. */
 typedef enum ray_log_layout {
     RAY_LOG_PACKED, /* lane-group order, only rays */
-    RAY_LOG_GROUPS, /* each 8 entries of a list are one lane group's k-th rays of that kind; a lane whose
+    RAY_LOG_GROUPS, /* each W entries of a list are one lane group's k-th rays of that kind; a lane whose
                        path has none (it ended or casts the other kind) holds an idle ray (tmax -1: it ends
                        at the first box), as the bake's lane waits */
     RAY_LOG_MIXED,  /* as GROUPS, but both kinds in one list (closest): a lane group's k-th rays together,
@@ -50,7 +53,7 @@ typedef enum ray_log_layout {
                              as a compaction that moves paths between lanes and keeps the groups' order
                              would run them (a lane that restarts paths falls out of step instead:
                              ray_log_restart) */
-    RAY_LOG_FIRST_COMPACTED, /* the probe rays in the bake's groups, then the paths that go on packed 8 to a
+    RAY_LOG_FIRST_COMPACTED, /* the probe rays in the bake's groups, then the paths that go on packed W to a
                                 group, their later rays as MIXED: a schedule that compacts once, after the
                                 first hit (one list, closest) */
 } ray_log_layout;
@@ -64,14 +67,14 @@ typedef enum ray_log_layout {
 int ray_log_lockstep(const ray_log *log, const float *probes, uint32_t P, ray_log_layout layout, pb_ray **closest,
                      uint64_t *closest_count, pb_ray **any, uint64_t *any_count);
 /* The recorded rays as lanes that restart paths would trace them: a lane
- * group of 8 lanes holds 8 K consecutive paths, lane l paths l, l + 8, ...,
- * l + 8 (K - 1); each loop iteration every lane casts its path's next ray,
+ * group of W lanes holds W K consecutive paths, lane l paths l, l + W, ...,
+ * l + W (K - 1); each loop iteration every lane casts its path's next ray,
  * and a lane whose path has ended begins its next path at the next
  * iteration t with t % M == 0 (M 1: at once), idle until then. One list,
- * each 8 entries one iteration's rays (both kinds; idle lanes' rays end at
+ * each W entries one iteration's rays (both kinds; idle lanes' rays end at
  * the first box), to be traced to their closest hits. K 1 is
- * RAY_LOG_MIXED. A lane group spans 8 K paths of one record, so with
- * 8 K above a parallel range of paths (pb_bake_trace_cpu's 64) the record
+ * RAY_LOG_MIXED. A lane group spans W K paths of one record, so with
+ * W K above a parallel range of paths (pb_bake_trace_cpu's 64) the record
  * must come from one thread (peer_paths then pins its recording run to
  * one CPU). Returns as ray_log_lockstep. */
 int ray_log_restart(const ray_log *log, const float *probes, uint32_t P, uint32_t K, uint32_t M, pb_ray **rays,

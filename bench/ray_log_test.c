@@ -14,6 +14,7 @@
 
 #define PATHS 8
 #define PROBES 2
+#define LANES 8 /* one probe's paths to a lane group */
 
 static const uint32_t lengths[PROBES][PATHS] = {{1, 3, 5, 2, 1, 4, 3, 6}, {2, 2, 2, 2, 2, 2, 2, 2}};
 static const float probe_at[PROBES][4] = {{1.f, 2.f, 3.f, 0.f}, {-4.f, 5.f, 0.5f, 0.f}};
@@ -48,7 +49,7 @@ static void no_cast(void *user, const pb_ray *ray, pb_trace_mode mode, pb_hit *h
 static uint64_t record(ray_log *log)
 {
     uint64_t n = 0;
-    ray_log_init(log, no_cast, NULL);
+    ray_log_init(log, LANES, no_cast, NULL);
     for (uint32_t q = 0; q < PROBES; ++q)
         for (uint32_t p = 0; p < PATHS; ++p)
             for (uint32_t k = 0; k < lengths[q][p]; ++k, ++n) {
@@ -107,12 +108,12 @@ static uint32_t expected_first_compacted(float *want)
             if (lengths[q][p] > 1)
                 q_of[on] = q, p_of[on++] = p;
         }
-    for (uint32_t g = 0; g < on; g += RAY_LOG_LANES) {
-        uint32_t lanes = on - g < RAY_LOG_LANES ? on - g : RAY_LOG_LANES, longest = 0;
+    for (uint32_t g = 0; g < on; g += LANES) {
+        uint32_t lanes = on - g < LANES ? on - g : LANES, longest = 0;
         for (uint32_t l = 0; l < lanes; ++l)
             longest = lengths[q_of[g + l]][p_of[g + l]] > longest ? lengths[q_of[g + l]][p_of[g + l]] : longest;
         for (uint32_t k = 1; k < longest; ++k)
-            for (uint32_t l = 0; l < RAY_LOG_LANES; ++l)
+            for (uint32_t l = 0; l < LANES; ++l)
                 want[n++] = l < lanes && k < lengths[q_of[g + l]][p_of[g + l]] ? ident(q_of[g + l], p_of[g + l], k)
                                                                                  : -1.f;
     }
@@ -175,14 +176,14 @@ int main(void)
         uint32_t longest = 0;
         for (uint32_t l = 0; l < PATHS; ++l)
             longest = lengths[0][l] + lengths[1][l] > longest ? lengths[0][l] + lengths[1][l] : longest;
-        CHECK(nr == (uint64_t)RAY_LOG_LANES * longest, "restart 2:1: %llu entries, expected %u",
-              (unsigned long long)nr, RAY_LOG_LANES * longest);
-        for (uint32_t it = 0; it < longest && nr == (uint64_t)RAY_LOG_LANES * longest; ++it)
+        CHECK(nr == (uint64_t)LANES * longest, "restart 2:1: %llu entries, expected %u",
+              (unsigned long long)nr, LANES * longest);
+        for (uint32_t it = 0; it < longest && nr == (uint64_t)LANES * longest; ++it)
             for (uint32_t l = 0; l < PATHS; ++l) {
                 uint32_t first = lengths[0][l];
                 float w = it < first ? ident(0, l, it)
                                      : (it < first + lengths[1][l] ? ident(1, l, it - first) : -1.f);
-                const pb_ray *g = &r[RAY_LOG_LANES * it + l];
+                const pb_ray *g = &r[LANES * it + l];
                 CHECK((idle(g) ? -1.f : g->tmin) == w, "restart 2:1: iteration %u lane %u is %g, expected %g", it,
                       l, idle(g) ? -1.f : g->tmin, w);
             }
@@ -192,15 +193,15 @@ int main(void)
      * iteration 4 to begin probe 1's path 0 */
     CHECK(ray_log_restart(log, &probe_at[0][0], PROBES, 2, 4, &r, &nr) == 1, "restart 2:4 refused");
     if (!failures) {
-        for (uint32_t it = 1; it < 4 && RAY_LOG_LANES * it < nr; ++it)
-            CHECK(idle(&r[RAY_LOG_LANES * it]), "restart 2:4: lane 0 is not idle at iteration %u", it);
-        CHECK(nr > RAY_LOG_LANES * 4u && r[RAY_LOG_LANES * 4].tmin == ident(1, 0, 0),
+        for (uint32_t it = 1; it < 4 && LANES * it < nr; ++it)
+            CHECK(idle(&r[LANES * it]), "restart 2:4: lane 0 is not idle at iteration %u", it);
+        CHECK(nr > LANES * 4u && r[LANES * 4].tmin == ident(1, 0, 0),
               "restart 2:4: lane 0 does not begin its second path at iteration 4");
         free(r);
     }
     /* a record that does not begin with a path is refused */
     ray_log bad;
-    ray_log_init(&bad, no_cast, NULL);
+    ray_log_init(&bad, LANES, no_cast, NULL);
     pb_ray stray;
     memset(&stray, 0, sizeof stray);
     stray.origin[0] = 77.f, stray.tmax = 1.f;
