@@ -34,7 +34,8 @@
  * a compaction that moves paths between lanes, keeping the groups' order,
  * would trace them); "kr 1cp", the probe rays in the bake's groups, then
  * the paths that go on packed 8 to a group (a schedule that compacts once,
- * after the first hit); with
+ * after the first hit); "kr wg", each workgroup's 64 paths compacted before
+ * every ray (the k-th rays of those still going, packed); with
  * --restart K:M, "kr rst", the rays as lanes that each trace K paths, an
  * idle lane beginning its next one every M loop iterations, would trace
  * them (ray_log_restart: a schedule measured before it is built). Between
@@ -85,7 +86,7 @@ static const method methods[] = {
 };
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 #define MAX_REPEAT 15
-#define LAYOUTS 5 /* ray_log_layout's */
+#define LAYOUTS 6 /* ray_log_layout's */
 #define RESTART LAYOUTS /* own_rays' slot for --restart's schedule */
 #define AGREE_OWN_MAX 1e-3 /* a rare Russian roulette draw flipped by rounding moves ~1e-4 */
 
@@ -335,14 +336,15 @@ int main(int argc, char **argv)
            pb_context_device(ctx)->name, RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, pb_host_threads(),
            probes, rays, passes, bounces, repeat, lanes);
     printf("%-12s %-6s %9s %10s %10s %10s %10s %8s %8s %10s %10s "
-           "%6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s\n", "scene",
+           "%6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s %6s\n", "scene",
            "method", "paths", "bake ms", "all GPU", "peer ms", "own ms", "vs peer", "vs own", "agree peer", "agree own",
-           "trv/pa", "bk trc", "krn bt", "kr own", "kr grp", "kr mix", "kr pmx", "kr 1cp", "kr rst", "pr trc", "emb bt",
-           "em own");
+           "trv/pa", "bk trc", "krn bt", "kr own", "kr grp", "kr mix", "kr pmx", "kr 1cp", "kr wg", "kr rst", "pr trc",
+           "emb bt", "em own");
     fprintf(csv, "scene,method,paths,bake_trace_ms,bake_gpu_ms,peer_ms,own_ms,vs_peer,vs_own,agree_peer,agree_own,"
                  "bake_traversals,peer_traversals,bake_trc,kernel_bounce_over_probe,kernel_own_rays_over_probe,"
                  "kernel_own_groups_over_probe,kernel_own_mixed_groups_over_probe,kernel_own_packed_mixed_over_probe,"
-                 "kernel_own_first_compacted_over_probe,kernel_own_restart_over_probe,"
+                 "kernel_own_first_compacted_over_probe,kernel_own_workgroup_compacted_over_probe,"
+                 "kernel_own_restart_over_probe,"
                  "peer_trc,"
                  "embree_bounce_over_probe,embree_own_rays_over_probe\n");
     fprintf(json, "{\"device\": \"%s\", \"peer\": \"Embree %d.%d.%d\", \"host_threads\": %u, \"probes\": %u, "
@@ -505,22 +507,23 @@ int main(int argc, char **argv)
                      bench_median(embree_own, repeat),
                      {bench_median(kernel_own[0], repeat), bench_median(kernel_own[1], repeat),
                       bench_median(kernel_own[2], repeat), bench_median(kernel_own[3], repeat),
-                      bench_median(kernel_own[4], repeat), bench_median(kernel_own[RESTART], repeat)}};
+                      bench_median(kernel_own[4], repeat), bench_median(kernel_own[5], repeat),
+                      bench_median(kernel_own[RESTART], repeat)}};
             double vs_peer = w.peer_ms / w.bake_trace_ms, vs_own = w.own_ms / w.bake_trace_ms;
             printf("%-12.12s %-6s %9llu %10.1f %10.1f %10.1f %10.1f %7.3fx %7.3fx %10.2e %10.2e "
-                   "%6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f\n",
+                   "%6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f %6.2f\n",
                    w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms, w.own_ms,
                    vs_peer, vs_own, w.agree_peer, w.agree_own, (double)w.bake_trav / w.paths, w.bake_trc, w.kernel_bt,
                    w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.kernel_own[3], w.kernel_own[4],
-                   w.kernel_own[RESTART], w.peer_trc, w.embree_bt, w.embree_own);
+                   w.kernel_own[5], w.kernel_own[RESTART], w.peer_trc, w.embree_bt, w.embree_own);
             fprintf(csv,
                     "%s,%s,%llu,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.3e,%.3e,%llu,%llu,"
-                    "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+                    "%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
                     w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms, w.bake_gpu_ms, w.peer_ms,
                     w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own, (unsigned long long)w.bake_trav,
                     (unsigned long long)w.peer_trav, w.bake_trc, w.kernel_bt, w.kernel_own[0], w.kernel_own[1],
-                    w.kernel_own[2], w.kernel_own[3], w.kernel_own[4], w.kernel_own[RESTART], w.peer_trc, w.embree_bt,
-                    w.embree_own);
+                    w.kernel_own[2], w.kernel_own[3], w.kernel_own[4], w.kernel_own[5], w.kernel_own[RESTART],
+                    w.peer_trc, w.embree_bt, w.embree_own);
             fprintf(json,
                     "%s\n  {\"scene\": \"%s\", \"method\": \"%s\", \"paths\": %llu, \"bake_trace_ms\": %.3f, "
                     "\"bake_gpu_ms\": %.3f, \"peer_ms\": %.3f, \"own_ms\": %.3f, \"vs_peer\": %.4f, \"vs_own\": %.4f, "
@@ -528,14 +531,15 @@ int main(int argc, char **argv)
                     "\"bake_trc\": %.4f, \"kernel_bounce_over_probe\": %.4f, \"peer_trc\": %.4f, "
                     "\"kernel_own_rays_over_probe\": %.4f, \"kernel_own_groups_over_probe\": %.4f, "
                     "\"kernel_own_mixed_groups_over_probe\": %.4f, \"kernel_own_packed_mixed_over_probe\": %.4f, "
-                    "\"kernel_own_first_compacted_over_probe\": %.4f, \"kernel_own_restart_over_probe\": %.4f, "
+                    "\"kernel_own_first_compacted_over_probe\": %.4f, "
+                    "\"kernel_own_workgroup_compacted_over_probe\": %.4f, \"kernel_own_restart_over_probe\": %.4f, "
                     "\"embree_bounce_over_probe\": %.4f, "
                     "\"embree_own_rays_over_probe\": %.4f}",
                     first_row ? "" : ",", w.scene, w.method, (unsigned long long)w.paths, w.bake_trace_ms,
                     w.bake_gpu_ms, w.peer_ms, w.own_ms, vs_peer, vs_own, w.agree_peer, w.agree_own,
                     (unsigned long long)w.bake_trav, (unsigned long long)w.peer_trav, w.bake_trc, w.kernel_bt,
                     w.peer_trc, w.kernel_own[0], w.kernel_own[1], w.kernel_own[2], w.kernel_own[3],
-                    w.kernel_own[4], w.kernel_own[RESTART], w.embree_bt, w.embree_own);
+                    w.kernel_own[4], w.kernel_own[5], w.kernel_own[RESTART], w.embree_bt, w.embree_own);
             first_row = 0;
         }
     next_scene:
@@ -563,10 +567,11 @@ int main(int argc, char **argv)
            "ended or casts the other kind idle; kr mix: the same with both kinds in one lane group as the bake's one "
            "trace loop runs them, all traced to their closest hit; kr pmx: packed, both kinds in one list (closest "
            "hits), as a compaction that moves paths between lanes and keeps the groups' order would trace them; "
-           "kr 1cp: the probe rays in the bake's groups, then the paths that go on packed 8 to a group (one "
-           "compaction, after the first hit); kr rst: --restart K:M's schedule (K paths per lane, an idle lane "
-           "begins its next path every M iterations; ray_log.h); 0.00: not measured (no --restart, or the recorded "
-           "rays would take more than a tenth of host memory)\n");
+           "kr 1cp: the probe rays in the bake's groups, then the paths that go on packed to groups (one "
+           "compaction, after the first hit); kr wg: each workgroup's paths compacted before each ray (a "
+           "workgroup's k-th rays of its paths still going, packed); kr rst: --restart K:M's schedule (K paths per "
+           "lane, an idle lane begins its next path every M iterations; ray_log.h); 0.00: not measured (no "
+           "--restart, or the recorded rays would take more than a tenth of host memory)\n");
     printf("wrote %s\nwrote %s\n", csv_path, json_path);
     rtcReleaseDevice(edev);
     pb_context_destroy(ctx);

@@ -178,6 +178,36 @@ static uint64_t lay_out_first_compacted(const ray_log_thread *t, const uint64_t 
     return n;
 }
 
+/* RAY_LOG_WORKGROUP for one record: for each workgroup of paths and each
+ * step k, the k-th rays of its paths still going, in path order, packed w to
+ * a lane group, the last group of the step filled with idle lanes. out NULL:
+ * counts only. Returns the new count. */
+static uint64_t lay_out_workgroup(const ray_log_thread *t, const uint64_t *start, uint64_t paths, uint32_t w,
+                                  pb_ray *out, uint64_t n)
+{
+    for (uint64_t g = 0; g < paths; g += RAY_LOG_WORKGROUP_PATHS) {
+        uint64_t size = paths - g < RAY_LOG_WORKGROUP_PATHS ? paths - g : RAY_LOG_WORKGROUP_PATHS, longest = 0;
+        for (uint64_t p = g; p < g + size; ++p)
+            longest = start[p + 1] - start[p] > longest ? start[p + 1] - start[p] : longest;
+        for (uint64_t k = 0; k < longest; ++k) {
+            uint64_t live = 0;
+            const pb_ray *model = NULL;
+            for (uint64_t p = g; p < g + size; ++p)
+                if (start[p] + k < start[p + 1]) {
+                    model = &t->rays[start[p] + k];
+                    if (out)
+                        out[n + live] = *model;
+                    ++live;
+                }
+            for (; live % w; ++live)
+                if (out)
+                    out[n + live] = *model, out[n + live].tmin = 0.f, out[n + live].tmax = -1.f; /* idle */
+            n += live;
+        }
+    }
+    return n;
+}
+
 /* Lays out every record's rays in lane groups into c and a (NULL: counts
  * only); start: room for each record's path starts. Returns 0 when a record
  * does not start with a path (rays before it: not a path tracer's record). */
@@ -193,6 +223,10 @@ static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_
             return 0;
         if (layout == RAY_LOG_FIRST_COMPACTED) {
             *nc = lay_out_first_compacted(t, start, paths, w, c, *nc);
+            continue;
+        }
+        if (layout == RAY_LOG_WORKGROUP) {
+            *nc = lay_out_workgroup(t, start, paths, w, c, *nc);
             continue;
         }
         for (uint64_t g = 0; g < paths; g += w) {

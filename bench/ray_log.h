@@ -16,7 +16,8 @@
 #include <stdatomic.h>
 
 #define RAY_LOG_THREADS 256
-#define RAY_LOG_MAX_LANES 128 /* a subgroup's lanes at most */
+#define RAY_LOG_MAX_LANES 128      /* a subgroup's lanes at most */
+#define RAY_LOG_WORKGROUP_PATHS 64 /* bake_trace.comp's workgroup; pb_bake_trace_cpu's ranges are as long */
 
 typedef struct ray_log_thread {
     pb_ray *rays;
@@ -56,11 +57,15 @@ typedef enum ray_log_layout {
     RAY_LOG_FIRST_COMPACTED, /* the probe rays in the bake's groups, then the paths that go on packed W to a
                                 group, their later rays as MIXED: a schedule that compacts once, after the
                                 first hit (one list, closest) */
+    RAY_LOG_WORKGROUP, /* per workgroup of RAY_LOG_WORKGROUP_PATHS paths and per step k, the k-th rays of its
+                          paths still going packed W to a lane group in path order, idle lanes only in the
+                          step's last group: a kernel that compacts its workgroup's paths before each ray
+                          (through shared memory, at a barrier) would trace them (one list, closest) */
 } ray_log_layout;
 
 /* The recorded rays in lane-group order, closest-hit and any-hit ones apart
- * (each list keeps that order; MIXED, PACKED_MIXED, FIRST_COMPACTED: all in
- * closest, any empty). probes: the
+ * (each list keeps that order; MIXED, PACKED_MIXED, FIRST_COMPACTED,
+ * WORKGROUP: all in closest, any empty). probes: the
  * P probe positions (4 floats each; the first 3 read). Returns 1; 0 when out
  * of memory or nothing was recorded; -1 when a record does not start with a
  * path. The lists are malloc'ed, the caller's. */

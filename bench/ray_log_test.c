@@ -120,6 +120,28 @@ static uint32_t expected_first_compacted(float *want)
     return n;
 }
 
+/* The expected RAY_LOG_WORKGROUP list: all 16 paths are one workgroup; at
+ * each step the rays of the paths still going, in order, padded to a
+ * multiple of LANES with idle lanes. */
+static uint32_t expected_workgroup(float *want)
+{
+    uint32_t n = 0, longest = 0;
+    for (uint32_t q = 0; q < PROBES; ++q)
+        for (uint32_t p = 0; p < PATHS; ++p)
+            longest = lengths[q][p] > longest ? lengths[q][p] : longest;
+    for (uint32_t k = 0; k < longest; ++k) {
+        uint32_t live = 0;
+        for (uint32_t q = 0; q < PROBES; ++q)
+            for (uint32_t p = 0; p < PATHS; ++p)
+                if (k < lengths[q][p])
+                    want[n + live++] = ident(q, p, k);
+        for (; live % LANES; ++live)
+            want[n + live] = -1.f;
+        n += live;
+    }
+    return n;
+}
+
 static void check_list(const char *what, const pb_ray *got, uint64_t n, const float *want, uint32_t m)
 {
     CHECK(n == m, "%s: %llu rays, expected %u", what, (unsigned long long)n, m);
@@ -139,9 +161,9 @@ int main(void)
     CHECK(ray_log_count(log) == n, "count %llu, cast %llu", (unsigned long long)ray_log_count(log),
           (unsigned long long)n);
 
-    pb_ray *c[RAY_LOG_FIRST_COMPACTED + 1], *a[RAY_LOG_FIRST_COMPACTED + 1];
-    uint64_t nc[RAY_LOG_FIRST_COMPACTED + 1], na[RAY_LOG_FIRST_COMPACTED + 1];
-    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_FIRST_COMPACTED; ++L)
+    pb_ray *c[RAY_LOG_WORKGROUP + 1], *a[RAY_LOG_WORKGROUP + 1];
+    uint64_t nc[RAY_LOG_WORKGROUP + 1], na[RAY_LOG_WORKGROUP + 1];
+    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_WORKGROUP; ++L)
         CHECK(ray_log_lockstep(log, &probe_at[0][0], PROBES, (ray_log_layout)L, &c[L], &nc[L], &a[L], &na[L]) == 1,
               "layout %d refused", L);
     if (failures)
@@ -156,7 +178,9 @@ int main(void)
     check_list("packed mixed", c[RAY_LOG_PACKED_MIXED], nc[RAY_LOG_PACKED_MIXED], want, expected(-1, 0, want));
     check_list("first compacted", c[RAY_LOG_FIRST_COMPACTED], nc[RAY_LOG_FIRST_COMPACTED], want,
                expected_first_compacted(want));
-    CHECK(na[RAY_LOG_MIXED] == 0 && na[RAY_LOG_PACKED_MIXED] == 0 && na[RAY_LOG_FIRST_COMPACTED] == 0,
+    check_list("workgroup", c[RAY_LOG_WORKGROUP], nc[RAY_LOG_WORKGROUP], want, expected_workgroup(want));
+    CHECK(na[RAY_LOG_MIXED] == 0 && na[RAY_LOG_PACKED_MIXED] == 0 && na[RAY_LOG_FIRST_COMPACTED] == 0 &&
+              na[RAY_LOG_WORKGROUP] == 0,
           "one-list layouts left rays in the any list");
 
     /* K 1: the bake's own groups, byte for byte */
@@ -215,7 +239,7 @@ int main(void)
           "a record without a path's first ray was laid out as a restart schedule");
     ray_log_free(&bad);
 
-    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_FIRST_COMPACTED; ++L)
+    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_WORKGROUP; ++L)
         free(c[L]), free(a[L]);
     ray_log_free(log);
     free(log);
