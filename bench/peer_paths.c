@@ -189,8 +189,10 @@ static double kernel_rate_own(pb_context *ctx, pb_gpu_scene *gs, const own_rays 
 
 /* The peer's rays, from one untimed run of the peer's paths (trav: the
  * traversals of a timed run). Returns 1; 0 and no rays when they do not fit
- * in host memory (the record and its layouts take about 5 copies of the
- * rays: they are kept to a tenth of the machine's memory); -1 when the
+ * in host memory (the record, its packed layouts and the hits take about 4
+ * copies of the rays, and each of the 3 layouts with idle lanes up to one
+ * per 8 lanes of a group: all kept to a quarter of the machine's memory);
+ * -1 when the
  * record is not the peer's paths (another count of rays, rays before a
  * path's first, lists that lose or add rays): the bench is wrong. */
 static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P,
@@ -199,7 +201,8 @@ static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tm
 {
     memset(o, 0, sizeof *o);
     long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-    if (pages <= 0 || page <= 0 || 5 * trav * sizeof(pb_ray) > (uint64_t)pages * (uint64_t)page / 10)
+    uint64_t copies = 4 + 3 * (lanes > 8 ? lanes / 8 : 1);
+    if (pages <= 0 || page <= 0 || copies * trav * sizeof(pb_ray) > (uint64_t)pages * (uint64_t)page / 4)
         return 0;
     ray_log *log = malloc(sizeof *log);
     float *pos = malloc((size_t)P * 4 * sizeof *pos);
@@ -571,7 +574,7 @@ int main(int argc, char **argv)
            "compaction, after the first hit); kr wg: each workgroup's paths compacted before each ray (a "
            "workgroup's k-th rays of its paths still going, packed); kr rst: --restart K:M's schedule (K paths per "
            "lane, an idle lane begins its next path every M iterations; ray_log.h); 0.00: not measured (no "
-           "--restart, or the recorded rays would take more than a tenth of host memory)\n");
+           "--restart, or the recorded rays would take more than a quarter of host memory)\n");
     printf("wrote %s\nwrote %s\n", csv_path, json_path);
     rtcReleaseDevice(edev);
     pb_context_destroy(ctx);
