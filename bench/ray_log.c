@@ -4,8 +4,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Which slot of which log the calling thread writes: worker threads outlive
- * a log, so a slot is valid only for the generation it was taken in. */
+/* Which slot of which log the calling thread writes. A thread can outlive a
+ * log (the one that calls pb_parallel_for works in every pass), so a slot
+ * is valid only for the log generation it was taken in; pb_parallel_for's
+ * workers are new threads each call and take new slots. */
 static _Thread_local struct {
     uint64_t generation;
     uint32_t slot;
