@@ -137,7 +137,8 @@ for s in $steps; do
         run 240 build/bench/peer_paths --probes 16384 --repeat 3 --out /tmp/peer $crypt $cornell
         keep /tmp/peer/peer_paths.json ;;
     bakeab) # the issue's bake by this build and by .dev/probebake-before (another build's
-        # binary, put there by hand), alternately: the stages' wall and GPU times of each
+        # binary: scripts/gpu/variant.sh DIFF puts this commit with a kernel change there),
+        # alternately: the stages' wall and GPU times of each
         for b in before after before after before after; do
             bin=build/probebake
             [ $b = before ] && bin=.dev/probebake-before
