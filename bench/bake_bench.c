@@ -183,7 +183,8 @@ int main(int argc, char **argv)
                 double vs_trace[16], vs_bounce[16], vs_own[16];
                 uint32_t done = 0;
                 for (; done < repeat; ++done) {
-                    double tr = bench_trace_rate(ctx, gs, rays, n, hits), br = bench_trace_rate(ctx, gs, brays, nb, hits);
+                    double tr = bench_trace_rate(ctx, gs, rays, n, hits);
+                    double br = bench_trace_rate(ctx, gs, brays, nb, hits);
                     double orate = bench_trace_rate(ctx, gs, orays, no, hits);
                     if (nall < 48)
                         all_trace[nall] = tr, all_bounce[nall] = br, all_own[nall++] = orate;

@@ -62,10 +62,10 @@
 #include "bake/shading.h"
 #include "bench_util.h"
 #include "bounce_rays.h"
-#include "ray_log.h"
 #include "common/common.h"
 #include "embree_peer.h"
 #include "probebake/probebake.h"
+#include "ray_log.h"
 
 #include <errno.h>
 #include <sched.h>
@@ -86,7 +86,7 @@ static const method methods[] = {
 };
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 #define MAX_REPEAT 15
-#define LAYOUTS 6 /* ray_log_layout's */
+#define LAYOUTS RAY_LOG_LAYOUTS
 #define RESTART LAYOUTS /* own_rays' slot for --restart's schedule */
 #define AGREE_OWN_MAX 1e-3 /* a rare Russian roulette draw flipped by rounding moves ~1e-4 */
 
@@ -155,9 +155,9 @@ out:
     return ms;
 }
 
-/* The rays the peer cast, in the bake's lane-group order, in each of
- * ray_log.h's layouts (packed; in lane groups, kinds apart; in lane groups,
- * kinds together). real: how many rays. */
+/* The rays the peer cast, laid out in each of ray_log.h's layouts (indexed
+ * by ray_log_layout) and, when asked, as --restart's schedule. real: how
+ * many rays (the layouts with idle lanes hold more entries). */
 typedef struct own_rays {
     pb_ray *closest[LAYOUTS + 1], *any[LAYOUTS + 1]; /* [RESTART]: ray_log_restart's list, if asked */
     uint64_t closest_count[LAYOUTS + 1], any_count[LAYOUTS + 1], real;
@@ -192,9 +192,8 @@ static double kernel_rate_own(pb_context *ctx, pb_gpu_scene *gs, const own_rays 
  * in host memory (the record, its packed layouts and the hits take about 4
  * copies of the rays, and each of the 3 layouts with idle lanes up to one
  * per 8 lanes of a group: all kept to a quarter of the machine's memory);
- * -1 when the
- * record is not the peer's paths (another count of rays, rays before a
- * path's first, lists that lose or add rays): the bench is wrong. */
+ * -1 when the record is not the peer's paths (another count of rays, rays
+ * before a path's first, lists that lose or add rays): the bench is wrong. */
 static int record_rays(const pb_scene *s, const pb_bake_desc *d, pb_bake_pass tmpl, uint32_t P,
                        const embree_peer *peer, uint64_t trav, uint32_t lanes, uint32_t restart_k, uint32_t restart_m,
                        own_rays *o)
@@ -406,7 +405,7 @@ int main(int argc, char **argv)
             const method *m = &methods[mi];
             pb_bake_desc d;
             memset(&d, 0, sizeof d);
-            pb_probe_grid_fit(s->bounds_min, s->bounds_max, probes, &d.grid);
+            d.grid = grid; /* the reference rays' grid */
             d.rays_per_probe = rays, d.passes = passes, d.bounces = bounces, d.seed = 1;
             d.skip_relocation = 1; /* the peer places probes where the grid puts them */
             d.probe_nee = m->probe_nee, d.light_cells = m->light_cells, d.guide_paths = m->guide_paths;
@@ -414,7 +413,7 @@ int main(int argc, char **argv)
             float dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
                   dz = s->bounds_max[2] - s->bounds_min[2];
             d.max_distance = fmaxf(1e-3f, sqrtf(dx * dx + dy * dy + dz * dz));
-            uint32_t P = d.grid.counts[0] * d.grid.counts[1] * d.grid.counts[2];
+            uint32_t P = pb_probe_grid_count(&d.grid);
             double bake_ms[MAX_REPEAT], gpu_ms[MAX_REPEAT], peer_ms[MAX_REPEAT], own_ms[MAX_REPEAT];
             double bake_trc[MAX_REPEAT], peer_trc[MAX_REPEAT], kernel_bt[MAX_REPEAT], embree_bt[MAX_REPEAT];
             double embree_own[MAX_REPEAT], kernel_own[LAYOUTS + 1][MAX_REPEAT];

@@ -1,6 +1,6 @@
 /* The rays a CPU path tracer casts, recorded as it casts them and put back
  * in the order the bake's lane groups trace them: what a tracer alone pays
- * for exactly the bake's rays (peer_paths' "em own" and "krn own").
+ * for exactly the bake's rays (peer_paths' "em own" and "kr ..." columns).
  *
  * pb_bake_trace_cpu traces each path whole on one thread (its probe ray,
  * then shadow and bounce rays in turn), so each thread's record is a run of
@@ -61,6 +61,7 @@ typedef enum ray_log_layout {
                           paths still going packed W to a lane group in path order, idle lanes only in the
                           step's last group: a kernel that compacts its workgroup's paths before each ray
                           (through shared memory, at a barrier) would trace them (one list, closest) */
+    RAY_LOG_LAYOUTS    /* how many */
 } ray_log_layout;
 
 /* The recorded rays in lane-group order, closest-hit and any-hit ones apart

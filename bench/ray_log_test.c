@@ -161,9 +161,9 @@ int main(void)
     CHECK(ray_log_count(log) == n, "count %llu, cast %llu", (unsigned long long)ray_log_count(log),
           (unsigned long long)n);
 
-    pb_ray *c[RAY_LOG_WORKGROUP + 1], *a[RAY_LOG_WORKGROUP + 1];
-    uint64_t nc[RAY_LOG_WORKGROUP + 1], na[RAY_LOG_WORKGROUP + 1];
-    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_WORKGROUP; ++L)
+    pb_ray *c[RAY_LOG_LAYOUTS], *a[RAY_LOG_LAYOUTS];
+    uint64_t nc[RAY_LOG_LAYOUTS], na[RAY_LOG_LAYOUTS];
+    for (int L = 0; L < RAY_LOG_LAYOUTS; ++L)
         CHECK(ray_log_lockstep(log, &probe_at[0][0], PROBES, (ray_log_layout)L, &c[L], &nc[L], &a[L], &na[L]) == 1,
               "layout %d refused", L);
     if (failures)
@@ -239,7 +239,7 @@ int main(void)
           "a record without a path's first ray was laid out as a restart schedule");
     ray_log_free(&bad);
 
-    for (int L = RAY_LOG_PACKED; L <= RAY_LOG_WORKGROUP; ++L)
+    for (int L = 0; L < RAY_LOG_LAYOUTS; ++L)
         free(c[L]), free(a[L]);
     ray_log_free(log);
     free(log);

@@ -128,12 +128,10 @@ int main(int argc, char **argv)
             pb_ray *pr = malloc((size_t)n * sizeof *pr);
             pb_hit *hits = malloc((size_t)n * sizeof *hits);
             float *et = malloc((size_t)n * sizeof *et);
-            pb_trace_stats st;
             embree_peer peer;
             if (pr && hits && et && pb_probe_rays(&d.grid, 0, P, 256, 1, pr) == PB_OK &&
-                pb_trace(ctx, gs, pr, n, PB_TRACE_CLOSEST, hits, NULL, &err) == PB_OK &&
-                pb_trace(ctx, gs, pr, n, PB_TRACE_CLOSEST, hits, &st, &err) == PB_OK && st.kernel_ms > 0)
-                trace_mrays = n / (st.kernel_ms * 1e3);
+                pb_trace(ctx, gs, pr, n, PB_TRACE_CLOSEST, hits, NULL, &err) == PB_OK) /* untimed: warms it */
+                trace_mrays = bench_trace_rate(ctx, gs, pr, n, hits);
             if (pr && et && embree_peer_build(edev, s, 0, &peer)) {
                 embree_peer_trace(&peer, pr, n, et);
                 embree_mrays = n / (embree_peer_trace(&peer, pr, n, et) * 1e3);
