@@ -210,69 +210,6 @@ static uint64_t lay_out_workgroup(const ray_log_thread *t, const uint64_t *start
     return n;
 }
 
-/* Lays out every record's rays in lane groups into c and a (NULL: counts
- * only); start: room for each record's path starts. Returns 0 when a record
- * does not start with a path (rays before it: not a path tracer's record). */
-static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_layout layout, uint64_t *start,
-                   pb_ray *c, uint64_t *nc, pb_ray *a, uint64_t *na)
-{
-    uint32_t threads = atomic_load(&log->threads), w = log->lanes;
-    *nc = *na = 0;
-    for (uint32_t ti = 0; ti < threads; ++ti) {
-        const ray_log_thread *t = &log->thread[ti];
-        uint64_t paths = path_starts(t, sorted, P, start);
-        if (t->count && !paths)
-            return 0;
-        if (layout == RAY_LOG_FIRST_COMPACTED) {
-            *nc = lay_out_first_compacted(t, start, paths, w, c, *nc);
-            continue;
-        }
-        if (layout == RAY_LOG_WORKGROUP) {
-            *nc = lay_out_workgroup(t, start, paths, w, c, *nc);
-            continue;
-        }
-        for (uint64_t g = 0; g < paths; g += w) {
-            uint64_t lanes = paths - g < w ? paths - g : w, longest = 0;
-            for (uint64_t l = 0; l < lanes; ++l) {
-                uint64_t len = start[g + l + 1] - start[g + l];
-                longest = len > longest ? len : longest;
-            }
-            for (uint64_t k = 0; k < longest; ++k) {
-                if (layout == RAY_LOG_MIXED || layout == RAY_LOG_PACKED_MIXED) {
-                    *nc = append_kind(t, start + g, lanes, w, k, -1, layout == RAY_LOG_MIXED, c, *nc);
-                    continue;
-                }
-                *nc = append_kind(t, start + g, lanes, w, k, 0, layout == RAY_LOG_GROUPS, c, *nc);
-                *na = append_kind(t, start + g, lanes, w, k, 1, layout == RAY_LOG_GROUPS, a, *na);
-            }
-        }
-    }
-    return 1;
-}
-
-int ray_log_lockstep(const ray_log *log, const float *probes, uint32_t P, ray_log_layout layout, pb_ray **closest,
-                     uint64_t *closest_count, pb_ray **any, uint64_t *any_count)
-{
-    uint64_t total = ray_log_count(log), nc = 0, na = 0;
-    float *sorted = sorted_positions(probes, P);
-    uint64_t *start = malloc((total + 1) * sizeof *start);
-    pb_ray *c = NULL, *a = NULL;
-    int ok = total && sorted && start, paths = 1;
-    if (ok)
-        ok = paths = lay_out(log, sorted, P, layout, start, NULL, &nc, NULL, &na);
-    if (ok) {
-        c = malloc((nc ? nc : 1) * sizeof *c), a = malloc((na ? na : 1) * sizeof *a);
-        ok = c && a && lay_out(log, sorted, P, layout, start, c, &nc, a, &na);
-    }
-    free(sorted), free(start);
-    if (!ok) {
-        free(c), free(a);
-        return paths ? 0 : -1;
-    }
-    *closest = c, *closest_count = nc, *any = a, *any_count = na;
-    return 1;
-}
-
 /* A path's place in the restart schedule's lane: which of its rays is next. */
 typedef struct lane_state {
     uint64_t next, end; /* the current path's next ray and its end; next == end: none in flight */
@@ -321,36 +258,92 @@ static uint64_t lay_out_restart(const ray_log_thread *t, const uint64_t *start, 
     return n;
 }
 
-int ray_log_restart(const ray_log *log, const float *probes, uint32_t P, uint32_t K, uint32_t M, pb_ray **rays,
-                    uint64_t *count)
+/* Lays out every record's rays in lane groups into c and a (NULL: counts
+ * only): as `layout`, or with K nonzero as ray_log_restart's schedule (K
+ * paths per lane, restarts every M iterations; all in c). start: room for
+ * each record's path starts. Returns 0 when a record does not start with a
+ * path (rays before it: not a path tracer's record). */
+static int lay_out(const ray_log *log, const float *sorted, uint32_t P, ray_log_layout layout, uint32_t K,
+                   uint32_t M, uint64_t *start, pb_ray *c, uint64_t *nc, pb_ray *a, uint64_t *na)
 {
-    uint64_t total = ray_log_count(log), n = 0;
-    uint32_t threads = atomic_load(&log->threads);
+    uint32_t threads = atomic_load(&log->threads), w = log->lanes;
+    *nc = *na = 0;
+    for (uint32_t ti = 0; ti < threads; ++ti) {
+        const ray_log_thread *t = &log->thread[ti];
+        uint64_t paths = path_starts(t, sorted, P, start);
+        if (t->count && !paths)
+            return 0;
+        if (K) {
+            *nc = lay_out_restart(t, start, paths, w, K, M, c, *nc);
+            continue;
+        }
+        if (layout == RAY_LOG_FIRST_COMPACTED) {
+            *nc = lay_out_first_compacted(t, start, paths, w, c, *nc);
+            continue;
+        }
+        if (layout == RAY_LOG_WORKGROUP) {
+            *nc = lay_out_workgroup(t, start, paths, w, c, *nc);
+            continue;
+        }
+        for (uint64_t g = 0; g < paths; g += w) {
+            uint64_t lanes = paths - g < w ? paths - g : w, longest = 0;
+            for (uint64_t l = 0; l < lanes; ++l) {
+                uint64_t len = start[g + l + 1] - start[g + l];
+                longest = len > longest ? len : longest;
+            }
+            for (uint64_t k = 0; k < longest; ++k) {
+                if (layout == RAY_LOG_MIXED || layout == RAY_LOG_PACKED_MIXED) {
+                    *nc = append_kind(t, start + g, lanes, w, k, -1, layout == RAY_LOG_MIXED, c, *nc);
+                    continue;
+                }
+                *nc = append_kind(t, start + g, lanes, w, k, 0, layout == RAY_LOG_GROUPS, c, *nc);
+                *na = append_kind(t, start + g, lanes, w, k, 1, layout == RAY_LOG_GROUPS, a, *na);
+            }
+        }
+    }
+    return 1;
+}
+
+/* ray_log_lockstep and ray_log_restart: count, allocate, lay out. */
+static int lists(const ray_log *log, const float *probes, uint32_t P, ray_log_layout layout, uint32_t K, uint32_t M,
+                 pb_ray **closest, uint64_t *closest_count, pb_ray **any, uint64_t *any_count)
+{
+    uint64_t total = ray_log_count(log), nc = 0, na = 0;
     float *sorted = sorted_positions(probes, P);
     uint64_t *start = malloc((total + 1) * sizeof *start);
-    pb_ray *out = NULL;
-    int ok = total && K && M && sorted && start, paths_ok = 1;
-    for (int pass = 0; ok && pass < 2; ++pass) { /* count, then lay out */
-        n = 0;
-        for (uint32_t ti = 0; ok && ti < threads; ++ti) {
-            const ray_log_thread *t = &log->thread[ti];
-            uint64_t paths = path_starts(t, sorted, P, start);
-            if (t->count && !paths) {
-                ok = paths_ok = 0;
-                break;
-            }
-            n = lay_out_restart(t, start, paths, log->lanes, K, M, out, n);
-        }
-        if (ok && pass == 0)
-            ok = (out = malloc((n ? n : 1) * sizeof *out)) != NULL;
+    pb_ray *c = NULL, *a = NULL;
+    int ok = total && sorted && start, paths = 1;
+    if (ok)
+        ok = paths = lay_out(log, sorted, P, layout, K, M, start, NULL, &nc, NULL, &na);
+    if (ok) {
+        c = malloc((nc ? nc : 1) * sizeof *c), a = malloc((na ? na : 1) * sizeof *a);
+        ok = c && a && lay_out(log, sorted, P, layout, K, M, start, c, &nc, a, &na);
     }
     free(sorted), free(start);
     if (!ok) {
-        free(out);
-        return paths_ok ? 0 : -1;
+        free(c), free(a);
+        return paths ? 0 : -1;
     }
-    *rays = out, *count = n;
+    *closest = c, *closest_count = nc;
+    if (any)
+        *any = a, *any_count = na;
+    else
+        free(a); /* empty: the restart schedule's rays are all in closest */
     return 1;
+}
+
+int ray_log_lockstep(const ray_log *log, const float *probes, uint32_t P, ray_log_layout layout, pb_ray **closest,
+                     uint64_t *closest_count, pb_ray **any, uint64_t *any_count)
+{
+    return lists(log, probes, P, layout, 0, 1, closest, closest_count, any, any_count);
+}
+
+int ray_log_restart(const ray_log *log, const float *probes, uint32_t P, uint32_t K, uint32_t M, pb_ray **rays,
+                    uint64_t *count)
+{
+    if (!K || !M)
+        return 0;
+    return lists(log, probes, P, RAY_LOG_MIXED, K, M, rays, count, NULL, NULL);
 }
 
 void ray_log_free(ray_log *log)
