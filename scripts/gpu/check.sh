@@ -29,8 +29,9 @@ if [ "$PWD" != "$src" ]; then
     [ -e "$src" ] && { say "$src exists and is not this checkout"; exit 1; }
     mkdir -p "$(dirname "$src")" && ln -s "$PWD" "$src"
 fi
-[ -d "$(dirname "$src")/shared/scenes" ] || tar -C "$(dirname "$src")" -xf .dev/scenes.tar
+[ -d "$(dirname "$src")/shared/scenes" ] || tar -C "$(dirname "$src")" -xJf .dev/scenes.tar.xz
 tar -xJf .dev/build.tar.xz
+[ -f .dev/probebake-before.xz ] && xz -dc .dev/probebake-before.xz >.dev/probebake-before && chmod +x .dev/probebake-before
 cd "$src" || exit 1
 say "setup done in $PWD: $(nvidia-smi --query-gpu=name,driver_version --format=csv,noheader 2>/dev/null)"
 run 60 build/probebake devices || exit 1
@@ -133,8 +134,9 @@ for s in $steps; do
             --json /tmp/bake-vs-trace-16k.json $crypt $cornell
         keep /tmp/bake-vs-trace-16k.json ;;
     peer) # the bake's paths against the same paths on the CPU path tracer with Embree on all host
-        # cores (bench/peer_paths), at a size that fills the GPU
-        run 240 build/bench/peer_paths --probes 16384 --repeat 3 --out /tmp/peer $crypt $cornell
+        # cores (bench/peer_paths), at a size that fills the GPU; PB_PEER_ARGS: more options
+        # (e.g. --restart 8:1, whose recording runs on one CPU)
+        run 300 build/bench/peer_paths --probes 16384 --repeat 3 ${PB_PEER_ARGS:-} --out /tmp/peer $crypt $cornell
         keep /tmp/peer/peer_paths.json ;;
     bakeab) # the issue's bake by this build and by .dev/probebake-before (another build's
         # binary: scripts/gpu/variant.sh DIFF puts this commit with a kernel change there),

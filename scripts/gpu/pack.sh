@@ -46,7 +46,7 @@ s=$(cd "$shared" && pwd)
 b=$(basename "$s")
 scenes="$b/scenes/cornell $b/scenes/openarena/oacmpdm1.glb $b/scenes/MANIFEST.md"
 [ $lavapipe = 1 ] || scenes="$scenes $b/scenes/openarena/am_underworks2.glb $b/scenes/env $b/scenes/samples"
-tar -C "$(dirname "$s")" -cf .dev/scenes.tar $scenes
+tar -C "$(dirname "$s")" -cJf .dev/scenes.tar.xz $scenes
 if [ $lavapipe = 1 ]; then
     # lavapipe and its libraries, glibc's own left to that machine's glibc
     lvp=/usr/lib/x86_64-linux-gnu/libvulkan_lvp.so

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds this commit with a kernel change applied (a diff, e.g. one kept in
 # bench/results/) and puts its probebake where check.sh's `bakeab` step runs
-# it as the "before" build: .dev/probebake-before. Run after pack.sh (which
+# it as the "before" build: .dev/probebake-before.xz, unpacked there by check.sh. Run after pack.sh (which
 # empties .dev). The build is made in a worktree under /tmp at the paths the
 # packed build was made at, so it links the same carried libraries.
 # Usage, from the repository root: bash scripts/gpu/variant.sh DIFF
@@ -18,5 +18,6 @@ git worktree add -f --detach "$wt" HEAD >/dev/null
 git -C "$wt" apply "$diff"
 cmake -S "$wt" -B "$wt/build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$wt/build" -j"$(nproc)" --target probebake >/dev/null
-cp "$wt/build/probebake" .dev/probebake-before
-echo "variant.sh: .dev/probebake-before is this commit with $(basename "$diff") applied"
+# compressed: the call carries 64 MiB, working tree included (check.sh unpacks it)
+xz -c "$wt/build/probebake" >.dev/probebake-before.xz
+echo "variant.sh: .dev/probebake-before.xz is this commit with $(basename "$diff") applied"
