@@ -69,15 +69,19 @@ void pb_points_free(pb_points *p);
 typedef int (*pb_progress_fn)(float fraction, const char *label, void *user_data);
 
 /* How a bake pass's paths run on the device (docs/bake.md, "Schedules"):
- * one invocation per path that traces all of its rays, or a wavefront whose
+ * one invocation per path that traces all of its rays; a wavefront whose
  * dispatches each trace one ray of every path waiting for that kind of ray
- * (closest hit or shadow). Both write the same volume, bit for bit; on
- * lavapipe the wavefront is 1.1-1.8x slower (bench/RESULTS.md, "A wavefront
- * bake"). */
+ * (closest hit or shadow); or restarts: one invocation per K paths, which
+ * begins its next path as soon as its last ends (paths_per_lane). All write
+ * the same volume, bit for bit; on lavapipe the wavefront is 1.1-1.8x slower
+ * (bench/RESULTS.md, "A wavefront bake"). */
 typedef enum pb_bake_schedule {
     PB_SCHEDULE_MEGAKERNEL = 0,
-    PB_SCHEDULE_WAVEFRONT = 1
+    PB_SCHEDULE_WAVEFRONT = 1,
+    PB_SCHEDULE_RESTART = 2
 } pb_bake_schedule;
+#define PB_PATHS_PER_LANE_DEFAULT 8 /* PB_SCHEDULE_RESTART's K when paths_per_lane is 0 */
+#define PB_MAX_PATHS_PER_LANE 64
 
 /* Passes every probe takes under a target error before it may stop: its
  * standard error is estimated from the passes' spread, and the floor of
@@ -137,6 +141,7 @@ typedef struct pb_bake_desc {
                                      it spans 0.01 sr or more (docs/bake.md, "Emitters by solid angle") */
     uint32_t schedule;            /* pb_bake_schedule of the bake passes (relocation always runs as one kernel);
                                      default PB_SCHEDULE_MEGAKERNEL */
+    uint32_t paths_per_lane;      /* PB_SCHEDULE_RESTART: paths each invocation traces, 1 to 64; 0: 8 */
     uint32_t shard_index, shard_count; /* count > 0: bake part `index` (0-based) of `count` only: a contiguous
                                      range of the probes (grid or points), undilated, as a volume with
                                      PB_VOLUME_SHARD; pb_volume_merge joins the parts into the very bytes

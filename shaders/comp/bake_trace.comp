@@ -34,13 +34,7 @@ void main()
     // a relocation pass reads only the first hits: no shading, no shadow or bounce rays
     PathResult pr = path_radiance(P, origin, d, P.bounces, P.direct != 0u, P.pass_index >= PB_RELOCATION_PASS, state);
     store_probe_ray(P, i, d, pr);
-    if (bake_feature(PB_FEATURE_PROBE_NEE) && !addr_null(P.nee)) { // probe NEE: one light sample from the probe per ray
-        vec4 nr[2] = vec4[2](vec4(0.0), vec4(0.0, 1.0, 0.0, 0.0));
-        if (P.direct != 0u && (bake_emitters(P) || bake_env(P).count > 0u))
-            nr = probe_light_nee(P, origin, state);
-        Vec4RW(P.nee).v[2u * i] = nr[0];
-        Vec4RW(P.nee).v[2u * i + 1u] = nr[1];
-    }
+    store_probe_nee(P, i, origin, state);
     if (!addr_null(P.counters)) {
         atomicAdd(UintRW(P.counters).v[0], pb_traversals);
         // near llvmpipe's per-invocation loop cap (65535 iterations, triangle

@@ -563,4 +563,18 @@ void store_probe_ray(BakeParams P, uint i, vec3 d, PathResult pr)
     Vec4RW(P.rays).v[i] = vec4(pr.L, first_distance);
 }
 
+// Probe NEE: probe ray i's light sample (an emitter or the environment) drawn
+// from the probe once its path is done, with the random numbers where the
+// path left them (as the CPU reference draws it), into nee[2i], nee[2i + 1].
+void store_probe_nee(BakeParams P, uint i, vec3 origin, inout uint state)
+{
+    if (!bake_feature(PB_FEATURE_PROBE_NEE) || addr_null(P.nee))
+        return;
+    vec4 nr[2] = vec4[2](vec4(0.0), vec4(0.0, 1.0, 0.0, 0.0));
+    if (P.direct != 0u && (bake_emitters(P) || bake_env(P).count > 0u))
+        nr = probe_light_nee(P, origin, state);
+    Vec4RW(P.nee).v[2u * i] = nr[0];
+    Vec4RW(P.nee).v[2u * i + 1u] = nr[1];
+}
+
 #endif

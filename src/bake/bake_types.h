@@ -83,9 +83,12 @@ _Static_assert(sizeof(gpu_emitter) == 16, "Emitter layout");
 
 typedef struct bake_push {
     uint64_t params;
-    uint32_t spread, pad; /* bake_trace's workgroup stride (pb_dispatch_spread) */
+    uint32_t spread;         /* bake_trace's workgroup stride (pb_dispatch_spread) */
+    uint32_t paths_per_lane; /* bake_restart's K (1: one path per invocation, as bake_trace) */
+    uint32_t lane_group;     /* bake_restart: invocations whose paths interleave (the device's subgroup) */
+    uint32_t pad;
 } bake_push;
-_Static_assert(sizeof(bake_push) == 16, "bake push layout");
+_Static_assert(sizeof(bake_push) == 24, "bake push layout");
 
 /* bake_wave.comp's push constants (src/bake/stages/wave.c). */
 typedef struct wave_push {

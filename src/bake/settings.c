@@ -22,6 +22,8 @@ void pb_bake_settings_default(pb_bake_desc *d)
     if (!d->relocation_rays)
         d->relocation_rays = d->rays_per_probe < PB_RELOCATION_RAYS_DEFAULT ? d->rays_per_probe
                                                                              : PB_RELOCATION_RAYS_DEFAULT;
+    if (!d->paths_per_lane)
+        d->paths_per_lane = PB_PATHS_PER_LANE_DEFAULT;
 }
 
 pb_result pb_bake_settings_check(const pb_bake_desc *d, pb_error *err)
@@ -50,9 +52,12 @@ pb_result pb_bake_settings_check(const pb_bake_desc *d, pb_error *err)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u bounces: at most 64", d->bounces);
     if (d->octmap_res > 64)
         return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "octahedral map %u: at most 64 texels per side", d->octmap_res);
-    if (d->schedule > PB_SCHEDULE_WAVEFRONT)
-        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "schedule %u: 0 (one kernel per path) or 1 (a wavefront)",
-                       d->schedule);
+    if (d->schedule > PB_SCHEDULE_RESTART)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT,
+                       "schedule %u: 0 (one kernel per path), 1 (a wavefront) or 2 (restarts)", d->schedule);
+    if (d->paths_per_lane > PB_MAX_PATHS_PER_LANE)
+        return pb_fail(err, PB_ERROR_INVALID_ARGUMENT, "%u paths per lane: at most %u", d->paths_per_lane,
+                       PB_MAX_PATHS_PER_LANE);
     if (d->environment && (!d->environment->rgb || !d->environment->width || !d->environment->height ||
                            (uint64_t)d->environment->width * d->environment->height > (1u << 24) ||
                            !isfinite(d->environment->rotation_deg)))

@@ -42,6 +42,7 @@ typedef struct options {
     int no_normal_maps;         /* --normal-maps off: pb_scene_desc.no_normal_maps */
     int emitters_by_area;       /* --emitter-sampling area: pb_bake_desc.emitters_by_area */
     uint32_t schedule;          /* --schedule: pb_bake_desc.schedule (pb_bake_schedule) */
+    uint32_t paths_per_lane;    /* --schedule restart:K (0: the default) */
     uint32_t probes, rays, seed, probe;
     cli_log log;
     /* render */

@@ -221,6 +221,7 @@ static void desc_from_options(const options *o, const pb_bake_quality *q, const 
     d->light_cells = o->light_cells ? !strcmp(o->light_cells, "on") : q ? q->light_cells : 1u;
     d->emitters_by_area = (uint32_t)o->emitters_by_area;
     d->schedule = o->schedule;
+    d->paths_per_lane = o->paths_per_lane;
     memcpy(d->sky, o->sky, sizeof d->sky);
     d->environment = o->env ? env : NULL;
     d->indirect_volume = (uint32_t)o->indirect_volume;

@@ -75,9 +75,10 @@ void cli_print_help(void)
            "  --emitter-sampling solid-angle|area   light samples on an emissive triangle: uniform in the\n"
            "                                 solid angle it spans where that is 0.01 sr or more (default),\n"
            "                                 or a uniform point on it (noisier near it; both unbiased)\n"
-           "  --schedule megakernel|wavefront   each path traced by one invocation (default; faster on\n"
-           "                                 lavapipe) or as a wavefront, one kind of ray per dispatch; the\n"
-           "                                 same volume, bit for bit (docs/bake.md, \"Schedules\")\n"
+           "  --schedule megakernel|wavefront|restart[:K]   each path traced by one invocation (default),\n"
+           "                                 as a wavefront, one kind of ray per dispatch, or K paths per\n"
+           "                                 invocation, the next begun when one ends (K 1-64, default 8);\n"
+           "                                 the same volume, bit for bit (docs/bake.md, \"Schedules\")\n"
            "  --shading-normals vertex|face  reflect with the file's vertex normals interpolated (default)\n"
            "                                 or each triangle's face normal (flat); render too, info counts\n"
            "  --normal-maps on|off           bend the shading normals by the materials' glTF normal maps\n"
@@ -383,9 +384,17 @@ static int apply(options *o, const char *a, const char *next)
         o->scene_loads = !strcmp(next, "address") ? PB_SCENE_LOADS_ADDRESS
                          : !strcmp(next, "texel") ? PB_SCENE_LOADS_TEXEL : PB_SCENE_LOADS_AUTO;
     } else if (!strcmp(a, "--schedule")) {
-        if (!next || (strcmp(next, "megakernel") && strcmp(next, "wavefront")))
-            return cli_usage_error("%s takes megakernel or wavefront", a);
-        o->schedule = !strcmp(next, "wavefront") ? PB_SCHEDULE_WAVEFRONT : PB_SCHEDULE_MEGAKERNEL;
+        unsigned k = 0;
+        char end = 0;
+        int restart = next && !strncmp(next, "restart", 7) && (!next[7] || next[7] == ':');
+        if (restart && next[7] && (next[7] != ':' || sscanf(next + 8, "%u%c", &k, &end) != 1 || k < 1 ||
+                                   k > PB_MAX_PATHS_PER_LANE))
+            return cli_usage_error("%s restart:K takes K from 1 to 64 paths per lane", a);
+        if (!next || (!restart && strcmp(next, "megakernel") && strcmp(next, "wavefront")))
+            return cli_usage_error("%s takes megakernel, wavefront or restart[:K]", a);
+        o->schedule = restart ? PB_SCHEDULE_RESTART
+                      : !strcmp(next, "wavefront") ? PB_SCHEDULE_WAVEFRONT : PB_SCHEDULE_MEGAKERNEL;
+        o->paths_per_lane = k;
     } else if (!strcmp(a, "--emitter-sampling")) {
         if (!next || (strcmp(next, "solid-angle") && strcmp(next, "area")))
             return cli_usage_error("%s takes solid-angle or area", a);

@@ -71,6 +71,17 @@ typedef struct pass_results {
     int relocating;
 } pass_results;
 
+/* bake_restart's lane group: the invocations whose K paths interleave, as
+ * wide as the device's subgroup, so that a subgroup's first rays leave one
+ * probe along neighbouring directions as in bake_trace. The mapping is a
+ * permutation of each workgroup's paths whatever the width (the kernel needs
+ * no subgroup operations); a width that does not divide 64 gives 64. */
+static uint32_t restart_lane_group(pb_context *ctx)
+{
+    uint32_t w = pb_context_device(ctx)->subgroup_size;
+    return w && w <= 64 && 64 % w == 0 ? w : 64;
+}
+
 static void add_pass_results(void *user, uint64_t begin, uint64_t end)
 {
     const pass_results *pr = user;
@@ -128,11 +139,14 @@ pb_result pb_bake_run_pass(bake_run *run, uint32_t pass, int relocating, const u
             break;
         if ((r = pb_cmd_begin(ctx, err)) != PB_OK)
             break;
-        bake_push push = {B->params.address, pb_dispatch_spread((count * rpp + 63) / 64), 0}; /* spread: bake_trace's */
+        /* bake_restart (--schedule restart) traces K paths per invocation; relocation, first hits only, 1 */
+        uint32_t K = d->schedule == PB_SCHEDULE_RESTART && !relocating ? d->paths_per_lane : 1;
+        uint32_t groups = (count * rpp + 64 * K - 1) / (64 * K);
+        bake_push push = {B->params.address, pb_dispatch_spread(groups), K, restart_lane_group(ctx), 0};
         if (!wave) {
             pb_cmd_timestamp(ctx);
             pb_cmd_bind_set(ctx, &B->trace, run->gs->set);
-            pb_cmd_dispatch(ctx, &B->trace, &push, (count * rpp + 63) / 64);
+            pb_cmd_dispatch(ctx, &B->trace, &push, groups);
             pb_cmd_timestamp(ctx);
             pb_cmd_barrier(ctx);
         }

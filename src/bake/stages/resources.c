@@ -6,6 +6,8 @@
 #include "bake/light_cells.h"
 #include "common/common.h"
 #include "bake_depth.spv.h"
+#include "bake_restart.spv.h"
+#include "bake_restart_native64.spv.h"
 #include "bake_sh.spv.h"
 #include "bake_sh_native64.spv.h"
 #include "bake_trace.spv.h"
@@ -177,6 +179,9 @@ pb_result pb_bake_stage_resources(bake_job *j, const pb_sample_volume *feedback,
         {PB_KERNEL_SPIRV(ctx, bake_sh), sizeof(bake_push), spec, 3, 64, "bake_sh", &B->sh},
         {pb_spv_bake_depth, sizeof pb_spv_bake_depth, sizeof(bake_push), spec, 3, 64, "bake_depth", &B->depth},
         {PB_KERNEL_SPIRV(ctx, bake_wave), sizeof(wave_push), spec, 3, 64, "bake_wave", &B->wave}};
+    if (d->schedule == PB_SCHEDULE_RESTART) /* its paths and relocation's, one path per invocation there */
+        kernels[0] = (pb_pipeline_request){PB_KERNEL_SPIRV(ctx, bake_restart), sizeof(bake_push), spec, 3, 64,
+                                           "bake_restart", &B->trace};
     pb_pipeline_batch batch;
     if (r == PB_OK)
         r = pb_pipelines_begin(ctx, kernels, B->wave_capacity ? 4 : 3, &batch, err);
