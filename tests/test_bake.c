@@ -2316,8 +2316,12 @@ static void count_wave_submissions(pb_log_level level, const char *msg, void *us
  * environment and thin glass (a shadow ray through layers, and rays that
  * outlast a submission's rounds, as 20 lights' shadow rays do), --indirect
  * volume's first-hit shading, and --target-error's later passes over a list
- * of the probes still short of it. Relocation runs as one kernel in both. */
-static void wavefront_writes_the_megakernel_volume(void)
+ * of the probes still short of it. Relocation runs as one kernel in both.
+ * --schedule restart (bake_restart.comp) traces K paths per invocation, the
+ * next begun when one ends: at K 3 (a submission's last workgroup partly
+ * past the paths, lanes that stop after fewer paths) and 8 it must write the
+ * same bytes too, every path once. */
+static void schedules_write_the_megakernel_volume(void)
 {
     struct {
         const char *label;
@@ -2391,16 +2395,24 @@ static void wavefront_writes_the_megakernel_volume(void)
                 CHECK(least < most);
             }
         }
+        for (uint32_t K = 3; K <= 8 && mega.ok; K += 5) {
+            d.schedule = PB_SCHEDULE_RESTART, d.paths_per_lane = K;
+            baked restart = bake(s, &d);
+            int same = restart.ok && volumes_identical(&mega.vol, &restart.vol);
+            fprintf(stderr, "    restarts, %u paths per lane: %s\n", K, same ? "the same bytes" : "DIFFERS");
+            CHECK(same);
+            release(&restart);
+        }
         release(&mega), release(&wave);
         pb_scene_destroy(s);
     }
     pb_environment_free(&envmap);
-    /* an unknown schedule is refused before any work */
+    /* an unknown schedule, or more paths per lane than the kernel takes, is refused before any work */
     pb_scene *s = load_test_scene("panel.gltf");
     if (s) {
         pb_bake_desc d = {0};
         pb_probe_grid_fit(s->bounds_min, s->bounds_max, 8, &d.grid);
-        d.schedule = 2;
+        d.schedule = 3;
         pb_volume v;
         pb_error err;
         pb_bvh *bvh = NULL;
@@ -2408,8 +2420,12 @@ static void wavefront_writes_the_megakernel_volume(void)
         CHECK(pb_bvh_build(s, NULL, &bvh, &err) == PB_OK && pb_gpu_scene_create(ctx, s, bvh, &gs, &err) == PB_OK);
         if (gs) {
             pb_result r = pb_bake(ctx, s, gs, &d, &v, &err);
-            fprintf(stderr, "  schedule 2: %s\n", err.message);
-            CHECK(r == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "schedule 2"));
+            fprintf(stderr, "  schedule 3: %s\n", err.message);
+            CHECK(r == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "schedule 3"));
+            d.schedule = PB_SCHEDULE_RESTART, d.paths_per_lane = PB_MAX_PATHS_PER_LANE + 1;
+            r = pb_bake(ctx, s, gs, &d, &v, &err);
+            fprintf(stderr, "  %u paths per lane: %s\n", d.paths_per_lane, err.message);
+            CHECK(r == PB_ERROR_INVALID_ARGUMENT && strstr(err.message, "paths per lane"));
         }
         pb_gpu_scene_destroy(gs);
         pb_bvh_destroy(bvh);
@@ -3888,7 +3904,7 @@ int main(void)
     RUN(guide_is_learned_once_per_key);
     RUN(environment_kernels_match_cpu);
     RUN(glass_kernels_match_cpu);
-    RUN(wavefront_writes_the_megakernel_volume);
+    RUN(schedules_write_the_megakernel_volume);
     RUN(indirect_volume_matches_cpu_reference);
     RUN(relocation_and_dilation);
     RUN(scale_and_position_invariance);

@@ -554,8 +554,17 @@ print("same view" if len(a) == len(b) and worst < 1e-3 else "differs by %g" % wo
     "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --bounces 3 -o "$tmp/m.probes" >/dev/null 2>&1
     expect bake-schedule-same-bytes 0 '^0$' -- \
         bash -c "cmp -l '$tmp/m.probes' '$tmp/w.probes' | awk '\$1 < 185 || \$1 > 248' | wc -l"
-    expect bake-bad-schedule 2 '--schedule takes megakernel or wavefront' -- \
+    # --schedule restart:K: the same bytes too (3 paths per lane: the last workgroup partly past the paths)
+    expect bake-schedule-restart 0 "wrote $tmp/r.probes" -- "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 \
+        --octmap-res 4 --bounces 3 --schedule restart:3 --validation -o "$tmp/r.probes"
+    expect bake-schedule-restart-same-bytes 0 '^0$' -- \
+        bash -c "cmp -l '$tmp/m.probes' '$tmp/r.probes' | awk '\$1 < 185 || \$1 > 248' | wc -l"
+    expect bake-bad-schedule 2 '--schedule takes megakernel, wavefront or restart\[:K\]' -- \
         "$pb" bake "$demo" --schedule fast -o "$tmp/x.probes"
+    for k in 0 65 x 8x; do
+        expect bake-bad-restart-$k 2 '--schedule restart:K takes K from 1 to 64 paths per lane' -- \
+            "$pb" bake "$demo" --schedule restart:$k -o "$tmp/x.probes"
+    done
     expect bake-probe-nee-off 0 'probe NEE off' -- \
         "$pb" bake "$demo" --counts 2,2,2 --rays 32 --passes 1 --octmap-res 4 --probe-nee off -o "$tmp/q.probes"
     expect bake-probe-nee-off-inspect 0 'probe NEE off' -- "$pb" inspect "$tmp/q.probes"
