@@ -6,9 +6,9 @@
 # (at most 8 files come back): log.txt, clocks.csv (the GPU's clocks every
 # 250 ms), ctest.log, bake_portable.log, json.tar.
 # Usage there, from the repository root: bash scripts/gpu/check.sh [STEPS]
-# STEPS: any of compile bake bakeab blocks bench clocks decode large lavapipe loads peer sweep test_bake test_trace traceab tests
-# vsbake wavefront (default: compile bake wavefront vsbake peer bench clocks loads tests, in that order). PB_GPU_TEST_LIMIT: seconds for
-# each test program in the tests step (default 300).
+# STEPS: any of compile bake bakeab blocks bench clocks decode large lavapipe loads peer schedules sweep test_bake
+# test_trace traceab tests vsbake wavefront (default: compile bake wavefront vsbake peer bench clocks loads tests,
+# in that order). PB_GPU_TEST_LIMIT: seconds for each test program in the tests step (default 300).
 set -u
 out=${OUT:?OUT must name the folder that comes back}
 steps=${*:-compile bake wavefront vsbake peer bench clocks loads tests}
@@ -126,6 +126,13 @@ for s in $steps; do
             say "volumes differ outside the timings in $(cmp -l /tmp/sched-megakernel.probes /tmp/sched-wavefront.probes \
                 | awk '$1 < 185 || $1 > 248' | wc -l) bytes"
         done ;;
+    schedules) # --schedule megakernel against restart:K (bench/schedules.sh: turned rounds, the passes' GPU
+        # time, the volumes' bytes checked) on the issue's bake; the replay predicted restarts 1.15-1.25x here
+        run 300 bash bench/schedules.sh --rounds 7 --out /tmp/schedules \
+            --schedules "megakernel restart:2 restart:4 restart:8 restart:16" $crypt $cornell \
+            -- --counts 32,16,32 --rays 256 --passes 1 --bounces 3
+        keep /tmp/schedules/schedules.json
+        keep /tmp/schedules/schedules.csv ;;
     vsbake) # issue 11's bake ratio on the device, at a size that fills it: bake_bench's "vs trc"
         # (bake traversals per second of GPU time over the trace kernel's probe-ray rate on the same
         # grid, next to it in the same process) and "vs bnc", at 16k probes and 3 bounces. bake_bench's
