@@ -46,7 +46,10 @@ while [ $# -gt 0 ] && [ "$1" != -- ]; do scenes+=("$1"); shift; done
 [ $# -gt 0 ] && shift
 args=("$@")
 [ ${#args[@]} -gt 0 ] || args=(--counts 16,8,16 --rays 256 --passes 1 --bounces 3)
-[ $report = 1 ] || [ ${#scenes[@]} -gt 0 ] || { echo "usage: schedules.sh [--rounds N] [--out DIR] [--probebake BIN] [--schedules LIST] SCENE... [-- ARGS]" >&2; exit 2; }
+if [ $report = 0 ] && [ ${#scenes[@]} = 0 ]; then
+    echo "usage: schedules.sh [--rounds N] [--out DIR] [--probebake BIN] [--schedules LIST] SCENE... [-- ARGS]" >&2
+    exit 2
+fi
 [ -x "$bin" ] || { echo "schedules: $bin: not an executable" >&2; exit 1; }
 read -r -a sched <<<"$schedules"
 mkdir -p "$out"
