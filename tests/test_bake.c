@@ -3747,7 +3747,7 @@ static void settings_checked_before_the_scene_as_in_the_bake(void)
     float texel[3] = {1, 1, 1};
     pb_environment empty_env = {0};
     empty_env.rgb = texel; /* a texel, but no width */
-    enum { N = 27 };
+    enum { N = 29 };
     for (int i = 0; i < N && gs; ++i) {
         pb_bake_desc d = {0};
         d.grid.counts[0] = d.grid.counts[1] = d.grid.counts[2] = 2;
@@ -3775,7 +3775,7 @@ static void settings_checked_before_the_scene_as_in_the_bake(void)
         case 14: d.points = &bad_spacing, memset(&d.grid, 0, sizeof d.grid), want = "points spacing"; break;
         case 15: d.passes = 1000001, want = "passes: at most 1e6"; break;
         case 16: d.sh_window = 7, want = "SH window 7"; break;
-        case 17: d.schedule = 2, want = "schedule 2"; break;
+        case 17: d.schedule = 3, want = "schedule 3"; break;
         case 18: d.environment = &empty_env, want = "environment map: empty"; break;
         case 19: d.lobe_power = -1.f, want = "lobe power"; break;
         case 20: d.inside_fraction = NAN, want = "inside fraction"; break;
@@ -3785,6 +3785,8 @@ static void settings_checked_before_the_scene_as_in_the_bake(void)
         case 24: sparse = &sd, sd.test = 7, want = "unknown refinement test 7"; break;
         case 25: sparse = &sd, d.points = &pts, memset(&d.grid, 0, sizeof d.grid), want = "not with --points"; break;
         case 26: sparse = &sd, sd.test_pass_scale = 65, want = "at most 64"; break;
+        case 27: d.schedule = PB_SCHEDULE_RESTART, d.paths_per_lane = 65, want = "65 paths per lane"; break;
+        case 28: d.schedule = PB_SCHEDULE_RESTART, d.paths_per_lane = 5; break;
         }
         pb_result rp = pb_bake_check_settings(&d, sparse, &pre);
         pb_volume v;
