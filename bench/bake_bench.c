@@ -1,6 +1,7 @@
 /* bake_bench: bake time per stage and error against a long bake.
  *
- *   bake_bench [--probes N] [--reference-passes N] [--bounces N] [--repeat N] [--schedule megakernel|wavefront]
+ *   bake_bench [--probes N] [--reference-passes N] [--bounces N] [--repeat N]
+ *              [--schedule megakernel|wavefront|restart[:K]]
  *              [--json FILE] [SCENE ...]
  *
  * For each scene: a reference bake (256 rays x --reference-passes passes,
@@ -82,7 +83,7 @@ int main(int argc, char **argv)
     uint32_t probes = 256, ref_passes = 32, bounces = 2, repeat = 3;
     const char *json = "bench/out/bake_bench.json";
     int validation = 0; /* --validation: fail on any Vulkan validation message */
-    uint32_t schedule = PB_SCHEDULE_MEGAKERNEL; /* of the timed bakes (the reference's does not matter) */
+    uint32_t schedule = PB_SCHEDULE_MEGAKERNEL, paths_per_lane = 0; /* of the timed bakes (not the reference's) */
     const char *scenes[16];
     int nscenes = 0;
     for (int i = 1; i < argc; ++i) {
@@ -98,10 +99,12 @@ int main(int argc, char **argv)
             json = argv[++i];
         else if (!strcmp(argv[i], "--validation"))
             validation = 1;
-        else if (!strcmp(argv[i], "--schedule") && i + 1 < argc && !strcmp(argv[i + 1], "wavefront"))
-            schedule = PB_SCHEDULE_WAVEFRONT, ++i;
-        else if (!strcmp(argv[i], "--schedule") && i + 1 < argc && !strcmp(argv[i + 1], "megakernel"))
-            schedule = PB_SCHEDULE_MEGAKERNEL, ++i;
+        else if (!strcmp(argv[i], "--schedule") && i + 1 < argc) {
+            if (!pb_bake_schedule_parse(argv[++i], &schedule, &paths_per_lane)) {
+                fprintf(stderr, "bake_bench: --schedule %s: megakernel, wavefront or restart[:K], K 1-64\n", argv[i]);
+                return 2;
+            }
+        }
         else if (argv[i][0] == '-') {
             fprintf(stderr, "bake_bench: unknown option %s\n", argv[i]);
             return 2;
@@ -121,9 +124,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "bake_bench: %s\n", err.message);
         return 1;
     }
+    char sched[32];
+    pb_bake_schedule_name(&(pb_bake_desc){.schedule = schedule, .paths_per_lane = paths_per_lane}, sched, sizeof sched);
     printf("device: %s; %u probes, %u bounces, reference 256 rays x %u passes; medians of %u runs; schedule %s\n",
-           pb_context_device(ctx)->name, probes, bounces, ref_passes, repeat,
-           schedule == PB_SCHEDULE_WAVEFRONT ? "wavefront" : "megakernel");
+           pb_context_device(ctx)->name, probes, bounces, ref_passes, repeat, sched);
     printf("%-18s %6s %6s %9s %8s %8s %9s %9s %9s %7s %7s %7s %8s\n", "scene", "rays", "passes", "trace ms", "sh ms",
            "depth ms", "wall ms", "Mrays/s", "Mtrav/s", "vs trc", "vs bnc", "vs own", "rel RMSE");
     row rows[64];
@@ -178,7 +182,7 @@ int main(int argc, char **argv)
                 d.rays_per_probe = rays_list[ri];
                 d.passes = 1;
                 d.seed = 7;
-                d.schedule = schedule;
+                d.schedule = schedule, d.paths_per_lane = paths_per_lane;
                 row run[16];
                 double vs_trace[16], vs_bounce[16], vs_own[16];
                 uint32_t done = 0;
@@ -270,7 +274,7 @@ int main(int argc, char **argv)
     if (f) {
         fprintf(f, "{\n  \"bench\": \"bake\",\n  \"device\": \"%s\",\n  \"bounces\": %u,\n  \"reference_passes\": %u,\n"
                    "  \"repeat\": %u,\n  \"schedule\": \"%s\",\n  \"results\": [\n", pb_context_device(ctx)->name, bounces,
-                ref_passes, repeat, schedule == PB_SCHEDULE_WAVEFRONT ? "wavefront" : "megakernel");
+                ref_passes, repeat, sched);
         for (int i = 0; i < nrows; ++i)
             fprintf(f,
                     "    {\"scene\": \"%s\", \"probes\": %u, \"rays_per_probe\": %u, \"passes\": %u, \"trace_ms\": %.3f, "

@@ -342,6 +342,14 @@ pb_result pb_bake_sparse(pb_context *ctx, const pb_scene *scene, pb_gpu_scene *g
  * PB_ERROR_INVALID_ARGUMENT with the bake's own message. */
 pb_result pb_bake_check_settings(const pb_bake_desc *desc, const pb_sparse_desc *sparse, pb_error *err);
 
+/* A schedule as front ends name it: "megakernel", "wavefront", "restart" or
+ * "restart:K" (K 1 to PB_MAX_PATHS_PER_LANE) into *schedule and *paths_per_lane
+ * (0 unless given). Returns 0 for any other text, leaving both alone. */
+int pb_bake_schedule_parse(const char *text, uint32_t *schedule, uint32_t *paths_per_lane);
+
+/* desc's schedule by that name ("restart:8" with its K filled in), into buf. */
+const char *pb_bake_schedule_name(const pb_bake_desc *desc, char *buf, size_t size);
+
 /* The passes a bake of desc takes (at most, under target_error): desc->passes,
  * or its default when 0. */
 uint32_t pb_bake_passes(const pb_bake_desc *desc);

@@ -132,7 +132,11 @@ for s in $steps; do
             --schedules "megakernel restart:2 restart:4 restart:8 restart:16" $crypt $cornell \
             -- --counts 32,16,32 --rays 256 --passes 1 --bounces 3
         keep /tmp/schedules/schedules.json
-        keep /tmp/schedules/schedules.csv ;;
+        keep /tmp/schedules/schedules.csv
+        # and issue 11's ratio ("vs trc", as the vsbake step) with restarts
+        run 240 build/bench/bake_bench --probes 16384 --reference-passes 8 --bounces 3 --repeat 3 --schedule restart:8 \
+            --json /tmp/bake-vs-trace-16k-restart8.json $crypt $cornell
+        keep /tmp/bake-vs-trace-16k-restart8.json ;;
     vsbake) # issue 11's bake ratio on the device, at a size that fills it: bake_bench's "vs trc"
         # (bake traversals per second of GPU time over the trace kernel's probe-ray rate on the same
         # grid, next to it in the same process) and "vs bnc", at 16k probes and 3 bounces. bake_bench's

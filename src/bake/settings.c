@@ -5,6 +5,8 @@
 #include "probebake/sparse.h"
 
 #include <math.h>
+#include <stdio.h>
+#include <string.h>
 
 void pb_bake_settings_default(pb_bake_desc *d)
 {
@@ -24,6 +26,33 @@ void pb_bake_settings_default(pb_bake_desc *d)
                                                                              : PB_RELOCATION_RAYS_DEFAULT;
     if (!d->paths_per_lane)
         d->paths_per_lane = PB_PATHS_PER_LANE_DEFAULT;
+}
+
+int pb_bake_schedule_parse(const char *text, uint32_t *schedule, uint32_t *paths_per_lane)
+{
+    unsigned k = 0;
+    char end = 0;
+    if (!text)
+        return 0;
+    if (!strcmp(text, "megakernel") || !strcmp(text, "wavefront")) {
+        *schedule = text[0] == 'w' ? PB_SCHEDULE_WAVEFRONT : PB_SCHEDULE_MEGAKERNEL, *paths_per_lane = 0;
+        return 1;
+    }
+    if (strncmp(text, "restart", 7) ||
+        (text[7] && (text[7] != ':' || sscanf(text + 8, "%u%c", &k, &end) != 1 || k < 1 || k > PB_MAX_PATHS_PER_LANE)))
+        return 0;
+    *schedule = PB_SCHEDULE_RESTART, *paths_per_lane = k;
+    return 1;
+}
+
+const char *pb_bake_schedule_name(const pb_bake_desc *desc, char *buf, size_t size)
+{
+    uint32_t k = desc->paths_per_lane ? desc->paths_per_lane : PB_PATHS_PER_LANE_DEFAULT;
+    if (desc->schedule == PB_SCHEDULE_RESTART)
+        snprintf(buf, size, "restart:%u", k);
+    else
+        snprintf(buf, size, "%s", desc->schedule == PB_SCHEDULE_WAVEFRONT ? "wavefront" : "megakernel");
+    return buf;
 }
 
 pb_result pb_bake_settings_check(const pb_bake_desc *d, pb_error *err)

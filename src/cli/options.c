@@ -384,17 +384,11 @@ static int apply(options *o, const char *a, const char *next)
         o->scene_loads = !strcmp(next, "address") ? PB_SCENE_LOADS_ADDRESS
                          : !strcmp(next, "texel") ? PB_SCENE_LOADS_TEXEL : PB_SCENE_LOADS_AUTO;
     } else if (!strcmp(a, "--schedule")) {
-        unsigned k = 0;
-        char end = 0;
-        int restart = next && !strncmp(next, "restart", 7) && (!next[7] || next[7] == ':');
-        if (restart && next[7] && (next[7] != ':' || sscanf(next + 8, "%u%c", &k, &end) != 1 || k < 1 ||
-                                   k > PB_MAX_PATHS_PER_LANE))
-            return cli_usage_error("%s restart:K takes K from 1 to 64 paths per lane", a);
-        if (!next || (!restart && strcmp(next, "megakernel") && strcmp(next, "wavefront")))
-            return cli_usage_error("%s takes megakernel, wavefront or restart[:K]", a);
-        o->schedule = restart ? PB_SCHEDULE_RESTART
-                      : !strcmp(next, "wavefront") ? PB_SCHEDULE_WAVEFRONT : PB_SCHEDULE_MEGAKERNEL;
-        o->paths_per_lane = k;
+        if (!pb_bake_schedule_parse(next, &o->schedule, &o->paths_per_lane))
+            return cli_usage_error(next && !strncmp(next, "restart:", 8)
+                                       ? "%s restart:K takes K from 1 to 64 paths per lane"
+                                       : "%s takes megakernel, wavefront or restart[:K]",
+                                   a);
     } else if (!strcmp(a, "--emitter-sampling")) {
         if (!next || (strcmp(next, "solid-angle") && strcmp(next, "area")))
             return cli_usage_error("%s takes solid-angle or area", a);
