@@ -273,6 +273,11 @@ static void print_banner(const options *o, const pb_bake_quality *q, const pb_ba
             /* --indirect volume bakes one bounce at a time: no bounce rays to guide */
             d->guide_paths && d->bounces && !d->indirect_volume ? "on" : "off", d->light_cells ? "on" : "off",
             d->emitters_by_area ? "area" : "solid angle", d->seed);
+    if (d->schedule != PB_SCHEDULE_MEGAKERNEL) {
+        char sched[32];
+        fprintf(stderr, "probebake: schedule %s (the default's volume, bit for bit)\n",
+                pb_bake_schedule_name(d, sched, sizeof sched));
+    }
     if (d->indirect_clamp > 0.f || d->sh_window)
         fprintf(stderr, "probebake: biased on request:%s%s%s\n",
                 d->indirect_clamp > 0.f ? " reflected light clamped per path to radiance " : "",
