@@ -1,7 +1,7 @@
 /* peer_paths: what a path costs the bake on this Vulkan device against a CPU
  * path tracer on this host's cores, path for path.
  *
- *   peer_paths [--probes N] [--rays N] [--passes N] [--bounces N] [--methods plain,all]
+ *   peer_paths [--probes N] [--rays N] [--passes N] [--bounces N] [--methods plain,all,nee,cells,guide]
  *              [--repeat N] [--restart K[:M]] [--out DIR] [--validation] [SCENE ...]
  *
  * The peer is the bake's own CPU reference path tracer (src/bake/bake_cpu.c:
@@ -80,9 +80,14 @@ typedef struct method {
     uint32_t probe_nee, light_cells, guide_paths;
 } method;
 
+/* plain and all by default; each estimator alone on request, to tell what
+ * each one's shading costs the kernel (--methods plain,nee,cells,guide,all) */
 static const method methods[] = {
     {"plain", 0, 0, 0},
     {"all", 1, 1, PB_GUIDE_DEFAULT_PATHS},
+    {"nee", 1, 0, 0},
+    {"cells", 0, 1, 0},
+    {"guide", 0, 0, PB_GUIDE_DEFAULT_PATHS},
 };
 #define METHOD_COUNT (int)(sizeof methods / sizeof methods[0])
 #define MAX_REPEAT 15

@@ -146,7 +146,8 @@ for s in $steps; do
         keep /tmp/bake-vs-trace-16k.json ;;
     peer) # the bake's paths against the same paths on the CPU path tracer with Embree on all host
         # cores (bench/peer_paths), at a size that fills the GPU; PB_PEER_ARGS: more options
-        # (e.g. --restart 8:1, whose recording runs on one CPU)
+        # (e.g. --restart 8:1, whose recording runs on one CPU; --methods plain,nee,cells,guide,all: what each
+        # estimator's shading costs)
         run 300 build/bench/peer_paths --probes 16384 --repeat 3 ${PB_PEER_ARGS:-} --out /tmp/peer $crypt $cornell
         keep /tmp/peer/peer_paths.json ;;
     bakeab) # the bake by this build and by .dev/probebake-before (another build's
