@@ -5,7 +5,7 @@
 // one ends, so its group waits only at the end of K paths. The same paths,
 // random numbers and results as bake_trace, bit for bit (test_bake); what
 // differs is only which invocation traces which path, and that lanes leave
-// step with one another (bench/RESULTS.md, "The bake's own rays replayed").
+// step with one another (bench/RESULTS.md, "Restarts built"; docs/bake.md, "Schedules").
 // CPU reference: pb_bake_trace_cpu (src/bake/bake_cpu.c).
 #extension GL_GOOGLE_include_directive : require
 
