@@ -101,7 +101,8 @@ int main(int argc, char **argv)
             validation = 1;
         else if (!strcmp(argv[i], "--schedule") && i + 1 < argc) {
             if (!pb_bake_schedule_parse(argv[++i], &schedule, &paths_per_lane)) {
-                fprintf(stderr, "bake_bench: --schedule %s: megakernel, wavefront or restart[:K], K 1-64\n", argv[i]);
+                fprintf(stderr, "bake_bench: --schedule %s: megakernel, wavefront or restart[:K], K 1-%u\n", argv[i],
+                        PB_MAX_PATHS_PER_LANE);
                 return 2;
             }
         }

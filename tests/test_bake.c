@@ -1202,7 +1202,8 @@ static void multi_bounce_matches_cpu_reference_on(int guided, int bent, uint32_t
     }
     fprintf(stderr, "  %s%s: %u probes (%u not dilated), 3 bounces, 8 passes: DC irradiance differs by at most %.3f%%",
             guided && bent ? "guided, bent normals" : guided ? "guided" : bent ? "plain, bent normals" : "plain",
-            schedule ? ", wavefront" : "", P, compared,
+            schedule == PB_SCHEDULE_WAVEFRONT ? ", wavefront" : schedule == PB_SCHEDULE_RESTART ? ", restarts" : "", P,
+            compared,
             100 * worst);
     if (guided)
         fprintf(stderr, "; %u of %u guide entries learned; unguided reference %.2f%% apart", g.learned, g.entries,
@@ -1227,6 +1228,7 @@ static void multi_bounce_matches_cpu_reference(void)
     multi_bounce_matches_cpu_reference_on(1, 0, PB_SCHEDULE_MEGAKERNEL);
     multi_bounce_matches_cpu_reference_on(0, 1, PB_SCHEDULE_MEGAKERNEL);
     multi_bounce_matches_cpu_reference_on(1, 1, PB_SCHEDULE_WAVEFRONT); /* bake_wave.comp against the reference */
+    multi_bounce_matches_cpu_reference_on(1, 1, PB_SCHEDULE_RESTART);   /* bake_restart.comp, K 8, likewise */
 }
 
 /* pb_bake_pass.cast: the CPU reference casts every ray it traces through

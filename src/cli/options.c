@@ -384,11 +384,13 @@ static int apply(options *o, const char *a, const char *next)
         o->scene_loads = !strcmp(next, "address") ? PB_SCENE_LOADS_ADDRESS
                          : !strcmp(next, "texel") ? PB_SCENE_LOADS_TEXEL : PB_SCENE_LOADS_AUTO;
     } else if (!strcmp(a, "--schedule")) {
-        if (!pb_bake_schedule_parse(next, &o->schedule, &o->paths_per_lane))
-            return cli_usage_error(next && !strncmp(next, "restart:", 8)
-                                       ? "%s restart:K takes K from 1 to 64 paths per lane"
-                                       : "%s takes megakernel, wavefront or restart[:K]",
-                                   a);
+        if (!pb_bake_schedule_parse(next, &o->schedule, &o->paths_per_lane)) {
+            char k_range[80];
+            snprintf(k_range, sizeof k_range, "%%s restart:K takes K from 1 to %u paths per lane",
+                     PB_MAX_PATHS_PER_LANE);
+            int bad_k = next && !strncmp(next, "restart:", 8);
+            return cli_usage_error(bad_k ? k_range : "%s takes megakernel, wavefront or restart[:K]", a);
+        }
     } else if (!strcmp(a, "--emitter-sampling")) {
         if (!next || (strcmp(next, "solid-angle") && strcmp(next, "area")))
             return cli_usage_error("%s takes solid-angle or area", a);
